@@ -23,6 +23,10 @@ void wv_error_prefix(wv_error *err, const char *fmt, ...) {
   vsnprintf(pre, sizeof pre, fmt, ap);
   va_end(ap);
   memcpy(old, err->msg, sizeof old);
-  int n = snprintf(err->msg, sizeof err->msg, "%s: %s", pre, old);
-  (void)n; /* truncation of very long messages is acceptable */
+  /* Assemble by hand: very long messages are truncated, never overflowed. */
+  size_t cap = sizeof err->msg - 1, n = 0;
+  for (const char *p = pre; *p && n < cap; p++) err->msg[n++] = *p;
+  for (const char *p = ": "; *p && n < cap; p++) err->msg[n++] = *p;
+  for (const char *p = old; *p && n < cap; p++) err->msg[n++] = *p;
+  err->msg[n] = '\0';
 }
