@@ -1,0 +1,45 @@
+/* woven: fabric parameters (SPEC section 5) and their JSON file format.
+ * Units are in the keys: densities in yarns per inch, angles in degrees. */
+#ifndef WOVEN_PARAMS_H
+#define WOVEN_PARAMS_H
+
+#include <stdint.h>
+#include "woven/error.h"
+#include "woven/weave.h"
+#include "woven/yarn.h"
+
+typedef struct {
+  char pattern[16];                  /* plain, twill, satin, twill90, satin90 or custom */
+  int custom_rows;                   /* custom pattern only */
+  char custom[WV_WEAVE_MAX][WV_WEAVE_MAX + 1];
+  double density[2];                 /* yarns per inch, [WV_WARP], [WV_WEFT]: 20..250 */
+  double heightfield[2];             /* beta: 0..2 */
+  double diffuse[2][3];              /* k_d RGB: 0..1 */
+  double specular[2][3];             /* k_s RGB: 0..1 */
+  double roughness[2];               /* alpha: 0.01..1 */
+  double twist_deg;                  /* psi: -60..60 */
+  double inclination_deg;            /* u_max: 5..70 */
+  double diffuse_blend;              /* w: 0..1 */
+  int noise_level;                   /* Q: 0..10 */
+  double thickness;                  /* T: > 0, default 2 */
+  double yarn_width;                 /* fraction of the spacing: 0.1..1 */
+  int64_t seed;                      /* noise seed (U_n, U_s) */
+  int specular_noise;                /* 1: glints U_s on (default); 0: U_s = 1 */
+} wv_params;
+
+/* Prior mean of a built-in pattern (also the fit's start without a network). */
+wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err);
+/* Every value in range, pattern known; the message names the key. */
+wv_status wv_params_validate(const wv_params *p, wv_error *err);
+/* Parse from a JSON text; 'source' names it in messages (a file name). */
+wv_status wv_params_parse(const char *json, const char *source, wv_params *p, wv_error *err);
+wv_status wv_params_read(const char *path, wv_params *p, wv_error *err);
+/* JSON text (malloc'ed, caller frees) and atomic file write. */
+char *wv_params_to_json(const wv_params *p);
+wv_status wv_params_write(const char *path, const wv_params *p, wv_error *err);
+
+wv_status wv_params_weave(const wv_params *p, wv_weave *w, wv_error *err);
+/* The geometry model the renderer uses for these parameters. */
+wv_status wv_params_yarn_model(const wv_params *p, wv_yarn_model *m, wv_error *err);
+
+#endif

@@ -1,0 +1,24 @@
+/* woven: the forward renderer. Renders fabric parameters in a capture scene:
+ * stratified supersampling of each pixel, bent-cylinder geometry, SGGX/SpongeCake
+ * specular and blended Lambert diffuse under one point light. Threads: OpenMP.
+ * Deterministic: every sample position and noise value is a hash of
+ * (pixel, sample, seed), so results do not depend on the thread count. */
+#ifndef WOVEN_RENDER_H
+#define WOVEN_RENDER_H
+
+#include "woven/error.h"
+#include "woven/image.h"
+#include "woven/params.h"
+#include "woven/scene.h"
+
+typedef struct {
+  int spp;            /* samples per pixel; 0 = the scene's */
+  int threads;        /* 0 = OpenMP default */
+} wv_render_opts;
+
+/* radiance (optional, may be NULL): linear radiance before the sensor response.
+ * capture: the image as the scene's camera records it. Both allocated here. */
+wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, wv_image *capture,
+                    wv_image *radiance, wv_error *err);
+
+#endif

@@ -1,0 +1,58 @@
+/* woven: capture scenes (SPEC section 6): the sample's shape, a pinhole camera,
+ * a point light, the image size and sampling, and the sensor response
+ * (clipping, colour encoding, falloff mask). Read from JSON; see scenes/. */
+#ifndef WOVEN_SCENE_H
+#define WOVEN_SCENE_H
+
+#include "woven/error.h"
+#include "woven/image.h"
+
+typedef enum { WV_SHAPE_CYLINDER = 0, WV_SHAPE_PLANE = 1 } wv_shape_type;
+typedef enum { WV_ENC_LINEAR = 0, WV_ENC_SRGB = 1, WV_ENC_GAMMA = 2 } wv_encoding;
+
+typedef struct {
+  char name[64];
+  int width, height, spp;
+  /* Camera: pinhole at position looking at look_at; vfov is the full vertical angle. */
+  double cam_pos[3], cam_look_at[3], cam_up[3], vfov_deg;
+  /* Sample: a cylinder of radius around the world x axis, or the plane z = 0. */
+  wv_shape_type shape;
+  double radius;        /* cylinder, mm */
+  int warp_along_axis;  /* cylinder: 1 = warp along the axis (default), 0 = around it */
+  double rotation_deg;  /* plane: angle of the fabric x axis from world x */
+  double fabric_offset[2]; /* shift of the pattern on the sample, mm */
+  /* Point light. */
+  double light_pos[3], light_intensity;
+  /* Sensor response, applied in this order: exposure, clip, encode, falloff mask. */
+  double exposure;
+  double clip;          /* <= 0: no clipping */
+  wv_encoding encoding;
+  double gamma;         /* for WV_ENC_GAMMA: encoded = linear^(1/gamma) */
+  int falloff;          /* 1 = Gaussian mask exp(-d^2/sigma^2), d in pixels from the centre */
+  double falloff_sigma;
+} wv_scene;
+
+/* Limits on what a scene may request (memory and time guards). */
+#define WV_SCENE_MAX_SIDE 16384
+#define WV_SCENE_MAX_SPP 4096
+#define WV_SCENE_MAX_SAMPLES (1LL << 34)
+
+wv_status wv_scene_parse(const char *json, const char *source, wv_scene *s, wv_error *err);
+wv_status wv_scene_read(const char *path, wv_scene *s, wv_error *err);
+wv_status wv_scene_validate(const wv_scene *s, wv_error *err);
+/* The presets, built in (identical to scenes/cylinder.json and scenes/flat45.json). */
+wv_status wv_scene_preset(const char *name, wv_scene *s, wv_error *err);
+/* "cylinder" / "flat45" name a preset; anything else is read as a file. */
+wv_status wv_scene_load(const char *name_or_path, wv_scene *s, wv_error *err);
+char *wv_scene_to_json(const wv_scene *s);
+
+/* Sensor response: capture = mask * encode(clip(exposure * radiance)). In place allowed. */
+void wv_scene_response(const wv_scene *s, const wv_image *radiance, wv_image *capture);
+/* Adjoint of the response: given dL/dcapture, dL/dradiance (uses the radiance). */
+void wv_scene_response_backward(const wv_scene *s, const wv_image *radiance, const wv_image *dcapture,
+                                wv_image *dradiance);
+/* Encoding of one value and its inverse (used to decode photos). */
+float wv_encode(const wv_scene *s, float linear);
+float wv_decode(const wv_scene *s, float encoded);
+
+#endif

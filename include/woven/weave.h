@@ -1,0 +1,42 @@
+/* woven: weave patterns and their segment table (SPEC section 2).
+ * P[i][j] = 1 when warp yarn j lies over weft yarn i. Row 0 is the top row of
+ * the pattern as seen in an image (fabric y decreases with the row index). */
+#ifndef WOVEN_WEAVE_H
+#define WOVEN_WEAVE_H
+
+#include <stdint.h>
+#include "woven/error.h"
+
+#define WV_WEAVE_MAX 32
+
+enum { WV_WARP = 0, WV_WEFT = 1 };
+
+/* What is visible in one cell: the float it belongs to, that float's length in
+ * cells, and the cell's index inside the float (warp floats count rows downward,
+ * weft floats count columns rightward). Precomputed so lookup is O(1). */
+typedef struct {
+  uint8_t type;  /* WV_WARP or WV_WEFT */
+  uint8_t len;   /* float length L in cells */
+  uint8_t index; /* 0..len-1 */
+} wv_weave_cell;
+
+typedef struct {
+  int rows, cols;
+  uint8_t p[WV_WEAVE_MAX][WV_WEAVE_MAX];
+  wv_weave_cell cell[WV_WEAVE_MAX][WV_WEAVE_MAX];
+} wv_weave;
+
+/* Built-in names: plain, twill, satin, twill90, satin90. */
+wv_status wv_weave_builtin(const char *name, wv_weave *w, wv_error *err);
+int wv_weave_is_builtin(const char *name);
+/* A custom pattern from n text rows of '0'/'1' of equal length (1..WV_WEAVE_MAX). */
+wv_status wv_weave_from_rows(const char *const *rows, int n, wv_weave *w, wv_error *err);
+/* Cell lookup for any integer row/column (wraps around the repeat). */
+static inline const wv_weave_cell *wv_weave_at(const wv_weave *w, int64_t row, int64_t col) {
+  int64_t r = row % w->rows, c = col % w->cols;
+  if (r < 0) r += w->rows;
+  if (c < 0) c += w->cols;
+  return &w->cell[r][c];
+}
+
+#endif

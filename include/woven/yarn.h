@@ -1,0 +1,44 @@
+/* woven: bent-cylinder yarn geometry (SPEC section 3, paper section 3.1).
+ * Evaluates, at a point (x, y) of the fabric plane in millimetres, which yarn is
+ * visible and its normal n and fiber tangent t in fabric tangent space
+ * (x along the weft, y along the warp, z the macroscopic normal). */
+#ifndef WOVEN_YARN_H
+#define WOVEN_YARN_H
+
+#include <stdint.h>
+#include "woven/weave.h"
+
+typedef struct {
+  wv_weave weave;
+  float spacing[2];  /* [WV_WARP]: distance between warp yarns (mm, along x) = 25.4 / warp density;
+                        [WV_WEFT]: distance between weft yarns (mm, along y) */
+  float beta[2];     /* heightfield scaling per yarn type */
+  float umax;        /* maximum inclination, radians */
+  float psi;         /* fiber twist, radians */
+  float width;       /* yarn width as a fraction of the spacing, (0, 1] */
+  int noise_level;   /* Q, 0..10 */
+  uint64_t seed;
+  /* When > 0, segment identities repeat every period_rows x period_cols cells so
+   * that a map of exactly that many cells tiles seamlessly. 0: never repeat. */
+  int period_rows, period_cols;
+} wv_yarn_model;
+
+typedef struct {
+  int type;          /* WV_WARP, WV_WEFT, or -1 in a gap between yarns */
+  float n[3], t[3];  /* unit normal and fiber tangent (n.t = 0), fabric tangent space */
+  float height;      /* heightfield value, mm */
+  float u, v;        /* inclination along and angle around the yarn (radians) */
+  float beta;        /* the segment's heightfield scaling after noise U_n */
+  uint64_t segment;  /* identity of the visible segment (hash) */
+} wv_yarn_point;
+
+/* Fabric row/column of a point: rows grow toward -y, columns toward +x. */
+void wv_yarn_eval(const wv_yarn_model *m, float x, float y, wv_yarn_point *out);
+
+/* Local bent-cylinder frame before heightfield scaling (exposed for tests):
+ * yarn running along +y, angles u (along) and v (around). */
+void wv_yarn_frame(float u, float v, float psi, float n[3], float t[3]);
+/* Heightfield scaling of a frame by beta (keeps n.t = 0 and unit length). */
+void wv_yarn_scale(float beta, float n[3], float t[3]);
+
+#endif

@@ -1,0 +1,328 @@
+#include "woven/params.h"
+
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "woven/io.h"
+
+#define DEG (3.14159265358979323846 / 180.0)
+
+/* Ranges of SPEC section 5. */
+typedef struct {
+  const char *key;
+  double lo, hi;
+} range;
+static const range R_DENSITY = {"density", 20, 250};
+static const range R_BETA = {"heightfield", 0, 2};
+static const range R_KD = {"diffuse", 0, 1};
+static const range R_KS = {"specular", 0, 1};
+static const range R_ALPHA = {"roughness", 0.01, 1};
+static const range R_TWIST = {"twist_deg", -60, 60};
+static const range R_UMAX = {"inclination_deg", 5, 70};
+static const range R_BLEND = {"diffuse_blend", 0, 1};
+static const range R_THICK = {"thickness", 0.01, 100};
+static const range R_WIDTH = {"yarn_width", 0.1, 1};
+
+wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err) {
+  memset(p, 0, sizeof *p);
+  if (!wv_weave_is_builtin(pattern))
+    return wv_fail(err, WV_ERR_INVALID, "no prior for pattern '%s'", pattern);
+  snprintf(p->pattern, sizeof p->pattern, "%s", pattern);
+  int rot = strstr(pattern, "90") != NULL;
+  int wa = rot ? WV_WEFT : WV_WARP, we = rot ? WV_WARP : WV_WEFT;
+  /* Centres of the dataset priors (SPEC section 5). */
+  if (!strncmp(pattern, "plain", 5)) {
+    p->density[wa] = p->density[we] = 100;
+    p->heightfield[wa] = p->heightfield[we] = 1.1;
+    p->roughness[wa] = p->roughness[we] = 0.25;
+    p->inclination_deg = 22.5;
+    p->twist_deg = 0;
+  } else if (!strncmp(pattern, "twill", 5)) {
+    p->density[wa] = 140, p->density[we] = 85;
+    p->heightfield[wa] = p->heightfield[we] = 1.5;
+    p->roughness[wa] = p->roughness[we] = 0.745;
+    p->inclination_deg = 30;
+    p->twist_deg = -30;
+  } else {
+    p->density[wa] = 185, p->density[we] = 100;
+    p->heightfield[wa] = p->heightfield[we] = 0.6;
+    p->roughness[wa] = 0.745, p->roughness[we] = 0.265;
+    p->inclination_deg = 47.5;
+    p->twist_deg = 0;
+  }
+  if (rot) p->twist_deg = -p->twist_deg; /* the 90-degree pattern is a mirror image */
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) {
+      p->diffuse[y][c] = 0.5;
+      p->specular[y][c] = 0.5;
+    }
+  p->diffuse_blend = 0.5;
+  p->noise_level = 2;
+  p->thickness = 2.0;
+  p->yarn_width = 1.0;
+  p->seed = 1;
+  p->specular_noise = 1;
+  return WV_OK;
+}
+
+static wv_status check(const range *r, const char *sub, double v, wv_error *err) {
+  if (!isfinite(v) || v < r->lo || v > r->hi)
+    return wv_fail(err, WV_ERR_INVALID, "'%s%s%s' = %g is outside %g..%g", r->key, sub ? "." : "",
+                   sub ? sub : "", v, r->lo, r->hi);
+  return WV_OK;
+}
+
+wv_status wv_params_weave(const wv_params *p, wv_weave *w, wv_error *err) {
+  if (!strcmp(p->pattern, "custom")) {
+    const char *rows[WV_WEAVE_MAX];
+    for (int i = 0; i < p->custom_rows && i < WV_WEAVE_MAX; i++) rows[i] = p->custom[i];
+    wv_status st = wv_weave_from_rows(rows, p->custom_rows, w, err);
+    if (st) wv_error_prefix(err, "'weave'");
+    return st;
+  }
+  return wv_weave_builtin(p->pattern, w, err);
+}
+
+wv_status wv_params_validate(const wv_params *p, wv_error *err) {
+  static const char *yn[2] = {"warp", "weft"};
+  wv_weave w;
+  wv_status st = wv_params_weave(p, &w, err);
+  if (st) return st;
+  for (int y = 0; y < 2; y++) {
+    if ((st = check(&R_DENSITY, yn[y], p->density[y], err))) return st;
+    if ((st = check(&R_BETA, yn[y], p->heightfield[y], err))) return st;
+    if ((st = check(&R_ALPHA, yn[y], p->roughness[y], err))) return st;
+    for (int c = 0; c < 3; c++) {
+      if ((st = check(&R_KD, yn[y], p->diffuse[y][c], err))) return st;
+      if ((st = check(&R_KS, yn[y], p->specular[y][c], err))) return st;
+    }
+  }
+  if ((st = check(&R_TWIST, NULL, p->twist_deg, err))) return st;
+  if ((st = check(&R_UMAX, NULL, p->inclination_deg, err))) return st;
+  if ((st = check(&R_BLEND, NULL, p->diffuse_blend, err))) return st;
+  if ((st = check(&R_THICK, NULL, p->thickness, err))) return st;
+  if ((st = check(&R_WIDTH, NULL, p->yarn_width, err))) return st;
+  if (p->noise_level < 0 || p->noise_level > 10)
+    return wv_fail(err, WV_ERR_INVALID, "'noise_level' = %d is outside 0..10", p->noise_level);
+  return WV_OK;
+}
+
+/* ---- JSON reading: every key known, every value typed, messages name the key. ---- */
+
+static wv_status get_number(json_t *v, const char *key, double *out, wv_error *err) {
+  if (!json_is_number(v))
+    return wv_fail(err, WV_ERR_INVALID, "'%s' must be a number", key);
+  *out = json_number_value(v);
+  return WV_OK;
+}
+
+static wv_status get_pair(json_t *root, const char *key, double out[2], wv_error *err) {
+  json_t *o = json_object_get(root, key);
+  if (!o) return WV_OK; /* keep the default */
+  if (!json_is_object(o))
+    return wv_fail(err, WV_ERR_INVALID, "'%s' must be an object {\"warp\": .., \"weft\": ..}", key);
+  const char *k;
+  json_t *v;
+  json_object_foreach(o, k, v) {
+    char name[64];
+    snprintf(name, sizeof name, "%s.%s", key, k);
+    int y = !strcmp(k, "warp") ? 0 : !strcmp(k, "weft") ? 1 : -1;
+    if (y < 0) return wv_fail(err, WV_ERR_INVALID, "unknown key '%s' (expected warp or weft)", name);
+    wv_status st = get_number(v, name, &out[y], err);
+    if (st) return st;
+  }
+  return WV_OK;
+}
+
+static wv_status get_rgb_pair(json_t *root, const char *key, double out[2][3], wv_error *err) {
+  json_t *o = json_object_get(root, key);
+  if (!o) return WV_OK;
+  if (!json_is_object(o))
+    return wv_fail(err, WV_ERR_INVALID, "'%s' must be an object {\"warp\": [r,g,b], \"weft\": [r,g,b]}", key);
+  const char *k;
+  json_t *v;
+  json_object_foreach(o, k, v) {
+    int y = !strcmp(k, "warp") ? 0 : !strcmp(k, "weft") ? 1 : -1;
+    if (y < 0) return wv_fail(err, WV_ERR_INVALID, "unknown key '%s.%s' (expected warp or weft)", key, k);
+    if (json_is_number(v)) { /* a grey value is accepted as r = g = b */
+      out[y][0] = out[y][1] = out[y][2] = json_number_value(v);
+      continue;
+    }
+    if (!json_is_array(v) || json_array_size(v) != 3)
+      return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be an array of 3 numbers", key, k);
+    for (int c = 0; c < 3; c++) {
+      char name[64];
+      snprintf(name, sizeof name, "%s.%s[%d]", key, k, c);
+      wv_status st = get_number(json_array_get(v, c), name, &out[y][c], err);
+      if (st) return st;
+    }
+  }
+  return WV_OK;
+}
+
+static const char *KNOWN_KEYS[] = {"pattern", "weave", "density", "heightfield", "diffuse", "specular",
+                                   "roughness", "twist_deg", "inclination_deg", "diffuse_blend",
+                                   "noise_level", "thickness", "yarn_width", "seed", "specular_noise",
+                                   "comment", NULL};
+
+static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
+  if (!json_is_object(root)) return wv_fail(err, WV_ERR_INVALID, "top level must be a JSON object");
+  const char *k;
+  json_t *v;
+  json_object_foreach(root, k, v) {
+    int known = 0;
+    for (int i = 0; KNOWN_KEYS[i]; i++) known |= !strcmp(k, KNOWN_KEYS[i]);
+    if (!known) return wv_fail(err, WV_ERR_INVALID, "unknown key '%s'", k);
+  }
+  json_t *pat = json_object_get(root, "pattern");
+  if (!json_is_string(pat)) return wv_fail(err, WV_ERR_INVALID, "'pattern' must be a string");
+  const char *name = json_string_value(pat);
+  wv_status st;
+  if (!strcmp(name, "custom")) {
+    wv_params_default("plain", p, err);
+    snprintf(p->pattern, sizeof p->pattern, "custom");
+    json_t *wv = json_object_get(root, "weave");
+    if (!json_is_array(wv) || json_array_size(wv) < 1 || json_array_size(wv) > WV_WEAVE_MAX)
+      return wv_fail(err, WV_ERR_INVALID, "'weave' must be an array of 1..%d strings of 0/1 for a custom pattern",
+                     WV_WEAVE_MAX);
+    p->custom_rows = (int)json_array_size(wv);
+    for (int i = 0; i < p->custom_rows; i++) {
+      json_t *row = json_array_get(wv, i);
+      if (!json_is_string(row) || strlen(json_string_value(row)) > WV_WEAVE_MAX)
+        return wv_fail(err, WV_ERR_INVALID, "'weave[%d]' must be a string of at most %d characters 0/1", i,
+                       WV_WEAVE_MAX);
+      snprintf(p->custom[i], sizeof p->custom[i], "%s", json_string_value(row));
+    }
+  } else {
+    if (!wv_weave_is_builtin(name))
+      return wv_fail(err, WV_ERR_INVALID,
+                     "'pattern': unknown pattern '%s' (expected plain, twill, satin, twill90, satin90 or custom)", name);
+    if (json_object_get(root, "weave"))
+      return wv_fail(err, WV_ERR_INVALID, "'weave' is only allowed with \"pattern\": \"custom\"");
+    wv_params_default(name, p, err);
+  }
+  if ((st = get_pair(root, "density", p->density, err))) return st;
+  if ((st = get_pair(root, "heightfield", p->heightfield, err))) return st;
+  if ((st = get_pair(root, "roughness", p->roughness, err))) return st;
+  if ((st = get_rgb_pair(root, "diffuse", p->diffuse, err))) return st;
+  if ((st = get_rgb_pair(root, "specular", p->specular, err))) return st;
+  struct {
+    const char *key;
+    double *dst;
+  } scalars[] = {{"twist_deg", &p->twist_deg}, {"inclination_deg", &p->inclination_deg},
+                 {"diffuse_blend", &p->diffuse_blend}, {"thickness", &p->thickness},
+                 {"yarn_width", &p->yarn_width}};
+  for (size_t i = 0; i < sizeof scalars / sizeof scalars[0]; i++) {
+    json_t *x = json_object_get(root, scalars[i].key);
+    if (x && (st = get_number(x, scalars[i].key, scalars[i].dst, err))) return st;
+  }
+  json_t *x;
+  if ((x = json_object_get(root, "noise_level"))) {
+    if (!json_is_integer(x)) return wv_fail(err, WV_ERR_INVALID, "'noise_level' must be an integer 0..10");
+    json_int_t q = json_integer_value(x);
+    p->noise_level = q < -1 ? -1 : q > 11 ? 11 : (int)q; /* validated below */
+  }
+  if ((x = json_object_get(root, "seed"))) {
+    if (!json_is_integer(x)) return wv_fail(err, WV_ERR_INVALID, "'seed' must be an integer");
+    p->seed = (int64_t)json_integer_value(x);
+  }
+  if ((x = json_object_get(root, "specular_noise"))) {
+    if (!json_is_boolean(x)) return wv_fail(err, WV_ERR_INVALID, "'specular_noise' must be true or false");
+    p->specular_noise = json_is_true(x);
+  }
+  return wv_params_validate(p, err);
+}
+
+wv_status wv_params_parse(const char *text, const char *source, wv_params *p, wv_error *err) {
+  json_error_t je;
+  json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
+  if (!root)
+    return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", source, je.line, je.column, je.text);
+  wv_status st = parse_root(root, p, err);
+  json_decref(root);
+  if (st) wv_error_prefix(err, "%s", source);
+  return st;
+}
+
+wv_status wv_params_read(const char *path, wv_params *p, wv_error *err) {
+  char *text;
+  size_t len;
+  wv_status st = wv_read_file(path, &text, &len, err);
+  if (st) return st;
+  if (strlen(text) != len) {
+    free(text);
+    return wv_fail(err, WV_ERR_FORMAT, "%s: file contains a NUL byte; not a JSON text", path);
+  }
+  st = wv_params_parse(text, path, p, err);
+  free(text);
+  return st;
+}
+
+static json_t *rgb(const double v[3]) {
+  return json_pack("[f,f,f]", v[0], v[1], v[2]);
+}
+
+char *wv_params_to_json(const wv_params *p) {
+  json_t *o = json_object();
+  json_object_set_new(o, "pattern", json_string(p->pattern));
+  if (!strcmp(p->pattern, "custom")) {
+    json_t *a = json_array();
+    for (int i = 0; i < p->custom_rows; i++) json_array_append_new(a, json_string(p->custom[i]));
+    json_object_set_new(o, "weave", a);
+  }
+  json_object_set_new(o, "density", json_pack("{s:f,s:f}", "warp", p->density[0], "weft", p->density[1]));
+  json_object_set_new(o, "heightfield",
+                      json_pack("{s:f,s:f}", "warp", p->heightfield[0], "weft", p->heightfield[1]));
+  json_object_set_new(o, "diffuse", json_pack("{s:o,s:o}", "warp", rgb(p->diffuse[0]), "weft", rgb(p->diffuse[1])));
+  json_object_set_new(o, "specular",
+                      json_pack("{s:o,s:o}", "warp", rgb(p->specular[0]), "weft", rgb(p->specular[1])));
+  json_object_set_new(o, "roughness", json_pack("{s:f,s:f}", "warp", p->roughness[0], "weft", p->roughness[1]));
+  json_object_set_new(o, "twist_deg", json_real(p->twist_deg));
+  json_object_set_new(o, "inclination_deg", json_real(p->inclination_deg));
+  json_object_set_new(o, "diffuse_blend", json_real(p->diffuse_blend));
+  json_object_set_new(o, "noise_level", json_integer(p->noise_level));
+  json_object_set_new(o, "thickness", json_real(p->thickness));
+  json_object_set_new(o, "yarn_width", json_real(p->yarn_width));
+  json_object_set_new(o, "seed", json_integer(p->seed));
+  json_object_set_new(o, "specular_noise", json_boolean(p->specular_noise));
+  /* 17 significant digits: the file reads back to the same doubles. */
+  char *s = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
+  json_decref(o);
+  return s;
+}
+
+wv_status wv_params_write(const char *path, const wv_params *p, wv_error *err) {
+  wv_status st = wv_params_validate(p, err);
+  if (st) return st;
+  char *s = wv_params_to_json(p);
+  if (!s) return wv_fail(err, WV_ERR_NOMEM, "%s: cannot format parameters", path);
+  size_t n = strlen(s);
+  char *t = realloc(s, n + 2);
+  if (!t) {
+    free(s);
+    return wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
+  }
+  t[n] = '\n', t[n + 1] = 0;
+  st = wv_write_file_atomic(path, t, n + 1, err);
+  free(t);
+  return st;
+}
+
+wv_status wv_params_yarn_model(const wv_params *p, wv_yarn_model *m, wv_error *err) {
+  memset(m, 0, sizeof *m);
+  wv_status st = wv_params_weave(p, &m->weave, err);
+  if (st) return st;
+  for (int y = 0; y < 2; y++) {
+    m->spacing[y] = (float)(25.4 / p->density[y]);
+    m->beta[y] = (float)p->heightfield[y];
+  }
+  m->umax = (float)(p->inclination_deg * DEG);
+  m->psi = (float)(p->twist_deg * DEG);
+  m->width = (float)p->yarn_width;
+  m->noise_level = p->noise_level;
+  m->seed = (uint64_t)p->seed;
+  return WV_OK;
+}

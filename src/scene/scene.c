@@ -1,0 +1,279 @@
+#include "woven/scene.h"
+
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "woven/io.h"
+
+/* The presets. scenes/cylinder.json and scenes/flat45.json hold the same text (a test checks they agree). */
+static const char *PRESET_CYLINDER =
+    "{\n"
+    "  \"name\": \"cylinder\",\n"
+    "  \"comment\": \"The paper's rig (Fig. 6): fabric on a horizontal cylinder, phone camera 250 mm from the axis, flash 60 mm above the camera.\",\n"
+    "  \"image\": {\"width\": 800, \"height\": 300, \"spp\": 64},\n"
+    "  \"camera\": {\"position_mm\": [0, 0, 250], \"look_at_mm\": [0, 0, 0], \"up\": [0, 1, 0], \"vfov_deg\": 16.89},\n"
+    "  \"sample\": {\"shape\": \"cylinder\", \"radius_mm\": 35, \"warp\": \"along_axis\", \"offset_mm\": [0, 0]},\n"
+    "  \"light\": {\"position_mm\": [0, 60, 250], \"intensity\": 150000},\n"
+    "  \"response\": {\"exposure\": 1, \"clip\": 1, \"encoding\": \"srgb\"},\n"
+    "  \"falloff\": {\"type\": \"gaussian\", \"sigma_px\": 450}\n"
+    "}\n";
+
+static const char *PRESET_FLAT45 =
+    "{\n"
+    "  \"name\": \"flat45\",\n"
+    "  \"comment\": \"Flat sample seen from above, light at 45 degrees toward the top of the image (the photos of shared/data/real-flat). One unit is about 1 mm.\",\n"
+    "  \"image\": {\"width\": 512, \"height\": 512, \"spp\": 64},\n"
+    "  \"camera\": {\"position_mm\": [0, 0, 8], \"look_at_mm\": [0, 0, 0], \"up\": [0, 1, 0], \"vfov_deg\": 53},\n"
+    "  \"sample\": {\"shape\": \"plane\", \"rotation_deg\": 0, \"offset_mm\": [0, 0]},\n"
+    "  \"light\": {\"position_mm\": [0, 8, 8], \"intensity\": 300},\n"
+    "  \"response\": {\"exposure\": 1, \"clip\": 1, \"encoding\": \"gamma\", \"gamma\": 2.2},\n"
+    "  \"falloff\": {\"type\": \"gaussian\", \"sigma_px\": 450}\n"
+    "}\n";
+
+static wv_status num(json_t *o, const char *obj, const char *key, double *out, int required, wv_error *err) {
+  json_t *v = json_object_get(o, key);
+  if (!v) {
+    if (required) return wv_fail(err, WV_ERR_INVALID, "missing '%s.%s'", obj, key);
+    return WV_OK;
+  }
+  if (!json_is_number(v)) return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be a number", obj, key);
+  *out = json_number_value(v);
+  if (!isfinite(*out)) return wv_fail(err, WV_ERR_INVALID, "'%s.%s' is not finite", obj, key);
+  return WV_OK;
+}
+
+static wv_status vec(json_t *o, const char *obj, const char *key, double *out, int n, int required,
+                     wv_error *err) {
+  json_t *v = json_object_get(o, key);
+  if (!v) {
+    if (required) return wv_fail(err, WV_ERR_INVALID, "missing '%s.%s'", obj, key);
+    return WV_OK;
+  }
+  if (!json_is_array(v) || (int)json_array_size(v) != n)
+    return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be an array of %d numbers", obj, key, n);
+  for (int i = 0; i < n; i++) {
+    json_t *x = json_array_get(v, i);
+    if (!json_is_number(x)) return wv_fail(err, WV_ERR_INVALID, "'%s.%s[%d]' must be a number", obj, key, i);
+    out[i] = json_number_value(x);
+  }
+  return WV_OK;
+}
+
+/* Reject keys the program does not know: a typo must not silently change a capture. */
+static wv_status only_keys(json_t *o, const char *obj, const char *const *keys, wv_error *err) {
+  if (!json_is_object(o)) return wv_fail(err, WV_ERR_INVALID, "'%s' must be an object", obj);
+  const char *k;
+  json_t *v;
+  json_object_foreach(o, k, v) {
+    int ok = 0;
+    for (int i = 0; keys[i]; i++) ok |= !strcmp(k, keys[i]);
+    if (!ok) return wv_fail(err, WV_ERR_INVALID, "unknown key '%s%s%s'", obj, *obj ? "." : "", k);
+  }
+  return WV_OK;
+}
+
+static wv_status get_int(json_t *o, const char *obj, const char *key, int *out, int required, wv_error *err) {
+  json_t *v = json_object_get(o, key);
+  if (!v) return required ? wv_fail(err, WV_ERR_INVALID, "missing '%s.%s'", obj, key) : WV_OK;
+  if (!json_is_integer(v)) return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be an integer", obj, key);
+  json_int_t x = json_integer_value(v);
+  if (x < -1000000000 || x > 1000000000)
+    return wv_fail(err, WV_ERR_INVALID, "'%s.%s' = %lld is out of range", obj, key, (long long)x);
+  *out = (int)x;
+  return WV_OK;
+}
+
+static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
+  static const char *top[] = {"name", "comment", "image", "camera", "sample", "light", "response", "falloff", NULL};
+  static const char *k_img[] = {"width", "height", "spp", NULL};
+  static const char *k_cam[] = {"position_mm", "look_at_mm", "up", "vfov_deg", NULL};
+  static const char *k_smp[] = {"shape", "radius_mm", "warp", "rotation_deg", "offset_mm", NULL};
+  static const char *k_lig[] = {"position_mm", "intensity", NULL};
+  static const char *k_rsp[] = {"exposure", "clip", "encoding", "gamma", NULL};
+  static const char *k_fal[] = {"type", "sigma_px", NULL};
+  wv_status st;
+  memset(s, 0, sizeof *s);
+  if ((st = only_keys(r, "", top, err))) return st;
+  json_t *nm = json_object_get(r, "name");
+  snprintf(s->name, sizeof s->name, "%s", json_is_string(nm) ? json_string_value(nm) : "custom");
+
+  json_t *o = json_object_get(r, "image");
+  if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'image'");
+  if ((st = only_keys(o, "image", k_img, err))) return st;
+  if ((st = get_int(o, "image", "width", &s->width, 1, err))) return st;
+  if ((st = get_int(o, "image", "height", &s->height, 1, err))) return st;
+  s->spp = 64;
+  if ((st = get_int(o, "image", "spp", &s->spp, 0, err))) return st;
+
+  o = json_object_get(r, "camera");
+  if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'camera'");
+  if ((st = only_keys(o, "camera", k_cam, err))) return st;
+  s->cam_up[1] = 1;
+  if ((st = vec(o, "camera", "position_mm", s->cam_pos, 3, 1, err))) return st;
+  if ((st = vec(o, "camera", "look_at_mm", s->cam_look_at, 3, 1, err))) return st;
+  if ((st = vec(o, "camera", "up", s->cam_up, 3, 0, err))) return st;
+  if ((st = num(o, "camera", "vfov_deg", &s->vfov_deg, 1, err))) return st;
+
+  o = json_object_get(r, "sample");
+  if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'sample'");
+  if ((st = only_keys(o, "sample", k_smp, err))) return st;
+  json_t *shape = json_object_get(o, "shape");
+  const char *sh = json_is_string(shape) ? json_string_value(shape) : "";
+  if (!strcmp(sh, "cylinder")) {
+    s->shape = WV_SHAPE_CYLINDER;
+    if ((st = num(o, "sample", "radius_mm", &s->radius, 1, err))) return st;
+    s->warp_along_axis = 1;
+    json_t *w = json_object_get(o, "warp");
+    if (w) {
+      const char *ws = json_is_string(w) ? json_string_value(w) : "";
+      if (!strcmp(ws, "along_axis")) s->warp_along_axis = 1;
+      else if (!strcmp(ws, "around_axis")) s->warp_along_axis = 0;
+      else return wv_fail(err, WV_ERR_INVALID, "'sample.warp' must be \"along_axis\" or \"around_axis\"");
+    }
+  } else if (!strcmp(sh, "plane")) {
+    s->shape = WV_SHAPE_PLANE;
+    if ((st = num(o, "sample", "rotation_deg", &s->rotation_deg, 0, err))) return st;
+  } else {
+    return wv_fail(err, WV_ERR_INVALID, "'sample.shape' must be \"cylinder\" or \"plane\"");
+  }
+  if ((st = vec(o, "sample", "offset_mm", s->fabric_offset, 2, 0, err))) return st;
+
+  o = json_object_get(r, "light");
+  if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'light'");
+  if ((st = only_keys(o, "light", k_lig, err))) return st;
+  if ((st = vec(o, "light", "position_mm", s->light_pos, 3, 1, err))) return st;
+  if ((st = num(o, "light", "intensity", &s->light_intensity, 1, err))) return st;
+
+  s->exposure = 1, s->clip = 1, s->encoding = WV_ENC_SRGB, s->gamma = 2.2;
+  o = json_object_get(r, "response");
+  if (o) {
+    if ((st = only_keys(o, "response", k_rsp, err))) return st;
+    if ((st = num(o, "response", "exposure", &s->exposure, 0, err))) return st;
+    if ((st = num(o, "response", "clip", &s->clip, 0, err))) return st;
+    if ((st = num(o, "response", "gamma", &s->gamma, 0, err))) return st;
+    json_t *e = json_object_get(o, "encoding");
+    if (e) {
+      const char *es = json_is_string(e) ? json_string_value(e) : "";
+      if (!strcmp(es, "srgb")) s->encoding = WV_ENC_SRGB;
+      else if (!strcmp(es, "gamma")) s->encoding = WV_ENC_GAMMA;
+      else if (!strcmp(es, "linear")) s->encoding = WV_ENC_LINEAR;
+      else return wv_fail(err, WV_ERR_INVALID, "'response.encoding' must be \"srgb\", \"gamma\" or \"linear\"");
+    }
+  }
+  o = json_object_get(r, "falloff");
+  if (o) {
+    if ((st = only_keys(o, "falloff", k_fal, err))) return st;
+    json_t *t = json_object_get(o, "type");
+    const char *ts = json_is_string(t) ? json_string_value(t) : "";
+    if (!strcmp(ts, "gaussian")) {
+      s->falloff = 1;
+      if ((st = num(o, "falloff", "sigma_px", &s->falloff_sigma, 1, err))) return st;
+    } else if (strcmp(ts, "none")) {
+      return wv_fail(err, WV_ERR_INVALID, "'falloff.type' must be \"gaussian\" or \"none\"");
+    }
+  }
+  return wv_scene_validate(s, err);
+}
+
+wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
+  if (s->width < 1 || s->width > WV_SCENE_MAX_SIDE || s->height < 1 || s->height > WV_SCENE_MAX_SIDE)
+    return wv_fail(err, WV_ERR_INVALID, "'image' size %d x %d is outside 1..%d per side", s->width, s->height,
+                   WV_SCENE_MAX_SIDE);
+  if (s->spp < 1 || s->spp > WV_SCENE_MAX_SPP)
+    return wv_fail(err, WV_ERR_INVALID, "'image.spp' = %d is outside 1..%d", s->spp, WV_SCENE_MAX_SPP);
+  if ((long long)s->width * s->height * s->spp > WV_SCENE_MAX_SAMPLES)
+    return wv_fail(err, WV_ERR_NOMEM, "'image': %d x %d pixels x %d spp is too many samples (limit %lld)",
+                   s->width, s->height, s->spp, (long long)WV_SCENE_MAX_SAMPLES);
+  if (!(s->vfov_deg > 0.01 && s->vfov_deg < 179))
+    return wv_fail(err, WV_ERR_INVALID, "'camera.vfov_deg' = %g is outside (0.01, 179)", s->vfov_deg);
+  double f[3], l2 = 0, c2 = 0;
+  for (int i = 0; i < 3; i++) f[i] = s->cam_look_at[i] - s->cam_pos[i], l2 += f[i] * f[i];
+  if (!(l2 > 1e-12)) return wv_fail(err, WV_ERR_INVALID, "'camera.look_at_mm' equals 'camera.position_mm'");
+  double cr[3] = {f[1] * s->cam_up[2] - f[2] * s->cam_up[1], f[2] * s->cam_up[0] - f[0] * s->cam_up[2],
+                  f[0] * s->cam_up[1] - f[1] * s->cam_up[0]};
+  for (int i = 0; i < 3; i++) c2 += cr[i] * cr[i];
+  if (!(c2 > 1e-12 * l2)) return wv_fail(err, WV_ERR_INVALID, "'camera.up' is parallel to the view direction");
+  if (s->shape == WV_SHAPE_CYLINDER && !(s->radius > 0 && s->radius < 1e6))
+    return wv_fail(err, WV_ERR_INVALID, "'sample.radius_mm' = %g must be positive", s->radius);
+  if (!(s->light_intensity >= 0 && isfinite(s->light_intensity)))
+    return wv_fail(err, WV_ERR_INVALID, "'light.intensity' = %g must be >= 0", s->light_intensity);
+  if (!(s->exposure > 0 && isfinite(s->exposure)))
+    return wv_fail(err, WV_ERR_INVALID, "'response.exposure' = %g must be > 0", s->exposure);
+  if (!isfinite(s->clip)) return wv_fail(err, WV_ERR_INVALID, "'response.clip' must be finite");
+  if (s->encoding == WV_ENC_GAMMA && !(s->gamma > 0.1 && s->gamma < 10))
+    return wv_fail(err, WV_ERR_INVALID, "'response.gamma' = %g is outside 0.1..10", s->gamma);
+  if (s->falloff && !(s->falloff_sigma > 0))
+    return wv_fail(err, WV_ERR_INVALID, "'falloff.sigma_px' = %g must be > 0", s->falloff_sigma);
+  for (int i = 0; i < 3; i++)
+    if (!isfinite(s->cam_pos[i]) || !isfinite(s->light_pos[i]) || !isfinite(s->cam_up[i]) ||
+        !isfinite(s->cam_look_at[i]))
+      return wv_fail(err, WV_ERR_INVALID, "camera and light positions must be finite");
+  return WV_OK;
+}
+
+wv_status wv_scene_parse(const char *text, const char *source, wv_scene *s, wv_error *err) {
+  json_error_t je;
+  json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
+  if (!root) return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", source, je.line, je.column, je.text);
+  wv_status st = json_is_object(root) ? parse_root(root, s, err)
+                                      : wv_fail(err, WV_ERR_INVALID, "top level must be a JSON object");
+  json_decref(root);
+  if (st) wv_error_prefix(err, "%s", source);
+  return st;
+}
+
+wv_status wv_scene_read(const char *path, wv_scene *s, wv_error *err) {
+  char *text;
+  size_t len;
+  wv_status st = wv_read_file(path, &text, &len, err);
+  if (st) return st;
+  if (strlen(text) != len) st = wv_fail(err, WV_ERR_FORMAT, "%s: file contains a NUL byte; not a JSON text", path);
+  else st = wv_scene_parse(text, path, s, err);
+  free(text);
+  return st;
+}
+
+wv_status wv_scene_preset(const char *name, wv_scene *s, wv_error *err) {
+  if (!strcmp(name, "cylinder")) return wv_scene_parse(PRESET_CYLINDER, "preset cylinder", s, err);
+  if (!strcmp(name, "flat45")) return wv_scene_parse(PRESET_FLAT45, "preset flat45", s, err);
+  return wv_fail(err, WV_ERR_INVALID, "unknown scene preset '%s' (expected cylinder or flat45)", name);
+}
+
+wv_status wv_scene_load(const char *name_or_path, wv_scene *s, wv_error *err) {
+  if (!strcmp(name_or_path, "cylinder") || !strcmp(name_or_path, "flat45"))
+    return wv_scene_preset(name_or_path, s, err);
+  return wv_scene_read(name_or_path, s, err);
+}
+
+char *wv_scene_to_json(const wv_scene *s) {
+  static const char *enc[] = {"linear", "srgb", "gamma"};
+  json_t *o = json_object();
+  json_object_set_new(o, "name", json_string(s->name));
+  json_object_set_new(o, "image", json_pack("{s:i,s:i,s:i}", "width", s->width, "height", s->height, "spp", s->spp));
+  json_object_set_new(o, "camera", json_pack("{s:[f,f,f],s:[f,f,f],s:[f,f,f],s:f}", "position_mm", s->cam_pos[0],
+                                             s->cam_pos[1], s->cam_pos[2], "look_at_mm", s->cam_look_at[0],
+                                             s->cam_look_at[1], s->cam_look_at[2], "up", s->cam_up[0], s->cam_up[1],
+                                             s->cam_up[2], "vfov_deg", s->vfov_deg));
+  if (s->shape == WV_SHAPE_CYLINDER)
+    json_object_set_new(o, "sample", json_pack("{s:s,s:f,s:s,s:[f,f]}", "shape", "cylinder", "radius_mm", s->radius,
+                                               "warp", s->warp_along_axis ? "along_axis" : "around_axis",
+                                               "offset_mm", s->fabric_offset[0], s->fabric_offset[1]));
+  else
+    json_object_set_new(o, "sample", json_pack("{s:s,s:f,s:[f,f]}", "shape", "plane", "rotation_deg",
+                                               s->rotation_deg, "offset_mm", s->fabric_offset[0],
+                                               s->fabric_offset[1]));
+  json_object_set_new(o, "light", json_pack("{s:[f,f,f],s:f}", "position_mm", s->light_pos[0], s->light_pos[1],
+                                            s->light_pos[2], "intensity", s->light_intensity));
+  json_object_set_new(o, "response", json_pack("{s:f,s:f,s:s,s:f}", "exposure", s->exposure, "clip", s->clip,
+                                               "encoding", enc[s->encoding], "gamma", s->gamma));
+  if (s->falloff)
+    json_object_set_new(o, "falloff", json_pack("{s:s,s:f}", "type", "gaussian", "sigma_px", s->falloff_sigma));
+  else
+    json_object_set_new(o, "falloff", json_pack("{s:s}", "type", "none"));
+  char *out = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
+  json_decref(o);
+  return out;
+}
