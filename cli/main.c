@@ -1,2 +1,39 @@
+/* woven: capture woven fabric materials from one photo. A thin front end: every
+ * subcommand parses its options and calls the library. */
 #include <stdio.h>
-int main(void) { puts("woven"); return 0; }
+#include <string.h>
+
+#include "cli.h"
+
+static const struct {
+  const char *name;
+  int (*fn)(int, char **);
+  const char *help;
+} COMMANDS[] = {
+    {"render", cmd_render, "render fabric parameters in a capture scene"},
+    {"maps", cmd_maps, "write tileable texture maps (normal, tangent, albedo, ...)"},
+};
+
+static void usage(FILE *f) {
+  fprintf(f, "usage: woven <command> [options]\n\ncommands:\n");
+  for (size_t i = 0; i < sizeof COMMANDS / sizeof COMMANDS[0]; i++)
+    fprintf(f, "  %-10s %s\n", COMMANDS[i].name, COMMANDS[i].help);
+  fprintf(f, "\n'woven <command> --help' describes a command.\n"
+             "Exit codes: 0 ok, 1 usage, 2 invalid value, 3 I/O error, 4 malformed file, 5 too large.\n");
+}
+
+int main(int argc, char **argv) {
+  if (argc < 2) {
+    usage(stderr);
+    return EXIT_USAGE;
+  }
+  if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
+    usage(stdout);
+    return 0;
+  }
+  for (size_t i = 0; i < sizeof COMMANDS / sizeof COMMANDS[0]; i++)
+    if (!strcmp(argv[1], COMMANDS[i].name)) return COMMANDS[i].fn(argc - 1, argv + 1);
+  fprintf(stderr, "woven: unknown command '%s'\n", argv[1]);
+  usage(stderr);
+  return EXIT_USAGE;
+}

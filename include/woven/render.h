@@ -14,6 +14,9 @@
 typedef struct {
   int spp;            /* samples per pixel; 0 = the scene's */
   int threads;        /* 0 = OpenMP default */
+  /* Called now and then from one thread with the fraction done (may be NULL). */
+  void (*progress)(void *user, double fraction);
+  void *progress_user;
 } wv_render_opts;
 
 /* radiance (optional, may be NULL): linear radiance before the sensor response.

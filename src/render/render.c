@@ -65,8 +65,15 @@ wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts 
     return st;
   }
   const float inv = 1.0f / (float)spp;
+  int rows_done = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (int py = 0; py < s->height; py++) {
+    if (opt && opt->progress && omp_get_thread_num() == 0) {
+      int d;
+#pragma omp atomic read
+      d = rows_done;
+      opt->progress(opt->progress_user, (double)d / s->height);
+    }
     for (int px = 0; px < s->width; px++) {
       float acc[3] = {0, 0, 0};
       for (int k = 0; k < spp; k++) {
@@ -78,7 +85,10 @@ wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts 
       float *o = wv_image_px(&rad, px, py);
       for (int c = 0; c < 3; c++) o[c] = acc[c] * inv;
     }
+#pragma omp atomic update
+    rows_done++;
   }
+  if (opt && opt->progress) opt->progress(opt->progress_user, 1.0);
   wv_scene_response(s, &rad, capture);
   if (radiance) *radiance = rad;
   else wv_image_free(&rad);

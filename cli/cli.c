@@ -1,0 +1,106 @@
+#include "cli.h"
+
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+void cli_args_init(cli_args *a, int argc, char **argv, const char *cmd) {
+  a->argc = argc, a->argv = argv, a->i = 0, a->cmd = cmd, a->inline_value = NULL;
+}
+
+const char *cli_next(cli_args *a) {
+  a->inline_value = NULL;
+  if (++a->i >= a->argc) return NULL;
+  return a->argv[a->i];
+}
+
+int cli_is(cli_args *a, const char *arg, const char *name) {
+  size_t n = strlen(name);
+  if (strncmp(arg, name, n)) return 0;
+  if (arg[n] == '\0') return 1;
+  if (arg[n] == '=') {
+    a->inline_value = arg + n + 1;
+    return 1;
+  }
+  return 0;
+}
+
+const char *cli_value(cli_args *a, const char *name) {
+  if (a->inline_value) return a->inline_value;
+  if (a->i + 1 >= a->argc) {
+    cli_usage_error(a->cmd, "option %s needs a value", name);
+    return NULL;
+  }
+  return a->argv[++a->i];
+}
+
+int cli_int(cli_args *a, const char *name, long lo, long hi, long *out) {
+  const char *v = cli_value(a, name);
+  if (!v) return 0;
+  char *end;
+  long x = strtol(v, &end, 10);
+  if (*v == '\0' || *end != '\0' || x < lo || x > hi) {
+    cli_usage_error(a->cmd, "%s: '%s' is not an integer in %ld..%ld", name, v, lo, hi);
+    return 0;
+  }
+  *out = x;
+  return 1;
+}
+
+int cli_fail(const cli_ctx *c, const wv_error *err) {
+  fprintf(stderr, "woven %s: error: %s\n", c->cmd, err->msg);
+  return err->code ? (int)err->code : 2;
+}
+
+int cli_usage_error(const char *cmd, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  fprintf(stderr, "woven %s: ", cmd);
+  vfprintf(stderr, fmt, ap);
+  fprintf(stderr, "\nTry 'woven %s --help'.\n", cmd);
+  va_end(ap);
+  return EXIT_USAGE;
+}
+
+void cli_info(const cli_ctx *c, const char *fmt, ...) {
+  if (c->quiet || c->json) return;
+  va_list ap;
+  va_start(ap, fmt);
+  vfprintf(stderr, fmt, ap);
+  va_end(ap);
+}
+
+double cli_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+void cli_progress_start(cli_progress *p, const cli_ctx *c, const char *label) {
+  p->enabled = !c->quiet && isatty(STDERR_FILENO);
+  p->label = label;
+  p->start = cli_now();
+  p->last_pct = -1;
+}
+
+void cli_progress_update(void *vp, double f) {
+  cli_progress *p = vp;
+  if (!p->enabled) return;
+  int pct = (int)(f * 100.0);
+  if (pct == p->last_pct) return;
+  p->last_pct = pct;
+  double el = cli_now() - p->start;
+  double left = f > 0.01 ? el * (1.0 - f) / f : 0.0;
+  char bar[31];
+  int fill = (int)(f * 30.0);
+  for (int i = 0; i < 30; i++) bar[i] = i < fill ? '#' : '.';
+  bar[30] = '\0';
+  fprintf(stderr, "\r%s [%s] %3d%%  %.1fs, %.1fs left ", p->label, bar, pct, el, left);
+  fflush(stderr);
+}
+
+void cli_progress_end(cli_progress *p) {
+  if (p->enabled) fprintf(stderr, "\r\033[K");
+}

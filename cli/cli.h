@@ -1,0 +1,54 @@
+/* Helpers shared by the woven subcommands: argument parsing, messages,
+ * progress bars, exit codes. */
+#ifndef WOVEN_CLI_H
+#define WOVEN_CLI_H
+
+#include <stdio.h>
+#include "woven/error.h"
+
+/* Exit codes: 0 success, 1 usage error, otherwise the wv_status of the failure
+ * (2 invalid input value, 3 I/O, 4 malformed file, 5 too large/out of memory). */
+#define EXIT_USAGE 1
+
+typedef struct {
+  int quiet, json;
+  const char *cmd; /* subcommand name for messages */
+} cli_ctx;
+
+/* Argument cursor: "--key value" and "--key=value" both work. */
+typedef struct {
+  int argc, i;
+  char **argv;
+  const char *cmd;
+  const char *inline_value;
+} cli_args;
+
+void cli_args_init(cli_args *a, int argc, char **argv, const char *cmd);
+/* Next argument, or NULL at the end. */
+const char *cli_next(cli_args *a);
+/* Is the current argument the option 'name' (e.g. "--spp")? */
+int cli_is(cli_args *a, const char *arg, const char *name);
+/* Value of the current option; prints an error and returns NULL when missing. */
+const char *cli_value(cli_args *a, const char *name);
+int cli_int(cli_args *a, const char *name, long lo, long hi, long *out);
+
+int cli_fail(const cli_ctx *c, const wv_error *err);       /* prints "woven CMD: msg", returns exit code */
+int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void cli_info(const cli_ctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* Progress bar on stderr, drawn only when stderr is a TTY and not quiet. */
+typedef struct {
+  int enabled;
+  const char *label;
+  double start;
+  int last_pct;
+} cli_progress;
+void cli_progress_start(cli_progress *p, const cli_ctx *c, const char *label);
+void cli_progress_update(void *p, double fraction);
+void cli_progress_end(cli_progress *p);
+double cli_now(void);
+
+int cmd_render(int argc, char **argv);
+int cmd_maps(int argc, char **argv);
+
+#endif
