@@ -21,7 +21,13 @@ typedef struct {
   /* When > 0, segment identities repeat every period_rows x period_cols cells so
    * that a map of exactly that many cells tiles seamlessly. 0: never repeat. */
   int period_rows, period_cols;
+  /* Derived by wv_yarn_model_update() from the fields above. */
+  float sin_psi, cos_psi, sin_umax, cos_umax;
+  float inv_spacing[2], umax_over_spacing[2], v_scale[2];
 } wv_yarn_model;
+
+/* Recompute the derived fields; call after changing umax or psi. */
+void wv_yarn_model_update(wv_yarn_model *m);
 
 typedef struct {
   int type;          /* WV_WARP, WV_WEFT, or -1 in a gap between yarns */
@@ -37,7 +43,7 @@ void wv_yarn_eval(const wv_yarn_model *m, float x, float y, wv_yarn_point *out);
 
 /* Local bent-cylinder frame before heightfield scaling (exposed for tests):
  * yarn running along +y, angles u (along) and v (around). */
-void wv_yarn_frame(float u, float v, float psi, float n[3], float t[3]);
+void wv_yarn_frame(float u, float v, float sin_psi, float cos_psi, float n[3], float t[3]);
 /* Heightfield scaling of a frame by beta (keeps n.t = 0 and unit length). */
 void wv_yarn_scale(float beta, float n[3], float t[3]);
 

@@ -324,5 +324,6 @@ wv_status wv_params_yarn_model(const wv_params *p, wv_yarn_model *m, wv_error *e
   m->width = (float)p->yarn_width;
   m->noise_level = p->noise_level;
   m->seed = (uint64_t)p->seed;
+  wv_yarn_model_update(m);
   return WV_OK;
 }

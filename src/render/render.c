@@ -6,6 +6,7 @@
 
 #include "render/render_internal.h"
 #include "woven/brdf.h"
+#include "yarn/yarn_eval.h"
 
 wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
   memset(f, 0, sizeof *f);
@@ -24,23 +25,56 @@ wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
   f->glints = p->specular_noise;
   f->glint_cell[0] = f->ym.spacing[WV_WARP] / 8.0f;
   f->glint_cell[1] = f->ym.spacing[WV_WEFT] / 8.0f;
+  for (int i = 0; i < 2; i++) f->inv_glint_cell[i] = 1.0f / f->glint_cell[i];
+  for (int i = 0; i < 4096; i++) {
+    float u = (float)-log(1.0 - (i + 0.5) / 4096.0);
+    f->glint_table[i] = u < 10.0f ? u : 10.0f;
+  }
   f->seed = (uint64_t)p->seed;
   return WV_OK;
 }
 
-/* Radiance of one sample (RGB added to acc). */
-static inline void shade(const wv_fabric *f, const wv_hit *h, float acc[3]) {
+/* Radiance of one sample at fabric point (fx, fy), added to acc. */
+static inline void shade(const wv_fabric *f, const wv_dirs *d, float fx, float fy, float acc[3]) {
   wv_yarn_point yp;
-  wv_yarn_eval(&f->ym, h->fx, h->fy, &yp);
+  wv_yarn_eval_inline(&f->ym, fx, fy, &yp);
   if (yp.type < 0) return; /* gap: nothing reflects */
   int ty = yp.type;
-  float mi = h->wi[2], mo = h->wo[2];
-  float spec = wv_brdf_specular(yp.t, f->alpha[ty], f->thickness, h->wi, h->wo, (const float[3]){0, 0, 1});
-  spec *= wv_glint(f, h->fx, h->fy) * mi;
-  float ni = wv_dot3(h->wi, yp.n);
-  float diff = (f->blend * (ni > 0.0f ? ni : 0.0f) + (1.0f - f->blend) * mi) * (1.0f / 3.14159265358979f);
-  (void)mo;
-  for (int c = 0; c < 3; c++) acc[c] += h->light * (f->ks[ty][c] * spec + f->kd[ty][c] * diff);
+  float a = f->alpha[ty], k = 1.0f - a * a;
+  float ti = wv_dot3(yp.t, d->wi), to = wv_dot3(yp.t, d->wo), th = wv_dot3(yp.t, d->h);
+  float si2 = 1.0f - k * ti * ti, so2 = 1.0f - k * to * to;
+  float si = sqrtf(si2 > 0.0f ? si2 : 0.0f), so = sqrtf(so2 > 0.0f ? so2 : 0.0f);
+  float A = si / d->mi + so / d->mo;
+  float q = 1.0f + (1.0f / (a * a) - 1.0f) * th * th;
+  float D = 1.0f / (3.14159265358979f * a * q * q);
+  /* f_s mu_i = D (1 - exp(-T A)) / (4 mu_o A), times the glint factor */
+  float spec = A > 0.0f ? D * (1.0f - expf(-f->thickness * A)) / (4.0f * d->mo * A) : 0.0f;
+  spec *= wv_glint(f, fx, fy);
+  float ni = wv_dot3(d->wi, yp.n);
+  float diff = (f->blend * (ni > 0.0f ? ni : 0.0f) + (1.0f - f->blend) * d->mi) * (1.0f / 3.14159265358979f);
+  for (int c = 0; c < 3; c++) acc[c] += d->light * (f->ks[ty][c] * spec + f->kd[ty][c] * diff);
+}
+
+/* Average radiance of pixel (px, py). */
+static void render_pixel(const wv_camera_rig *rig, const wv_fabric *fab, int px, int py, int spp, float out[3]) {
+  wv_footprint fp;
+  wv_footprint_prepare(rig, px, py, &fp);
+  float acc[3] = {0, 0, 0};
+  for (int k = 0; k < spp; k++) {
+    float sx, sy, fx, fy;
+    wv_pixel_sample(px, py, k, spp, rig->width, fab->seed, &sx, &sy);
+    if (fp.fast) {
+      wv_footprint_at(&fp, sx, sy, &fx, &fy);
+      shade(fab, &fp.dirs, fx, fy, acc);
+    } else { /* silhouette pixel: trace each sample */
+      wv_hit hit;
+      if (!wv_rig_trace(rig, (float)px + sx, (float)py + sy, &hit)) continue;
+      wv_dirs d;
+      wv_dirs_from_hit(&hit, &d);
+      shade(fab, &d, hit.fx, hit.fy, acc);
+    }
+  }
+  for (int c = 0; c < 3; c++) out[c] = acc[c] / (float)spp;
 }
 
 wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, wv_image *capture,
@@ -64,7 +98,6 @@ wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts 
     wv_image_free(&rad);
     return st;
   }
-  const float inv = 1.0f / (float)spp;
   int rows_done = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (int py = 0; py < s->height; py++) {
@@ -75,15 +108,7 @@ wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts 
       opt->progress(opt->progress_user, (double)d / s->height);
     }
     for (int px = 0; px < s->width; px++) {
-      float acc[3] = {0, 0, 0};
-      for (int k = 0; k < spp; k++) {
-        float sx, sy;
-        wv_pixel_sample(px, py, k, spp, s->width, fab.seed, &sx, &sy);
-        wv_hit hit;
-        if (wv_rig_trace(&rig, (float)px + sx, (float)py + sy, &hit)) shade(&fab, &hit, acc);
-      }
-      float *o = wv_image_px(&rad, px, py);
-      for (int c = 0; c < 3; c++) o[c] = acc[c] * inv;
+      render_pixel(&rig, &fab, px, py, spp, wv_image_px(&rad, px, py));
     }
 #pragma omp atomic update
     rows_done++;

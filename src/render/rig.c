@@ -2,6 +2,7 @@
 #include <string.h>
 
 #include "render/render_internal.h"
+#include "util/fastmath.h"
 
 static void normalize3(float v[3]) {
   float l = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
@@ -61,7 +62,7 @@ int wv_rig_trace(const wv_camera_rig *r, float x, float y, wv_hit *hit) {
     float inv = 1.0f / r->radius;
     float sn = p[1] * inv, cs = p[2] * inv;
     N[0] = 0, N[1] = sn, N[2] = cs;
-    float theta = atan2f(p[1], p[2]);
+    float theta = wv_atan2(p[1], p[2]);
     if (r->warp_along_axis) { /* fabric y along +x, fabric x runs down the front */
       T[0] = 0, T[1] = -cs, T[2] = sn;
       B[0] = 1, B[1] = 0, B[2] = 0;
@@ -98,4 +99,15 @@ int wv_rig_trace(const wv_camera_rig *r, float x, float y, wv_hit *hit) {
   if (hit->wi[2] <= 0.0f || hit->wo[2] <= 0.0f) return 0;
   hit->light = r->lint / r2;
   return 1;
+}
+
+void wv_footprint_prepare(const wv_camera_rig *rig, int px, int py, wv_footprint *fp) {
+  wv_hit c, k[4];
+  fp->centre_hit = wv_rig_trace(rig, (float)px + 0.5f, (float)py + 0.5f, &c);
+  fp->fast = fp->centre_hit;
+  for (int i = 0; i < 4 && fp->fast; i++) {
+    fp->fast = wv_rig_trace(rig, (float)(px + (i & 1)), (float)(py + (i >> 1)), &k[i]);
+    fp->fx[i] = k[i].fx, fp->fy[i] = k[i].fy;
+  }
+  if (fp->centre_hit) wv_dirs_from_hit(&c, &fp->dirs);
 }

@@ -15,4 +15,23 @@ static inline float wv_cos_hp(float x) {
          x2 * (-1.0f / 3628800 + x2 * (1.0f / 479001600))))));
 }
 
+/* atan2 to about 1e-7 rad: octant reduction, then a shift by pi/6 brings the
+ * argument under tan(15 deg), where an odd Taylor series to x^13 suffices. */
+static inline float wv_atan2(float y, float x) {
+  float ax = x < 0 ? -x : x, ay = y < 0 ? -y : y;
+  float mx = ax > ay ? ax : ay, mn = ax > ay ? ay : ax;
+  if (mx == 0.0f) return 0.0f;
+  float a = mn / mx, off = 0.0f;
+  if (a > 0.26794919f) {
+    a = (a * 1.7320508f - 1.0f) / (a + 1.7320508f);
+    off = 0.52359878f;
+  }
+  float a2 = a * a;
+  float r = off + a * (1.0f + a2 * (-1.0f / 3 + a2 * (1.0f / 5 + a2 * (-1.0f / 7 + a2 * (1.0f / 9 +
+                  a2 * (-1.0f / 11 + a2 * (1.0f / 13)))))));
+  if (ay > ax) r = 1.57079633f - r;
+  if (x < 0) r = 3.14159265f - r;
+  return y < 0 ? -r : r;
+}
+
 #endif

@@ -17,6 +17,10 @@ static inline uint64_t wv_hash4(uint64_t a, uint64_t b, uint64_t c, uint64_t d) 
   h = wv_mix64(h ^ (c + 0x9e3779b97f4a7c15ULL));
   return wv_mix64(h ^ (d + 0x9e3779b97f4a7c15ULL));
 }
+/* Cheaper two-key hash for the renderer's inner loop (two mixing rounds). */
+static inline uint64_t wv_hash2(uint64_t a, uint64_t b, uint64_t seed) {
+  return wv_mix64(wv_mix64(a * 0x9e3779b97f4a7c15ULL + seed) ^ (b * 0xc2b2ae3d27d4eb4fULL));
+}
 /* Uniform float in [0,1) from the top 24 bits. */
 static inline float wv_u01(uint64_t h) { return (float)(h >> 40) * (1.0f / 16777216.0f); }
 /* Uniform double in [0,1) from the top 53 bits. */
