@@ -19,18 +19,24 @@ typedef struct {
 
 /* Reads any supported image (detected from its magic bytes, not its name) and
  * returns it with 3 channels (grey is replicated, alpha dropped). info may be NULL.
- * Images over WV_IMAGE_MAX_PIXELS are rejected before decoding. */
+ * Images over WV_IMAGE_MAX_PIXELS are rejected before decoding.
+ * Limits: CMYK JPEGs are refused; for EXR the first part is read, it must be a
+ * scanline part (tiled and deep are refused) with half or float R,G,B or Y channels,
+ * and its data window becomes the image. On failure *img is left empty. */
 wv_status wv_image_read(const char *path, wv_image *img, wv_image_info *info, wv_error *err);
 
 /* Writes by extension: .png (8-bit, values clamped to [0,1], no colour encoding
- * applied: pass already-encoded values), .exr (32-bit float, linear). */
+ * applied: pass already-encoded values), .exr (32-bit float, linear).
+ * Files are always RGB: a 1-channel image is replicated, a 4th channel is not stored.
+ * wv_image_write_png takes bit_depth 8 or 16; EXR output is ZIP-compressed scanlines. */
 wv_status wv_image_write(const char *path, const wv_image *img, wv_error *err);
 wv_status wv_image_write_png(const char *path, const wv_image *img, int bit_depth, wv_error *err);
 wv_status wv_image_write_exr(const char *path, const wv_image *img, wv_error *err);
 
 /* Atomically replaces path with len bytes of data. */
 wv_status wv_write_file_atomic(const char *path, const void *data, size_t len, wv_error *err);
-/* Reads a whole file (NUL-terminated for convenience); caller frees *data. */
+/* Reads a whole file (NUL-terminated for convenience); caller frees *data.
+ * len may be NULL. */
 wv_status wv_read_file(const char *path, char **data, size_t *len, wv_error *err);
 
 #endif

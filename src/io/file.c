@@ -1,0 +1,213 @@
+/* woven: whole-file reads and atomic file replacement. */
+#include <errno.h>
+#include <fcntl.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "io/io_internal.h"
+
+const char *wv_io_strerror(int errnum, char *buf, size_t len) {
+  /* XSI strerror_r (we build with _POSIX_C_SOURCE): returns 0 on success. */
+  if (strerror_r(errnum, buf, len) != 0) snprintf(buf, len, "error %d", errnum);
+  return buf;
+}
+
+wv_status wv_io_check_size(const char *path, long long w, long long h, wv_error *err) {
+  if (w <= 0 || h <= 0)
+    return wv_fail(err, WV_ERR_FORMAT, "%s: invalid image size %lld x %lld", path, w, h);
+  if (w > WV_IMAGE_MAX_PIXELS || h > WV_IMAGE_MAX_PIXELS || w * h > WV_IMAGE_MAX_PIXELS)
+    return wv_fail(err, WV_ERR_NOMEM,
+                   "%s: image of %lld x %lld pixels is too large (limit %ld pixels)", path, w, h,
+                   (long)WV_IMAGE_MAX_PIXELS);
+  return WV_OK;
+}
+
+wv_status wv_io_check_image(const char *path, const wv_image *img, wv_error *err) {
+  if (!img || !img->data || img->w <= 0 || img->h <= 0 ||
+      (img->c != 1 && img->c != 3 && img->c != 4) ||
+      (long long)img->w * img->h > WV_IMAGE_MAX_PIXELS)
+    return wv_fail(err, WV_ERR_INVALID, "%s: cannot write an invalid image (%d x %d x %d)", path,
+                   img ? img->w : 0, img ? img->h : 0, img ? img->c : 0);
+  return WV_OK;
+}
+
+/* ---- whole-file read ---- */
+
+wv_status wv_read_file(const char *path, char **data, size_t *len, wv_error *err) {
+  char eb[128];
+  if (!path || !data) return wv_fail(err, WV_ERR_INVALID, "wv_read_file: missing path or output");
+  *data = NULL;
+  if (len) *len = 0;
+  int fd = open(path, O_RDONLY | O_CLOEXEC);
+  if (fd < 0)
+    return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path,
+                   wv_io_strerror(errno, eb, sizeof eb));
+  struct stat st;
+  int have_st = fstat(fd, &st) == 0;
+  if (have_st && S_ISDIR(st.st_mode)) {
+    close(fd);
+    return wv_fail(err, WV_ERR_IO, "%s: is a directory", path);
+  }
+  /* The size is only a hint: pipes report 0 and files may grow while read. Room for
+   * one byte more than expected lets the final read see end of file without growing. */
+  size_t cap = (have_st && S_ISREG(st.st_mode) && st.st_size > 0) ? (size_t)st.st_size + 2 : 4096;
+  size_t n = 0;
+  char *buf = malloc(cap);
+  wv_status s = buf ? WV_OK : wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
+  while (s == WV_OK) {
+    if (n + 1 >= cap) {
+      char *nb = cap < SIZE_MAX / 2 ? realloc(buf, cap * 2) : NULL;
+      if (!nb) {
+        s = wv_fail(err, WV_ERR_NOMEM, "%s: file too large to read into memory", path);
+        break;
+      }
+      buf = nb;
+      cap *= 2;
+    }
+    ssize_t r = read(fd, buf + n, cap - 1 - n);
+    if (r < 0 && errno == EINTR) continue;
+    if (r < 0)
+      s = wv_fail(err, WV_ERR_IO, "%s: cannot read: %s", path,
+                  wv_io_strerror(errno, eb, sizeof eb));
+    if (r <= 0) break;
+    n += (size_t)r;
+  }
+  close(fd);
+  if (s != WV_OK) {
+    free(buf);
+    return s;
+  }
+  buf[n] = '\0';
+  *data = buf;
+  if (len) *len = n;
+  return WV_OK;
+}
+
+/* ---- atomic replacement ---- */
+
+/* The umask cannot be read without setting it (racy in threads), so ask the kernel. */
+static mode_t current_umask(void) {
+  mode_t mask = 022;
+  int fd = open("/proc/self/status", O_RDONLY | O_CLOEXEC);
+  FILE *f = fd >= 0 ? fdopen(fd, "r") : NULL;
+  if (!f) {
+    if (fd >= 0) close(fd);
+    return mask;
+  }
+  char line[128];
+  unsigned m;
+  while (fgets(line, sizeof line, f))
+    if (sscanf(line, "Umask: %o", &m) == 1) {
+      mask = (mode_t)m;
+      break;
+    }
+  fclose(f);
+  return mask;
+}
+
+/* mkstemp creates 0600 files; give the result the mode a plain fopen would, or keep
+ * the mode of the file being replaced. */
+static void set_final_mode(int fd, const char *path) {
+  struct stat st;
+  mode_t mode = (stat(path, &st) == 0 && S_ISREG(st.st_mode)) ? (st.st_mode & 07777)
+                                                              : (0666 & ~current_umask());
+  (void)fchmod(fd, mode); /* best effort: the data matters more than the mode */
+}
+
+/* Directory part of path for messages ("." when there is none). */
+static void dir_of(const char *path, char *out, size_t len) {
+  const char *slash = strrchr(path, '/');
+  if (!slash) {
+    snprintf(out, len, ".");
+  } else if (slash == path) {
+    snprintf(out, len, "/");
+  } else {
+    snprintf(out, len, "%.*s", (int)(slash - path), path);
+  }
+}
+
+wv_status wv_io_atomic_open(wv_io_atomic *af, const char *path, wv_error *err) {
+  static const char suffix[] = ".tmp.XXXXXX";
+  char eb[128], dir[512];
+  af->path = path;
+  af->fd = -1;
+  size_t n = strlen(path);
+  af->tmp = malloc(n + sizeof suffix);
+  if (!af->tmp) return wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
+  memcpy(af->tmp, path, n);
+  memcpy(af->tmp + n, suffix, sizeof suffix);
+  af->fd = mkstemp(af->tmp);
+  if (af->fd < 0) {
+    int e = errno;
+    free(af->tmp);
+    af->tmp = NULL;
+    dir_of(path, dir, sizeof dir);
+    return wv_fail(err, WV_ERR_IO, "%s: cannot create temporary file in '%s': %s", path, dir,
+                   wv_io_strerror(e, eb, sizeof eb));
+  }
+  set_final_mode(af->fd, path);
+  return WV_OK;
+}
+
+wv_status wv_io_atomic_write(wv_io_atomic *af, const void *data, size_t len, wv_error *err) {
+  const char *p = data;
+  char eb[128];
+  while (len > 0) {
+    ssize_t w = write(af->fd, p, len);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0)
+      return wv_fail(err, WV_ERR_IO, "%s: cannot write: %s", af->path,
+                     wv_io_strerror(w < 0 ? errno : EIO, eb, sizeof eb));
+    p += w;
+    len -= (size_t)w;
+  }
+  return WV_OK;
+}
+
+wv_status wv_io_atomic_commit(wv_io_atomic *af, wv_error *err) {
+  char eb[128];
+  int fd = af->fd;
+  af->fd = -1;
+  /* close() can report delayed write errors (e.g. NFS, quota). */
+  if (close(fd) != 0) {
+    int e = errno;
+    wv_io_atomic_abort(af);
+    return wv_fail(err, WV_ERR_IO, "%s: cannot write: %s", af->path,
+                   wv_io_strerror(e, eb, sizeof eb));
+  }
+  if (rename(af->tmp, af->path) != 0) {
+    int e = errno;
+    wv_io_atomic_abort(af);
+    return wv_fail(err, WV_ERR_IO, "%s: cannot replace file: %s", af->path,
+                   wv_io_strerror(e, eb, sizeof eb));
+  }
+  free(af->tmp);
+  af->tmp = NULL;
+  return WV_OK;
+}
+
+void wv_io_atomic_abort(wv_io_atomic *af) {
+  if (af->fd >= 0) close(af->fd);
+  af->fd = -1;
+  if (af->tmp) unlink(af->tmp);
+  free(af->tmp);
+  af->tmp = NULL;
+}
+
+wv_status wv_write_file_atomic(const char *path, const void *data, size_t len, wv_error *err) {
+  if (!path || (!data && len > 0))
+    return wv_fail(err, WV_ERR_INVALID, "%s: invalid arguments to write", path ? path : "(null)");
+  wv_io_atomic af;
+  wv_status s = wv_io_atomic_open(&af, path, err);
+  if (s != WV_OK) return s;
+  s = wv_io_atomic_write(&af, data, len, err);
+  if (s != WV_OK) {
+    wv_io_atomic_abort(&af);
+    return s;
+  }
+  return wv_io_atomic_commit(&af, err);
+}
