@@ -38,6 +38,24 @@ wv_status wv_params_read(const char *path, wv_params *p, wv_error *err);
 char *wv_params_to_json(const wv_params *p);
 wv_status wv_params_write(const char *path, const wv_params *p, wv_error *err);
 
+/* The continuous parameters, in a fixed order (the differentiable renderer's and
+ * the fit's vector). Values are in the file's units (angles in degrees). */
+typedef enum {
+  WV_P_BETA_WARP, WV_P_BETA_WEFT,
+  WV_P_KD_WARP_R, WV_P_KD_WARP_G, WV_P_KD_WARP_B,
+  WV_P_KD_WEFT_R, WV_P_KD_WEFT_G, WV_P_KD_WEFT_B,
+  WV_P_KS_WARP_R, WV_P_KS_WARP_G, WV_P_KS_WARP_B,
+  WV_P_KS_WEFT_R, WV_P_KS_WEFT_G, WV_P_KS_WEFT_B,
+  WV_P_ALPHA_WARP, WV_P_ALPHA_WEFT,
+  WV_P_UMAX_DEG, WV_P_BLEND, WV_P_TWIST_DEG,
+  WV_P_COUNT
+} wv_param_id;
+
+const char *wv_param_name(int id);              /* e.g. "diffuse.warp[1]" */
+void wv_param_range(int id, double *lo, double *hi);
+double wv_param_get(const wv_params *p, int id);
+void wv_param_set(wv_params *p, int id, double value);
+
 wv_status wv_params_weave(const wv_params *p, wv_weave *w, wv_error *err);
 /* The geometry model the renderer uses for these parameters. */
 wv_status wv_params_yarn_model(const wv_params *p, wv_yarn_model *m, wv_error *err);

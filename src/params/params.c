@@ -327,3 +327,36 @@ wv_status wv_params_yarn_model(const wv_params *p, wv_yarn_model *m, wv_error *e
   wv_yarn_model_update(m);
   return WV_OK;
 }
+
+static double *param_slot(wv_params *p, int id) {
+  if (id <= WV_P_BETA_WEFT) return &p->heightfield[id - WV_P_BETA_WARP];
+  if (id <= WV_P_KD_WEFT_B) return &p->diffuse[(id - WV_P_KD_WARP_R) / 3][(id - WV_P_KD_WARP_R) % 3];
+  if (id <= WV_P_KS_WEFT_B) return &p->specular[(id - WV_P_KS_WARP_R) / 3][(id - WV_P_KS_WARP_R) % 3];
+  if (id <= WV_P_ALPHA_WEFT) return &p->roughness[id - WV_P_ALPHA_WARP];
+  if (id == WV_P_UMAX_DEG) return &p->inclination_deg;
+  if (id == WV_P_BLEND) return &p->diffuse_blend;
+  return &p->twist_deg;
+}
+
+double wv_param_get(const wv_params *p, int id) { return *param_slot((wv_params *)p, id); }
+void wv_param_set(wv_params *p, int id, double v) { *param_slot(p, id) = v; }
+
+void wv_param_range(int id, double *lo, double *hi) {
+  const range *r = id <= WV_P_BETA_WEFT ? &R_BETA
+                   : id <= WV_P_KD_WEFT_B ? &R_KD
+                   : id <= WV_P_KS_WEFT_B ? &R_KS
+                   : id <= WV_P_ALPHA_WEFT ? &R_ALPHA
+                   : id == WV_P_UMAX_DEG ? &R_UMAX
+                   : id == WV_P_BLEND ? &R_BLEND
+                                      : &R_TWIST;
+  *lo = r->lo, *hi = r->hi;
+}
+
+const char *wv_param_name(int id) {
+  static const char *names[WV_P_COUNT] = {
+      "heightfield.warp", "heightfield.weft", "diffuse.warp[0]", "diffuse.warp[1]", "diffuse.warp[2]",
+      "diffuse.weft[0]",  "diffuse.weft[1]",  "diffuse.weft[2]", "specular.warp[0]", "specular.warp[1]",
+      "specular.warp[2]", "specular.weft[0]", "specular.weft[1]", "specular.weft[2]", "roughness.warp",
+      "roughness.weft",   "inclination_deg",  "diffuse_blend",   "twist_deg"};
+  return id >= 0 && id < WV_P_COUNT ? names[id] : "?";
+}
