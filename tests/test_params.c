@@ -1,0 +1,177 @@
+/* Parameter and scene files: round trips, and every kind of bad input named. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+#include "woven/io.h"
+#include "woven/params.h"
+#include "woven/scene.h"
+
+static const char *GOOD =
+    "{\"pattern\": \"twill\", \"density\": {\"warp\": 120, \"weft\": 80},\n"
+    " \"heightfield\": {\"warp\": 1.2, \"weft\": 1.0},\n"
+    " \"diffuse\": {\"warp\": [0.30, 0.25, 0.10], \"weft\": [0.28, 0.27, 0.12]},\n"
+    " \"specular\": {\"warp\": [0.60, 0.55, 0.40], \"weft\": [0.55, 0.55, 0.45]},\n"
+    " \"roughness\": {\"warp\": 0.75, \"weft\": 0.70}, \"twist_deg\": -30, \"inclination_deg\": 30,\n"
+    " \"diffuse_blend\": 0.5, \"noise_level\": 2, \"thickness\": 2.0, \"yarn_width\": 1.0, \"seed\": 1}";
+
+static void test_parse_and_round_trip(void **state) {
+  (void)state;
+  wv_params p, q;
+  wv_error err = {0};
+  assert_int_equal(wv_params_parse(GOOD, "good.json", &p, &err), WV_OK);
+  assert_string_equal(p.pattern, "twill");
+  assert_true(p.density[WV_WARP] == 120 && p.density[WV_WEFT] == 80);
+  assert_true(p.diffuse[WV_WEFT][2] == 0.12);
+  assert_true(p.twist_deg == -30);
+  assert_int_equal(p.noise_level, 2);
+  char *text = wv_params_to_json(&p);
+  assert_int_equal(wv_params_parse(text, "rt.json", &q, &err), WV_OK);
+  free(text);
+  assert_memory_equal(&p, &q, sizeof p); /* the same doubles, bit for bit */
+  /* through a file, and a custom pattern */
+  const char *dir = tu_tmpdir("params");
+  char path[256];
+  snprintf(path, sizeof path, "%s/custom.json", dir);
+  wv_params c;
+  assert_int_equal(wv_params_parse("{\"pattern\": \"custom\", \"weave\": [\"110\", \"011\", \"101\"]}", "c", &c, &err),
+                   WV_OK);
+  assert_int_equal(wv_params_write(path, &c, &err), WV_OK);
+  assert_int_equal(wv_params_read(path, &q, &err), WV_OK);
+  assert_memory_equal(&c, &q, sizeof c);
+  /* every shipped example reads */
+  const char *ex[] = {"twill", "twill90", "satin", "satin90", "plain", "basket"};
+  for (int i = 0; i < 6; i++) {
+    snprintf(path, sizeof path, "%s/examples/%s.json", WOVEN_SOURCE_DIR, ex[i]);
+    if (wv_params_read(path, &q, &err)) fail_msg("%s", err.msg);
+  }
+}
+
+static void test_param_vector(void **state) {
+  (void)state;
+  wv_params p;
+  wv_params_default("satin", &p, NULL);
+  for (int i = 0; i < WV_P_COUNT; i++) {
+    double lo, hi;
+    wv_param_range(i, &lo, &hi);
+    assert_true(lo < hi);
+    wv_param_set(&p, i, 0.5 * (lo + hi));
+    assert_true(wv_param_get(&p, i) == 0.5 * (lo + hi));
+    assert_true(strlen(wv_param_name(i)) > 3);
+  }
+  assert_int_equal(wv_params_validate(&p, NULL), WV_OK);
+  assert_true(p.diffuse[WV_WEFT][1] == 0.5);
+  assert_true(p.roughness[WV_WEFT] == 0.505);
+}
+
+/* Each bad text must fail with the given code and a message containing 'needle'. */
+static void expect_bad(const char *text, wv_status code, const char *needle) {
+  wv_params p;
+  wv_error err = {0};
+  wv_status st = wv_params_parse(text, "bad.json", &p, &err);
+  if (st != code || !strstr(err.msg, needle) || !strstr(err.msg, "bad.json"))
+    fail_msg("for %s: got %d '%s', wanted %d with '%s'", text, st, err.msg, code, needle);
+}
+
+static void test_bad_params(void **state) {
+  (void)state;
+  expect_bad("{\"pattern\": \"twill\",\n \"density\": {\"warp\": 120,, }}", WV_ERR_FORMAT, "bad.json:2:");
+  expect_bad("{\"pattern\": \"twill\", \"colour\": 1}", WV_ERR_INVALID, "'colour'");
+  expect_bad("{\"pattern\": \"twill\", \"density\": {\"warp\": 120, \"wefts\": 3}}", WV_ERR_INVALID, "density.wefts");
+  expect_bad("{\"pattern\": \"herringbone\"}", WV_ERR_INVALID, "herringbone");
+  expect_bad("{\"pattern\": \"twill\", \"density\": {\"warp\": 400}}", WV_ERR_INVALID, "density.warp");
+  expect_bad("{\"pattern\": \"twill\", \"roughness\": {\"weft\": 0}}", WV_ERR_INVALID, "roughness.weft");
+  expect_bad("{\"pattern\": \"twill\", \"diffuse\": {\"warp\": [0.1, 1.5, 0.2]}}", WV_ERR_INVALID, "diffuse.warp");
+  expect_bad("{\"pattern\": \"twill\", \"diffuse\": {\"warp\": [0.1, 0.2]}}", WV_ERR_INVALID, "diffuse.warp");
+  expect_bad("{\"pattern\": \"twill\", \"twist_deg\": \"a lot\"}", WV_ERR_INVALID, "twist_deg");
+  expect_bad("{\"pattern\": \"twill\", \"inclination_deg\": 1e999}", WV_ERR_FORMAT, "bad.json:1:");
+  expect_bad("{\"pattern\": \"twill\", \"inclination_deg\": NaN}", WV_ERR_FORMAT, "bad.json:1:");
+  expect_bad("{\"pattern\": \"twill\", \"noise_level\": 11}", WV_ERR_INVALID, "noise_level");
+  expect_bad("{\"pattern\": \"twill\", \"noise_level\": 2.5}", WV_ERR_INVALID, "noise_level");
+  expect_bad("{\"pattern\": \"twill\", \"twist_deg\": 5, \"twist_deg\": 6}", WV_ERR_FORMAT, "duplicate");
+  expect_bad("{\"pattern\": \"custom\", \"weave\": [\"10\", \"1\"]}", WV_ERR_INVALID, "weave");
+  expect_bad("{\"pattern\": \"custom\"}", WV_ERR_INVALID, "weave");
+  expect_bad("[1, 2]", WV_ERR_INVALID, "object");
+  expect_bad("", WV_ERR_FORMAT, "bad.json:");
+  /* NaN can also arrive through the API */
+  wv_params p;
+  wv_error err = {0};
+  wv_params_default("plain", &p, NULL);
+  p.diffuse_blend = NAN;
+  assert_int_equal(wv_params_validate(&p, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "diffuse_blend"));
+  /* missing and unreadable files */
+  assert_int_equal(wv_params_read("no/such/file.json", &p, &err), WV_ERR_IO);
+  assert_non_null(strstr(err.msg, "no/such/file.json"));
+}
+
+static void test_scenes(void **state) {
+  (void)state;
+  const char *names[] = {"cylinder", "flat45"};
+  for (int i = 0; i < 2; i++) {
+    wv_scene a, b;
+    wv_error err = {0};
+    char path[512];
+    snprintf(path, sizeof path, "%s/scenes/%s.json", WOVEN_SOURCE_DIR, names[i]);
+    assert_int_equal(wv_scene_preset(names[i], &a, &err), WV_OK);
+    if (wv_scene_read(path, &b, &err)) fail_msg("%s", err.msg);
+    assert_memory_equal(&a, &b, sizeof a); /* scenes/ files and built-in presets agree */
+    char *text = wv_scene_to_json(&a);
+    assert_int_equal(wv_scene_parse(text, "rt", &b, &err), WV_OK);
+    free(text);
+    assert_memory_equal(&a, &b, sizeof a);
+  }
+  wv_scene s;
+  wv_scene_preset("flat45", &s, NULL);
+  assert_int_equal(s.width, 512);
+  assert_int_equal(s.encoding, WV_ENC_GAMMA);
+  assert_true(s.falloff && s.falloff_sigma == 450);
+}
+
+static void expect_bad_scene(const char *text, wv_status code, const char *needle) {
+  wv_scene s;
+  wv_error err = {0};
+  wv_status st = wv_scene_parse(text, "scene.json", &s, &err);
+  if (st != code || !strstr(err.msg, needle) || !strstr(err.msg, "scene.json"))
+    fail_msg("for %s: got %d '%s', wanted %d with '%s'", text, st, err.msg, code, needle);
+}
+
+#define CAM "\"camera\": {\"position_mm\": [0,0,8], \"look_at_mm\": [0,0,0], \"vfov_deg\": 50}"
+#define LIGHT "\"light\": {\"position_mm\": [0,8,8], \"intensity\": 300}"
+#define PLANE "\"sample\": {\"shape\": \"plane\"}"
+
+static void test_bad_scenes(void **state) {
+  (void)state;
+  expect_bad_scene("{\"image\": {\"width\": 100, \"height\": 100}, " CAM ", " PLANE ", " LIGHT ", }", WV_ERR_FORMAT,
+                   "scene.json:1:");
+  expect_bad_scene("{\"image\": {\"width\": 100000, \"height\": 100}, " CAM ", " PLANE ", " LIGHT "}",
+                   WV_ERR_INVALID, "image");
+  expect_bad_scene("{\"image\": {\"width\": 16000, \"height\": 16000, \"spp\": 4000}, " CAM ", " PLANE ", " LIGHT "}",
+                   WV_ERR_NOMEM, "too many samples");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10, \"spp\": 0}, " CAM ", " PLANE ", " LIGHT "}",
+                   WV_ERR_INVALID, "image.spp");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", \"sample\": {\"shape\": \"sphere\"}, " LIGHT "}",
+                   WV_ERR_INVALID, "sample.shape");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE ", " LIGHT ", \"lens\": 1}",
+                   WV_ERR_INVALID, "'lens'");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE "}", WV_ERR_INVALID, "light");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE ", " LIGHT
+                   ", \"response\": {\"encoding\": \"log\"}}",
+                   WV_ERR_INVALID, "response.encoding");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, \"camera\": {\"position_mm\": [0,0,8], "
+                   "\"look_at_mm\": [0,0,0], \"vfov_deg\": 200}, " PLANE ", " LIGHT "}",
+                   WV_ERR_INVALID, "vfov_deg");
+  wv_scene s;
+  wv_error err = {0};
+  assert_int_equal(wv_scene_load("nowhere.json", &s, &err), WV_ERR_IO);
+  assert_non_null(strstr(err.msg, "nowhere.json"));
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_parse_and_round_trip), cmocka_unit_test(test_param_vector),
+                                     cmocka_unit_test(test_bad_params), cmocka_unit_test(test_scenes),
+                                     cmocka_unit_test(test_bad_scenes)};
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
