@@ -1,0 +1,20 @@
+/* Small helpers shared by the benchmarks: wall time and medians. */
+#ifndef WOVEN_BENCH_COMMON_H
+#define WOVEN_BENCH_COMMON_H
+#include <stdlib.h>
+#include <time.h>
+
+static inline double bench_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+static int bench_cmp(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+static inline double bench_median(double *v, int n) {
+  qsort(v, n, sizeof *v, bench_cmp);
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+#endif
