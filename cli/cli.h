@@ -50,5 +50,6 @@ double cli_now(void);
 
 int cmd_render(int argc, char **argv);
 int cmd_maps(int argc, char **argv);
+int cmd_compare(int argc, char **argv);
 
 #endif
