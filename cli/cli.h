@@ -48,7 +48,24 @@ void cli_progress_update(void *p, double fraction);
 void cli_progress_end(cli_progress *p);
 double cli_now(void);
 
+/* A fit to run (woven fit and woven capture). */
+#include "woven/descriptor.h"
+#include "woven/fit.h"
+#include "woven/params.h"
+#include "woven/scene.h"
+typedef struct {
+  const wv_scene *scene;
+  const wv_image *photo;
+  wv_descriptor *desc;
+  const wv_params *start; /* NULL when resuming */
+  wv_fit_opts opts;
+  const char *dir, *photo_path, *start_label, *title;
+  int resume, iters_given;
+} fit_job;
+int fit_pipeline(cli_ctx *c, const fit_job *job);
+
 int cmd_render(int argc, char **argv);
+int cmd_fit(int argc, char **argv);
 int cmd_maps(int argc, char **argv);
 int cmd_compare(int argc, char **argv);
 

@@ -12,6 +12,7 @@ static const struct {
 } COMMANDS[] = {
     {"render", cmd_render, "render fabric parameters in a capture scene"},
     {"maps", cmd_maps, "write tileable texture maps (normal, tangent, albedo, ...)"},
+    {"fit", cmd_fit, "refine fabric parameters from a photo (differentiable rendering)"},
     {"compare", cmd_compare, "SSIM and mean absolute difference of two images"},
 };
 

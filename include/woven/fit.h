@@ -1,0 +1,86 @@
+/* woven: refine fabric parameters from a photo by differentiable rendering
+ * (paper section 4.3, SPEC section 7).
+ *   L = L_g + w1 L_p + w2 L_c
+ *   L_g = mean |Gram(photo) - Gram(render)|        (the texture descriptor)
+ *   L_p = sum over warp, weft of (beta - mu)^2 / (2 sigma^2)   (pattern prior)
+ *   L_c = mean |down(photo) - down(render)|        (area average to 16 x 8)
+ * Adam on the continuous parameters (normalised to [0,1] by their ranges, kept
+ * inside them), the twist included (we have its gradient); every few iterations
+ * a random step of a discrete parameter (noise level Q, warp or weft density) is
+ * kept only if the loss drops. */
+#ifndef WOVEN_FIT_H
+#define WOVEN_FIT_H
+
+#include <stdint.h>
+
+#include "woven/descriptor.h"
+#include "woven/error.h"
+#include "woven/image.h"
+#include "woven/params.h"
+#include "woven/scene.h"
+
+typedef struct {
+  int iters;          /* 200 */
+  double lr;          /* Adam learning rate in normalised units: 0.01 */
+  double w_prior;     /* w1 = 0.0005 */
+  double w_pixel;     /* w2 = 0.2 */
+  int down_w, down_h; /* 16 x 8 */
+  int discrete_every; /* 5 (0: no discrete search) */
+  int iter_scale;     /* iterate on the image downscaled by this factor (2) */
+  int iter_spp;       /* samples per pixel while iterating (16) */
+  uint64_t seed;      /* random steps of the discrete search */
+  int threads;        /* 0: all cores */
+  int checkpoint_every; /* 10 */
+} wv_fit_opts;
+
+void wv_fit_opts_default(wv_fit_opts *o);
+
+/* One iteration's record. */
+typedef struct {
+  int iter;
+  double loss, gram, prior, pixel;
+  int discrete_tried, discrete_kept;
+} wv_fit_record;
+
+/* Time spent, seconds. */
+typedef struct {
+  double render, gradient, descriptor, discrete, total;
+} wv_fit_timing;
+
+/* Everything needed to continue a fit: parameters, Adam moments, RNG, history. */
+typedef struct {
+  wv_params start, params;
+  int iter; /* iterations done */
+  double adam_m[WV_P_COUNT], adam_v[WV_P_COUNT];
+  uint64_t rng;
+  wv_fit_record *log; /* iter entries */
+  int log_cap;
+  wv_fit_timing timing;
+} wv_fit_state;
+
+wv_status wv_fit_state_init(wv_fit_state *st, const wv_params *start, const wv_fit_opts *o, wv_error *err);
+void wv_fit_state_free(wv_fit_state *st);
+
+/* Called after every iteration (may be NULL); return nonzero to stop early. */
+typedef int (*wv_fit_callback)(void *user, const wv_fit_state *st, const wv_fit_opts *o);
+
+/* Runs iterations st->iter .. o->iters - 1 against photo (the scene's size, as
+ * wv_photo_load gives it). */
+wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
+                     const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err);
+
+/* Loss terms of params against photo at the scene's own resolution and spp. */
+wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p,
+                      const wv_fit_opts *o, wv_fit_record *out, wv_error *err);
+
+/* Checkpoints (JSON, written atomically): the state and the options. */
+wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, const wv_fit_opts *o,
+                                  const char *descriptor_name, wv_error *err);
+wv_status wv_fit_checkpoint_read(const char *path, wv_fit_state *st, wv_fit_opts *o, char *descriptor_name,
+                                 size_t name_cap, wv_error *err);
+
+/* The beta prior of SPEC section 7 for a pattern (plain, twill, satin; the 90
+ * variants and custom patterns use their base / the plain prior). */
+void wv_fit_beta_prior(const char *pattern, double *mu, double *sigma);
+
+#endif

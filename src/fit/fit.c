@@ -1,0 +1,380 @@
+#include "woven/fit.h"
+
+#include <jansson.h>
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "util/hash.h"
+#include "woven/grad.h"
+#include "woven/imgops.h"
+#include "woven/io.h"
+#include "woven/render.h"
+
+void wv_fit_opts_default(wv_fit_opts *o) {
+  memset(o, 0, sizeof *o);
+  o->iters = 200;
+  o->lr = 0.01;
+  o->w_prior = 0.0005;
+  o->w_pixel = 0.2;
+  o->down_w = 16, o->down_h = 8;
+  o->discrete_every = 5;
+  o->iter_scale = 2;
+  o->iter_spp = 16;
+  o->seed = 1;
+  o->checkpoint_every = 10;
+}
+
+void wv_fit_beta_prior(const char *pattern, double *mu, double *sigma) {
+  if (!strncmp(pattern, "twill", 5)) *mu = 1.0, *sigma = 0.5;
+  else if (!strncmp(pattern, "satin", 5)) *mu = 0.1, *sigma = 0.5;
+  else *mu = 1.0, *sigma = 1.0;
+}
+
+wv_status wv_fit_state_init(wv_fit_state *st, const wv_params *start, const wv_fit_opts *o, wv_error *err) {
+  memset(st, 0, sizeof *st);
+  wv_status s = wv_params_validate(start, err);
+  if (s) return s;
+  st->start = st->params = *start;
+  st->rng = wv_mix64(o->seed ^ 0x666974ULL);
+  st->log_cap = o->iters > 0 ? o->iters : 1;
+  st->log = calloc((size_t)st->log_cap, sizeof *st->log);
+  if (!st->log) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the fit log");
+  return WV_OK;
+}
+
+void wv_fit_state_free(wv_fit_state *st) {
+  free(st->log);
+  st->log = NULL;
+}
+
+/* What stays fixed during a fit: the target at the iteration resolution. */
+typedef struct {
+  wv_scene scene;
+  wv_image photo, photo_down;
+  float *gram_photo, *gram, *dgram;
+  size_t ng;
+  wv_image render, dcap, dcap_pix, down, ddown;
+  wv_descriptor *d;
+  const wv_fit_opts *o;
+  wv_fit_timing *timing;
+} fit_ctx;
+
+static void ctx_free(fit_ctx *c) {
+  wv_image_free(&c->photo), wv_image_free(&c->photo_down), wv_image_free(&c->render);
+  wv_image_free(&c->dcap), wv_image_free(&c->dcap_pix), wv_image_free(&c->down), wv_image_free(&c->ddown);
+  free(c->gram_photo), free(c->gram), free(c->dgram);
+}
+
+static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, wv_descriptor *d, int scale,
+                          int spp, const wv_fit_opts *o, wv_fit_timing *timing, wv_error *err) {
+  memset(c, 0, sizeof *c);
+  c->d = d, c->o = o, c->timing = timing;
+  c->scene = *s;
+  if (scale > 1) {
+    c->scene.width = s->width / scale, c->scene.height = s->height / scale;
+    c->scene.falloff_sigma = s->falloff_sigma / scale;
+  }
+  if (spp > 0) c->scene.spp = spp;
+  if (photo->w != s->width || photo->h != s->height)
+    return wv_fail(err, WV_ERR_INVALID, "the photo is %d x %d but the scene renders %d x %d", photo->w, photo->h,
+                   s->width, s->height);
+  wv_status st;
+  if (c->scene.width == photo->w && c->scene.height == photo->h) {
+    if ((st = wv_image_alloc(&c->photo, photo->w, photo->h, 3, err))) return st;
+    memcpy(c->photo.data, photo->data, sizeof(float) * 3 * (size_t)photo->w * photo->h);
+  } else if ((st = wv_image_downsample(photo, c->scene.width, c->scene.height, &c->photo, err))) {
+    return st;
+  }
+  if ((st = wv_image_downsample(&c->photo, o->down_w, o->down_h, &c->photo_down, err))) return st;
+  c->ng = wv_descriptor_size(d);
+  c->gram_photo = malloc(sizeof(float) * c->ng);
+  c->gram = malloc(sizeof(float) * c->ng);
+  c->dgram = malloc(sizeof(float) * c->ng);
+  if (!c->gram_photo || !c->gram || !c->dgram) return wv_fail(err, WV_ERR_NOMEM, "out of memory for Gram matrices");
+  if ((st = wv_descriptor_forward(d, &c->photo, c->gram_photo, err))) return st;
+  if ((st = wv_image_alloc(&c->dcap, c->scene.width, c->scene.height, 3, err))) return st;
+  return WV_OK;
+}
+
+/* Loss of p; with grad != NULL also dL/dtheta (file units). */
+static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, double grad[WV_P_COUNT],
+                          wv_error *err) {
+  const wv_fit_opts *o = c->o;
+  wv_render_opts ro = {c->scene.spp, o->threads, NULL, NULL};
+  double t0 = omp_get_wtime();
+  wv_image_free(&c->render);
+  wv_status st = wv_render(&c->scene, p, &ro, &c->render, NULL, err);
+  if (st) return st;
+  double t1 = omp_get_wtime();
+  c->timing->render += t1 - t0;
+  /* L_g = mean |G_p - G_r| */
+  if ((st = wv_descriptor_forward(c->d, &c->render, c->gram, err))) return st;
+  double lg = 0;
+  for (size_t i = 0; i < c->ng; i++) {
+    float df = c->gram[i] - c->gram_photo[i];
+    lg += fabsf(df);
+    c->dgram[i] = (float)((df > 0) - (df < 0)) / (float)c->ng;
+  }
+  lg /= (double)c->ng;
+  /* L_c = mean |down(photo) - down(render)| */
+  wv_image_free(&c->down);
+  if ((st = wv_image_downsample(&c->render, o->down_w, o->down_h, &c->down, err))) return st;
+  if (!c->ddown.data && (st = wv_image_alloc(&c->ddown, o->down_w, o->down_h, 3, err))) return st;
+  double lc = wv_image_l1(&c->down, &c->photo_down, grad ? &c->ddown : NULL);
+  /* L_p on beta */
+  double mu, sg;
+  wv_fit_beta_prior(p->pattern, &mu, &sg);
+  double lp = 0;
+  for (int y = 0; y < 2; y++) lp += (p->heightfield[y] - mu) * (p->heightfield[y] - mu) / (2 * sg * sg);
+  rec->gram = lg, rec->pixel = lc, rec->prior = lp;
+  rec->loss = lg + o->w_prior * lp + o->w_pixel * lc;
+  double t2 = omp_get_wtime();
+  c->timing->descriptor += t2 - t1;
+  if (!grad) return WV_OK;
+  /* dL/dcapture: descriptor backward plus the pixel term through the downsampling */
+  if ((st = wv_descriptor_backward(c->d, &c->render, c->dgram, NULL, &c->dcap, err))) return st;
+  wv_image_free(&c->dcap_pix);
+  if ((st = wv_image_downsample_backward(c->scene.width, c->scene.height, &c->ddown, &c->dcap_pix, err))) return st;
+  size_t n = (size_t)c->scene.width * c->scene.height * 3;
+  for (size_t i = 0; i < n; i++) c->dcap.data[i] += (float)o->w_pixel * c->dcap_pix.data[i];
+  double t3 = omp_get_wtime();
+  c->timing->descriptor += t3 - t2;
+  if ((st = wv_render_grad(&c->scene, p, &ro, &c->dcap, grad, NULL, err))) return st;
+  c->timing->gradient += omp_get_wtime() - t3;
+  grad[WV_P_BETA_WARP] += o->w_prior * (p->heightfield[WV_WARP] - mu) / (sg * sg);
+  grad[WV_P_BETA_WEFT] += o->w_prior * (p->heightfield[WV_WEFT] - mu) / (sg * sg);
+  return WV_OK;
+}
+
+wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p,
+                      const wv_fit_opts *o, wv_fit_record *out, wv_error *err) {
+  fit_ctx c;
+  wv_fit_timing t = {0};
+  wv_status st = ctx_init(&c, s, photo, d, 1, 0, o, &t, err);
+  if (!st) st = evaluate(&c, p, out, NULL, err);
+  ctx_free(&c);
+  return st;
+}
+
+static uint64_t next_rand(uint64_t *state) {
+  *state += 0x9e3779b97f4a7c15ULL;
+  return wv_mix64(*state);
+}
+
+/* One random step of a discrete parameter (SPEC section 7 schedule). Returns 0
+ * when the step would leave the range (nothing to try). */
+static int discrete_step(wv_params *p, uint64_t *rng, int iter, int iters) {
+  uint64_t r = next_rand(rng);
+  int which = (int)(r % 3), sign = (r >> 8) & 1 ? 1 : -1;
+  double frac = (double)iter / (iters > 0 ? iters : 1);
+  double dstep = frac < 0.5 ? 10 : frac < 0.75 ? 5 : 2;
+  if (which == 0) {
+    int q = p->noise_level + sign;
+    if (q < 0 || q > 10) return 0;
+    p->noise_level = q;
+  } else {
+    double *dens = &p->density[which - 1];
+    double v = *dens + sign * dstep;
+    if (v < 20 || v > 250) return 0;
+    *dens = v;
+  }
+  return 1;
+}
+
+wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
+                     const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err) {
+  if (o->iters > st->log_cap) {
+    wv_fit_record *nl = realloc(st->log, sizeof *nl * (size_t)o->iters);
+    if (!nl) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the fit log");
+    st->log = nl, st->log_cap = o->iters;
+  }
+  fit_ctx c;
+  double t_start = omp_get_wtime();
+  wv_status rc = ctx_init(&c, s, photo, d, o->iter_scale, o->iter_spp, o, &st->timing, err);
+  const double b1 = 0.9, b2 = 0.999, eps = 1e-8;
+  while (!rc && st->iter < o->iters) {
+    wv_fit_record rec = {0};
+    rec.iter = st->iter;
+    double g[WV_P_COUNT] = {0};
+    if ((rc = evaluate(&c, &st->params, &rec, g, err))) break;
+    /* Adam in normalised coordinates z = (theta - lo) / (hi - lo), kept in [0, 1] */
+    int t = st->iter + 1;
+    for (int i = 0; i < WV_P_COUNT; i++) {
+      double lo, hi;
+      wv_param_range(i, &lo, &hi);
+      double gz = g[i] * (hi - lo);
+      if (!isfinite(gz)) gz = 0;
+      st->adam_m[i] = b1 * st->adam_m[i] + (1 - b1) * gz;
+      st->adam_v[i] = b2 * st->adam_v[i] + (1 - b2) * gz * gz;
+      double mh = st->adam_m[i] / (1 - pow(b1, t)), vh = st->adam_v[i] / (1 - pow(b2, t));
+      double z = (wv_param_get(&st->params, i) - lo) / (hi - lo) - o->lr * mh / (sqrt(vh) + eps);
+      z = z < 0 ? 0 : z > 1 ? 1 : z;
+      wv_param_set(&st->params, i, lo + z * (hi - lo));
+    }
+    /* Discrete search: keep a random step only if it lowers the loss. */
+    if (o->discrete_every > 0 && t % o->discrete_every == 0) {
+      double td = omp_get_wtime();
+      wv_fit_timing saved = st->timing;
+      wv_params trial = st->params;
+      if (discrete_step(&trial, &st->rng, st->iter, o->iters)) {
+        wv_fit_record cur = {0}, alt = {0};
+        if ((rc = evaluate(&c, &st->params, &cur, NULL, err))) break;
+        if ((rc = evaluate(&c, &trial, &alt, NULL, err))) break;
+        rec.discrete_tried = 1;
+        if (alt.loss < cur.loss) {
+          st->params = trial;
+          rec.discrete_kept = 1;
+        }
+      }
+      /* account the search as its own item, not as render/descriptor time */
+      double spent = omp_get_wtime() - td;
+      st->timing.render = saved.render, st->timing.descriptor = saved.descriptor;
+      st->timing.discrete += spent;
+    }
+    st->log[st->iter] = rec;
+    st->iter++;
+    st->timing.total += omp_get_wtime() - t_start;
+    t_start = omp_get_wtime();
+    if (cb && cb(user, st, o)) break;
+  }
+  ctx_free(&c);
+  return rc;
+}
+
+/* ---- checkpoints ---- */
+
+static json_t *darray(const double *v, int n) {
+  json_t *a = json_array();
+  for (int i = 0; i < n; i++) json_array_append_new(a, json_real(v[i]));
+  return a;
+}
+
+static json_t *params_json(const wv_params *p) {
+  char *s = wv_params_to_json(p);
+  json_t *o = json_loads(s, 0, NULL);
+  free(s);
+  return o;
+}
+
+wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, const wv_fit_opts *o,
+                                  const char *descriptor_name, wv_error *err) {
+  json_t *root = json_object();
+  json_object_set_new(root, "kind", json_string("woven-fit-checkpoint"));
+  json_object_set_new(root, "version", json_integer(1));
+  json_object_set_new(root, "descriptor", json_string(descriptor_name));
+  json_object_set_new(root, "iter", json_integer(st->iter));
+  json_object_set_new(root, "start", params_json(&st->start));
+  json_object_set_new(root, "params", params_json(&st->params));
+  json_object_set_new(root, "adam_m", darray(st->adam_m, WV_P_COUNT));
+  json_object_set_new(root, "adam_v", darray(st->adam_v, WV_P_COUNT));
+  char rng[32];
+  snprintf(rng, sizeof rng, "%016llx", (unsigned long long)st->rng);
+  json_object_set_new(root, "rng", json_string(rng));
+  json_object_set_new(root, "timing", json_pack("{s:f,s:f,s:f,s:f,s:f}", "render", st->timing.render, "gradient",
+                                                st->timing.gradient, "descriptor", st->timing.descriptor,
+                                                "discrete", st->timing.discrete, "total", st->timing.total));
+  json_object_set_new(root, "opts",
+                      json_pack("{s:i,s:f,s:f,s:f,s:i,s:i,s:i,s:i,s:i,s:I}", "iters", o->iters, "lr", o->lr,
+                                "w_prior", o->w_prior, "w_pixel", o->w_pixel, "down_w", o->down_w, "down_h",
+                                o->down_h, "discrete_every", o->discrete_every, "iter_scale", o->iter_scale,
+                                "iter_spp", o->iter_spp, "seed", (json_int_t)o->seed));
+  json_t *log = json_array();
+  for (int i = 0; i < st->iter; i++) {
+    const wv_fit_record *r = &st->log[i];
+    json_array_append_new(log, json_pack("[i,f,f,f,f,i,i]", r->iter, r->loss, r->gram, r->prior, r->pixel,
+                                         r->discrete_tried, r->discrete_kept));
+  }
+  json_object_set_new(root, "log", log);
+  char *text = json_dumps(root, JSON_COMPACT | JSON_REAL_PRECISION(17));
+  json_decref(root);
+  if (!text) return wv_fail(err, WV_ERR_NOMEM, "%s: cannot format checkpoint", path);
+  wv_status s = wv_write_file_atomic(path, text, strlen(text), err);
+  free(text);
+  return s;
+}
+
+static wv_status read_params_obj(json_t *o, const char *path, const char *key, wv_params *p, wv_error *err) {
+  json_t *v = json_object_get(o, key);
+  if (!json_is_object(v)) return wv_fail(err, WV_ERR_FORMAT, "%s: checkpoint has no '%s' parameters", path, key);
+  char *s = json_dumps(v, JSON_REAL_PRECISION(17));
+  char src[600];
+  snprintf(src, sizeof src, "%s '%s'", path, key);
+  wv_status st = wv_params_parse(s, src, p, err);
+  free(s);
+  return st;
+}
+
+static wv_status read_darray(json_t *o, const char *path, const char *key, double *v, int n, wv_error *err) {
+  json_t *a = json_object_get(o, key);
+  if (!json_is_array(a) || (int)json_array_size(a) != n)
+    return wv_fail(err, WV_ERR_FORMAT, "%s: '%s' must be an array of %d numbers", path, key, n);
+  for (int i = 0; i < n; i++) {
+    json_t *x = json_array_get(a, i);
+    if (!json_is_number(x)) return wv_fail(err, WV_ERR_FORMAT, "%s: '%s[%d]' is not a number", path, key, i);
+    v[i] = json_number_value(x);
+  }
+  return WV_OK;
+}
+
+wv_status wv_fit_checkpoint_read(const char *path, wv_fit_state *st, wv_fit_opts *o, char *descriptor_name,
+                                 size_t name_cap, wv_error *err) {
+  memset(st, 0, sizeof *st);
+  json_error_t je;
+  json_t *root = json_load_file(path, JSON_REJECT_DUPLICATES, &je);
+  if (!root) {
+    if (je.line < 0) return wv_fail(err, WV_ERR_IO, "%s: %s", path, je.text);
+    return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", path, je.line, je.column, je.text);
+  }
+  wv_status rc = WV_OK;
+  json_t *kind = json_object_get(root, "kind");
+  if (!json_is_string(kind) || strcmp(json_string_value(kind), "woven-fit-checkpoint") ||
+      json_integer_value(json_object_get(root, "version")) != 1) {
+    rc = wv_fail(err, WV_ERR_FORMAT, "%s: not a woven fit checkpoint (version 1)", path);
+    goto done;
+  }
+  json_t *opts = json_object_get(root, "opts");
+  wv_fit_opts_default(o);
+  json_int_t seed = 1;
+  if (json_unpack(opts, "{s:i,s:F,s:F,s:F,s:i,s:i,s:i,s:i,s:i,s:I}", "iters", &o->iters, "lr", &o->lr, "w_prior",
+                  &o->w_prior, "w_pixel", &o->w_pixel, "down_w", &o->down_w, "down_h", &o->down_h, "discrete_every",
+                  &o->discrete_every, "iter_scale", &o->iter_scale, "iter_spp", &o->iter_spp, "seed", &seed)) {
+    rc = wv_fail(err, WV_ERR_FORMAT, "%s: checkpoint options are incomplete", path);
+    goto done;
+  }
+  o->seed = (uint64_t)seed;
+  wv_params start;
+  if ((rc = read_params_obj(root, path, "start", &start, err))) goto done;
+  if ((rc = wv_fit_state_init(st, &start, o, err))) goto done;
+  if ((rc = read_params_obj(root, path, "params", &st->params, err))) goto done;
+  if ((rc = read_darray(root, path, "adam_m", st->adam_m, WV_P_COUNT, err))) goto done;
+  if ((rc = read_darray(root, path, "adam_v", st->adam_v, WV_P_COUNT, err))) goto done;
+  const char *rng = json_string_value(json_object_get(root, "rng"));
+  const char *dn = json_string_value(json_object_get(root, "descriptor"));
+  json_t *log = json_object_get(root, "log");
+  json_int_t it = json_integer_value(json_object_get(root, "iter"));
+  if (!rng || !dn || !json_is_array(log) || it < 0 || it > o->iters || (json_int_t)json_array_size(log) != it) {
+    rc = wv_fail(err, WV_ERR_FORMAT, "%s: checkpoint is inconsistent (iter, log, rng or descriptor)", path);
+    goto done;
+  }
+  st->rng = strtoull(rng, NULL, 16);
+  snprintf(descriptor_name, name_cap, "%s", dn);
+  st->iter = (int)it;
+  for (int i = 0; i < st->iter; i++) {
+    wv_fit_record *r = &st->log[i];
+    if (json_unpack(json_array_get(log, i), "[i,F,F,F,F,i,i]", &r->iter, &r->loss, &r->gram, &r->prior, &r->pixel,
+                    &r->discrete_tried, &r->discrete_kept)) {
+      rc = wv_fail(err, WV_ERR_FORMAT, "%s: log entry %d is malformed", path, i);
+      goto done;
+    }
+  }
+  json_unpack(json_object_get(root, "timing"), "{s:F,s:F,s:F,s:F,s:F}", "render", &st->timing.render, "gradient",
+              &st->timing.gradient, "descriptor", &st->timing.descriptor, "discrete", &st->timing.discrete, "total",
+              &st->timing.total);
+done:
+  if (rc && st->log) wv_fit_state_free(st);
+  json_decref(root);
+  return rc;
+}
