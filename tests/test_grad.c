@@ -334,6 +334,42 @@ static void test_chain_with_downsampling(void **state) {
   wv_image_free(&W), wv_image_free(&dc);
 }
 
+/* Render, then differentiate with several adjoints: the same as the fused call. */
+static void test_record(void **state) {
+  (void)state;
+  rng r = {17};
+  wv_scene s = small_scene("flat45", 48, 40, 4);
+  wv_params p;
+  random_params("satin", &r, &p);
+  p.noise_level = 1;
+  wv_error err;
+  wv_image dc, cap1, cap2;
+  assert_int_equal(wv_image_alloc(&dc, 32, 24, 3, &err), WV_OK);
+  for (int dbl = 0; dbl < 2; dbl++) {
+    wv_grad_opts go = {8, 10, 32, 24, dbl};
+    wv_grad_record *rec;
+    assert_int_equal(wv_render_record(&s, &p, NULL, &go, &cap1, &rec, &err), WV_OK);
+    for (int k = 0; k < 3; k++) {
+      fill_random(&dc, &r);
+      double g1[WV_P_COUNT], g2[WV_P_COUNT], d1, d2;
+      assert_int_equal(wv_record_grad(rec, &dc, g1, &d1, &err), WV_OK);
+      assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &go, &dc, g2, &d2, &cap2, &err), WV_OK);
+      assert_int_equal(memcmp(g1, g2, sizeof g1), 0);
+      assert_true(d1 == d2);
+      assert_int_equal(memcmp(cap1.data, cap2.data, sizeof(float) * 32 * 24 * 3), 0);
+      wv_image_free(&cap2);
+    }
+    wv_image bad;
+    assert_int_equal(wv_image_alloc(&bad, 24, 32, 3, &err), WV_OK);
+    double g[WV_P_COUNT];
+    assert_int_equal(wv_record_grad(rec, &bad, g, NULL, &err), WV_ERR_INVALID);
+    wv_image_free(&bad), wv_image_free(&cap1);
+    wv_record_free(rec);
+  }
+  wv_record_free(NULL);
+  wv_image_free(&dc);
+}
+
 static void test_errors(void **state) {
   (void)state;
   wv_scene s = small_scene("flat45", 32, 32, 2);
@@ -361,6 +397,7 @@ int main(void) {
       cmocka_unit_test(test_finite_differences), cmocka_unit_test(test_float_matches_double),
       cmocka_unit_test(test_capture_and_windows), cmocka_unit_test(test_exact_zeros),
       cmocka_unit_test(test_range_edges),        cmocka_unit_test(test_deterministic),
-      cmocka_unit_test(test_chain_with_downsampling), cmocka_unit_test(test_errors)};
+      cmocka_unit_test(test_chain_with_downsampling), cmocka_unit_test(test_record),
+      cmocka_unit_test(test_errors)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

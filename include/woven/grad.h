@@ -19,8 +19,9 @@ typedef struct {
    * y0..y0+height-1); the falloff mask stays centred on the full image.
    * width = height = 0: the whole image. */
   int x0, y0, width, height;
-  /* 1: evaluate the shading and its derivatives in double precision (about 3x
-   * slower; for gradient checks, where float rounding swamps finite differences). */
+  /* 1: evaluate the shading and its derivatives in double precision (about 1.3x
+   * slower; for gradient checks, where float rounding swamps finite differences).
+   * The capture is then the double result rounded to float, not wv_render's. */
   int double_precision;
 } wv_grad_opts;
 
@@ -39,6 +40,18 @@ wv_status wv_render_grad(const wv_scene *s, const wv_params *p, const wv_render_
 wv_status wv_render_grad_ex(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
                             const wv_grad_opts *g, const wv_image *dcapture, double grad[WV_P_COUNT],
                             double *dot, wv_image *capture_out, wv_error *err);
+
+/* Render first, differentiate later: for losses whose adjoint depends on the
+ * capture itself (L1, Gram matrices), which is every loss of the fit. The render
+ * keeps each pixel's derivative sums (about 200 bytes a pixel); wv_record_grad
+ * then costs one cheap pass over them and may be called with any number of
+ * adjoints. Same results as wv_render_grad_ex, bit for bit. */
+typedef struct wv_grad_record wv_grad_record;
+wv_status wv_render_record(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
+                           const wv_grad_opts *g, wv_image *capture, wv_grad_record **rec, wv_error *err);
+wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcapture, double grad[WV_P_COUNT],
+                         double *dot, wv_error *err);
+void wv_record_free(wv_grad_record *rec);
 
 /* Gradient check: analytic gradient of L = sum(dcapture * capture) against
  * central finite differences, (L(theta + h) - L(theta - h)) / 2h with

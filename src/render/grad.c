@@ -56,9 +56,9 @@ static const int BETA_ID[2] = {WV_P_BETA_WARP, WV_P_BETA_WEFT};
 static const int ALPHA_ID[2] = {WV_P_ALPHA_WARP, WV_P_ALPHA_WEFT};
 
 /* Add a pixel's contribution given gr[c] = dL/dradiance_c. */
-static void accumulate(const wv_grad_model *gm, const wv_grad_pixel *px, const double gr[3], double *g) {
+static void accumulate(const wv_grad_model *gm, const double JJ[2][WV_J_COUNT], const double gr[3], double *g) {
   for (int y = 0; y < 2; y++) {
-    const double *J = px->J[y];
+    const double *J = JJ[y];
     double ws = 0, wd = 0; /* dL/dS and dL/dDF of this type */
     for (int c = 0; c < 3; c++) {
       g[KD_ID[y] + c] += gr[c] * J[WV_J_DF];
@@ -74,11 +74,71 @@ static void accumulate(const wv_grad_model *gm, const wv_grad_pixel *px, const d
   }
 }
 
-wv_status wv_render_grad_ex(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
-                            const wv_grad_opts *go, const wv_image *dcap, double grad[WV_P_COUNT], double *dot,
-                            wv_image *capture_out, wv_error *err) {
+/* What the adjoint pass needs of a pixel once it is rendered. */
+typedef struct {
+  double cap[3];   /* the capture (in double mode the unrounded double value) */
+  double slope[3]; /* d capture / d radiance, 0 where clipped */
+  double J[2][WV_J_COUNT];
+} pixel_rec;
+
+struct wv_grad_record {
+  int w, h;
+  wv_grad_model gm;
+  pixel_rec *px; /* w * h, row-major */
+};
+
+/* Sensor response of one pixel and its slope; in float mode exactly
+ * wv_scene_response's arithmetic, so the capture is wv_render's. */
+static void respond(const wv_scene *s, int dbl, int px, int py, const wv_grad_pixel *pix, float cap[3],
+                    pixel_rec *rec) {
+  double m = wv_falloff_mask(s, px, py);
+  for (int c = 0; c < 3; c++) {
+    if (dbl) {
+      double v = pix->rad[c] * s->exposure;
+      int clipped = s->clip > 0 && v > s->clip;
+      rec->cap[c] = m * wv_encode_d(s, clipped ? s->clip : v);
+      rec->slope[c] = clipped ? 0.0 : m * wv_encode_slope(s, v) * s->exposure;
+      cap[c] = (float)rec->cap[c];
+    } else {
+      float clipf = (float)s->clip, vf = (float)pix->rad[c] * (float)s->exposure;
+      int clipped = clipf > 0.0f && vf > clipf;
+      if (clipped) vf = clipf;
+      cap[c] = (float)m * wv_encode(s, vf);
+      rec->cap[c] = cap[c];
+      rec->slope[c] = clipped ? 0.0 : m * wv_encode_slope(s, vf) * s->exposure;
+    }
+  }
+  memcpy(rec->J, pix->J, sizeof rec->J);
+}
+
+/* Add a pixel's contribution (and its dot term, in g[WV_P_COUNT]). */
+static void backward_pixel(const wv_grad_model *gm, const pixel_rec *rec, const float dc[3], double *g) {
+  double gr[3];
+  for (int c = 0; c < 3; c++) {
+    g[WV_P_COUNT] += (double)dc[c] * rec->cap[c];
+    gr[c] = (double)dc[c] * rec->slope[c];
+  }
+  accumulate(gm, (const double(*)[WV_J_COUNT])rec->J, gr, g);
+}
+
+enum { NG = WV_P_COUNT + 1 }; /* the gradient, then the dot */
+
+/* The totals out, angles converted from per radian to per degree. */
+static void output(const double total[NG], double grad[WV_P_COUNT], double *dot) {
+  for (int i = 0; i < WV_P_COUNT; i++) grad[i] = total[i];
+  grad[WV_P_UMAX_DEG] *= DEG;
+  grad[WV_P_TWIST_DEG] *= DEG;
+  if (dot) *dot = total[WV_P_COUNT];
+}
+
+/* The render: either with an adjoint (fused: gradient rows out, nothing kept)
+ * or without (every pixel's record kept in rec). */
+static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, const wv_grad_opts *go,
+                     const wv_image *dcap, double grad[WV_P_COUNT], double *dot, wv_image *capture_out,
+                     wv_grad_record **rec_out, wv_error *err) {
   if (capture_out) memset(capture_out, 0, sizeof *capture_out);
-  if (!s || !p || !grad) return wv_fail(err, WV_ERR_INVALID, "render_grad: scene, parameters and grad are required");
+  if (rec_out) *rec_out = NULL;
+  if (!s || !p) return wv_fail(err, WV_ERR_INVALID, "render_grad: a scene and parameters are required");
   wv_status st = wv_scene_validate(s, err);
   if (st) return st;
   wv_fabric fab;
@@ -96,7 +156,7 @@ wv_status wv_render_grad_ex(const wv_scene *s, const wv_params *p, const wv_rend
   if ((long long)W * H * spp > WV_SCENE_MAX_SAMPLES)
     return wv_fail(err, WV_ERR_NOMEM, "%d x %d pixels x %d spp is too many samples (limit %lld)", W, H, spp,
                    (long long)WV_SCENE_MAX_SAMPLES);
-  if (!dcap || !dcap->data || dcap->w != W || dcap->h != H || dcap->c != 3)
+  if (!rec_out && (!dcap || !dcap->data || dcap->w != W || dcap->h != H || dcap->c != 3))
     return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", W, H,
                    dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
 
@@ -106,18 +166,27 @@ wv_status wv_render_grad_ex(const wv_scene *s, const wv_params *p, const wv_rend
   void (*kernel)(const wv_camera_rig *, const wv_fabric *, const wv_grad_model *, int, int, int, wv_grad_pixel *) =
       dbl ? wv_grad_pixel_d : wv_grad_pixel_f;
 
-  enum { NG = WV_P_COUNT + 1 }; /* the gradient, then the dot */
-  double *rows = calloc((size_t)H * NG, sizeof *rows);
-  if (!rows) return wv_fail(err, WV_ERR_NOMEM, "out of memory for %d gradient rows", H);
+  double *rows = NULL;
+  wv_grad_record *rec = NULL;
+  if (rec_out) {
+    rec = calloc(1, sizeof *rec);
+    if (rec) rec->px = malloc((size_t)W * H * sizeof *rec->px);
+    if (!rec || !rec->px) {
+      wv_record_free(rec);
+      return wv_fail(err, WV_ERR_NOMEM, "out of memory for the derivatives of %d x %d pixels", W, H);
+    }
+    rec->w = W, rec->h = H, rec->gm = gm;
+  } else if (!(rows = calloc((size_t)H * NG, sizeof *rows))) {
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for %d gradient rows", H);
+  }
   if (capture_out && (st = wv_image_alloc(capture_out, W, H, 3, err))) {
     free(rows);
+    wv_record_free(rec);
     return st;
   }
   wv_camera_rig rig;
   wv_rig_prepare(s, &rig);
   int threads = opt && opt->threads > 0 ? opt->threads : omp_get_max_threads();
-  const float exf = (float)s->exposure, clipf = (float)s->clip;
-  const double ex = s->exposure, clip = s->clip;
   int rows_done = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (int r = 0; r < H; r++) {
@@ -127,56 +196,67 @@ wv_status wv_render_grad_ex(const wv_scene *s, const wv_params *p, const wv_rend
       d = rows_done;
       opt->progress(opt->progress_user, (double)d / H);
     }
-    double *g = rows + (size_t)r * NG;
-    int py = y0 + r;
     for (int i = 0; i < W; i++) {
-      int px = x0 + i;
       wv_grad_pixel pix;
-      kernel(&rig, &fab, &gm, px, py, spp, &pix);
-      const float *dc = wv_image_px(dcap, i, r);
-      double m = wv_falloff_mask(s, px, py), gr[3];
+      kernel(&rig, &fab, &gm, x0 + i, y0 + r, spp, &pix);
+      pixel_rec local, *pr = rec ? &rec->px[(size_t)r * W + i] : &local;
       float cap[3];
-      for (int c = 0; c < 3; c++) {
-        /* Response forward (exposure, clip, encode, mask) and its slope. */
-        double slope, v;
-        if (dbl) {
-          v = pix.rad[c] * ex;
-          int clipped = clip > 0 && v > clip;
-          cap[c] = (float)(m * wv_encode_d(s, clipped ? clip : v));
-          g[WV_P_COUNT] += (double)dc[c] * m * wv_encode_d(s, clipped ? clip : v);
-          slope = clipped ? 0.0 : m * wv_encode_slope(s, v) * ex;
-        } else { /* exactly wv_scene_response's float arithmetic */
-          float vf = (float)pix.rad[c] * exf;
-          int clipped = clipf > 0.0f && vf > clipf;
-          if (clipped) vf = clipf;
-          cap[c] = (float)m * wv_encode(s, vf);
-          g[WV_P_COUNT] += (double)dc[c] * cap[c];
-          slope = clipped ? 0.0 : m * wv_encode_slope(s, vf) * ex;
-        }
-        gr[c] = (double)dc[c] * slope;
-      }
-      if (capture_out) {
-        float *o = wv_image_px(capture_out, i, r);
-        o[0] = cap[0], o[1] = cap[1], o[2] = cap[2];
-      }
-      accumulate(&gm, &pix, gr, g);
+      respond(s, dbl, x0 + i, y0 + r, &pix, cap, pr);
+      if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);
+      if (rows) backward_pixel(&gm, pr, wv_image_px(dcap, i, r), rows + (size_t)r * NG);
     }
 #pragma omp atomic update
     rows_done++;
   }
   if (opt && opt->progress) opt->progress(opt->progress_user, 1.0);
-  /* Reduce in row order: the sum does not depend on the thread schedule. */
-  double total[NG];
-  memset(total, 0, sizeof total);
-  for (int r = 0; r < H; r++)
-    for (int i = 0; i < NG; i++) total[i] += rows[(size_t)r * NG + i];
-  free(rows);
-  for (int i = 0; i < WV_P_COUNT; i++) grad[i] = total[i];
-  /* Angles: the kernel differentiates per radian; the parameter file is in degrees. */
-  grad[WV_P_UMAX_DEG] *= DEG;
-  grad[WV_P_TWIST_DEG] *= DEG;
-  if (dot) *dot = total[WV_P_COUNT];
+  if (rows) { /* reduce in row order: the sum does not depend on the thread schedule */
+    double total[NG];
+    memset(total, 0, sizeof total);
+    for (int r = 0; r < H; r++)
+      for (int i = 0; i < NG; i++) total[i] += rows[(size_t)r * NG + i];
+    output(total, grad, dot);
+    free(rows);
+  }
+  if (rec_out) *rec_out = rec;
   return WV_OK;
+}
+
+wv_status wv_render_grad_ex(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
+                            const wv_grad_opts *go, const wv_image *dcap, double grad[WV_P_COUNT], double *dot,
+                            wv_image *capture_out, wv_error *err) {
+  if (!grad) return wv_fail(err, WV_ERR_INVALID, "render_grad: no gradient array");
+  return run(s, p, opt, go, dcap, grad, dot, capture_out, NULL, err);
+}
+
+wv_status wv_render_record(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
+                           const wv_grad_opts *g, wv_image *capture, wv_grad_record **rec, wv_error *err) {
+  if (!rec) return wv_fail(err, WV_ERR_INVALID, "render_record: no record pointer");
+  return run(s, p, opt, g, NULL, NULL, NULL, capture, rec, err);
+}
+
+wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcap, double grad[WV_P_COUNT], double *dot,
+                         wv_error *err) {
+  if (!rec || !grad) return wv_fail(err, WV_ERR_INVALID, "record_grad: a record and a gradient array are required");
+  if (!dcap || !dcap->data || dcap->w != rec->w || dcap->h != rec->h || dcap->c != 3)
+    return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", rec->w,
+                   rec->h, dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
+  double row[NG], total[NG];
+  memset(total, 0, sizeof total);
+  for (int r = 0; r < rec->h; r++) {
+    /* The same per-row partials as the fused pass: bitwise the same result. */
+    memset(row, 0, sizeof row);
+    for (int i = 0; i < rec->w; i++)
+      backward_pixel(&rec->gm, &rec->px[(size_t)r * rec->w + i], wv_image_px(dcap, i, r), row);
+    for (int k = 0; k < NG; k++) total[k] += row[k];
+  }
+  output(total, grad, dot);
+  return WV_OK;
+}
+
+void wv_record_free(wv_grad_record *rec) {
+  if (!rec) return;
+  free(rec->px);
+  free(rec);
 }
 
 wv_status wv_render_grad(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, const wv_image *dcap,
