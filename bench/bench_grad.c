@@ -1,6 +1,7 @@
 /* Benchmark: forward render vs forward + gradient (wv_render_grad) on the
- * cylinder preset (800 x 300) at its default spp, twill prior mean. Runs are
- * interleaved and each figure is a median, as the machine is shared.
+ * cylinder preset (800 x 300) at its default spp, twill prior mean; also the
+ * two-step path (wv_render_record, then wv_record_grad). Runs are interleaved
+ * and each figure is a median, as the machine is shared.
  *   bench_grad [--runs N] [--spp N] [--threads N]
  * Last line: {"forward_ms": ..., "forward_grad_ms": ..., "ratio": ..., ...}
  *   bench_grad --grad-check [--scene cylinder|flat45] [--spp N]
@@ -94,24 +95,31 @@ int main(int argc, char **argv) {
     st = st * 6364136223846793005ULL + 1442695040888963407ULL;
     dc.data[i] = (st >> 63) ? 1.0f : -1.0f;
   }
-  double tf[100], tg[100], grad[WV_P_COUNT];
+  double tf[100], tg[100], tr[100], tb[100], grad[WV_P_COUNT];
   for (int r = 0; r < runs; r++) {
-    wv_image cap, cap2;
+    wv_image cap, cap2, cap3;
+    wv_grad_record *rec;
     double t0 = omp_get_wtime();
     if (wv_render(&s, &p, &o, &cap, NULL, &err)) goto fail;
     double t1 = omp_get_wtime();
     if (wv_render_grad(&s, &p, &o, &dc, grad, &cap2, &err)) goto fail;
     double t2 = omp_get_wtime();
-    tf[r] = (t1 - t0) * 1e3, tg[r] = (t2 - t1) * 1e3;
-    fprintf(stderr, "run %d: forward %.0f ms, forward+grad %.0f ms\n", r + 1, tf[r], tg[r]);
-    wv_image_free(&cap);
-    wv_image_free(&cap2);
+    if (wv_render_record(&s, &p, &o, NULL, &cap3, &rec, &err)) goto fail;
+    double t3 = omp_get_wtime();
+    if (wv_record_grad(rec, &dc, grad, NULL, &err)) goto fail;
+    double t4 = omp_get_wtime();
+    tf[r] = (t1 - t0) * 1e3, tg[r] = (t2 - t1) * 1e3, tr[r] = (t3 - t2) * 1e3, tb[r] = (t4 - t3) * 1e3;
+    fprintf(stderr, "run %d: forward %.0f ms, forward+grad %.0f ms, record %.0f ms + grad %.1f ms\n", r + 1, tf[r],
+            tg[r], tr[r], tb[r]);
+    wv_record_free(rec);
+    wv_image_free(&cap), wv_image_free(&cap2), wv_image_free(&cap3);
   }
-  double fm = median(tf, runs), gm = median(tg, runs);
+  double fm = median(tf, runs), gm = median(tg, runs), rm = median(tr, runs), bm = median(tb, runs);
   printf("{\"scene\": \"cylinder\", \"width\": %d, \"height\": %d, \"spp\": %d, \"threads\": %d, \"runs\": %d, "
+         "\"record_ms\": %.1f, \"record_grad_ms\": %.2f, "
          "\"forward_ms\": %.1f, \"forward_grad_ms\": %.1f, \"ratio\": %.3f}\n",
-         s.width, s.height, spp > 0 ? spp : s.spp, threads > 0 ? threads : omp_get_max_threads(), runs, fm, gm,
-         gm / fm);
+         s.width, s.height, spp > 0 ? spp : s.spp, threads > 0 ? threads : omp_get_max_threads(), runs, rm, bm, fm,
+         gm, gm / fm);
   wv_image_free(&dc);
   return 0;
 fail:
