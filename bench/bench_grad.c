@@ -109,8 +109,9 @@ int main(int argc, char **argv) {
     if (wv_record_grad(rec, &dc, grad, NULL, &err)) goto fail;
     double t4 = omp_get_wtime();
     tf[r] = (t1 - t0) * 1e3, tg[r] = (t2 - t1) * 1e3, tr[r] = (t3 - t2) * 1e3, tb[r] = (t4 - t3) * 1e3;
-    fprintf(stderr, "run %d: forward %.0f ms, forward+grad %.0f ms, record %.0f ms + grad %.1f ms\n", r + 1, tf[r],
-            tg[r], tr[r], tb[r]);
+    printf("run %d: forward %.0f ms, forward+grad %.0f ms, record %.0f ms + grad %.1f ms\n", r + 1, tf[r], tg[r],
+           tr[r], tb[r]);
+    fflush(stdout);
     wv_record_free(rec);
     wv_image_free(&cap), wv_image_free(&cap2), wv_image_free(&cap3);
   }

@@ -4,7 +4,9 @@
  * type, the sums radiance is linear in (specular and diffuse factors) with
  * their derivatives with respect to the non-linear parameters. The sensor
  * response is per pixel, so its adjoint dL/dradiance is known as soon as the
- * pixel's radiance is: one pass, no stored image, no second render. */
+ * pixel's radiance is: one pass, no stored image, no second render. When the
+ * adjoint depends on the capture (wv_render_record), those per-pixel sums are
+ * kept instead and wv_record_grad does the same accumulation afterwards. */
 #include "woven/grad.h"
 
 #include <math.h>
