@@ -1,0 +1,69 @@
+/* woven: the differentiable renderer (paper section 4.3). Gradients of a scalar
+ * loss L(capture) with respect to every continuous fabric parameter, given the
+ * adjoint image dL/dcapture. Exact derivatives of the renderer as implemented
+ * (forward mode over the few non-linear parameters, closed form; no finite
+ * differences), with the same sample positions and noise as wv_render, so the
+ * capture it returns is the image wv_render gives. See docs/gradients.md. */
+#ifndef WOVEN_GRAD_H
+#define WOVEN_GRAD_H
+
+#include "woven/error.h"
+#include "woven/image.h"
+#include "woven/params.h"
+#include "woven/render.h"
+#include "woven/scene.h"
+
+/* Extra controls; a zeroed struct (or NULL) means: the whole image, float. */
+typedef struct {
+  /* Render only this window of the scene's image (pixel x0..x0+width-1,
+   * y0..y0+height-1); the falloff mask stays centred on the full image.
+   * width = height = 0: the whole image. */
+  int x0, y0, width, height;
+  /* 1: evaluate the shading and its derivatives in double precision (about 1.3x
+   * slower; for gradient checks, where float rounding swamps finite differences).
+   * The capture is then the double result rounded to float, not wv_render's. */
+  int double_precision;
+} wv_grad_opts;
+
+/* Render the capture and the gradient of L in one pass.
+ * dcapture: dL/dcapture, the size of the render (3 channels).
+ * grad[i]: dL/dtheta_i for theta = wv_param_get(p, i), in the parameter file's
+ *   units (angles per degree). Densities, Q, thickness and width have none.
+ * capture_out (optional, allocated here): the capture image, equal to wv_render's. */
+wv_status wv_render_grad(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
+                         const wv_image *dcapture, double grad[WV_P_COUNT], wv_image *capture_out,
+                         wv_error *err);
+
+/* As wv_render_grad with a window and precision (g may be NULL). dot (optional):
+ * the sum over the window of dcapture * capture, accumulated in double: the
+ * linear loss whose exact gradient grad is (what a finite-difference check needs). */
+wv_status wv_render_grad_ex(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
+                            const wv_grad_opts *g, const wv_image *dcapture, double grad[WV_P_COUNT],
+                            double *dot, wv_image *capture_out, wv_error *err);
+
+/* Render first, differentiate later: for losses whose adjoint depends on the
+ * capture itself (L1, Gram matrices), which is every loss of the fit. The render
+ * keeps each pixel's derivative sums (about 200 bytes a pixel); wv_record_grad
+ * then costs one cheap pass over them and may be called with any number of
+ * adjoints. Same results as wv_render_grad_ex, bit for bit. */
+typedef struct wv_grad_record wv_grad_record;
+wv_status wv_render_record(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
+                           const wv_grad_opts *g, wv_image *capture, wv_grad_record **rec, wv_error *err);
+wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcapture, double grad[WV_P_COUNT],
+                         double *dot, wv_error *err);
+void wv_record_free(wv_grad_record *rec);
+
+/* Gradient check: analytic gradient of L = sum(dcapture * capture) against
+ * central finite differences, (L(theta + h) - L(theta - h)) / 2h with
+ * h = rel_step * (range of the parameter), stepping inward at a range edge
+ * (one-sided there). Uses the window and precision of g. */
+typedef struct {
+  double analytic, numeric;
+  double rel_err; /* |analytic - numeric| / max(|analytic|, |numeric|); 0 when both are 0 */
+} wv_grad_check_entry;
+
+wv_status wv_grad_check(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, const wv_grad_opts *g,
+                        const wv_image *dcapture, double rel_step, wv_grad_check_entry out[WV_P_COUNT],
+                        wv_error *err);
+
+#endif

@@ -1,0 +1,403 @@
+/* The differentiable renderer: analytic gradients against central finite
+ * differences (double-precision kernel), the float path against the double one,
+ * the capture against wv_render, exact zeros, range edges, determinism. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+#include "woven/grad.h"
+#include "woven/imgops.h"
+#include "woven/render.h"
+
+typedef struct {
+  uint64_t s;
+} rng;
+static double rnd(rng *r) {
+  r->s = r->s * 6364136223846793005ULL + 1442695040888963407ULL;
+  return (double)(r->s >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static void fill_random(wv_image *im, rng *r) {
+  for (size_t i = 0; i < (size_t)im->w * im->h * im->c; i++) im->data[i] = (float)(2.0 * rnd(r) - 1.0);
+}
+
+/* A random point of the parameter space: every continuous parameter uniform
+ * inside its range (2% away from the edges, so central differences fit). */
+static void random_params(const char *pattern, rng *r, wv_params *p) {
+  wv_error err;
+  assert_int_equal(wv_params_default(pattern, p, &err), WV_OK);
+  for (int i = 0; i < WV_P_COUNT; i++) {
+    double lo, hi;
+    wv_param_range(i, &lo, &hi);
+    wv_param_set(p, i, lo + (hi - lo) * (0.02 + 0.96 * rnd(r)));
+  }
+  p->density[0] = 60 + 100 * rnd(r);
+  p->density[1] = 60 + 100 * rnd(r);
+  p->seed = (int64_t)(rnd(r) * 1000);
+}
+
+static wv_scene preset(const char *name) {
+  wv_scene s;
+  wv_error err;
+  assert_int_equal(wv_scene_preset(name, &s, &err), WV_OK);
+  return s;
+}
+
+/* Largest relative error seen per parameter over the finite-difference checks. */
+typedef struct {
+  double worst[WV_P_COUNT];
+  int checks;
+} fd_stats;
+
+static void fd_check(const wv_scene *s, const wv_params *p, int x0, int y0, int w, int h, int spp, rng *r,
+                     fd_stats *stats) {
+  wv_grad_opts g = {x0, y0, w, h, 1};
+  wv_render_opts o = {0};
+  o.spp = spp;
+  wv_image dc;
+  wv_error err = {0};
+  assert_int_equal(wv_image_alloc(&dc, w, h, 3, &err), WV_OK);
+  fill_random(&dc, r);
+  wv_grad_check_entry e[WV_P_COUNT];
+  assert_int_equal(wv_grad_check(s, p, &o, &g, &dc, 1e-5, e, &err), WV_OK);
+  for (int i = 0; i < WV_P_COUNT; i++) {
+    if (e[i].rel_err >= 1e-3)
+      print_error("%s %s at %g: analytic %.9e, finite difference %.9e, relative error %.2e\n", s->name,
+                  wv_param_name(i), wv_param_get(p, i), e[i].analytic, e[i].numeric, e[i].rel_err);
+    assert_true(e[i].rel_err < 1e-3);
+    assert_true(e[i].analytic != 0.0); /* a random adjoint sees every parameter */
+    if (e[i].rel_err > stats->worst[i]) stats->worst[i] = e[i].rel_err;
+  }
+  stats->checks++;
+  wv_image_free(&dc);
+}
+
+/* Every parameter, several random points, both presets, with and without the
+ * (fixed, hashed) noise; windows at the image centre and, on the cylinder, on
+ * its silhouette where every sample is traced. */
+static void test_finite_differences(void **state) {
+  (void)state;
+  static const char *patterns[] = {"twill", "satin", "plain", "satin90"};
+  static const char *scenes[] = {"cylinder", "flat45"};
+  rng r = {42};
+  fd_stats st;
+  memset(&st, 0, sizeof st);
+  for (int k = 0; k < 2; k++) {
+    wv_scene s = preset(scenes[k]);
+    for (int j = 0; j < 4; j++) {
+      wv_params p;
+      random_params(patterns[j], &r, &p);
+      p.noise_level = j % 2 ? 3 : 0;
+      p.specular_noise = j % 2;
+      fd_check(&s, &p, s.width / 2 - 24, s.height / 2 - 16, 48, 32, 12, &r, &st);
+    }
+  }
+  wv_scene s = preset("cylinder");
+  for (int j = 0; j < 2; j++) {
+    wv_params p;
+    random_params(patterns[j], &r, &p);
+    fd_check(&s, &p, 376, j ? s.height - 12 : 0, 48, 12, 12, &r, &st);
+  }
+  printf("max relative error, analytic vs central difference, over %d checks:\n", st.checks);
+  for (int i = 0; i < WV_P_COUNT; i++) printf("  %-18s %.2e\n", wv_param_name(i), st.worst[i]);
+}
+
+/* The float kernel (production) computes the same gradient as the double one. */
+static void test_float_matches_double(void **state) {
+  (void)state;
+  rng r = {7};
+  static const char *scenes[] = {"cylinder", "flat45"};
+  for (int k = 0; k < 2; k++) {
+    wv_scene s = preset(scenes[k]);
+    wv_params p;
+    random_params(k ? "satin" : "twill", &r, &p);
+    wv_grad_opts gf = {s.width / 2 - 32, s.height / 2 - 16, 64, 32, 0}, gd = gf;
+    gd.double_precision = 1;
+    wv_render_opts o = {0};
+    o.spp = 16;
+    wv_image dc, capf, capd;
+    wv_error err;
+    assert_int_equal(wv_image_alloc(&dc, 64, 32, 3, &err), WV_OK);
+    fill_random(&dc, &r);
+    double g1[WV_P_COUNT], g2[WV_P_COUNT], d1, d2;
+    assert_int_equal(wv_render_grad_ex(&s, &p, &o, &gf, &dc, g1, &d1, &capf, &err), WV_OK);
+    assert_int_equal(wv_render_grad_ex(&s, &p, &o, &gd, &dc, g2, &d2, &capd, &err), WV_OK);
+    for (int i = 0; i < WV_P_COUNT; i++) {
+      double rel = fabs(g1[i] - g2[i]) / fmax(fabs(g1[i]), fabs(g2[i]));
+      if (rel > 1e-4) print_error("%s: float %.9e double %.9e\n", wv_param_name(i), g1[i], g2[i]);
+      assert_true(rel < 1e-4);
+    }
+    assert_true(fabs(d1 - d2) <= 1e-5 * fabs(d2));
+    assert_true(wv_image_mad(&capf, &capd) < 1e-6);
+    wv_image_free(&dc), wv_image_free(&capf), wv_image_free(&capd);
+  }
+}
+
+/* A small version of a preset: same camera and sample, fewer pixels. */
+static wv_scene small_scene(const char *name, int w, int h, int spp) {
+  wv_scene s = preset(name);
+  s.width = w, s.height = h, s.spp = spp;
+  return s;
+}
+
+/* The capture is exactly wv_render's; a window is exactly a crop of it; the
+ * full-image gradient is the sum of the gradients of windows that tile it. */
+static void test_capture_and_windows(void **state) {
+  (void)state;
+  static const char *scenes[] = {"cylinder", "flat45"};
+  rng r = {99};
+  for (int k = 0; k < 2; k++) {
+    wv_scene s = small_scene(scenes[k], 96, k ? 96 : 36, 8);
+    wv_params p;
+    random_params("twill", &r, &p);
+    p.noise_level = 2;
+    wv_error err;
+    wv_image ref, cap, dc, win;
+    assert_int_equal(wv_render(&s, &p, NULL, &ref, NULL, &err), WV_OK);
+    assert_int_equal(wv_image_alloc(&dc, s.width, s.height, 3, &err), WV_OK);
+    fill_random(&dc, &r);
+    double g[WV_P_COUNT], dot;
+    assert_int_equal(wv_render_grad_ex(&s, &p, NULL, NULL, &dc, g, &dot, &cap, &err), WV_OK);
+    assert_int_equal(memcmp(ref.data, cap.data, sizeof(float) * 3 * s.width * s.height), 0);
+    /* Split into a top and a bottom window. */
+    int hh = s.height / 2;
+    double gsum[WV_P_COUNT] = {0}, dsum = 0;
+    for (int part = 0; part < 2; part++) {
+      int y0 = part ? hh : 0, wh = part ? s.height - hh : hh;
+      wv_image sub;
+      assert_int_equal(wv_image_alloc(&sub, s.width, wh, 3, &err), WV_OK);
+      memcpy(sub.data, wv_image_px(&dc, 0, y0), sizeof(float) * 3 * s.width * wh);
+      wv_grad_opts go = {0, y0, s.width, wh, 0};
+      double gp[WV_P_COUNT], dp;
+      assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &go, &sub, gp, &dp, &win, &err), WV_OK);
+      assert_int_equal(memcmp(win.data, wv_image_px(&ref, 0, y0), sizeof(float) * 3 * s.width * wh), 0);
+      for (int i = 0; i < WV_P_COUNT; i++) gsum[i] += gp[i];
+      dsum += dp;
+      wv_image_free(&sub), wv_image_free(&win);
+    }
+    for (int i = 0; i < WV_P_COUNT; i++) assert_true(fabs(gsum[i] - g[i]) <= 1e-12 * fabs(g[i]) + 1e-300);
+    assert_true(fabs(dsum - dot) <= 1e-12 * fabs(dot));
+    wv_image_free(&ref), wv_image_free(&cap), wv_image_free(&dc);
+  }
+}
+
+static void grad_window(const wv_scene *s, const wv_params *p, const wv_image *dc, int dbl, double g[WV_P_COUNT]) {
+  wv_grad_opts go = {s->width / 2 - dc->w / 2, s->height / 2 - dc->h / 2, dc->w, dc->h, dbl};
+  wv_render_opts o = {0};
+  o.spp = 8;
+  wv_error err = {0};
+  wv_status st = wv_render_grad_ex(s, p, &o, &go, dc, g, NULL, NULL, &err);
+  if (st) print_error("%s\n", err.msg);
+  assert_int_equal(st, WV_OK);
+}
+
+/* Parameters the loss does not depend on get exactly zero. */
+static void test_exact_zeros(void **state) {
+  (void)state;
+  rng r = {5};
+  wv_scene s = preset("cylinder");
+  wv_params p;
+  random_params("twill", &r, &p);
+  p.noise_level = 2;
+  wv_image dc;
+  wv_error err;
+  assert_int_equal(wv_image_alloc(&dc, 40, 24, 3, &err), WV_OK);
+  double g[WV_P_COUNT];
+  for (int dbl = 0; dbl < 2; dbl++) {
+    /* Adjoint on red only: green and blue albedos do not matter. */
+    fill_random(&dc, &r);
+    for (int i = 0; i < 40 * 24; i++) dc.data[3 * i + 1] = dc.data[3 * i + 2] = 0;
+    grad_window(&s, &p, &dc, dbl, g);
+    for (int y = 0; y < 2; y++)
+      for (int c = 1; c < 3; c++) {
+        assert_true(g[WV_P_KD_WARP_R + 3 * y + c] == 0.0);
+        assert_true(g[WV_P_KS_WARP_R + 3 * y + c] == 0.0);
+      }
+    assert_true(g[WV_P_KD_WARP_R] != 0.0 && g[WV_P_KS_WEFT_R] != 0.0);
+    /* Zero adjoint: everything zero. */
+    memset(dc.data, 0, sizeof(float) * 40 * 24 * 3);
+    grad_window(&s, &p, &dc, dbl, g);
+    for (int i = 0; i < WV_P_COUNT; i++) assert_true(g[i] == 0.0);
+    fill_random(&dc, &r);
+    /* No specular albedo: roughness and twist (which only shape the specular lobe) do not matter. */
+    wv_params q = p;
+    memset(q.specular, 0, sizeof q.specular);
+    grad_window(&s, &q, &dc, dbl, g);
+    assert_true(g[WV_P_ALPHA_WARP] == 0.0 && g[WV_P_ALPHA_WEFT] == 0.0 && g[WV_P_TWIST_DEG] == 0.0);
+    assert_true(g[WV_P_KS_WARP_G] != 0.0 && g[WV_P_BETA_WARP] != 0.0);
+    /* No diffuse albedo: the blend does not matter. */
+    q = p;
+    memset(q.diffuse, 0, sizeof q.diffuse);
+    grad_window(&s, &q, &dc, dbl, g);
+    assert_true(g[WV_P_BLEND] == 0.0);
+    assert_true(g[WV_P_KD_WEFT_B] != 0.0);
+    /* A fabric of warp only: no weft parameter matters. */
+    q = p;
+    snprintf(q.pattern, sizeof q.pattern, "custom");
+    q.custom_rows = 1;
+    snprintf(q.custom[0], sizeof q.custom[0], "1");
+    grad_window(&s, &q, &dc, dbl, g);
+    int weft[] = {WV_P_BETA_WEFT, WV_P_KD_WEFT_R, WV_P_KD_WEFT_G, WV_P_KD_WEFT_B, WV_P_KS_WEFT_R,
+                  WV_P_KS_WEFT_G, WV_P_KS_WEFT_B, WV_P_ALPHA_WEFT};
+    for (size_t i = 0; i < sizeof weft / sizeof weft[0]; i++) assert_true(g[weft[i]] == 0.0);
+    assert_true(g[WV_P_BETA_WARP] != 0.0 && g[WV_P_ALPHA_WARP] != 0.0);
+  }
+  wv_image_free(&dc);
+}
+
+/* Gradients stay finite at both ends of every range (in float and double). */
+static void test_range_edges(void **state) {
+  (void)state;
+  rng r = {11};
+  static const char *scenes[] = {"cylinder", "flat45"};
+  wv_image dc;
+  wv_error err;
+  assert_int_equal(wv_image_alloc(&dc, 24, 16, 3, &err), WV_OK);
+  fill_random(&dc, &r);
+  for (int k = 0; k < 2; k++) {
+    wv_scene s = preset(scenes[k]);
+    for (int i = 0; i < WV_P_COUNT; i++)
+      for (int end = 0; end < 2; end++) {
+        wv_params p;
+        random_params(k ? "satin" : "twill", &r, &p);
+        p.noise_level = end ? 10 : 2; /* Q = 10 can drive a segment's beta to 0 */
+        double lo, hi;
+        wv_param_range(i, &lo, &hi);
+        wv_param_set(&p, i, end ? hi : lo);
+        for (int dbl = 0; dbl < 2; dbl++) {
+          double g[WV_P_COUNT];
+          grad_window(&s, &p, &dc, dbl, g);
+          for (int j = 0; j < WV_P_COUNT; j++) {
+            if (!isfinite(g[j])) print_error("%s = %g: d/d %s = %g\n", wv_param_name(i), end ? hi : lo, wv_param_name(j), g[j]);
+            assert_true(isfinite(g[j]));
+          }
+        }
+      }
+    /* Everything at its lower and at its upper end at once. */
+    for (int end = 0; end < 2; end++) {
+      wv_params p;
+      random_params("plain", &r, &p);
+      for (int i = 0; i < WV_P_COUNT; i++) {
+        double lo, hi;
+        wv_param_range(i, &lo, &hi);
+        wv_param_set(&p, i, end ? hi : lo);
+      }
+      double g[WV_P_COUNT];
+      grad_window(&s, &p, &dc, 0, g);
+      for (int j = 0; j < WV_P_COUNT; j++) assert_true(isfinite(g[j]));
+    }
+  }
+  wv_image_free(&dc);
+}
+
+/* The result does not depend on the number of threads (row partials are
+ * reduced in row order). */
+static void test_deterministic(void **state) {
+  (void)state;
+  rng r = {3};
+  wv_scene s = small_scene("cylinder", 64, 40, 4);
+  wv_params p;
+  random_params("satin", &r, &p);
+  wv_image dc;
+  wv_error err;
+  assert_int_equal(wv_image_alloc(&dc, 64, 40, 3, &err), WV_OK);
+  fill_random(&dc, &r);
+  double g1[WV_P_COUNT], g2[WV_P_COUNT];
+  wv_render_opts o1 = {0}, o2 = {0};
+  o1.threads = 1, o2.threads = 3;
+  assert_int_equal(wv_render_grad(&s, &p, &o1, &dc, g1, NULL, &err), WV_OK);
+  assert_int_equal(wv_render_grad(&s, &p, &o2, &dc, g2, NULL, &err), WV_OK);
+  assert_int_equal(memcmp(g1, g2, sizeof g1), 0);
+  wv_image_free(&dc);
+}
+
+/* The colour loss of the fit, L = sum W .* down16x8(capture), differentiated
+ * through the downsampling adjoint, against finite differences. */
+static void test_chain_with_downsampling(void **state) {
+  (void)state;
+  rng r = {21};
+  wv_scene s = small_scene("cylinder", 80, 30, 4);
+  s.vfov_deg = 16.89; /* the preset's: the whole cylinder in 30 rows */
+  wv_params p;
+  random_params("twill", &r, &p);
+  wv_image W, dc;
+  wv_error err;
+  assert_int_equal(wv_image_alloc(&W, 16, 8, 3, &err), WV_OK);
+  fill_random(&W, &r);
+  assert_int_equal(wv_image_downsample_backward(80, 30, &W, &dc, &err), WV_OK);
+  wv_grad_opts g = {0, 0, 80, 30, 1};
+  wv_grad_check_entry e[WV_P_COUNT];
+  assert_int_equal(wv_grad_check(&s, &p, NULL, &g, &dc, 1e-5, e, &err), WV_OK);
+  for (int i = 0; i < WV_P_COUNT; i++) assert_true(e[i].rel_err < 1e-3);
+  wv_image_free(&W), wv_image_free(&dc);
+}
+
+/* Render, then differentiate with several adjoints: the same as the fused call. */
+static void test_record(void **state) {
+  (void)state;
+  rng r = {17};
+  wv_scene s = small_scene("flat45", 48, 40, 4);
+  wv_params p;
+  random_params("satin", &r, &p);
+  p.noise_level = 1;
+  wv_error err;
+  wv_image dc, cap1, cap2;
+  assert_int_equal(wv_image_alloc(&dc, 32, 24, 3, &err), WV_OK);
+  for (int dbl = 0; dbl < 2; dbl++) {
+    wv_grad_opts go = {8, 10, 32, 24, dbl};
+    wv_grad_record *rec;
+    assert_int_equal(wv_render_record(&s, &p, NULL, &go, &cap1, &rec, &err), WV_OK);
+    for (int k = 0; k < 3; k++) {
+      fill_random(&dc, &r);
+      double g1[WV_P_COUNT], g2[WV_P_COUNT], d1, d2;
+      assert_int_equal(wv_record_grad(rec, &dc, g1, &d1, &err), WV_OK);
+      assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &go, &dc, g2, &d2, &cap2, &err), WV_OK);
+      assert_int_equal(memcmp(g1, g2, sizeof g1), 0);
+      assert_true(d1 == d2);
+      assert_int_equal(memcmp(cap1.data, cap2.data, sizeof(float) * 32 * 24 * 3), 0);
+      wv_image_free(&cap2);
+    }
+    wv_image bad;
+    assert_int_equal(wv_image_alloc(&bad, 24, 32, 3, &err), WV_OK);
+    double g[WV_P_COUNT];
+    assert_int_equal(wv_record_grad(rec, &bad, g, NULL, &err), WV_ERR_INVALID);
+    wv_image_free(&bad), wv_image_free(&cap1);
+    wv_record_free(rec);
+  }
+  wv_record_free(NULL);
+  wv_image_free(&dc);
+}
+
+static void test_errors(void **state) {
+  (void)state;
+  wv_scene s = small_scene("flat45", 32, 32, 2);
+  wv_params p;
+  wv_error err;
+  assert_int_equal(wv_params_default("plain", &p, &err), WV_OK);
+  wv_image dc, cap = {0};
+  assert_int_equal(wv_image_alloc(&dc, 16, 16, 3, &err), WV_OK);
+  double g[WV_P_COUNT];
+  assert_int_equal(wv_render_grad(&s, &p, NULL, &dc, g, &cap, &err), WV_ERR_INVALID); /* wrong size */
+  assert_non_null(strstr(err.msg, "32 x 32"));
+  assert_null(cap.data);
+  wv_grad_opts go = {20, 0, 16, 16, 0};
+  assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &go, &dc, g, NULL, NULL, &err), WV_ERR_INVALID);
+  go.x0 = 16;
+  assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &go, &dc, g, NULL, NULL, &err), WV_OK);
+  p.roughness[0] = 0; /* out of range */
+  assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &go, &dc, g, NULL, NULL, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "roughness"));
+  wv_image_free(&dc);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_finite_differences), cmocka_unit_test(test_float_matches_double),
+      cmocka_unit_test(test_capture_and_windows), cmocka_unit_test(test_exact_zeros),
+      cmocka_unit_test(test_range_edges),        cmocka_unit_test(test_deterministic),
+      cmocka_unit_test(test_chain_with_downsampling), cmocka_unit_test(test_record),
+      cmocka_unit_test(test_errors)};
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
