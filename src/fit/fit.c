@@ -106,12 +106,16 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   wv_render_opts ro = {c->scene.spp, o->threads, NULL, NULL};
   double t0 = omp_get_wtime();
   wv_image_free(&c->render);
-  wv_status st = wv_render(&c->scene, p, &ro, &c->render, NULL, err);
+  /* With a gradient wanted, render once and keep each pixel's derivative sums:
+   * the adjoint depends on the render, so it is applied afterwards. */
+  wv_grad_record *record = NULL;
+  wv_status st = grad ? wv_render_record(&c->scene, p, &ro, NULL, &c->render, &record, err)
+                      : wv_render(&c->scene, p, &ro, &c->render, NULL, err);
   if (st) return st;
   double t1 = omp_get_wtime();
   c->timing->render += t1 - t0;
   /* L_g = mean |G_p - G_r| */
-  if ((st = wv_descriptor_forward(c->d, &c->render, c->gram, err))) return st;
+  if ((st = wv_descriptor_forward(c->d, &c->render, c->gram, err))) goto fail;
   double lg = 0;
   for (size_t i = 0; i < c->ng; i++) {
     float df = c->gram[i] - c->gram_photo[i];
@@ -121,8 +125,8 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   lg /= (double)c->ng;
   /* L_c = mean |down(photo) - down(render)| */
   wv_image_free(&c->down);
-  if ((st = wv_image_downsample(&c->render, o->down_w, o->down_h, &c->down, err))) return st;
-  if (!c->ddown.data && (st = wv_image_alloc(&c->ddown, o->down_w, o->down_h, 3, err))) return st;
+  if ((st = wv_image_downsample(&c->render, o->down_w, o->down_h, &c->down, err))) goto fail;
+  if (!c->ddown.data && (st = wv_image_alloc(&c->ddown, o->down_w, o->down_h, 3, err))) goto fail;
   double lc = wv_image_l1(&c->down, &c->photo_down, grad ? &c->ddown : NULL);
   /* L_p on beta */
   double mu, sg;
@@ -135,18 +139,27 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   c->timing->descriptor += t2 - t1;
   if (!grad) return WV_OK;
   /* dL/dcapture: descriptor backward plus the pixel term through the downsampling */
-  if ((st = wv_descriptor_backward(c->d, &c->render, c->dgram, NULL, &c->dcap, err))) return st;
+  st = wv_descriptor_backward(c->d, &c->render, c->dgram, NULL, &c->dcap, err);
   wv_image_free(&c->dcap_pix);
-  if ((st = wv_image_downsample_backward(c->scene.width, c->scene.height, &c->ddown, &c->dcap_pix, err))) return st;
+  if (!st) st = wv_image_downsample_backward(c->scene.width, c->scene.height, &c->ddown, &c->dcap_pix, err);
+  if (st) {
+    wv_record_free(record);
+    return st;
+  }
   size_t n = (size_t)c->scene.width * c->scene.height * 3;
   for (size_t i = 0; i < n; i++) c->dcap.data[i] += (float)o->w_pixel * c->dcap_pix.data[i];
   double t3 = omp_get_wtime();
   c->timing->descriptor += t3 - t2;
-  if ((st = wv_render_grad(&c->scene, p, &ro, &c->dcap, grad, NULL, err))) return st;
+  st = wv_record_grad(record, &c->dcap, grad, NULL, err);
+  wv_record_free(record);
+  if (st) return st;
   c->timing->gradient += omp_get_wtime() - t3;
   grad[WV_P_BETA_WARP] += o->w_prior * (p->heightfield[WV_WARP] - mu) / (sg * sg);
   grad[WV_P_BETA_WEFT] += o->w_prior * (p->heightfield[WV_WEFT] - mu) / (sg * sg);
   return WV_OK;
+fail:
+  wv_record_free(record);
+  return st;
 }
 
 wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p,
