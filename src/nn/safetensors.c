@@ -115,12 +115,13 @@ static wv_status parse_entry(const char *path, const char *key, json_t *v, uint6
                    path, key, t->begin, t->end, data_size);
   char sh[160];
   shape_str(sh, sizeof sh, t->ndim, t->shape);
-  if (overflow || numel * (uint64_t)es != t->end - t->begin)
+  if (overflow)
+    return wv_fail(err, WV_ERR_FORMAT, "%s: tensor '%s' has an absurd shape %s", path, key, sh);
+  if (numel * (uint64_t)es != t->end - t->begin)
     return wv_fail(err, WV_ERR_FORMAT,
-                   "%s: tensor '%s' data_offsets [%" PRIu64 ", %" PRIu64
-                   "] hold %" PRIu64 " bytes but shape %s of %s needs %s",
-                   path, key, t->begin, t->end, t->end - t->begin, sh, dt,
-                   overflow ? "more than 2^60" : "a different size");
+                   "%s: tensor '%s' data_offsets [%" PRIu64 ", %" PRIu64 "] hold %" PRIu64
+                   " bytes but shape %s of %s needs %" PRIu64,
+                   path, key, t->begin, t->end, t->end - t->begin, sh, dt, numel * (uint64_t)es);
   return WV_OK;
 }
 
