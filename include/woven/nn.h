@@ -56,8 +56,8 @@ typedef struct {
   int n, c, h, w;          /* input */
   int oc, k, stride, pad;  /* filters */
   int oh, ow;              /* output size, set by init */
-  int chunk;               /* output positions per im2col block, set by init */
-  int rows;                /* output rows per backward block (>= k / stride), set by init */
+  int chunk;               /* output positions per per-thread block, set by init */
+  int shared;              /* 1: threads share blocks (see conv.c), set by init */
   int nthreads;            /* OpenMP threads the op uses, set by init */
 } wv_nn_conv2d;
 

@@ -29,15 +29,15 @@ static const int rmf_c[RMF_LEVELS] = {64, 64, 64, 64, 64}; /* filters per level 
 #define RMF_DC 0.1f /* kept fraction of each filter's mean (see create) */
 /* Fixed seed: the weights are part of the descriptor's definition. */
 #define RMF_SEED 0x776f76656e524d46ULL /* "wovenRMF" */
-#define RMF_BLOCK_FLOATS (1 << 18)
+#define RMF_BLOCK_FLOATS (3 << 16) /* 768 kB */
 
 typedef struct {
   float *w[RMF_LEVELS]; /* (c, 3, k, k) per level */
   int w_img, h_img, nthreads;
   float *lev[RMF_LEVELS], *dlev[RMF_LEVELS]; /* lev[0], dlev[0] are the caller's */
   int lw[RMF_LEVELS], lh[RMF_LEVELS];
-  int rows[RMF_LEVELS];                       /* output rows per block */
-  float *scratch, *gpart;
+  int blk[RMF_LEVELS];                        /* output positions per block */
+  float *scratch, *gpart, *dxpart;
   size_t per_thread;
 } rmf_net;
 
@@ -46,8 +46,8 @@ static void free_buffers(rmf_net *m) {
     free(m->lev[s]), free(m->dlev[s]);
     m->lev[s] = m->dlev[s] = NULL;
   }
-  free(m->scratch), free(m->gpart);
-  m->scratch = m->gpart = NULL;
+  free(m->scratch), free(m->gpart), free(m->dxpart);
+  m->scratch = m->gpart = m->dxpart = NULL;
   m->w_img = m->h_img = 0;
 }
 
@@ -71,15 +71,14 @@ static wv_status ensure_buffers(rmf_net *m, int w, int h, wv_error *err) {
     m->lh[s] = s ? m->lh[s - 1] / 2 : h;
     int k = rmf_k[s], kk = 3 * k * k, c = rmf_c[s];
     int oh = m->lh[s] - k + 1, ow = m->lw[s] - k + 1;
-    /* Blocks of >= k rows: blocks two apart never share input rows in col2im. */
-    int rows = RMF_BLOCK_FLOATS / (kk * ow);
-    int bal = (oh + 2 * nt - 1) / (2 * nt); /* at least two blocks per thread */
-    if (rows > bal) rows = bal;
-    if (rows < k) rows = k;
-    if (rows > oh) rows = oh;
-    m->rows[s] = rows;
-    size_t blk = (size_t)rows * ow;
-    size_t need = blk * (kk + 2 * c); /* col, F, dF */
+    /* A block's columns, features and their gradient stay in L2. */
+    long npos = (long)oh * ow, len = RMF_BLOCK_FLOATS / (kk + 2 * c);
+    if (len < 256) len = 256;
+    long nb = (npos + len - 1) / len;
+    if (nb < 4 * nt) nb = 4 * nt; /* balance */
+    if (nb > npos) nb = npos;
+    m->blk[s] = (int)((npos + nb - 1) / nb);
+    size_t need = (size_t)m->blk[s] * (kk + 2 * c); /* col, F, dF */
     if (need > per) per = need;
     if (s) {
       size_t n = (size_t)3 * m->lw[s] * m->lh[s];
@@ -88,8 +87,10 @@ static wv_status ensure_buffers(rmf_net *m, int w, int h, wv_error *err) {
     }
   }
   m->per_thread = per;
+  /* Threads other than the first accumulate input gradients in their own copy. */
   if (!(m->scratch = malloc(sizeof(float) * per * nt)) ||
-      !(m->gpart = malloc(sizeof(float) * (size_t)RMF_MAXC * RMF_MAXC * nt)))
+      !(m->gpart = malloc(sizeof(float) * (size_t)RMF_MAXC * RMF_MAXC * nt)) ||
+      !(m->dxpart = malloc(sizeof(float) * 3 * (size_t)w * h * (nt > 1 ? nt - 1 : 1))))
     goto oom;
   m->w_img = w, m->h_img = h;
   return WV_OK;
@@ -100,43 +101,46 @@ oom:
 }
 
 /* One pyramid level: Gram into gram (c x c); with S = (dG + dG^T) / HW, also adds the
- * input gradient into dx. */
+ * input gradient into dx (zero on entry). Blocks go to threads in a fixed order and
+ * partial sums are added in thread order, so results are deterministic. */
 static void level_pass(rmf_net *m, int s, const float *S, float *gram, float *dx) {
   const float *x = m->lev[s];
   const float *W = m->w[s];
   int w = m->lw[s], h = m->lh[s], k = rmf_k[s], c = rmf_c[s], kk = 3 * k * k;
-  int oh = h - k + 1, ow = w - k + 1, npos = oh * ow, rows = m->rows[s];
-  int nb = (oh + rows - 1) / rows, nt = m->nthreads;
+  int oh = h - k + 1, ow = w - k + 1, npos = oh * ow, bl = m->blk[s];
+  int nb = (npos + bl - 1) / bl, nt = m->nthreads;
+  size_t nx = (size_t)3 * w * h;
 #pragma omp parallel num_threads(nt)
   {
     int tid = omp_get_thread_num();
     float *col = m->scratch + (size_t)tid * m->per_thread;
-    float *f = col + (size_t)kk * rows * ow, *df = f + (size_t)c * rows * ow;
+    float *f = col + (size_t)kk * bl, *df = f + (size_t)c * bl;
     float *gp = m->gpart + (size_t)tid * c * c;
+    float *dxt = tid ? m->dxpart + (size_t)(tid - 1) * nx : dx;
     memset(gp, 0, sizeof(float) * c * c);
-    int nphase = S ? 2 : 1;
-    for (int phase = 0; phase < nphase; phase++) {
-      int cnt = S ? (nb + 1 - phase) / 2 : nb;
+    if (S && tid) memset(dxt, 0, sizeof(float) * nx);
 #pragma omp for schedule(static)
-      for (int t = 0; t < cnt; t++) {
-        int blk = S ? 2 * t + phase : t;
-        int p0 = blk * rows * ow, p1 = p0 + rows * ow < npos ? p0 + rows * ow : npos;
-        int len = p1 - p0;
-        wv_nn_im2col(x, 3, h, w, k, 1, 0, ow, p0, p1, col);
-        cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, c, len, kk, 1.0f, W, kk, col, len,
-                    0.0f, f, len);
-        for (size_t i = 0; i < (size_t)c * len; i++) f[i] = f[i] > 0.0f ? f[i] : 0.0f;
-        cblas_ssyrk(CblasRowMajor, CblasUpper, CblasNoTrans, c, len, 1.0f, f, len, 1.0f, gp, c);
-        if (S) {
-          cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, c, len, c, 1.0f, S, c, f, len,
-                      0.0f, df, len);
-          for (size_t i = 0; i < (size_t)c * len; i++)
-            if (!(f[i] > 0.0f)) df[i] = 0.0f;
-          cblas_sgemm(CblasRowMajor, CblasTrans, CblasNoTrans, kk, len, c, 1.0f, W, kk, df, len,
-                      0.0f, col, len);
-          wv_nn_col2im(col, 3, h, w, k, 1, 0, ow, p0, p1, dx);
-        }
+    for (int b = 0; b < nb; b++) {
+      int p0 = b * bl, p1 = p0 + bl < npos ? p0 + bl : npos, len = p1 - p0;
+      wv_nn_im2col(x, 3, h, w, k, 1, 0, ow, p0, p1, col);
+      cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, c, len, kk, 1.0f, W, kk, col, len,
+                  0.0f, f, len);
+      for (size_t i = 0; i < (size_t)c * len; i++) f[i] = f[i] > 0.0f ? f[i] : 0.0f;
+      cblas_ssyrk(CblasRowMajor, CblasUpper, CblasNoTrans, c, len, 1.0f, f, len, 1.0f, gp, c);
+      if (S) {
+        cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, c, len, c, 1.0f, S, c, f, len,
+                    0.0f, df, len);
+        for (size_t i = 0; i < (size_t)c * len; i++)
+          if (!(f[i] > 0.0f)) df[i] = 0.0f;
+        cblas_sgemm(CblasRowMajor, CblasTrans, CblasNoTrans, kk, len, c, 1.0f, W, kk, df, len,
+                    0.0f, col, len);
+        wv_nn_col2im(col, 3, h, w, k, 1, 0, ow, p0, p1, dxt);
       }
+    }
+    if (S && nt > 1) {
+#pragma omp for schedule(static)
+      for (size_t i = 0; i < nx; i++)
+        for (int t = 1; t < nt; t++) dx[i] += m->dxpart[(size_t)(t - 1) * nx + i];
     }
   }
   /* Sum the threads' upper triangles in thread order, mirror, normalise. */
@@ -221,4 +225,12 @@ wv_status wv_descriptor_create_default(wv_descriptor **out, wv_error *err) {
   d->min_side = rmf_k[RMF_LEVELS - 1] << (RMF_LEVELS - 1);
   *out = d;
   return WV_OK;
+}
+
+int wv_descriptor_default_filters(const wv_descriptor *d, int level, int *k, int *c,
+                                  const float **w) {
+  if (d->run != rmf_run || level < 0 || level >= RMF_LEVELS) return -1;
+  const rmf_net *m = d->impl;
+  *k = rmf_k[level], *c = rmf_c[level], *w = m->w[level];
+  return RMF_LEVELS;
 }

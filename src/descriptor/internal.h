@@ -29,4 +29,9 @@ struct wv_descriptor {
 wv_status wv_descriptor_alloc(wv_descriptor **out, const char *name, int nlayers,
                               const int *channels, wv_error *err);
 
+/* For tests: the default descriptor's filters of pyramid level `level` (c x 3 x k x k);
+ * returns the number of levels, or -1 if d is not the default descriptor. */
+int wv_descriptor_default_filters(const wv_descriptor *d, int level, int *k, int *c,
+                                  const float **w);
+
 #endif

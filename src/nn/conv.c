@@ -1,5 +1,15 @@
-/* 2-D convolution as im2col + sgemm, one block of output positions per OpenMP
- * thread and a single-threaded sgemm per block (nn.h explains why). */
+/* 2-D convolution as im2col + sgemm with single-threaded sgemm calls inside OpenMP
+ * regions (nn.h explains why). Two schedules:
+ *  - blocks: each thread takes whole blocks of output positions (im2col + sgemm on
+ *    its own block, no synchronisation); best for the first layers of a network:
+ *    many positions, few input channels.
+ *  - shared: one large block at a time; each thread builds the column rows of its
+ *    share of the input channels, then multiplies its share of the output channels.
+ *    The backward pass always uses this one: a thread owns input channels (its rows
+ *    of the column gradient, and col2im into its own planes of dx) and output
+ *    channels (its rows of dW), so nothing is summed across threads.
+ * Measured on 2 cores for VGG-19 at 400x150, this is as fast as or faster than
+ * OpenBLAS's own threaded sgemm on the same matrix shapes. */
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,17 +50,10 @@ wv_status wv_nn_conv2d_init(wv_nn_conv2d *cv, int n, int c, int h, int w, int oc
   if (chunk > npos) chunk = npos;
   long nb = (npos + chunk - 1) / chunk;
   cv->chunk = (int)((npos + nb - 1) / nb); /* equal blocks */
-  /* Backward blocks are whole output rows; blocks two apart never touch the same input
-   * row in col2im, so even blocks and then odd blocks can run in parallel. */
-  int minrows = (k + stride - 1) / stride;
-  long rows = CONV_BLOCK_FLOATS / (kk * cv->ow);
-  if (n < cv->nthreads) {
-    long per = (cv->oh + 2 * cv->nthreads - 1) / (2 * cv->nthreads);
-    if (rows > per) rows = per;
-  }
-  if (rows < minrows) rows = minrows;
-  if (rows > cv->oh) rows = cv->oh;
-  cv->rows = (int)rows;
+  /* Per-thread blocks suit many positions and short columns (the first layers); with
+   * long columns (many input channels) each block's sgemm would repack the whole weight
+   * matrix for few positions, so the threads then share one large block instead. */
+  cv->shared = kk * 256 > CONV_BLOCK_FLOATS || n * nb < cv->nthreads;
   return WV_OK;
 }
 
@@ -58,13 +61,22 @@ static int is_pointwise(const wv_nn_conv2d *cv) {
   return cv->k == 1 && cv->stride == 1 && cv->pad == 0;
 }
 
+/* The shared block (16 MB) stays in L3; at least 256 positions per sgemm. */
+#define SHARED_FLOATS (1 << 22)
+static int shared_len(const wv_nn_conv2d *cv) {
+  long kk = (long)cv->c * cv->k * cv->k, npos = (long)cv->oh * cv->ow;
+  long len = SHARED_FLOATS / kk;
+  if (len < 256) len = 256;
+  if (len > npos) len = npos;
+  long nb = (npos + len - 1) / len;
+  return (int)((npos + nb - 1) / nb);
+}
+
 size_t wv_nn_conv2d_scratch_floats(const wv_nn_conv2d *cv, int with_dw) {
+  (void)with_dw; /* every mode needs the same */
   size_t kk = (size_t)cv->c * cv->k * cv->k;
-  size_t blk = (size_t)cv->chunk;
-  if ((size_t)cv->rows * cv->ow > blk) blk = (size_t)cv->rows * cv->ow;
-  size_t s = (size_t)cv->nthreads * kk * blk;
-  if (with_dw) s += (size_t)cv->nthreads * cv->oc * kk;
-  return s;
+  size_t blocks = (size_t)cv->nthreads * kk * cv->chunk, shared = kk * shared_len(cv);
+  return blocks > shared ? blocks : shared;
 }
 
 void wv_nn_im2col(const float *x, int c, int h, int w, int k, int stride, int pad, int ow, int p0,
@@ -134,9 +146,102 @@ void wv_nn_col2im(const float *col, int c, int h, int w, int k, int stride, int 
   }
 }
 
+static void split(int n, int tid, int nth, int *a, int *b) {
+  *a = (int)((long)n * tid / nth), *b = (int)((long)n * (tid + 1) / nth);
+}
+
+static void forward_shared(const wv_nn_conv2d *cv, const float *x, const float *w, const float *b,
+                           float *y, float *col) {
+  int kk = cv->c * cv->k * cv->k, npos = cv->oh * cv->ow, k2 = cv->k * cv->k;
+  int len = shared_len(cv), pw = is_pointwise(cv);
+#pragma omp parallel num_threads(cv->nthreads)
+  {
+    int tid = omp_get_thread_num(), nth = omp_get_num_threads(), c0, c1, m0, m1;
+    split(cv->c, tid, nth, &c0, &c1);
+    split(cv->oc, tid, nth, &m0, &m1);
+    for (int img = 0; img < cv->n; img++) {
+      const float *xi = x + (size_t)img * cv->c * cv->h * cv->w;
+      float *yi = y + (size_t)img * cv->oc * npos;
+      for (int p0 = 0; p0 < npos; p0 += len) {
+        int p1 = p0 + len < npos ? p0 + len : npos, l = p1 - p0;
+        const float *cp = xi + p0;
+        int ldc = npos;
+        if (!pw) {
+          wv_nn_im2col(xi + (size_t)c0 * cv->h * cv->w, c1 - c0, cv->h, cv->w, cv->k, cv->stride,
+                       cv->pad, cv->ow, p0, p1, col + (size_t)c0 * k2 * l);
+          cp = col, ldc = l;
+#pragma omp barrier
+        }
+        if (m1 > m0)
+          wv_nn_sgemm(0, 0, m1 - m0, l, kk, 1.0f, w + (size_t)m0 * kk, kk, cp, ldc, 0.0f,
+                      yi + (size_t)m0 * npos + p0, npos);
+        if (b)
+          for (int o = m0; o < m1; o++) {
+            float *row = yi + (size_t)o * npos + p0;
+            for (int i = 0; i < l; i++) row[i] += b[o];
+          }
+#pragma omp barrier
+      }
+    }
+  }
+}
+
+static void backward_shared(const wv_nn_conv2d *cv, const float *x, const float *w, const float *dy,
+                            float *dx, float *dw, float *col) {
+  int kk = cv->c * cv->k * cv->k, npos = cv->oh * cv->ow, k2 = cv->k * cv->k;
+  int len = shared_len(cv), pw = is_pointwise(cv);
+#pragma omp parallel num_threads(cv->nthreads)
+  {
+    int tid = omp_get_thread_num(), nth = omp_get_num_threads(), c0, c1, m0, m1;
+    split(cv->c, tid, nth, &c0, &c1);
+    split(cv->oc, tid, nth, &m0, &m1);
+    int r0 = c0 * k2, r1 = c1 * k2;
+    for (int img = 0; img < cv->n; img++) {
+      const float *xi = x + (size_t)img * cv->c * cv->h * cv->w;
+      const float *dyi = dy + (size_t)img * cv->oc * npos;
+      float *dxi = dx ? dx + (size_t)img * cv->c * cv->h * cv->w : NULL;
+      for (int p0 = 0; p0 < npos; p0 += len) {
+        int p1 = p0 + len < npos ? p0 + len : npos, l = p1 - p0;
+        if (dw) {
+          const float *cp = xi + p0;
+          int ldc = npos;
+          if (!pw) {
+            wv_nn_im2col(xi + (size_t)c0 * cv->h * cv->w, c1 - c0, cv->h, cv->w, cv->k,
+                         cv->stride, cv->pad, cv->ow, p0, p1, col + (size_t)r0 * l);
+            cp = col, ldc = l;
+#pragma omp barrier
+          }
+          /* Each thread owns rows m0..m1 of dW: no partial sums. */
+          if (m1 > m0)
+            wv_nn_sgemm(0, 1, m1 - m0, kk, l, 1.0f, dyi + (size_t)m0 * npos + p0, npos, cp, ldc,
+                        1.0f, dw + (size_t)m0 * kk, kk);
+#pragma omp barrier
+        }
+        if (dx && r1 > r0) {
+          /* Each thread owns input channels c0..c1: its rows of dcol and its planes of dx. */
+          if (pw) {
+            wv_nn_sgemm(1, 0, r1 - r0, l, cv->oc, 1.0f, w + r0, kk, dyi + p0, npos, 1.0f,
+                        dxi + (size_t)r0 * npos + p0, npos);
+          } else {
+            wv_nn_sgemm(1, 0, r1 - r0, l, cv->oc, 1.0f, w + r0, kk, dyi + p0, npos, 0.0f,
+                        col + (size_t)r0 * l, l);
+            wv_nn_col2im(col + (size_t)r0 * l, c1 - c0, cv->h, cv->w, cv->k, cv->stride, cv->pad,
+                         cv->ow, p0, p1, dxi + (size_t)c0 * cv->h * cv->w);
+          }
+        }
+#pragma omp barrier
+      }
+    }
+  }
+}
+
 void wv_nn_conv2d_forward(const wv_nn_conv2d *cv, const float *x, const float *w, const float *b,
                           float *y, float *scratch) {
   wv_nn_blas_serial();
+  if (cv->shared) {
+    forward_shared(cv, x, w, b, y, scratch);
+    return;
+  }
   int kk = cv->c * cv->k * cv->k, npos = cv->oh * cv->ow;
   int nb = (npos + cv->chunk - 1) / cv->chunk, ntask = cv->n * nb;
   int pw = is_pointwise(cv);
@@ -167,61 +272,6 @@ void wv_nn_conv2d_forward(const wv_nn_conv2d *cv, const float *x, const float *w
 void wv_nn_conv2d_backward(const wv_nn_conv2d *cv, const float *x, const float *w, const float *dy,
                            float *dx, float *dw, float *db, float *scratch) {
   wv_nn_blas_serial();
-  int kk = cv->c * cv->k * cv->k, npos = cv->oh * cv->ow, nth = cv->nthreads;
-  if (db) wv_nn_bias_backward(NULL, db, dy, cv->n, cv->oc, npos);
-  if (!dx && !dw) return;
-  size_t blk = (size_t)cv->chunk;
-  if ((size_t)cv->rows * cv->ow > blk) blk = (size_t)cv->rows * cv->ow;
-  float *dwpart = scratch + (size_t)nth * kk * blk;
-  if (dw) memset(dwpart, 0, sizeof(float) * nth * cv->oc * kk);
-  int nb = (cv->oh + cv->rows - 1) / cv->rows; /* row blocks per image */
-  int pw = is_pointwise(cv);
-#pragma omp parallel num_threads(nth)
-  {
-    int tid = omp_get_thread_num();
-    float *buf = scratch + (size_t)tid * kk * blk;
-    float *dwt = dwpart + (size_t)tid * cv->oc * kk;
-    for (int phase = 0; phase < 2; phase++) {
-      int nphase = (nb + 1 - phase) / 2; /* blocks of this parity per image */
-#pragma omp for schedule(static)
-      for (int t = 0; t < cv->n * nphase; t++) {
-        int img = t / nphase, blkno = 2 * (t % nphase) + phase;
-        int p0 = blkno * cv->rows * cv->ow;
-        int p1 = p0 + cv->rows * cv->ow < npos ? p0 + cv->rows * cv->ow : npos, len = p1 - p0;
-        const float *xi = x + (size_t)img * cv->c * cv->h * cv->w;
-        const float *dyi = dy + (size_t)img * cv->oc * npos + p0;
-        float *dxi = dx ? dx + (size_t)img * cv->c * cv->h * cv->w : NULL;
-        if (dw) {
-          const float *col = xi + p0;
-          int ldcol = npos;
-          if (!pw) {
-            wv_nn_im2col(xi, cv->c, cv->h, cv->w, cv->k, cv->stride, cv->pad, cv->ow, p0, p1, buf);
-            col = buf, ldcol = len;
-          }
-          /* dW += dy_block col^T */
-          wv_nn_sgemm(0, 1, cv->oc, kk, len, 1.0f, dyi, npos, col, ldcol, 1.0f, dwt, kk);
-        }
-        if (dx) {
-          if (pw) {
-            wv_nn_sgemm(1, 0, kk, len, cv->oc, 1.0f, w, kk, dyi, npos, 1.0f, dxi + p0, npos);
-          } else {
-            /* dcol = W^T dy_block, then scattered back onto the input. */
-            wv_nn_sgemm(1, 0, kk, len, cv->oc, 1.0f, w, kk, dyi, npos, 0.0f, buf, len);
-            wv_nn_col2im(buf, cv->c, cv->h, cv->w, cv->k, cv->stride, cv->pad, cv->ow, p0, p1,
-                         dxi);
-          }
-        }
-      }
-    }
-    if (dw) {
-      /* Sum the per-thread parts in thread order: deterministic. */
-      size_t total = (size_t)cv->oc * kk;
-#pragma omp for schedule(static)
-      for (size_t i = 0; i < total; i++) {
-        float s = 0.0f;
-        for (int t = 0; t < nth; t++) s += dwpart[(size_t)t * total + i];
-        dw[i] += s;
-      }
-    }
-  }
+  if (db) wv_nn_bias_backward(NULL, db, dy, cv->n, cv->oc, cv->oh * cv->ow);
+  if (dx || dw) backward_shared(cv, x, w, dy, dx, dw, scratch);
 }
