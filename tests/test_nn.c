@@ -1,0 +1,414 @@
+/* nn ops: every backward against central finite differences of
+ * loss = sum(dy .* forward(...)) (accumulated in double), plus forward references,
+ * the threaded sgemm, Adam, the RNG and half-float conversion. */
+#include <cblas.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+#include "woven/nn.h"
+
+static float *rnd(wv_rng *r, size_t n, float lo, float hi) {
+  float *x = malloc(sizeof(float) * (n ? n : 1));
+  wv_rng_fill_uniform(r, x, n, lo, hi);
+  return x;
+}
+
+/* Values away from 0 so that ReLU-like kinks are not crossed by the finite difference. */
+static float *rnd_nokink(wv_rng *r, size_t n, float margin) {
+  float *x = rnd(r, n, -1, 1);
+  for (size_t i = 0; i < n; i++)
+    if (fabsf(x[i]) < margin) x[i] = x[i] < 0 ? -margin - 0.1f : margin + 0.1f;
+  return x;
+}
+
+static double dot(const float *a, const float *b, size_t n) {
+  double s = 0;
+  for (size_t i = 0; i < n; i++) s += (double)a[i] * b[i];
+  return s;
+}
+
+typedef double (*loss_fn)(void *ctx);
+
+/* Compares the analytic gradient g of f with respect to p[0..n) with central differences.
+ * Errors are relative, with a floor of a tenth of the largest gradient entry: the float
+ * rounding of the loss makes tiny derivatives noisy in absolute terms. */
+static void check_grad(const char *what, float *p, size_t n, const float *g, loss_fn f, void *ctx,
+                       float eps, double tol) {
+  double worst = 0, gmax = 0;
+  for (size_t i = 0; i < n; i++) gmax = fmax(gmax, fabs(g[i]));
+  for (size_t i = 0; i < n; i++) {
+    float save = p[i];
+    p[i] = save + eps;
+    double fp = f(ctx);
+    p[i] = save - eps;
+    double fm = f(ctx);
+    p[i] = save;
+    /* Divide by the step actually taken in float. */
+    double num = (fp - fm) / ((double)(save + eps) - (double)(save - eps));
+    double err = fabs(num - g[i]) / (fabs(num) + fabs(g[i]) + 0.1 * gmax + 1e-6);
+    if (err > worst) worst = err;
+    if (err > tol) {
+      fprintf(stderr, "%s: d/dp[%zu] analytic %.6g, finite difference %.6g\n", what, i, g[i], num);
+      fail();
+    }
+  }
+  fprintf(stderr, "%-28s %5zu values, worst relative error %.2e\n", what, n, worst);
+}
+
+/* ---- conv2d ---- */
+typedef struct {
+  wv_nn_conv2d cv;
+  float *x, *w, *b, *y, *dy, *s;
+} conv_ctx;
+
+static double conv_loss(void *p) {
+  conv_ctx *c = p;
+  wv_nn_conv2d_forward(&c->cv, c->x, c->w, c->b, c->y, c->s);
+  return dot(c->y, c->dy, (size_t)c->cv.n * c->cv.oc * c->cv.oh * c->cv.ow);
+}
+
+static void conv_reference(const wv_nn_conv2d *cv, const float *x, const float *w, const float *b,
+                           double *y) {
+  for (int n = 0; n < cv->n; n++)
+    for (int o = 0; o < cv->oc; o++)
+      for (int oy = 0; oy < cv->oh; oy++)
+        for (int ox = 0; ox < cv->ow; ox++) {
+          double s = b ? b[o] : 0;
+          for (int c = 0; c < cv->c; c++)
+            for (int i = 0; i < cv->k; i++)
+              for (int j = 0; j < cv->k; j++) {
+                int iy = oy * cv->stride + i - cv->pad, ix = ox * cv->stride + j - cv->pad;
+                if (iy < 0 || ix < 0 || iy >= cv->h || ix >= cv->w) continue;
+                s += (double)w[((o * cv->c + c) * cv->k + i) * cv->k + j] *
+                     x[((size_t)(n * cv->c + c) * cv->h + iy) * cv->w + ix];
+              }
+          y[((size_t)(n * cv->oc + o) * cv->oh + oy) * cv->ow + ox] = s;
+        }
+}
+
+static void conv_case(int n, int c, int h, int w, int oc, int k, int stride, int pad) {
+  char what[96];
+  snprintf(what, sizeof what, "conv2d %dx%dx%dx%d k%d s%d p%d", n, c, h, w, k, stride, pad);
+  wv_rng r;
+  wv_rng_seed(&r, 100 + k * 10 + stride + pad);
+  conv_ctx cc;
+  wv_error err;
+  assert_int_equal(wv_nn_conv2d_init(&cc.cv, n, c, h, w, oc, k, stride, pad, &err), WV_OK);
+  size_t nx = (size_t)n * c * h * w, nw = (size_t)oc * c * k * k,
+         ny = (size_t)n * oc * cc.cv.oh * cc.cv.ow;
+  cc.x = rnd(&r, nx, -1, 1), cc.w = rnd(&r, nw, -1, 1), cc.b = rnd(&r, oc, -1, 1);
+  cc.y = rnd(&r, ny, 0, 0), cc.dy = rnd(&r, ny, -1, 1);
+  cc.s = malloc(sizeof(float) * wv_nn_conv2d_scratch_floats(&cc.cv, 1));
+  /* Forward against the direct sum. */
+  double *ref = malloc(sizeof(double) * ny);
+  conv_reference(&cc.cv, cc.x, cc.w, cc.b, ref);
+  conv_loss(&cc);
+  for (size_t i = 0; i < ny; i++) assert_true(fabs(cc.y[i] - ref[i]) < 1e-4 * (1 + fabs(ref[i])));
+  /* Backward: gradients accumulate, so start from a known offset and subtract it. */
+  float *dx = rnd(&r, nx, 0, 0), *dw = rnd(&r, nw, 0, 0), *db = rnd(&r, oc, 0, 0);
+  for (size_t i = 0; i < nx; i++) dx[i] = 0.5f;
+  wv_nn_conv2d_backward(&cc.cv, cc.x, cc.w, cc.dy, dx, dw, db, cc.s);
+  for (size_t i = 0; i < nx; i++) dx[i] -= 0.5f;
+  char wx[128];
+  snprintf(wx, sizeof wx, "%s dx", what);
+  check_grad(wx, cc.x, nx, dx, conv_loss, &cc, 5e-2f, 2e-3);
+  snprintf(wx, sizeof wx, "%s dw", what);
+  check_grad(wx, cc.w, nw, dw, conv_loss, &cc, 5e-2f, 2e-3);
+  snprintf(wx, sizeof wx, "%s db", what);
+  check_grad(wx, cc.b, oc, db, conv_loss, &cc, 5e-2f, 2e-3);
+  free(ref), free(dx), free(dw), free(db);
+  free(cc.x), free(cc.w), free(cc.b), free(cc.y), free(cc.dy), free(cc.s);
+}
+
+static void test_conv2d(void **state) {
+  (void)state;
+  conv_case(2, 3, 7, 6, 4, 3, 1, 1);   /* VGG-style same convolution */
+  conv_case(1, 2, 9, 8, 3, 5, 1, 0);   /* valid convolution, as the default descriptor */
+  conv_case(2, 3, 8, 7, 2, 3, 2, 1);   /* strided */
+  conv_case(2, 4, 5, 6, 3, 1, 1, 0);   /* pointwise (no im2col) */
+  conv_case(1, 2, 40, 33, 3, 3, 1, 1); /* several blocks per thread */
+  conv_case(2, 120, 6, 5, 5, 3, 1, 1); /* long columns: the shared schedule */
+}
+
+static void test_conv2d_invalid(void **state) {
+  (void)state;
+  wv_nn_conv2d cv;
+  wv_error err = {0};
+  assert_int_equal(wv_nn_conv2d_init(&cv, 1, 3, 2, 2, 4, 5, 1, 0, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "smaller than"));
+  assert_int_equal(wv_nn_conv2d_init(&cv, 1, 3, 8, 8, 4, 3, 1, 3, &err), WV_ERR_INVALID);
+  assert_int_equal(wv_nn_conv2d_init(&cv, 1, 0, 8, 8, 4, 3, 1, 1, &err), WV_ERR_INVALID);
+}
+
+/* ---- element-wise ops ---- */
+typedef struct {
+  int kind; /* 0 relu, 1 leaky, 2 sigmoid, 3 bias */
+  size_t n;
+  int nn, c, hw;
+  float *x, *b, *y, *dy;
+} ew_ctx;
+
+static double ew_loss(void *p) {
+  ew_ctx *e = p;
+  if (e->kind == 0) wv_nn_relu_forward(e->y, e->x, e->n);
+  if (e->kind == 1) wv_nn_leaky_relu_forward(e->y, e->x, 0.2f, e->n);
+  if (e->kind == 2) wv_nn_sigmoid_forward(e->y, e->x, e->n);
+  if (e->kind == 3) wv_nn_bias_forward(e->y, e->x, e->b, e->nn, e->c, e->hw);
+  return dot(e->y, e->dy, e->n);
+}
+
+static void test_elementwise(void **state) {
+  (void)state;
+  static const char *names[] = {"relu", "leaky_relu", "sigmoid", "bias"};
+  wv_rng r;
+  wv_rng_seed(&r, 7);
+  for (int kind = 0; kind < 4; kind++) {
+    ew_ctx e = {.kind = kind, .nn = 2, .c = 3, .hw = 10};
+    e.n = (size_t)e.nn * e.c * e.hw;
+    e.x = rnd_nokink(&r, e.n, 0.05f), e.b = rnd(&r, 3, -1, 1);
+    e.y = rnd(&r, e.n, 0, 0), e.dy = rnd(&r, e.n, -1, 1);
+    float *dx = calloc(e.n, sizeof(float)), *db = calloc(3, sizeof(float));
+    ew_loss(&e);
+    if (kind == 0) wv_nn_relu_backward(dx, e.x, e.dy, e.n);
+    if (kind == 1) wv_nn_leaky_relu_backward(dx, e.x, e.dy, 0.2f, e.n);
+    if (kind == 2) wv_nn_sigmoid_backward(dx, e.y, e.dy, e.n);
+    if (kind == 3) wv_nn_bias_backward(dx, db, e.dy, e.nn, e.c, e.hw);
+    check_grad(names[kind], e.x, e.n, dx, ew_loss, &e, 1e-2f, 2e-3);
+    if (kind == 3) check_grad("bias db", e.b, 3, db, ew_loss, &e, 5e-2f, 2e-3);
+    if (kind == 0) {
+      /* The in-place variant on the output gives the same gradient. */
+      float *d2 = malloc(sizeof(float) * e.n);
+      memcpy(d2, e.dy, sizeof(float) * e.n);
+      wv_nn_relu_mask(d2, e.y, e.n);
+      for (size_t i = 0; i < e.n; i++) assert_true(d2[i] == dx[i]);
+      free(d2);
+    }
+    free(dx), free(db), free(e.x), free(e.b), free(e.y), free(e.dy);
+  }
+  /* Sigmoid stays finite and saturates cleanly for large inputs. */
+  float big[2] = {-200.0f, 200.0f}, out[2];
+  wv_nn_sigmoid_forward(out, big, 2);
+  assert_true(out[0] == 0.0f && out[1] == 1.0f);
+}
+
+/* ---- pooling ---- */
+typedef struct {
+  int nc, h, w;
+  float *x, *y, *dy;
+} pool_ctx;
+
+static double pool_loss(void *p) {
+  pool_ctx *c = p;
+  wv_nn_avgpool2_forward(c->y, c->x, c->nc, c->h, c->w);
+  return dot(c->y, c->dy, (size_t)c->nc * (c->h / 2) * (c->w / 2));
+}
+
+static void test_avgpool(void **state) {
+  (void)state;
+  wv_rng r;
+  wv_rng_seed(&r, 8);
+  pool_ctx c = {.nc = 3, .h = 7, .w = 6}; /* odd height: the last row is dropped */
+  size_t nx = (size_t)c.nc * c.h * c.w, ny = (size_t)c.nc * 3 * 3;
+  c.x = rnd(&r, nx, -1, 1), c.y = rnd(&r, ny, 0, 0), c.dy = rnd(&r, ny, -1, 1);
+  pool_loss(&c);
+  assert_true(fabsf(c.y[0] - 0.25f * (c.x[0] + c.x[1] + c.x[6] + c.x[7])) < 1e-6f);
+  float *dx = calloc(nx, sizeof(float));
+  wv_nn_avgpool2_backward(dx, c.dy, c.nc, c.h, c.w);
+  check_grad("avgpool2", c.x, nx, dx, pool_loss, &c, 5e-2f, 2e-3);
+  for (int x = 0; x < c.w; x++) assert_true(dx[6 * c.w + x] == 0.0f); /* dropped row */
+  free(dx), free(c.x), free(c.y), free(c.dy);
+}
+
+/* ---- Gram ---- */
+typedef struct {
+  int n, c, hw;
+  float *f, *g, *dg;
+} gram_ctx;
+
+static double gram_loss(void *p) {
+  gram_ctx *c = p;
+  wv_nn_gram_forward(c->g, c->f, c->n, c->c, c->hw);
+  return dot(c->g, c->dg, (size_t)c->n * c->c * c->c);
+}
+
+static void test_gram(void **state) {
+  (void)state;
+  wv_rng r;
+  wv_rng_seed(&r, 9);
+  gram_ctx c = {.n = 2, .c = 4, .hw = 15};
+  size_t nf = (size_t)c.n * c.c * c.hw, ng = (size_t)c.n * c.c * c.c;
+  c.f = rnd(&r, nf, -1, 1), c.g = rnd(&r, ng, 0, 0), c.dg = rnd(&r, ng, -1, 1); /* dg not symmetric */
+  gram_loss(&c);
+  for (int i = 0; i < c.c; i++)
+    for (int j = 0; j < c.c; j++) {
+      double s = 0;
+      for (int p = 0; p < c.hw; p++) s += (double)c.f[i * c.hw + p] * c.f[j * c.hw + p];
+      assert_true(fabs(c.g[i * c.c + j] - s / c.hw) < 1e-5);
+    }
+  float *df = calloc(nf, sizeof(float));
+  wv_nn_gram_backward(df, c.f, c.dg, c.n, c.c, c.hw);
+  check_grad("gram", c.f, nf, df, gram_loss, &c, 5e-2f, 2e-3);
+  free(df), free(c.f), free(c.g), free(c.dg);
+}
+
+/* ---- fully connected ---- */
+typedef struct {
+  int batch, in, out;
+  float *x, *w, *b, *y, *dy;
+} fc_ctx;
+
+static double fc_loss(void *p) {
+  fc_ctx *c = p;
+  wv_nn_fc_forward(c->y, c->x, c->w, c->b, c->batch, c->in, c->out);
+  return dot(c->y, c->dy, (size_t)c->batch * c->out);
+}
+
+static void fc_case(int batch, int in, int out, int check_all) {
+  wv_rng r;
+  wv_rng_seed(&r, 10 + in);
+  fc_ctx c = {.batch = batch, .in = in, .out = out};
+  size_t nx = (size_t)batch * in, nw = (size_t)out * in, ny = (size_t)batch * out;
+  c.x = rnd(&r, nx, -1, 1), c.w = rnd(&r, nw, -1, 1), c.b = rnd(&r, out, -1, 1);
+  c.y = rnd(&r, ny, 0, 0), c.dy = rnd(&r, ny, -1, 1);
+  fc_loss(&c);
+  for (int i = 0; i < batch; i++)
+    for (int o = 0; o < out; o++) {
+      double s = c.b[o];
+      for (int k = 0; k < in; k++) s += (double)c.x[i * in + k] * c.w[(size_t)o * in + k];
+      assert_true(fabs(c.y[i * out + o] - s) < 1e-4 * (1 + fabs(s)));
+    }
+  float *dx = calloc(nx, sizeof(float)), *dw = calloc(nw, sizeof(float)),
+        *db = calloc(out, sizeof(float));
+  wv_nn_fc_backward(dx, dw, db, c.dy, c.x, c.w, batch, in, out);
+  /* Large layers: check a sample of entries (the FD of every one costs O(n^2)). */
+  size_t cx = check_all ? nx : 64, cw = check_all ? nw : 64;
+  check_grad("fc dx", c.x, cx, dx, fc_loss, &c, 5e-2f, 2e-3);
+  check_grad("fc dw", c.w, cw, dw, fc_loss, &c, 5e-2f, 2e-3);
+  check_grad("fc db", c.b, out, db, fc_loss, &c, 5e-2f, 2e-3);
+  free(dx), free(dw), free(db), free(c.x), free(c.w), free(c.b), free(c.y), free(c.dy);
+}
+
+static void test_fc(void **state) {
+  (void)state;
+  fc_case(3, 5, 4, 1);
+  fc_case(32, 300, 21, 0); /* large enough for the threaded sgemm split */
+}
+
+/* ---- L1 ---- */
+typedef struct {
+  size_t n;
+  float *p, *t;
+} l1_ctx;
+
+static double l1_loss(void *ctx) {
+  l1_ctx *c = ctx;
+  return 3.0 * wv_nn_l1_forward(c->p, c->t, c->n);
+}
+
+static void test_l1(void **state) {
+  (void)state;
+  wv_rng r;
+  wv_rng_seed(&r, 11);
+  l1_ctx c = {.n = 21};
+  c.p = rnd(&r, c.n, 0, 1), c.t = rnd(&r, c.n, 0, 1);
+  for (size_t i = 0; i < c.n; i++)
+    if (fabsf(c.p[i] - c.t[i]) < 0.05f) c.p[i] = c.t[i] + 0.1f;
+  double s = 0;
+  for (size_t i = 0; i < c.n; i++) s += fabs(c.p[i] - c.t[i]);
+  assert_true(fabs(wv_nn_l1_forward(c.p, c.t, c.n) - s / c.n) < 1e-6);
+  float *d = calloc(c.n, sizeof(float));
+  wv_nn_l1_backward(d, c.p, c.t, 3.0f, c.n);
+  check_grad("l1", c.p, c.n, d, l1_loss, &c, 1e-3f, 2e-3);
+  free(d), free(c.p), free(c.t);
+}
+
+/* ---- sgemm split ---- */
+static void test_sgemm(void **state) {
+  (void)state;
+  wv_rng r;
+  wv_rng_seed(&r, 12);
+  int shapes[][3] = {{300, 200, 50}, {20, 900, 64}, {500, 30, 70}, {3, 5, 7}};
+  for (int s = 0; s < 4; s++)
+    for (int ta = 0; ta < 2; ta++)
+      for (int tb = 0; tb < 2; tb++) {
+        int m = shapes[s][0], n = shapes[s][1], k = shapes[s][2];
+        int lda = ta ? m : k, ldb = tb ? k : n;
+        float *a = rnd(&r, (size_t)m * k, -1, 1), *b = rnd(&r, (size_t)k * n, -1, 1);
+        float *c1 = rnd(&r, (size_t)m * n, -1, 1), *c2 = malloc(sizeof(float) * m * n);
+        memcpy(c2, c1, sizeof(float) * m * n);
+        wv_nn_sgemm(ta, tb, m, n, k, 0.5f, a, lda, b, ldb, 0.25f, c1, n);
+        for (int i = 0; i < m; i++)
+          for (int j = 0; j < n; j++) {
+            double v = 0;
+            for (int p = 0; p < k; p++)
+              v += (double)(ta ? a[p * lda + i] : a[i * lda + p]) *
+                   (tb ? b[j * ldb + p] : b[p * ldb + j]);
+            v = 0.5 * v + 0.25 * c2[i * n + j];
+            assert_true(fabs(c1[i * n + j] - v) < 1e-4 * (1 + fabs(v)));
+          }
+        free(a), free(b), free(c1), free(c2);
+      }
+}
+
+/* ---- Adam ---- */
+static void test_adam(void **state) {
+  (void)state;
+  wv_nn_adam a;
+  wv_error err;
+  float p[3] = {1.0f, -2.0f, 0.5f}, g[3];
+  assert_int_equal(wv_nn_adam_init(&a, 3, 0.1f, &err), WV_OK);
+  /* First step: m^ = g, v^ = g^2, so every parameter moves by lr against its gradient sign. */
+  g[0] = 4.0f, g[1] = -0.01f, g[2] = 0.0f;
+  wv_nn_adam_step(&a, p, g);
+  assert_true(fabsf(p[0] - 0.9f) < 1e-6f && fabsf(p[1] + 1.9f) < 1e-4f && p[2] == 0.5f);
+  /* Minimises a quadratic sum (p - t)^2. */
+  const float t[3] = {0.3f, -0.7f, 2.0f};
+  for (int it = 0; it < 2000; it++) {
+    for (int i = 0; i < 3; i++) g[i] = 2.0f * (p[i] - t[i]);
+    wv_nn_adam_step(&a, p, g);
+  }
+  for (int i = 0; i < 3; i++) assert_true(fabsf(p[i] - t[i]) < 1e-2f);
+  assert_int_equal(a.t, 2001);
+  wv_nn_adam_free(&a);
+}
+
+/* ---- RNG and half floats ---- */
+static void test_rng_half(void **state) {
+  (void)state;
+  wv_rng r;
+  wv_rng_seed(&r, 0);
+  /* splitmix64's published first outputs for seed 0. */
+  assert_true(wv_rng_u64(&r) == 0xe220a8397b1dcdafULL);
+  assert_true(wv_rng_u64(&r) == 0x6e789e6aa1b965f4ULL);
+  double s = 0, s2 = 0;
+  wv_rng_seed(&r, 42);
+  for (int i = 0; i < 20000; i++) {
+    float u = wv_rng_uniform(&r);
+    assert_true(u >= 0.0f && u < 1.0f);
+    float z = wv_rng_normal(&r);
+    s += z, s2 += (double)z * z;
+  }
+  assert_true(fabs(s / 20000) < 0.05 && fabs(s2 / 20000 - 1) < 0.05);
+  assert_true(wv_nn_f16_to_f32(0x3c00) == 1.0f);
+  assert_true(wv_nn_f16_to_f32(0xc000) == -2.0f);
+  assert_true(wv_nn_f16_to_f32(0x7bff) == 65504.0f);
+  assert_true(wv_nn_f16_to_f32(0x0001) == ldexpf(1.0f, -24)); /* smallest subnormal */
+  assert_true(wv_nn_f16_to_f32(0x3555) == 0.25f + 341.0f / 4096.0f); /* (1 + 341/1024) 2^-2 */
+  assert_true(isinf(wv_nn_f16_to_f32(0x7c00)) && isnan(wv_nn_f16_to_f32(0x7e00)));
+  assert_true(wv_nn_bf16_to_f32(0x3f80) == 1.0f);
+  assert_true(wv_nn_bf16_to_f32(0xc0a0) == -5.0f);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_conv2d),  cmocka_unit_test(test_conv2d_invalid),
+      cmocka_unit_test(test_elementwise), cmocka_unit_test(test_avgpool),
+      cmocka_unit_test(test_gram),    cmocka_unit_test(test_fc),
+      cmocka_unit_test(test_l1),      cmocka_unit_test(test_sgemm),
+      cmocka_unit_test(test_adam),    cmocka_unit_test(test_rng_half),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
