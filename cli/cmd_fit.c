@@ -190,7 +190,7 @@ static wv_status write_job(const char *dir, const char *photo, const wv_crop *cr
   char *sj = wv_scene_to_json(s);
   json_t *scene = json_loads(sj, 0, NULL);
   free(sj);
-  json_t *o = json_pack("{s:s,s:i,s:s,s:[i,i,i,i],s:o,s:s,s:s?}", "kind", "woven-fit", "version", 1, "photo", photo,
+  json_t *o = json_pack("{s:s,s:i,s:s,s:[i,i,i,i],s:o,s:s,s:s*}", "kind", "woven-fit", "version", 1, "photo", photo,
                         "crop", crop->x, crop->y, crop->w, crop->h, "scene", scene, "descriptor", descriptor,
                         "vgg19_weights", weights);
   char *text = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# CLI behaviour of `woven fit` and `woven compare`: outputs, resume, bad input,
+# nothing in the output directory overwritten on failure. Usage: cli_fit.sh WOVEN SOURCE_DIR
+set -u
+WOVEN=$1
+SRC=$2
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+check() { # check NAME EXPECTED_CODE NEEDLE -- command...
+  local name=$1 want=$2 needle=$3
+  shift 4
+  "$@" >"$T/out" 2>"$T/err"
+  local got=$?
+  if [[ $got != "$want" ]] || { [[ -n $needle ]] && ! grep -qF -- "$needle" "$T/err" "$T/out"; }; then
+    echo "FAIL $name: exit $got (wanted $want), output:"
+    cat "$T/out" "$T/err"
+    fails=$((fails + 1))
+  else
+    echo "ok   $name"
+  fi
+}
+scene='{"name":"tiny","image":{"width":64,"height":48,"spp":8},"camera":{"position_mm":[0,0,8],"look_at_mm":[0,0,0],"vfov_deg":12},"sample":{"shape":"plane"},"light":{"position_mm":[0,8,8],"intensity":300},"response":{"encoding":"gamma","gamma":2.2},"falloff":{"type":"gaussian","sigma_px":60}}'
+echo "$scene" >"$T/tiny.json"
+"$WOVEN" render --params "$SRC/examples/satin.json" --scene "$T/tiny.json" -o "$T/photo.png" -q || exit 1
+
+check "fit" 0 '"ssim_fit"' -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit" --iters 6 --iter-scale 1 --iter-spp 2 --json
+for f in params.json render.png compare.png loss.svg report.html maps/normal.png fit.json checkpoint.json; do
+  [[ -s $T/fit/$f ]] || { echo "FAIL fit output $f missing"; fails=$((fails + 1)); }
+done
+grep -q "<svg" "$T/fit/loss.svg" || { echo "FAIL loss.svg is not SVG"; fails=$((fails + 1)); }
+grep -q "data:image/png;base64," "$T/fit/report.html" || { echo "FAIL report.html does not embed images"; fails=$((fails + 1)); }
+check "render the fit" 0 "" -- "$WOVEN" render --params "$T/fit/params.json" --scene "$T/tiny.json" -o "$T/refit.png" -q
+check "compare" 0 '"ssim"' -- "$WOVEN" compare "$T/photo.png" "$T/fit/render.png" --json
+check "resume further" 0 '"iterations": 9' -- "$WOVEN" fit --resume "$T/fit" --iters 9 --json
+check "resume finished" 0 '"iterations": 9' -- "$WOVEN" fit --resume "$T/fit" --json
+
+# bad input: clear error, non-zero exit, nothing in the directory touched
+cp -r "$T/fit" "$T/keep"
+check "refuses to overwrite" 3 "--force" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit"
+printf 'not an image at all' >"$T/corrupt.png"
+check "corrupt photo" 4 "corrupt.png" -- "$WOVEN" fit "$T/corrupt.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit" --force
+check "missing photo" 3 "nothere.png" -- "$WOVEN" fit "$T/nothere.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit" --force
+check "photo too small" 2 "much smaller" -- "$WOVEN" fit "$T/photo.png" --scene cylinder --pattern satin -o "$T/fit" --force
+check "init and pattern disagree" 2 "disagrees" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --init "$SRC/examples/twill.json" --pattern satin -o "$T/fit" --force
+check "resume not a fit" 2 "not a fit directory" -- "$WOVEN" fit --resume "$T"
+check "bad crop" 1 "--crop" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit" --crop 1,2,3
+check "unknown descriptor" 2 "descriptor" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit" --force --descriptor alexnet
+check "vgg19 without weights" 2 "weights" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit" --force --descriptor vgg19
+diff -r "$T/fit" "$T/keep" >/dev/null || { echo "FAIL a failed run changed the fit directory"; fails=$((fails + 1)); }
+check "compare sizes" 2 "differ in size" -- "$WOVEN" compare "$T/photo.png" "$T/fit/compare.png"
+
+echo "$fails failure(s)"
+[[ $fails == 0 ]]

@@ -1,0 +1,172 @@
+/* The fit: it lowers the loss and moves toward the target, it is deterministic,
+ * and a resumed fit equals an uninterrupted one. Small scenes keep it fast. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+#include "woven/descriptor.h"
+#include "woven/fit.h"
+#include "woven/io.h"
+#include "woven/photo.h"
+#include "woven/render.h"
+
+static void small_scene(wv_scene *s) {
+  wv_scene_preset("flat45", s, NULL);
+  /* the centre 96 x 96 of flat45 */
+  s->vfov_deg = 2.0 * atan(tan(0.5 * 53.0 * 3.14159265358979 / 180.0) * 96.0 / 512.0) * 180.0 / 3.14159265358979;
+  s->width = s->height = 96;
+  s->spp = 16;
+}
+
+static void target(wv_params *p) {
+  wv_params_default("twill", p, NULL);
+  p->density[WV_WARP] = 140, p->density[WV_WEFT] = 90;
+  p->diffuse[WV_WARP][0] = 0.7, p->diffuse[WV_WARP][1] = 0.3, p->diffuse[WV_WARP][2] = 0.1;
+  p->diffuse[WV_WEFT][0] = 0.6, p->diffuse[WV_WEFT][1] = 0.35, p->diffuse[WV_WEFT][2] = 0.15;
+  p->noise_level = 1;
+}
+
+static void opts(wv_fit_opts *o, int iters) {
+  wv_fit_opts_default(o);
+  o->iters = iters;
+  o->iter_scale = 1;
+  o->iter_spp = 4;
+  o->lr = 0.03;
+}
+
+static void test_fit_improves(void **state) {
+  (void)state;
+  wv_scene s;
+  small_scene(&s);
+  wv_params tp, start;
+  target(&tp);
+  wv_image photo;
+  wv_render_opts ro = {0, 0, NULL, NULL};
+  assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
+  wv_descriptor *d;
+  assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
+  wv_params_default("twill", &start, NULL);
+  start.density[WV_WARP] = 140, start.density[WV_WEFT] = 90;
+  wv_fit_opts o;
+  opts(&o, 30);
+  o.discrete_every = 0; /* colours only: the test watches k_d */
+  wv_fit_state st;
+  wv_error err = {0};
+  assert_int_equal(wv_fit_state_init(&st, &start, &o, &err), WV_OK);
+  if (wv_fit_run(&st, &s, &photo, d, &o, NULL, NULL, &err)) fail_msg("%s", err.msg);
+  assert_int_equal(st.iter, 30);
+  double first = st.log[0].loss, last = st.log[29].loss;
+  double e0 = 0, e1 = 0;
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) {
+      e0 += fabs(start.diffuse[y][c] - tp.diffuse[y][c]);
+      e1 += fabs(st.params.diffuse[y][c] - tp.diffuse[y][c]);
+    }
+  print_message("loss %.5f -> %.5f, k_d error %.3f -> %.3f\n", first, last, e0, e1);
+  assert_true(last < 0.6 * first);
+  assert_true(e1 < 0.6 * e0);
+  for (int i = 0; i < WV_P_COUNT; i++) { /* every parameter stays in its range */
+    double lo, hi, v = wv_param_get(&st.params, i);
+    wv_param_range(i, &lo, &hi);
+    assert_true(v >= lo && v <= hi);
+  }
+  wv_fit_state_free(&st);
+  wv_descriptor_free(d);
+  wv_image_free(&photo);
+}
+
+/* 6 + 6 iterations through a checkpoint file equal 12 straight, bit for bit,
+ * including the discrete search. */
+static void test_resume_equals_straight(void **state) {
+  (void)state;
+  wv_scene s;
+  small_scene(&s);
+  wv_params tp, start;
+  target(&tp);
+  wv_image photo;
+  wv_render_opts ro = {0, 0, NULL, NULL};
+  assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
+  wv_descriptor *d;
+  assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
+  wv_params_default("twill", &start, NULL);
+  wv_fit_opts o;
+  opts(&o, 12);
+  o.discrete_every = 3;
+  wv_error err = {0};
+  wv_fit_state a, b;
+  assert_int_equal(wv_fit_state_init(&a, &start, &o, &err), WV_OK);
+  assert_int_equal(wv_fit_run(&a, &s, &photo, d, &o, NULL, NULL, &err), WV_OK);
+  int tried = 0;
+  for (int i = 0; i < 12; i++) tried += a.log[i].discrete_tried;
+  assert_true(tried > 0);
+  /* interrupted after 6 */
+  wv_fit_opts o6 = o;
+  o6.iters = 6;
+  assert_int_equal(wv_fit_state_init(&b, &start, &o, &err), WV_OK);
+  assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o6, NULL, NULL, &err), WV_OK);
+  const char *dir = tu_tmpdir("fit_resume");
+  char path[256];
+  snprintf(path, sizeof path, "%s/checkpoint.json", dir);
+  assert_int_equal(wv_fit_checkpoint_write(path, &b, &o, "default", &err), WV_OK);
+  wv_fit_state_free(&b);
+  wv_fit_opts o2;
+  char name[32];
+  if (wv_fit_checkpoint_read(path, &b, &o2, name, sizeof name, &err)) fail_msg("%s", err.msg);
+  assert_string_equal(name, "default");
+  assert_int_equal(b.iter, 6);
+  assert_int_equal(o2.iters, 12);
+  assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o2, NULL, NULL, &err), WV_OK);
+  assert_memory_equal(&a.params, &b.params, sizeof a.params);
+  for (int i = 0; i < 12; i++) assert_true(a.log[i].loss == b.log[i].loss);
+  wv_fit_state_free(&a), wv_fit_state_free(&b);
+  /* a damaged checkpoint is refused with its name */
+  FILE *f = fopen(path, "w");
+  fputs("{\"kind\": \"woven-fit-checkpoint\", \"version\": 1}", f);
+  fclose(f);
+  assert_int_not_equal(wv_fit_checkpoint_read(path, &b, &o2, name, sizeof name, &err), WV_OK);
+  assert_non_null(strstr(err.msg, path));
+  wv_descriptor_free(d);
+  wv_image_free(&photo);
+}
+
+static void test_photo_load(void **state) {
+  (void)state;
+  const char *dir = tu_tmpdir("photo");
+  char path[256];
+  wv_scene s;
+  small_scene(&s); /* 96 x 96 */
+  wv_image img, out;
+  wv_error err = {0};
+  /* a 200 x 100 grey-ramp photo: centre crop 100 x 100, area-averaged to 96 x 96 */
+  wv_image_alloc(&img, 200, 100, 3, NULL);
+  for (int y = 0; y < 100; y++)
+    for (int x = 0; x < 200; x++)
+      for (int c = 0; c < 3; c++) wv_image_px(&img, x, y)[c] = (float)x / 199.0f;
+  snprintf(path, sizeof path, "%s/ramp.png", dir);
+  assert_int_equal(wv_image_write_png(path, &img, 16, NULL), WV_OK);
+  wv_photo_info info;
+  assert_int_equal(wv_photo_load(path, &s, NULL, &out, &info, &err), WV_OK);
+  assert_int_equal(out.w, 96);
+  assert_int_equal(info.crop[0], 50);
+  assert_int_equal(info.crop[2], 100);
+  /* output pixel 0 covers input columns [50, 50 + 100/96): column 50 fully, 51 for 1/24 */
+  double want = (50.0 + 51.0 / 24.0) / (1.0 + 1.0 / 24.0) / 199.0;
+  assert_true(fabs(wv_image_px(&out, 0, 0)[0] - want) < 1e-4);
+  wv_image_free(&out);
+  /* an explicit crop outside the photo, and a photo much smaller than the scene */
+  wv_crop bad = {150, 0, 100, 100};
+  assert_int_equal(wv_photo_load(path, &s, &bad, &out, NULL, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "crop"));
+  s.width = s.height = 300;
+  assert_int_equal(wv_photo_load(path, &s, NULL, &out, NULL, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "much smaller"));
+  wv_image_free(&img);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_fit_improves), cmocka_unit_test(test_resume_equals_straight),
+                                     cmocka_unit_test(test_photo_load)};
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
