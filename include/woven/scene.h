@@ -21,6 +21,7 @@ typedef struct {
   int warp_along_axis;  /* cylinder: 1 = warp along the axis (default), 0 = around it */
   double rotation_deg;  /* plane: angle of the fabric x axis from world x */
   double fabric_offset[2]; /* shift of the pattern on the sample, mm */
+  double mm_per_unit;      /* fabric millimetres per scene unit (1 when the scene is in mm) */
   /* Point light. */
   double light_pos[3], light_intensity;
   /* Sensor response, applied in this order: exposure, clip, encode, falloff mask. */

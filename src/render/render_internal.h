@@ -16,7 +16,7 @@ typedef struct {
   float cpos[3], fwd[3], right[3], up[3];
   float tan_half, aspect;
   int shape, warp_along_axis;
-  float radius, rot_c, rot_s, off[2];
+  float radius, rot_c, rot_s, off[2], scale;
   float lpos[3], lint;
 } wv_camera_rig;
 

@@ -36,6 +36,7 @@ void wv_rig_prepare(const wv_scene *s, wv_camera_rig *r) {
   r->rot_c = (float)cos(s->rotation_deg * 3.14159265358979323846 / 180.0);
   r->rot_s = (float)sin(s->rotation_deg * 3.14159265358979323846 / 180.0);
   r->off[0] = (float)s->fabric_offset[0], r->off[1] = (float)s->fabric_offset[1];
+  r->scale = (float)s->mm_per_unit;
   r->lint = (float)s->light_intensity;
 }
 
@@ -66,13 +67,13 @@ int wv_rig_trace(const wv_camera_rig *r, float x, float y, wv_hit *hit) {
     if (r->warp_along_axis) { /* fabric y along +x, fabric x runs down the front */
       T[0] = 0, T[1] = -cs, T[2] = sn;
       B[0] = 1, B[1] = 0, B[2] = 0;
-      hit->fx = -r->radius * theta + r->off[0];
-      hit->fy = p[0] + r->off[1];
+      hit->fx = -r->radius * theta * r->scale + r->off[0];
+      hit->fy = p[0] * r->scale + r->off[1];
     } else {
       T[0] = 1, T[1] = 0, T[2] = 0;
       B[0] = 0, B[1] = cs, B[2] = -sn;
-      hit->fx = p[0] + r->off[0];
-      hit->fy = r->radius * theta + r->off[1];
+      hit->fx = p[0] * r->scale + r->off[0];
+      hit->fy = r->radius * theta * r->scale + r->off[1];
     }
   } else {
     if (fabsf(d[2]) < 1e-12f) return 0;
@@ -82,8 +83,8 @@ int wv_rig_trace(const wv_camera_rig *r, float x, float y, wv_hit *hit) {
     N[0] = 0, N[1] = 0, N[2] = 1;
     T[0] = r->rot_c, T[1] = r->rot_s, T[2] = 0;
     B[0] = -r->rot_s, B[1] = r->rot_c, B[2] = 0;
-    hit->fx = p[0] * T[0] + p[1] * T[1] + r->off[0];
-    hit->fy = p[0] * B[0] + p[1] * B[1] + r->off[1];
+    hit->fx = (p[0] * T[0] + p[1] * T[1]) * r->scale + r->off[0];
+    hit->fy = (p[0] * B[0] + p[1] * B[1]) * r->scale + r->off[1];
   }
   float l[3];
   for (int i = 0; i < 3; i++) l[i] = r->lpos[i] - p[i];

@@ -24,10 +24,10 @@ static const char *PRESET_CYLINDER =
 static const char *PRESET_FLAT45 =
     "{\n"
     "  \"name\": \"flat45\",\n"
-    "  \"comment\": \"Flat sample seen from above, light at 45 degrees toward the top of the image (the photos of shared/data/real-flat). One unit is about 1 mm.\",\n"
+    "  \"comment\": \"Flat sample seen from above, light at 45 degrees toward the top of the image (the photos of shared/data/real-flat). The photos show yarns 1 to 2.5 pixels apart (0.019..0.038 units), so one unit stands for 8 mm of fabric: 85..170 yarns per inch.\",\n"
     "  \"image\": {\"width\": 512, \"height\": 512, \"spp\": 64},\n"
     "  \"camera\": {\"position_mm\": [0, 0, 8], \"look_at_mm\": [0, 0, 0], \"up\": [0, 1, 0], \"vfov_deg\": 53},\n"
-    "  \"sample\": {\"shape\": \"plane\", \"rotation_deg\": 0, \"offset_mm\": [0, 0]},\n"
+    "  \"sample\": {\"shape\": \"plane\", \"rotation_deg\": 0, \"offset_mm\": [0, 0], \"mm_per_unit\": 8},\n"
     "  \"light\": {\"position_mm\": [0, 8, 8], \"intensity\": 300},\n"
     "  \"response\": {\"exposure\": 1, \"clip\": 1, \"encoding\": \"gamma\", \"gamma\": 2.2},\n"
     "  \"falloff\": {\"type\": \"gaussian\", \"sigma_px\": 450}\n"
@@ -90,7 +90,7 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
   static const char *top[] = {"name", "comment", "image", "camera", "sample", "light", "response", "falloff", NULL};
   static const char *k_img[] = {"width", "height", "spp", NULL};
   static const char *k_cam[] = {"position_mm", "look_at_mm", "up", "vfov_deg", NULL};
-  static const char *k_smp[] = {"shape", "radius_mm", "warp", "rotation_deg", "offset_mm", NULL};
+  static const char *k_smp[] = {"shape", "radius_mm", "warp", "rotation_deg", "offset_mm", "mm_per_unit", NULL};
   static const char *k_lig[] = {"position_mm", "intensity", NULL};
   static const char *k_rsp[] = {"exposure", "clip", "encoding", "gamma", NULL};
   static const char *k_fal[] = {"type", "sigma_px", NULL};
@@ -140,6 +140,8 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
     return wv_fail(err, WV_ERR_INVALID, "'sample.shape' must be \"cylinder\" or \"plane\"");
   }
   if ((st = vec(o, "sample", "offset_mm", s->fabric_offset, 2, 0, err))) return st;
+  s->mm_per_unit = 1;
+  if ((st = num(o, "sample", "mm_per_unit", &s->mm_per_unit, 0, err))) return st;
 
   o = json_object_get(r, "light");
   if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'light'");
@@ -198,6 +200,8 @@ wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
   if (!(c2 > 1e-12 * l2)) return wv_fail(err, WV_ERR_INVALID, "'camera.up' is parallel to the view direction");
   if (s->shape == WV_SHAPE_CYLINDER && !(s->radius > 0 && s->radius < 1e6))
     return wv_fail(err, WV_ERR_INVALID, "'sample.radius_mm' = %g must be positive", s->radius);
+  if (!(s->mm_per_unit > 1e-6 && s->mm_per_unit < 1e6))
+    return wv_fail(err, WV_ERR_INVALID, "'sample.mm_per_unit' = %g must be positive", s->mm_per_unit);
   if (!(s->light_intensity >= 0 && isfinite(s->light_intensity)))
     return wv_fail(err, WV_ERR_INVALID, "'light.intensity' = %g must be >= 0", s->light_intensity);
   if (!(s->exposure > 0 && isfinite(s->exposure)))
@@ -258,13 +262,14 @@ char *wv_scene_to_json(const wv_scene *s) {
                                              s->cam_look_at[1], s->cam_look_at[2], "up", s->cam_up[0], s->cam_up[1],
                                              s->cam_up[2], "vfov_deg", s->vfov_deg));
   if (s->shape == WV_SHAPE_CYLINDER)
-    json_object_set_new(o, "sample", json_pack("{s:s,s:f,s:s,s:[f,f]}", "shape", "cylinder", "radius_mm", s->radius,
-                                               "warp", s->warp_along_axis ? "along_axis" : "around_axis",
-                                               "offset_mm", s->fabric_offset[0], s->fabric_offset[1]));
+    json_object_set_new(o, "sample", json_pack("{s:s,s:f,s:s,s:[f,f],s:f}", "shape", "cylinder", "radius_mm",
+                                               s->radius, "warp", s->warp_along_axis ? "along_axis" : "around_axis",
+                                               "offset_mm", s->fabric_offset[0], s->fabric_offset[1], "mm_per_unit",
+                                               s->mm_per_unit));
   else
-    json_object_set_new(o, "sample", json_pack("{s:s,s:f,s:[f,f]}", "shape", "plane", "rotation_deg",
+    json_object_set_new(o, "sample", json_pack("{s:s,s:f,s:[f,f],s:f}", "shape", "plane", "rotation_deg",
                                                s->rotation_deg, "offset_mm", s->fabric_offset[0],
-                                               s->fabric_offset[1]));
+                                               s->fabric_offset[1], "mm_per_unit", s->mm_per_unit));
   json_object_set_new(o, "light", json_pack("{s:[f,f,f],s:f}", "position_mm", s->light_pos[0], s->light_pos[1],
                                             s->light_pos[2], "intensity", s->light_intensity));
   json_object_set_new(o, "response", json_pack("{s:f,s:f,s:s,s:f}", "exposure", s->exposure, "clip", s->clip,
