@@ -169,9 +169,46 @@ static void test_bad_scenes(void **state) {
   assert_non_null(strstr(err.msg, "nowhere.json"));
 }
 
+static void test_prior_samples(void **state) {
+  (void)state;
+  const char *pats[] = {"plain", "twill", "satin", "twill90", "satin90"};
+  for (int k = 0; k < 5; k++) {
+    double dmin[2] = {1e9, 1e9}, dmax[2] = {0, 0}, amin[2] = {9, 9}, amax[2] = {0, 0};
+    int grey_like = 0, same_colour = 0;
+    for (uint64_t seed = 0; seed < 400; seed++) {
+      wv_params p, q;
+      wv_error err = {0};
+      if (wv_params_sample_prior(pats[k], seed, &p, &err)) fail_msg("%s", err.msg);
+      wv_params_sample_prior(pats[k], seed, &q, NULL);
+      assert_memory_equal(&p, &q, sizeof p); /* deterministic */
+      for (int y = 0; y < 2; y++) {
+        dmin[y] = fmin(dmin[y], p.density[y]), dmax[y] = fmax(dmax[y], p.density[y]);
+        amin[y] = fmin(amin[y], p.roughness[y]), amax[y] = fmax(amax[y], p.roughness[y]);
+        for (int c = 0; c < 3; c++) /* k_s = k_d^gamma, gamma in (0,1): never darker */
+          assert_true(p.specular[y][c] >= p.diffuse[y][c] - 1e-12);
+      }
+      grey_like += p.diffuse[0][0] == p.diffuse[0][1] && p.diffuse[0][1] == p.diffuse[0][2];
+      same_colour += !memcmp(p.diffuse[0], p.diffuse[1], sizeof p.diffuse[0]);
+      assert_true(p.noise_level >= 0 && p.noise_level <= 5);
+    }
+    int rot = k >= 3, base = k % 3 == 0 ? 0 : k % 3; /* 0 plain, 1 twill, 2 satin (and 90s) */
+    if (k == 3) base = 1;
+    if (k == 4) base = 2;
+    double want_lo = base == 0 ? 60 : base == 1 ? 80 : 120, want_hi = base == 0 ? 140 : base == 1 ? 200 : 250;
+    int y = rot ? WV_WEFT : WV_WARP; /* the base pattern's warp */
+    assert_true(dmin[y] >= want_lo && dmax[y] <= want_hi && dmax[y] - dmin[y] > 0.8 * (want_hi - want_lo));
+    if (base == 2) { /* satin: glossy weft, rough warp */
+      assert_true(amin[1 - y] >= 0.04 && amax[1 - y] <= 0.49);
+      assert_true(amin[y] >= 0.49);
+    }
+    assert_true(grey_like > 15 && grey_like < 90);     /* about 10% of 400 */
+    assert_true(same_colour > 80 && same_colour < 170); /* about 30% */
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_parse_and_round_trip), cmocka_unit_test(test_param_vector),
                                      cmocka_unit_test(test_bad_params), cmocka_unit_test(test_scenes),
-                                     cmocka_unit_test(test_bad_scenes)};
+                                     cmocka_unit_test(test_bad_scenes), cmocka_unit_test(test_prior_samples)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -29,6 +29,11 @@ typedef struct {
 
 /* Prior mean of a built-in pattern (also the fit's start without a network). */
 wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err);
+/* A random draw from the dataset prior of SPEC section 5 for a built-in pattern
+ * (the 90-degree patterns mirror their base: warp and weft ranges swapped, twist
+ * negated). Deterministic in seed. */
+wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *p, wv_error *err);
+
 /* Every value in range, pattern known; the message names the key. */
 wv_status wv_params_validate(const wv_params *p, wv_error *err);
 /* Parse from a JSON text; 'source' names it in messages (a file name). */

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "util/hash.h"
 #include "woven/io.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
@@ -359,4 +360,54 @@ const char *wv_param_name(int id) {
       "specular.warp[2]", "specular.weft[0]", "specular.weft[1]", "specular.weft[2]", "roughness.warp",
       "roughness.weft",   "inclination_deg",  "diffuse_blend",   "twist_deg"};
   return id >= 0 && id < WV_P_COUNT ? names[id] : "?";
+}
+
+static double uni(uint64_t *st, double lo, double hi) {
+  *st += 0x9e3779b97f4a7c15ULL;
+  return lo + (hi - lo) * wv_u01d(wv_mix64(*st));
+}
+
+wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *p, wv_error *err) {
+  wv_status st = wv_params_default(pattern, p, err);
+  if (st) return st;
+  uint64_t r = wv_mix64(seed ^ 0x7072696f72ULL);
+  int rot = strstr(pattern, "90") != NULL;
+  int wa = rot ? WV_WEFT : WV_WARP, we = rot ? WV_WARP : WV_WEFT; /* the base pattern's warp and weft */
+  double dlo[2], dhi[2], blo, bhi, alo[2], ahi[2], ulo, uhi;
+  if (!strncmp(pattern, "plain", 5)) {
+    dlo[0] = dlo[1] = 60, dhi[0] = dhi[1] = 140, blo = 0.2, bhi = 2;
+    alo[0] = alo[1] = 0.01, ahi[0] = ahi[1] = 0.49, ulo = 15, uhi = 30;
+  } else if (!strncmp(pattern, "twill", 5)) {
+    dlo[0] = 80, dhi[0] = 200, dlo[1] = 50, dhi[1] = 120, blo = 1, bhi = 2;
+    alo[0] = alo[1] = 0.49, ahi[0] = ahi[1] = 1, ulo = 20, uhi = 40;
+  } else {
+    dlo[0] = 120, dhi[0] = 250, dlo[1] = 60, dhi[1] = 140, blo = 0.2, bhi = 1;
+    alo[0] = 0.49, ahi[0] = 1, alo[1] = 0.04, ahi[1] = 0.49, ulo = 30, uhi = 65;
+  }
+  int role[2] = {wa, we};
+  for (int k = 0; k < 2; k++) { /* k: the base pattern's warp (0) and weft (1) */
+    int y = role[k];
+    p->density[y] = floor(uni(&r, dlo[k], dhi[k]) + 0.5);
+    p->heightfield[y] = uni(&r, blo, bhi);
+    p->roughness[y] = uni(&r, alo[k], ahi[k]);
+  }
+  /* Diffuse: uniform per channel; 10% grey; the weft repeats the warp colour 30% of the time. */
+  for (int y = 0; y < 2; y++) {
+    int grey = uni(&r, 0, 1) < 0.1;
+    for (int c = 0; c < 3; c++) p->diffuse[y][c] = uni(&r, 0, 1);
+    if (grey) p->diffuse[y][1] = p->diffuse[y][2] = p->diffuse[y][0];
+  }
+  if (uni(&r, 0, 1) < 0.3)
+    for (int c = 0; c < 3; c++) p->diffuse[WV_WEFT][c] = p->diffuse[WV_WARP][c];
+  /* Specular: the diffuse colour raised to a random power in (0, 1): a whiter tint. */
+  for (int y = 0; y < 2; y++) {
+    double g = uni(&r, 0, 1);
+    for (int c = 0; c < 3; c++) p->specular[y][c] = pow(p->diffuse[y][c], g);
+  }
+  p->inclination_deg = uni(&r, ulo, uhi);
+  p->diffuse_blend = uni(&r, 0, 1);
+  int q = (int)floor(uni(&r, 0, 6));
+  p->noise_level = q > 5 ? 5 : q;
+  p->seed = (int64_t)(wv_mix64(r + 1) >> 33);
+  return wv_params_validate(p, err);
 }
