@@ -133,6 +133,7 @@ void wv_nn_col2im(const float *col, int c, int h, int w, int k, int stride, int 
           int a = pad - kj > ox0 ? pad - kj : ox0;
           int b = w + pad - kj < ox1 ? w + pad - kj : ox1;
           float *dd = d + kj - pad;
+#pragma omp simd /* -O2 alone leaves it scalar */
           for (int ox = a; ox < b; ox++) dd[ox] += s[ox];
         } else {
           for (int ox = ox0; ox < ox1; ox++) {
