@@ -9,10 +9,12 @@
  * that they are mostly band-pass. Each level: valid convolution (no padding, so
  * no border artefacts), ReLU, Gram / (H W). 5 levels x 64 filters: 20,480 floats.
  *
- * Speed: each level runs as one fused pass over blocks of output rows, one block
- * per OpenMP thread at a time: im2col, sgemm, ReLU, Gram update (ssyrk) and, for
- * the gradient, dF = (dG + dG^T) F / HW, the ReLU mask, W^T dF and col2im, all on
- * data that stays in cache; the full feature maps are never stored. */
+ * Speed: each level runs as one fused pass over blocks of output positions, each
+ * block on one OpenMP thread: im2col, sgemm, ReLU, Gram update (ssyrk) and, for the
+ * gradient, dF = (dG + dG^T) F / HW, the ReLU mask, W^T dF and col2im, all on data
+ * that stays in the thread's L2 cache; the feature maps are never stored whole.
+ * Forward and backward take one pass, since dF needs dG and F but not G. Each thread
+ * keeps its own Gram and input-gradient sums, added in thread order at the end. */
 #include <cblas.h>
 #include <math.h>
 #include <omp.h>
