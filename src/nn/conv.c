@@ -72,8 +72,7 @@ static int shared_len(const wv_nn_conv2d *cv) {
   return (int)((npos + nb - 1) / nb);
 }
 
-size_t wv_nn_conv2d_scratch_floats(const wv_nn_conv2d *cv, int with_dw) {
-  (void)with_dw; /* every mode needs the same */
+size_t wv_nn_conv2d_scratch_floats(const wv_nn_conv2d *cv) {
   size_t kk = (size_t)cv->c * cv->k * cv->k;
   size_t blocks = (size_t)cv->nthreads * kk * cv->chunk, shared = kk * shared_len(cv);
   return blocks > shared ? blocks : shared;
@@ -165,16 +164,16 @@ static void forward_shared(const wv_nn_conv2d *cv, const float *x, const float *
       float *yi = y + (size_t)img * cv->oc * npos;
       for (int p0 = 0; p0 < npos; p0 += len) {
         int p1 = p0 + len < npos ? p0 + len : npos, l = p1 - p0;
-        const float *cp = xi + p0;
-        int ldc = npos;
+        const float *cp = xi + p0; /* pointwise: the input is its own column matrix */
+        int ldb = npos;
         if (!pw) {
           wv_nn_im2col(xi + (size_t)c0 * cv->h * cv->w, c1 - c0, cv->h, cv->w, cv->k, cv->stride,
                        cv->pad, cv->ow, p0, p1, col + (size_t)c0 * k2 * l);
-          cp = col, ldc = l;
+          cp = col, ldb = l;
 #pragma omp barrier
         }
         if (m1 > m0)
-          wv_nn_sgemm(0, 0, m1 - m0, l, kk, 1.0f, w + (size_t)m0 * kk, kk, cp, ldc, 0.0f,
+          wv_nn_sgemm(0, 0, m1 - m0, l, kk, 1.0f, w + (size_t)m0 * kk, kk, cp, ldb, 0.0f,
                       yi + (size_t)m0 * npos + p0, npos);
         if (b)
           for (int o = m0; o < m1; o++) {
@@ -205,16 +204,16 @@ static void backward_shared(const wv_nn_conv2d *cv, const float *x, const float 
         int p1 = p0 + len < npos ? p0 + len : npos, l = p1 - p0;
         if (dw) {
           const float *cp = xi + p0;
-          int ldc = npos;
+          int ldb = npos;
           if (!pw) {
             wv_nn_im2col(xi + (size_t)c0 * cv->h * cv->w, c1 - c0, cv->h, cv->w, cv->k,
                          cv->stride, cv->pad, cv->ow, p0, p1, col + (size_t)r0 * l);
-            cp = col, ldc = l;
+            cp = col, ldb = l;
 #pragma omp barrier
           }
           /* Each thread owns rows m0..m1 of dW: no partial sums. */
           if (m1 > m0)
-            wv_nn_sgemm(0, 1, m1 - m0, kk, l, 1.0f, dyi + (size_t)m0 * npos + p0, npos, cp, ldc,
+            wv_nn_sgemm(0, 1, m1 - m0, kk, l, 1.0f, dyi + (size_t)m0 * npos + p0, npos, cp, ldb,
                         1.0f, dw + (size_t)m0 * kk, kk);
 #pragma omp barrier
         }
