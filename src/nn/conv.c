@@ -88,10 +88,10 @@ void wv_nn_im2col(const float *x, int c, int h, int w, int k, int stride, int pa
     for (int pos = p0; pos < p1;) {
       int oy = pos / ow, ox0 = pos % ow;
       int ox1 = ow < ox0 + (p1 - pos) ? ow : ox0 + (p1 - pos);
-      float *d = dst + (pos - p0) - ox0; /* d[ox] for ox in [ox0, ox1) */
+      float *d = dst + (pos - p0); /* d[ox - ox0] for ox in [ox0, ox1) */
       int iy = oy * stride + ki - pad;
       if (iy < 0 || iy >= h) {
-        memset(d + ox0, 0, sizeof(float) * (ox1 - ox0));
+        memset(d, 0, sizeof(float) * (ox1 - ox0));
       } else {
         const float *src = plane + (size_t)iy * w;
         if (stride == 1) {
@@ -99,13 +99,13 @@ void wv_nn_im2col(const float *x, int c, int h, int w, int k, int stride, int pa
           int a = pad - kj > ox0 ? pad - kj : ox0;
           int b = w + pad - kj < ox1 ? w + pad - kj : ox1;
           if (b < a) b = a;
-          for (int ox = ox0; ox < a; ox++) d[ox] = 0.0f;
-          if (b > a) memcpy(d + a, src + a + kj - pad, sizeof(float) * (b - a));
-          for (int ox = b; ox < ox1; ox++) d[ox] = 0.0f;
+          for (int ox = ox0; ox < a; ox++) d[ox - ox0] = 0.0f;
+          if (b > a) memcpy(d + (a - ox0), src + (a + kj - pad), sizeof(float) * (b - a));
+          for (int ox = b; ox < ox1; ox++) d[ox - ox0] = 0.0f;
         } else {
           for (int ox = ox0; ox < ox1; ox++) {
             int ix = ox * stride + kj - pad;
-            d[ox] = (ix >= 0 && ix < w) ? src[ix] : 0.0f;
+            d[ox - ox0] = (ix >= 0 && ix < w) ? src[ix] : 0.0f;
           }
         }
       }
@@ -124,20 +124,20 @@ void wv_nn_col2im(const float *col, int c, int h, int w, int k, int stride, int 
     for (int pos = p0; pos < p1;) {
       int oy = pos / ow, ox0 = pos % ow;
       int ox1 = ow < ox0 + (p1 - pos) ? ow : ox0 + (p1 - pos);
-      const float *s = src + (pos - p0) - ox0;
+      const float *sp = src + (pos - p0); /* sp[ox - ox0] for ox in [ox0, ox1) */
       int iy = oy * stride + ki - pad;
       if (iy >= 0 && iy < h) {
         float *d = plane + (size_t)iy * w;
         if (stride == 1) {
           int a = pad - kj > ox0 ? pad - kj : ox0;
           int b = w + pad - kj < ox1 ? w + pad - kj : ox1;
-          float *dd = d + kj - pad;
+          int off = kj - pad;
 #pragma omp simd /* -O2 alone leaves it scalar */
-          for (int ox = a; ox < b; ox++) dd[ox] += s[ox];
+          for (int ox = a; ox < b; ox++) d[ox + off] += sp[ox - ox0];
         } else {
           for (int ox = ox0; ox < ox1; ox++) {
             int ix = ox * stride + kj - pad;
-            if (ix >= 0 && ix < w) d[ix] += s[ox];
+            if (ix >= 0 && ix < w) d[ix] += sp[ox - ox0];
           }
         }
       }
