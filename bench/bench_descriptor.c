@@ -170,7 +170,7 @@ static double vgg_conv_gflops(int w, int h, int reps, double *fwd_gf, double *bw
     size_t nx = (size_t)c * h * w, ny = (size_t)oc * h * w, nw = (size_t)oc * c * 9;
     l->x = malloc(sizeof(float) * nx), l->y = malloc(sizeof(float) * ny);
     l->wt = malloc(sizeof(float) * nw), l->dx = calloc(nx, sizeof(float));
-    l->s = malloc(sizeof(float) * wv_nn_conv2d_scratch_floats(&l->cv, 0));
+    l->s = malloc(sizeof(float) * wv_nn_conv2d_scratch_floats(&l->cv));
     wv_rng_fill_uniform(&r, l->x, nx, 0, 1);
     wv_rng_fill_uniform(&r, l->wt, nw, -0.1f, 0.1f);
     flops += 2.0 * oc * c * 9.0 * h * w;

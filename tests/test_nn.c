@@ -101,7 +101,7 @@ static void conv_case(int n, int c, int h, int w, int oc, int k, int stride, int
          ny = (size_t)n * oc * cc.cv.oh * cc.cv.ow;
   cc.x = rnd(&r, nx, -1, 1), cc.w = rnd(&r, nw, -1, 1), cc.b = rnd(&r, oc, -1, 1);
   cc.y = rnd(&r, ny, 0, 0), cc.dy = rnd(&r, ny, -1, 1);
-  cc.s = malloc(sizeof(float) * wv_nn_conv2d_scratch_floats(&cc.cv, 1));
+  cc.s = malloc(sizeof(float) * wv_nn_conv2d_scratch_floats(&cc.cv));
   /* Forward against the direct sum. */
   double *ref = malloc(sizeof(double) * ny);
   conv_reference(&cc.cv, cc.x, cc.w, cc.b, ref);
@@ -130,7 +130,7 @@ static void test_conv2d(void **state) {
   conv_case(2, 3, 8, 7, 2, 3, 2, 1);   /* strided */
   conv_case(2, 4, 5, 6, 3, 1, 1, 0);   /* pointwise (no im2col) */
   conv_case(1, 2, 40, 33, 3, 3, 1, 1); /* several blocks per thread */
-  conv_case(2, 120, 6, 5, 5, 3, 1, 1); /* long columns: the shared schedule */
+  conv_case(2, 120, 4, 3, 2, 3, 1, 1); /* long columns: the shared schedule */
 }
 
 static void test_conv2d_invalid(void **state) {
@@ -375,6 +375,55 @@ static void test_adam(void **state) {
   wv_nn_adam_free(&a);
 }
 
+/* ---- The FabricNet pieces together: FC -> LeakyReLU -> FC -> sigmoid, L1, Adam ---- */
+static void test_mlp_training(void **state) {
+  (void)state;
+  enum { B = 32, IN = 96, HID = 48, OUT = 5, STEPS = 300 };
+  wv_rng r;
+  wv_rng_seed(&r, 13);
+  /* Targets from a fixed random teacher network, so the student can fit them. */
+  float *x = rnd(&r, B * IN, -1, 1), *t = malloc(sizeof(float) * B * OUT);
+  float *tw = rnd(&r, OUT * IN, -0.3f, 0.3f);
+  wv_nn_fc_forward(t, x, tw, NULL, B, IN, OUT);
+  wv_nn_sigmoid_forward(t, t, B * OUT);
+  size_t n1 = (size_t)HID * IN, n2 = (size_t)OUT * HID, np = n1 + HID + n2 + OUT;
+  float *p = calloc(np, sizeof(float)), *g = malloc(sizeof(float) * np);
+  float *w1 = p, *b1 = w1 + n1, *w2 = b1 + HID, *b2 = w2 + n2;
+  wv_rng_fill_uniform(&r, w1, n1, -sqrtf(6.0f / IN), sqrtf(6.0f / IN));
+  wv_rng_fill_uniform(&r, w2, n2, -sqrtf(6.0f / HID), sqrtf(6.0f / HID));
+  float *h = malloc(sizeof(float) * B * HID), *a = malloc(sizeof(float) * B * HID),
+        *z = malloc(sizeof(float) * B * OUT), *y = malloc(sizeof(float) * B * OUT),
+        *dy = malloc(sizeof(float) * B * OUT), *dz = malloc(sizeof(float) * B * OUT),
+        *da = malloc(sizeof(float) * B * HID), *dh = malloc(sizeof(float) * B * HID);
+  wv_nn_adam opt;
+  wv_error err;
+  assert_int_equal(wv_nn_adam_init(&opt, np, 1e-2f, &err), WV_OK);
+  float first = 0, last = 0;
+  for (int it = 0; it < STEPS; it++) {
+    wv_nn_fc_forward(h, x, w1, b1, B, IN, HID);
+    wv_nn_leaky_relu_forward(a, h, 0.01f, B * HID);
+    wv_nn_fc_forward(z, a, w2, b2, B, HID, OUT);
+    wv_nn_sigmoid_forward(y, z, B * OUT);
+    float loss = wv_nn_l1_forward(y, t, B * OUT);
+    if (it == 0) first = loss;
+    last = loss;
+    memset(g, 0, sizeof(float) * np);
+    memset(dy, 0, sizeof(float) * B * OUT), memset(dz, 0, sizeof(float) * B * OUT);
+    memset(da, 0, sizeof(float) * B * HID), memset(dh, 0, sizeof(float) * B * HID);
+    wv_nn_l1_backward(dy, y, t, 1.0f, B * OUT);
+    wv_nn_sigmoid_backward(dz, y, dy, B * OUT);
+    wv_nn_fc_backward(da, g + (w2 - p), g + (b2 - p), dz, a, w2, B, HID, OUT);
+    wv_nn_leaky_relu_backward(dh, h, da, 0.01f, B * HID);
+    wv_nn_fc_backward(NULL, g + (w1 - p), g + (b1 - p), dh, x, w1, B, IN, HID);
+    wv_nn_adam_step(&opt, p, g);
+  }
+  fprintf(stderr, "MLP with Adam: L1 loss %.4f -> %.4f after %d steps\n", first, last, STEPS);
+  assert_true(last < 0.2f * first);
+  wv_nn_adam_free(&opt);
+  free(x), free(t), free(tw), free(p), free(g), free(h), free(a), free(z), free(y), free(dy);
+  free(dz), free(da), free(dh);
+}
+
 /* ---- RNG and half floats ---- */
 static void test_rng_half(void **state) {
   (void)state;
@@ -408,7 +457,8 @@ int main(void) {
       cmocka_unit_test(test_elementwise), cmocka_unit_test(test_avgpool),
       cmocka_unit_test(test_gram),    cmocka_unit_test(test_fc),
       cmocka_unit_test(test_l1),      cmocka_unit_test(test_sgemm),
-      cmocka_unit_test(test_adam),    cmocka_unit_test(test_rng_half),
+      cmocka_unit_test(test_adam),    cmocka_unit_test(test_mlp_training),
+      cmocka_unit_test(test_rng_half),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

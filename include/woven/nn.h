@@ -63,8 +63,8 @@ typedef struct {
 
 wv_status wv_nn_conv2d_init(wv_nn_conv2d *cv, int n, int c, int h, int w, int oc, int k,
                             int stride, int pad, wv_error *err);
-/* Scratch floats that forward and backward need (backward with dw needs more). */
-size_t wv_nn_conv2d_scratch_floats(const wv_nn_conv2d *cv, int with_dw);
+/* Scratch floats that forward and backward need. */
+size_t wv_nn_conv2d_scratch_floats(const wv_nn_conv2d *cv);
 void wv_nn_conv2d_forward(const wv_nn_conv2d *cv, const float *x, const float *w, const float *b,
                           float *y, float *scratch);
 /* dx, dw, db accumulate; any may be NULL. */

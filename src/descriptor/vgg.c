@@ -47,7 +47,7 @@ static wv_status ensure_buffers(vgg_net *m, int w, int h, wv_error *err) {
     if (m->cfg[i] > 0) {
       wv_status rc = wv_nn_conv2d_init(&m->cv[i], 1, c, hh, ww, m->cfg[i], 3, 1, 1, err);
       if (rc) return rc;
-      size_t s = wv_nn_conv2d_scratch_floats(&m->cv[i], 0);
+      size_t s = wv_nn_conv2d_scratch_floats(&m->cv[i]);
       if (s > smax) smax = s;
       m->ac[i + 1] = m->cfg[i], m->ah[i + 1] = hh, m->aw[i + 1] = ww;
     } else {

@@ -72,8 +72,7 @@ static int shared_len(const wv_nn_conv2d *cv) {
   return (int)((npos + nb - 1) / nb);
 }
 
-size_t wv_nn_conv2d_scratch_floats(const wv_nn_conv2d *cv, int with_dw) {
-  (void)with_dw; /* every mode needs the same */
+size_t wv_nn_conv2d_scratch_floats(const wv_nn_conv2d *cv) {
   size_t kk = (size_t)cv->c * cv->k * cv->k;
   size_t blocks = (size_t)cv->nthreads * kk * cv->chunk, shared = kk * shared_len(cv);
   return blocks > shared ? blocks : shared;
@@ -89,10 +88,10 @@ void wv_nn_im2col(const float *x, int c, int h, int w, int k, int stride, int pa
     for (int pos = p0; pos < p1;) {
       int oy = pos / ow, ox0 = pos % ow;
       int ox1 = ow < ox0 + (p1 - pos) ? ow : ox0 + (p1 - pos);
-      float *d = dst + (pos - p0) - ox0; /* d[ox] for ox in [ox0, ox1) */
+      float *d = dst + (pos - p0); /* d[ox - ox0] for ox in [ox0, ox1) */
       int iy = oy * stride + ki - pad;
       if (iy < 0 || iy >= h) {
-        memset(d + ox0, 0, sizeof(float) * (ox1 - ox0));
+        memset(d, 0, sizeof(float) * (ox1 - ox0));
       } else {
         const float *src = plane + (size_t)iy * w;
         if (stride == 1) {
@@ -100,13 +99,13 @@ void wv_nn_im2col(const float *x, int c, int h, int w, int k, int stride, int pa
           int a = pad - kj > ox0 ? pad - kj : ox0;
           int b = w + pad - kj < ox1 ? w + pad - kj : ox1;
           if (b < a) b = a;
-          for (int ox = ox0; ox < a; ox++) d[ox] = 0.0f;
-          if (b > a) memcpy(d + a, src + a + kj - pad, sizeof(float) * (b - a));
-          for (int ox = b; ox < ox1; ox++) d[ox] = 0.0f;
+          for (int ox = ox0; ox < a; ox++) d[ox - ox0] = 0.0f;
+          if (b > a) memcpy(d + (a - ox0), src + (a + kj - pad), sizeof(float) * (b - a));
+          for (int ox = b; ox < ox1; ox++) d[ox - ox0] = 0.0f;
         } else {
           for (int ox = ox0; ox < ox1; ox++) {
             int ix = ox * stride + kj - pad;
-            d[ox] = (ix >= 0 && ix < w) ? src[ix] : 0.0f;
+            d[ox - ox0] = (ix >= 0 && ix < w) ? src[ix] : 0.0f;
           }
         }
       }
@@ -125,19 +124,20 @@ void wv_nn_col2im(const float *col, int c, int h, int w, int k, int stride, int 
     for (int pos = p0; pos < p1;) {
       int oy = pos / ow, ox0 = pos % ow;
       int ox1 = ow < ox0 + (p1 - pos) ? ow : ox0 + (p1 - pos);
-      const float *s = src + (pos - p0) - ox0;
+      const float *sp = src + (pos - p0); /* sp[ox - ox0] for ox in [ox0, ox1) */
       int iy = oy * stride + ki - pad;
       if (iy >= 0 && iy < h) {
         float *d = plane + (size_t)iy * w;
         if (stride == 1) {
           int a = pad - kj > ox0 ? pad - kj : ox0;
           int b = w + pad - kj < ox1 ? w + pad - kj : ox1;
-          float *dd = d + kj - pad;
-          for (int ox = a; ox < b; ox++) dd[ox] += s[ox];
+          int off = kj - pad;
+#pragma omp simd /* -O2 alone leaves it scalar */
+          for (int ox = a; ox < b; ox++) d[ox + off] += sp[ox - ox0];
         } else {
           for (int ox = ox0; ox < ox1; ox++) {
             int ix = ox * stride + kj - pad;
-            if (ix >= 0 && ix < w) d[ix] += s[ox];
+            if (ix >= 0 && ix < w) d[ix] += sp[ox - ox0];
           }
         }
       }
@@ -164,16 +164,16 @@ static void forward_shared(const wv_nn_conv2d *cv, const float *x, const float *
       float *yi = y + (size_t)img * cv->oc * npos;
       for (int p0 = 0; p0 < npos; p0 += len) {
         int p1 = p0 + len < npos ? p0 + len : npos, l = p1 - p0;
-        const float *cp = xi + p0;
-        int ldc = npos;
+        const float *cp = xi + p0; /* pointwise: the input is its own column matrix */
+        int ldb = npos;
         if (!pw) {
           wv_nn_im2col(xi + (size_t)c0 * cv->h * cv->w, c1 - c0, cv->h, cv->w, cv->k, cv->stride,
                        cv->pad, cv->ow, p0, p1, col + (size_t)c0 * k2 * l);
-          cp = col, ldc = l;
+          cp = col, ldb = l;
 #pragma omp barrier
         }
         if (m1 > m0)
-          wv_nn_sgemm(0, 0, m1 - m0, l, kk, 1.0f, w + (size_t)m0 * kk, kk, cp, ldc, 0.0f,
+          wv_nn_sgemm(0, 0, m1 - m0, l, kk, 1.0f, w + (size_t)m0 * kk, kk, cp, ldb, 0.0f,
                       yi + (size_t)m0 * npos + p0, npos);
         if (b)
           for (int o = m0; o < m1; o++) {
@@ -204,16 +204,16 @@ static void backward_shared(const wv_nn_conv2d *cv, const float *x, const float 
         int p1 = p0 + len < npos ? p0 + len : npos, l = p1 - p0;
         if (dw) {
           const float *cp = xi + p0;
-          int ldc = npos;
+          int ldb = npos;
           if (!pw) {
             wv_nn_im2col(xi + (size_t)c0 * cv->h * cv->w, c1 - c0, cv->h, cv->w, cv->k,
                          cv->stride, cv->pad, cv->ow, p0, p1, col + (size_t)r0 * l);
-            cp = col, ldc = l;
+            cp = col, ldb = l;
 #pragma omp barrier
           }
           /* Each thread owns rows m0..m1 of dW: no partial sums. */
           if (m1 > m0)
-            wv_nn_sgemm(0, 1, m1 - m0, kk, l, 1.0f, dyi + (size_t)m0 * npos + p0, npos, cp, ldc,
+            wv_nn_sgemm(0, 1, m1 - m0, kk, l, 1.0f, dyi + (size_t)m0 * npos + p0, npos, cp, ldb,
                         1.0f, dw + (size_t)m0 * kk, kk);
 #pragma omp barrier
         }

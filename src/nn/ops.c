@@ -30,34 +30,33 @@ void wv_nn_bias_backward(float *dx, float *db, const float *dy, int n, int c, in
   }
   if (dx) {
     size_t total = (size_t)n * c * hw;
-#pragma omp parallel for schedule(static) if (total > PAR_MIN)
+#pragma omp parallel for simd schedule(static) if (total > PAR_MIN)
     for (size_t i = 0; i < total; i++) dx[i] += dy[i];
   }
 }
 
 void wv_nn_relu_forward(float *y, const float *x, size_t n) {
-#pragma omp parallel for schedule(static) if (n > PAR_MIN)
+#pragma omp parallel for simd schedule(static) if (n > PAR_MIN)
   for (size_t i = 0; i < n; i++) y[i] = x[i] > 0.0f ? x[i] : 0.0f;
 }
 
 void wv_nn_relu_backward(float *dx, const float *x, const float *dy, size_t n) {
-#pragma omp parallel for schedule(static) if (n > PAR_MIN)
+#pragma omp parallel for simd schedule(static) if (n > PAR_MIN)
   for (size_t i = 0; i < n; i++) dx[i] += x[i] > 0.0f ? dy[i] : 0.0f;
 }
 
 void wv_nn_relu_mask(float *d, const float *y, size_t n) {
-#pragma omp parallel for schedule(static) if (n > PAR_MIN)
-  for (size_t i = 0; i < n; i++)
-    if (!(y[i] > 0.0f)) d[i] = 0.0f;
+#pragma omp parallel for simd schedule(static) if (n > PAR_MIN)
+  for (size_t i = 0; i < n; i++) d[i] = y[i] > 0.0f ? d[i] : 0.0f; /* a select, not a branch */
 }
 
 void wv_nn_leaky_relu_forward(float *y, const float *x, float slope, size_t n) {
-#pragma omp parallel for schedule(static) if (n > PAR_MIN)
+#pragma omp parallel for simd schedule(static) if (n > PAR_MIN)
   for (size_t i = 0; i < n; i++) y[i] = x[i] > 0.0f ? x[i] : slope * x[i];
 }
 
 void wv_nn_leaky_relu_backward(float *dx, const float *x, const float *dy, float slope, size_t n) {
-#pragma omp parallel for schedule(static) if (n > PAR_MIN)
+#pragma omp parallel for simd schedule(static) if (n > PAR_MIN)
   for (size_t i = 0; i < n; i++) dx[i] += x[i] > 0.0f ? dy[i] : slope * dy[i];
 }
 
@@ -124,7 +123,7 @@ void wv_nn_fc_backward(float *dx, float *dw, float *db, const float *dy, const f
 }
 
 void wv_nn_sigmoid_forward(float *y, const float *x, size_t n) {
-#pragma omp parallel for schedule(static) if (n > PAR_MIN)
+#pragma omp parallel for simd schedule(static) if (n > PAR_MIN)
   for (size_t i = 0; i < n; i++) {
     /* Both branches stay finite for any x. */
     if (x[i] >= 0.0f) {
@@ -137,7 +136,7 @@ void wv_nn_sigmoid_forward(float *y, const float *x, size_t n) {
 }
 
 void wv_nn_sigmoid_backward(float *dx, const float *y, const float *dy, size_t n) {
-#pragma omp parallel for schedule(static) if (n > PAR_MIN)
+#pragma omp parallel for simd schedule(static) if (n > PAR_MIN)
   for (size_t i = 0; i < n; i++) dx[i] += dy[i] * y[i] * (1.0f - y[i]);
 }
 
