@@ -26,8 +26,8 @@ typedef struct {
   double w_pixel;     /* w2 = 0.2 */
   int down_w, down_h; /* 16 x 8 */
   int discrete_every; /* 5 (0: no discrete search) */
-  int iter_scale;     /* iterate on the image downscaled by this factor (2) */
-  int iter_spp;       /* samples per pixel while iterating (16) */
+  int iter_scale;     /* iterate on the image downscaled by this factor (1) */
+  int iter_spp;       /* samples per pixel while iterating (4) */
   uint64_t seed;      /* random steps of the discrete search */
   int threads;        /* 0: all cores */
   int checkpoint_every; /* 10 */

@@ -21,8 +21,8 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->w_pixel = 0.2;
   o->down_w = 16, o->down_h = 8;
   o->discrete_every = 5;
-  o->iter_scale = 2;
-  o->iter_spp = 16;
+  o->iter_scale = 1;
+  o->iter_spp = 4;
   o->seed = 1;
   o->checkpoint_every = 10;
 }
