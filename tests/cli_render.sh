@@ -1,25 +1,7 @@
 #!/usr/bin/env bash
 # CLI behaviour of `woven render` and `woven maps`: results, bad input, exit codes,
 # no partial output, earlier results kept. Usage: cli_render.sh WOVEN SOURCE_DIR
-set -u
-WOVEN=$1
-SRC=$2
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-check() { # check NAME EXPECTED_CODE NEEDLE -- command...
-  local name=$1 want=$2 needle=$3
-  shift 4
-  "$@" >"$T/out" 2>"$T/err"
-  local got=$?
-  if [[ $got != "$want" ]] || { [[ -n $needle ]] && ! grep -qF -- "$needle" "$T/err" "$T/out"; }; then
-    echo "FAIL $name: exit $got (wanted $want), output:"
-    cat "$T/out" "$T/err"
-    fails=$((fails + 1))
-  else
-    echo "ok   $name"
-  fi
-}
+source "$(dirname "$0")/cli_lib.bash"
 small='{"name":"small","image":{"width":40,"height":20,"spp":4},"camera":{"position_mm":[0,0,250],"look_at_mm":[0,0,0],"vfov_deg":3},"sample":{"shape":"cylinder","radius_mm":35},"light":{"position_mm":[0,60,250],"intensity":150000}}'
 echo "$small" >"$T/small.json"
 
