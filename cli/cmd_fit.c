@@ -19,7 +19,8 @@
 static const char *HELP =
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
-    "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--seed N] [--threads N]\n"
+    "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
+    "                 [--seed N] [--threads N]\n"
     "                 [--force] [--quiet] [--json]\n"
     "       woven fit --resume DIR [--iters N] [--quiet] [--json]\n"
     "\n"
@@ -30,6 +31,8 @@ static const char *HELP =
     "  --iters N         iterations (default 200)\n"
     "  --crop x,y,w,h    use this rectangle of the photo (default: centred, the scene's aspect)\n"
     "  --iter-spp N      samples per pixel while iterating (default 4)\n"
+    "  --align-radius N  after the iterations, search each density +-N yarns/inch for the\n"
+    "                    best SSIM in a centre window (default 40; 0 = off)\n"
     "  --iter-scale N    iterate on the image downscaled N times (default 1); the final render\n"
     "                    and SSIM use the scene's full resolution and spp\n"
     "  --force           replace the results of an earlier fit in DIR\n"
@@ -121,6 +124,7 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
              o.iters, st.iter, job->start_label, o.iter_scale, o.iter_spp);
   wv_status rc = wv_fit_run(&st, job->scene, job->photo, job->desc, &o, on_iter, &u, &err);
   cli_progress_end(&u.bar);
+  if (!rc && !u.ckpt_failed) rc = wv_fit_checkpoint_write(ckpt, &st, &o, u.descriptor, &err); /* with the alignment */
   if (rc || u.ckpt_failed) {
     wv_fit_state_free(&st);
     return cli_fail(c, &err);
@@ -175,9 +179,10 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
     char *pj = wv_params_to_json(&st.params);
     printf("{\"dir\": \"%s\", \"iterations\": %d, \"ssim_start\": %.6f, \"ssim_fit\": %.6f, \"loss\": %.8f, "
            "\"time_s\": {\"total\": %.3f, \"render\": %.3f, \"gradient\": %.3f, \"descriptor\": %.3f, "
-           "\"discrete\": %.3f}, \"params\": %s}\n",
+           "\"discrete\": %.3f}, \"density_alignment_ssim\": [%.4f, %.4f], \"params\": %s}\n",
            job->dir, st.iter, ssim_start, ssim_fit, last ? last->loss : 0.0, st.timing.total, st.timing.render,
-           st.timing.gradient, st.timing.descriptor, st.timing.discrete, pj ? pj : "null");
+           st.timing.gradient, st.timing.descriptor, st.timing.discrete, st.align_ssim_before, st.align_ssim_after,
+           pj ? pj : "null");
     free(pj);
   }
   wv_fit_state_free(&st);
@@ -266,6 +271,9 @@ int cmd_fit(int argc, char **argv) {
     } else if (cli_is(&a, s, "--seed")) {
       if (!cli_int(&a, "--seed", 0, 2147483647L, &v)) return EXIT_USAGE;
       job.opts.seed = (uint64_t)v;
+    } else if (cli_is(&a, s, "--align-radius")) {
+      if (!cli_int(&a, "--align-radius", 0, 100, &v)) return EXIT_USAGE;
+      job.opts.align_radius = (int)v;
     } else if (cli_is(&a, s, "--threads")) {
       if (!cli_int(&a, "--threads", 1, 1024, &v)) return EXIT_USAGE;
       job.opts.threads = (int)v;

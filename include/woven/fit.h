@@ -31,6 +31,7 @@ typedef struct {
   uint64_t seed;      /* random steps of the discrete search */
   int threads;        /* 0: all cores */
   int checkpoint_every; /* 10 */
+  int align_radius;   /* density alignment: search +-this many yarns/inch (40; 0 = off) */
 } wv_fit_opts;
 
 void wv_fit_opts_default(wv_fit_opts *o);
@@ -51,6 +52,8 @@ typedef struct {
 typedef struct {
   wv_params start, params;
   int iter; /* iterations done */
+  int aligned; /* the density alignment after the last iteration is done */
+  double align_ssim_before, align_ssim_after; /* its criterion at the start and end */
   double adam_m[WV_P_COUNT], adam_v[WV_P_COUNT];
   uint64_t rng;
   wv_fit_record *log; /* iter entries */
@@ -65,7 +68,12 @@ void wv_fit_state_free(wv_fit_state *st);
 typedef int (*wv_fit_callback)(void *user, const wv_fit_state *st, const wv_fit_opts *o);
 
 /* Runs iterations st->iter .. o->iters - 1 against photo (the scene's size, as
- * wv_photo_load gives it). */
+ * wv_photo_load gives it), then the density alignment: the Gram loss cannot see
+ * where yarns are, only what they look like, so a density a few yarns/inch off
+ * costs it nothing while it shifts every yarn in the picture. After the last
+ * iteration the warp and weft densities are searched, one at a time, on the
+ * integer grid within +-align_radius for the best SSIM against the photo in a
+ * centre window (a criterion that does see yarn positions). */
 wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
                      const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err);
 

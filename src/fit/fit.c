@@ -11,6 +11,7 @@
 #include "woven/grad.h"
 #include "woven/imgops.h"
 #include "woven/io.h"
+#include "woven/metrics.h"
 #include "woven/render.h"
 
 void wv_fit_opts_default(wv_fit_opts *o) {
@@ -25,6 +26,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->iter_spp = 4;
   o->seed = 1;
   o->checkpoint_every = 10;
+  o->align_radius = 40;
 }
 
 void wv_fit_beta_prior(const char *pattern, double *mu, double *sigma) {
@@ -197,6 +199,65 @@ static int discrete_step(wv_params *p, uint64_t *rng, int iter, int iters) {
   return 1;
 }
 
+/* The centre w x h window of a scene (same pixels as the full image there). */
+static void centre_window(const wv_scene *s, int w, int h, wv_scene *out) {
+  *out = *s;
+  double t = tan(0.5 * s->vfov_deg * 3.14159265358979323846 / 180.0) * h / s->height;
+  out->vfov_deg = 2.0 * atan(t) * 180.0 / 3.14159265358979323846;
+  out->width = w, out->height = h;
+}
+
+static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
+                                 wv_error *err) {
+  int w = s->width < 160 ? s->width : 160, h = s->height < 80 ? s->height : 80;
+  w -= (s->width - w) % 2, h -= (s->height - h) % 2; /* keep the window centred on whole pixels */
+  wv_scene win;
+  centre_window(s, w, h, &win);
+  win.spp = o->iter_spp;
+  wv_image ref;
+  wv_status rc = wv_image_alloc(&ref, w, h, 3, err);
+  if (rc) return rc;
+  int x0 = (s->width - w) / 2, y0 = (s->height - h) / 2;
+  for (int y = 0; y < h; y++)
+    memcpy(wv_image_px(&ref, 0, y), wv_image_px(photo, x0, y0 + y), sizeof(float) * 3 * (size_t)w);
+  wv_render_opts ro = {win.spp, o->threads, NULL, NULL};
+  /* Coordinate search: one density at a time over +-R with the other fixed, until
+   * a full round changes nothing (each density alone already moves the SSIM). */
+  wv_params cur = st->params;
+  for (int y = 0; y < 2; y++) cur.density[y] = floor(cur.density[y] + 0.5);
+  double best = -2, before = -2;
+  wv_image img;
+  if (!(rc = wv_render(&win, &cur, &ro, &img, NULL, err))) {
+    rc = wv_ssim(&ref, &img, WV_SSIM_LUMA, &before, err);
+    wv_image_free(&img);
+  }
+  best = before;
+  int unchanged = 0;
+  for (int pass = 0; pass < 6 && unchanged < 2 && !rc; pass++) {
+    int y = pass & 1;
+    int R = pass < 2 ? o->align_radius : (o->align_radius < 5 ? o->align_radius : 5); /* later rounds refine */
+    double centre = cur.density[y], best_d = centre;
+    for (int k = -R; k <= R && !rc; k++) {
+      wv_params trial = cur;
+      trial.density[y] = centre + k;
+      if (k == 0 || trial.density[y] < 20 || trial.density[y] > 250) continue; /* k = 0 is best already */
+      if ((rc = wv_render(&win, &trial, &ro, &img, NULL, err))) break;
+      double v;
+      rc = wv_ssim(&ref, &img, WV_SSIM_LUMA, &v, err);
+      wv_image_free(&img);
+      if (!rc && v > best) best = v, best_d = trial.density[y];
+    }
+    unchanged = best_d == centre ? unchanged + 1 : 0;
+    cur.density[y] = best_d;
+  }
+  wv_image_free(&ref);
+  if (rc) return rc;
+  st->params.density[0] = cur.density[0], st->params.density[1] = cur.density[1];
+  st->align_ssim_before = before, st->align_ssim_after = best;
+  st->aligned = 1;
+  return WV_OK;
+}
+
 wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
                      const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err) {
   if (o->iters > st->log_cap) {
@@ -204,6 +265,7 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     if (!nl) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the fit log");
     st->log = nl, st->log_cap = o->iters;
   }
+  if (st->iter < o->iters) st->aligned = 0; /* more iterations: align again after them */
   fit_ctx c;
   double t_start = omp_get_wtime();
   wv_status rc = ctx_init(&c, s, photo, d, o->iter_scale, o->iter_spp, o, &st->timing, err);
@@ -254,6 +316,12 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     if (cb && cb(user, st, o)) break;
   }
   ctx_free(&c);
+  if (!rc && st->iter >= o->iters && !st->aligned && o->align_radius > 0) {
+    double ta = omp_get_wtime();
+    rc = align_densities(st, s, photo, o, err);
+    st->timing.discrete += omp_get_wtime() - ta;
+    st->timing.total += omp_get_wtime() - ta;
+  }
   return rc;
 }
 
@@ -279,6 +347,7 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_object_set_new(root, "version", json_integer(1));
   json_object_set_new(root, "descriptor", json_string(descriptor_name));
   json_object_set_new(root, "iter", json_integer(st->iter));
+  json_object_set_new(root, "aligned", json_boolean(st->aligned));
   json_object_set_new(root, "start", params_json(&st->start));
   json_object_set_new(root, "params", params_json(&st->params));
   json_object_set_new(root, "adam_m", darray(st->adam_m, WV_P_COUNT));
@@ -290,10 +359,11 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
                                                 st->timing.gradient, "descriptor", st->timing.descriptor,
                                                 "discrete", st->timing.discrete, "total", st->timing.total));
   json_object_set_new(root, "opts",
-                      json_pack("{s:i,s:f,s:f,s:f,s:i,s:i,s:i,s:i,s:i,s:I}", "iters", o->iters, "lr", o->lr,
+                      json_pack("{s:i,s:f,s:f,s:f,s:i,s:i,s:i,s:i,s:i,s:I,s:i}", "iters", o->iters, "lr", o->lr,
                                 "w_prior", o->w_prior, "w_pixel", o->w_pixel, "down_w", o->down_w, "down_h",
                                 o->down_h, "discrete_every", o->discrete_every, "iter_scale", o->iter_scale,
-                                "iter_spp", o->iter_spp, "seed", (json_int_t)o->seed));
+                                "iter_spp", o->iter_spp, "seed", (json_int_t)o->seed, "align_radius",
+                                o->align_radius));
   json_t *log = json_array();
   for (int i = 0; i < st->iter; i++) {
     const wv_fit_record *r = &st->log[i];
@@ -351,9 +421,10 @@ wv_status wv_fit_checkpoint_read(const char *path, wv_fit_state *st, wv_fit_opts
   json_t *opts = json_object_get(root, "opts");
   wv_fit_opts_default(o);
   json_int_t seed = 1;
-  if (json_unpack(opts, "{s:i,s:F,s:F,s:F,s:i,s:i,s:i,s:i,s:i,s:I}", "iters", &o->iters, "lr", &o->lr, "w_prior",
-                  &o->w_prior, "w_pixel", &o->w_pixel, "down_w", &o->down_w, "down_h", &o->down_h, "discrete_every",
-                  &o->discrete_every, "iter_scale", &o->iter_scale, "iter_spp", &o->iter_spp, "seed", &seed)) {
+  if (json_unpack(opts, "{s:i,s:F,s:F,s:F,s:i,s:i,s:i,s:i,s:i,s:I,s:i}", "iters", &o->iters, "lr", &o->lr,
+                  "w_prior", &o->w_prior, "w_pixel", &o->w_pixel, "down_w", &o->down_w, "down_h", &o->down_h,
+                  "discrete_every", &o->discrete_every, "iter_scale", &o->iter_scale, "iter_spp", &o->iter_spp,
+                  "seed", &seed, "align_radius", &o->align_radius)) {
     rc = wv_fail(err, WV_ERR_FORMAT, "%s: checkpoint options are incomplete", path);
     goto done;
   }
@@ -373,6 +444,7 @@ wv_status wv_fit_checkpoint_read(const char *path, wv_fit_state *st, wv_fit_opts
     goto done;
   }
   st->rng = strtoull(rng, NULL, 16);
+  st->aligned = json_is_true(json_object_get(root, "aligned"));
   snprintf(descriptor_name, name_cap, "%s", dn);
   st->iter = (int)it;
   for (int i = 0; i < st->iter; i++) {
