@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdint.h>
 
+#include "util/fastmath.h"
 #include "util/hash.h"
 #include "woven/params.h"
 #include "woven/scene.h"
@@ -99,7 +100,7 @@ static inline void wv_footprint_at(const wv_footprint *fp, float sx, float sy, f
 /* Specular glint multiplier U_s = min(-ln xi, 10), xi hashed on a fine grid. */
 static inline float wv_glint(const wv_fabric *f, float fx, float fy) {
   if (!f->glints) return 1.0f;
-  int64_t gx = (int64_t)floorf(fx * f->inv_glint_cell[0]), gy = (int64_t)floorf(fy * f->inv_glint_cell[1]);
+  int64_t gx = wv_floor_ll(fx * f->inv_glint_cell[0]), gy = wv_floor_ll(fy * f->inv_glint_cell[1]);
   return f->glint_table[wv_hash2((uint64_t)gx, (uint64_t)gy, f->seed ^ 0x676c696eULL) >> 52];
 }
 

@@ -15,6 +15,14 @@ static inline float wv_cos_hp(float x) {
          x2 * (-1.0f / 3628800 + x2 * (1.0f / 479001600))))));
 }
 
+/* floor as an integer: without SSE4.1 floorf is a library call or a long
+ * sequence; a truncating conversion and one correction give the same integer
+ * for every |x| < 2^62. */
+static inline long long wv_floor_ll(float x) {
+  long long i = (long long)x;
+  return i - (x < (float)i);
+}
+
 /* atan2 to about 1e-7 rad: octant reduction, then a shift by pi/6 brings the
  * argument under tan(15 deg), where an odd Taylor series to x^13 suffices. */
 static inline float wv_atan2(float y, float x) {

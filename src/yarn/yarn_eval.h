@@ -50,7 +50,7 @@ static inline int64_t wrap(int64_t v, int period) {
 static inline void wv_yarn_eval_inline(const wv_yarn_model *m, float x, float y, wv_yarn_point *out) {
   const float dx = m->spacing[WV_WARP], dy = m->spacing[WV_WEFT];
   float r = -y * m->inv_spacing[WV_WEFT], c = x * m->inv_spacing[WV_WARP];
-  float rf = floorf(r), cf = floorf(c);
+  float rf = (float)wv_floor_ll(r), cf = (float)wv_floor_ll(c);
   int64_t I = (int64_t)rf, J = (int64_t)cf;
   float fr = r - rf, fc = c - cf;
   const wv_weave_cell *cell = wv_weave_at(&m->weave, I, J);
