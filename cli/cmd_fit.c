@@ -32,7 +32,7 @@ static const char *HELP =
     "  --crop x,y,w,h    use this rectangle of the photo (default: centred, the scene's aspect)\n"
     "  --iter-spp N      samples per pixel while iterating (default 4)\n"
     "  --align-radius N  after the iterations, search each density +-N yarns/inch for the\n"
-    "                    best SSIM in a centre window (default 40; 0 = off)\n"
+    "                    best SSIM in a centre window (default 230: the whole range; 0 = off)\n"
     "  --iter-scale N    iterate on the image downscaled N times (default 1); the final render\n"
     "                    and SSIM use the scene's full resolution and spp\n"
     "  --force           replace the results of an earlier fit in DIR\n"

@@ -31,7 +31,7 @@ typedef struct {
   uint64_t seed;      /* random steps of the discrete search */
   int threads;        /* 0: all cores */
   int checkpoint_every; /* 10 */
-  int align_radius;   /* density alignment: search +-this many yarns/inch (40; 0 = off) */
+  int align_radius;   /* density alignment: search +-this many yarns/inch (230: the whole range; 0 = off) */
 } wv_fit_opts;
 
 void wv_fit_opts_default(wv_fit_opts *o);

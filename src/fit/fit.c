@@ -26,7 +26,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->iter_spp = 4;
   o->seed = 1;
   o->checkpoint_every = 10;
-  o->align_radius = 40;
+  o->align_radius = 230;
 }
 
 void wv_fit_beta_prior(const char *pattern, double *mu, double *sigma) {
