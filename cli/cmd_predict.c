@@ -12,19 +12,22 @@
 
 static const char *PREDICT_HELP =
     "usage: woven predict PHOTO --scene S.json|cylinder|flat45 --pattern NAME -o P.json\n"
-    "                     [--model M] [--crop x,y,w,h] [--vgg19-weights FILE] [--force] [--quiet] [--json]\n"
+    "                     [--model M] [--crop x,y,w,h] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
+    "                     [--force] [--quiet] [--json]\n"
     "\n"
     "FabricNet's estimate of the fabric parameters of PHOTO taken in the scene.\n"
     "  --pattern NAME  plain, twill, satin, twill90 or satin90 (the network does not classify\n"
     "                  the pattern); the noise level Q is the pattern's prior value\n"
     "  --model M       a model from 'woven train' (default: models/fabricnet-<scene name>.bin;\n"
     "                  the directory can be changed with WOVEN_MODEL_DIR)\n"
+    "  --descriptor    the texture descriptor (default: default); the model must match it\n"
     "  --force         use a model trained for another scene\n";
 
 static const char *CAPTURE_HELP =
     "usage: woven capture PHOTO --scene S.json|cylinder|flat45 --pattern NAME -o DIR\n"
     "                     [--model M] [--iters N] [--crop x,y,w,h] [--iter-spp N] [--iter-scale N]\n"
-    "                     [--seed N] [--threads N] [--force] [--quiet] [--json]\n"
+    "                     [--seed N] [--threads N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
+    "                     [--force] [--quiet] [--json]\n"
     "\n"
     "The whole capture: FabricNet's estimate (as 'woven predict'), then the fit from it (as\n"
     "'woven fit', 200 iterations by default).\n"
@@ -43,7 +46,7 @@ static void default_model(const wv_scene *s, char *buf, size_t cap) {
 }
 
 typedef struct {
-  const char *photo, *scene_name, *pattern, *model, *weights, *out;
+  const char *photo, *scene_name, *pattern, *model, *descriptor, *weights, *out;
   wv_crop crop;
   int force;
 } predict_args;
@@ -71,7 +74,7 @@ static int run_predict(cli_ctx *c, const predict_args *pa, wv_scene *scene, wv_i
   wv_fabricnet net;
   if (wv_fabricnet_load(mpath, &net, &err)) return cli_fail(c, &err);
   int rc = 0;
-  if (wv_descriptor_create(net.descriptor, pa->weights, desc, &err)) {
+  if (wv_descriptor_create(pa->descriptor ? pa->descriptor : "default", pa->weights, desc, &err)) {
     rc = cli_fail(c, &err);
   } else if (wv_fabricnet_check(&net, mpath, wv_descriptor_name(*desc), wv_descriptor_size(*desc),
                                 pa->force ? NULL : scene, &err)) {
@@ -103,6 +106,8 @@ static int parse_common(cli_args *a, const char *s, predict_args *pa, int *handl
     if (!(pa->pattern = cli_value(a, "--pattern"))) return EXIT_USAGE;
   } else if (cli_is(a, s, "--model")) {
     if (!(pa->model = cli_value(a, "--model"))) return EXIT_USAGE;
+  } else if (cli_is(a, s, "--descriptor")) {
+    if (!(pa->descriptor = cli_value(a, "--descriptor"))) return EXIT_USAGE;
   } else if (cli_is(a, s, "--vgg19-weights")) {
     if (!(pa->weights = cli_value(a, "--vgg19-weights"))) return EXIT_USAGE;
   } else if (cli_is(a, s, "-o") || cli_is(a, s, "--output")) {
