@@ -63,10 +63,20 @@ typedef struct {
   int resume, iters_given;
 } fit_job;
 int fit_pipeline(cli_ctx *c, const fit_job *job);
+/* Shared with woven capture: the output directory check and fit.json (for --resume). */
+#include "woven/photo.h"
+int fit_prepare_dir(const char *cmd, const char *dir, int force, int resume);
+wv_status fit_write_job(const char *dir, const char *photo, const wv_crop *crop, const wv_scene *s,
+                        const char *descriptor, const char *weights, wv_error *err);
+int cli_parse_crop(const char *s, wv_crop *c);
 
 int cmd_render(int argc, char **argv);
 int cmd_fit(int argc, char **argv);
 int cmd_maps(int argc, char **argv);
 int cmd_compare(int argc, char **argv);
+int cmd_dataset(int argc, char **argv);
+int cmd_train(int argc, char **argv);
+int cmd_predict(int argc, char **argv);
+int cmd_capture(int argc, char **argv);
 
 #endif

@@ -75,7 +75,7 @@ static int on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
 
 /* A directory for results: created if missing; refused if it holds an earlier fit
  * and the user did not say --force. */
-static int prepare_dir(const char *cmd, const char *dir, int force, int resume) {
+int fit_prepare_dir(const char *cmd, const char *dir, int force, int resume) {
   struct stat sb;
   if (stat(dir, &sb) == 0) {
     if (!S_ISDIR(sb.st_mode)) {
@@ -190,7 +190,7 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
 }
 
 /* fit.json records what a resume needs: the photo, crop, scene and descriptor. */
-static wv_status write_job(const char *dir, const char *photo, const wv_crop *crop, const wv_scene *s,
+wv_status fit_write_job(const char *dir, const char *photo, const wv_crop *crop, const wv_scene *s,
                            const char *descriptor, const char *weights, wv_error *err) {
   char *sj = wv_scene_to_json(s);
   json_t *scene = json_loads(sj, 0, NULL);
@@ -340,9 +340,9 @@ int cmd_fit(int argc, char **argv) {
     wv_image_free(&ph);
     return cli_fail(&c, &err);
   }
-  int rc = prepare_dir(c.cmd, dir, force, resume != NULL);
+  int rc = fit_prepare_dir(c.cmd, dir, force, resume != NULL);
   wv_crop used = {info.crop[0], info.crop[1], info.crop[2], info.crop[3]};
-  if (!rc && !resume && write_job(dir, photo, &used, &scene, desc_name, weights, &err)) rc = cli_fail(&c, &err);
+  if (!rc && !resume && fit_write_job(dir, photo, &used, &scene, desc_name, weights, &err)) rc = cli_fail(&c, &err);
   if (!rc) {
     job.scene = &scene, job.photo = &ph, job.desc = desc, job.start = resume ? NULL : &start;
     job.dir = dir, job.photo_path = photo, job.resume = resume != NULL, job.iters_given = iters_given;

@@ -14,6 +14,10 @@ static const struct {
     {"maps", cmd_maps, "write tileable texture maps (normal, tangent, albedo, ...)"},
     {"fit", cmd_fit, "refine fabric parameters from a photo (differentiable rendering)"},
     {"compare", cmd_compare, "SSIM and mean absolute difference of two images"},
+    {"dataset", cmd_dataset, "render FabricNet's synthetic training set (resumable)"},
+    {"train", cmd_train, "train FabricNet on a dataset"},
+    {"predict", cmd_predict, "FabricNet's estimate of the parameters of a photo"},
+    {"capture", cmd_capture, "photo -> parameters: network estimate, then the fit, all outputs"},
 };
 
 static void usage(FILE *f) {

@@ -1,0 +1,263 @@
+/* woven dataset: FabricNet's synthetic training set (SPEC section 7), resumable. */
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "woven/descriptor.h"
+#include "woven/fabricnet.h"
+#include "woven/io.h"
+#include "woven/render.h"
+
+static const char *HELP =
+    "usage: woven dataset --scene S.json|cylinder|flat45 --per-pattern N -o DIR [--seed N] [--spp N]\n"
+    "                     [--jobs N] [--descriptor default|vgg19] [--vgg19-weights FILE] [--quiet] [--json]\n"
+    "\n"
+    "Renders N samples for each of the five patterns (plain, twill, satin, twill90, satin90),\n"
+    "parameters drawn from the SPEC section 5 priors, and caches their descriptor features.\n"
+    "  --seed N      dataset seed (default 1); sample parameters are a function of (seed, pattern, i)\n"
+    "  --spp N       samples per pixel (default: the scene's)\n"
+    "  --jobs N      samples rendered at once, one thread each (default: all cores)\n"
+    "Writes DIR/dataset.json and DIR/samples/<pattern>_<i>.{json,png,feat} (docs/fabricnet.md).\n"
+    "Run the same command again to resume after an interruption: finished samples are kept,\n"
+    "a larger --per-pattern extends the set; a DIR made with other settings is refused.\n";
+
+static int mkdir_p(const char *dir) {
+  struct stat sb;
+  if (stat(dir, &sb) == 0) return S_ISDIR(sb.st_mode) ? 0 : -1;
+  return mkdir(dir, 0777);
+}
+
+/* Temporary files an interrupted atomic write left behind. */
+static void remove_stale_tmp(const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) return;
+  char p[4096];
+  for (struct dirent *e; (e = readdir(d));)
+    if (strstr(e->d_name, ".tmp.")) {
+      snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
+      unlink(p);
+    }
+  closedir(d);
+}
+
+/* 8-bit quantisation, as the PNG stores it and as a photo arrives. */
+static void quantise8(wv_image *img) {
+  size_t n = (size_t)img->w * img->h * img->c;
+  for (size_t i = 0; i < n; i++) {
+    float v = img->data[i] < 0 ? 0 : img->data[i] > 1 ? 1 : img->data[i];
+    img->data[i] = floorf(v * 255.0f + 0.5f) / 255.0f;
+  }
+}
+
+static wv_status make_sample(const char *dir, const wv_dataset_info *info, int k, int render_threads,
+                             wv_descriptor *d, float *feat, wv_error *err) {
+  wv_params p;
+  wv_status st = wv_dataset_sample_params(info, k, &p, err);
+  if (st) return st;
+  wv_render_opts ro = {info->spp, render_threads, NULL, NULL};
+  wv_image img = {0};
+  if ((st = wv_render(&info->scene, &p, &ro, &img, NULL, err))) return st;
+  quantise8(&img);
+  char path[4096];
+  wv_dataset_path(dir, k, "json", path, sizeof path);
+  st = wv_params_write(path, &p, err);
+  wv_dataset_path(dir, k, "png", path, sizeof path);
+  if (!st) st = wv_image_write_png(path, &img, 8, err);
+  if (!st) st = wv_descriptor_forward(d, &img, feat, err);
+  /* features last: their presence marks a finished sample */
+  wv_dataset_path(dir, k, "feat", path, sizeof path);
+  if (!st) st = wv_dataset_write_features(path, feat, info->n_feat, err);
+  wv_image_free(&img);
+  return st;
+}
+
+int cmd_dataset(int argc, char **argv) {
+  cli_ctx c = {0, 0, "dataset"};
+  cli_args a;
+  cli_args_init(&a, argc, argv, c.cmd);
+  const char *scene_name = NULL, *dir = NULL, *desc_name = "default", *weights = NULL;
+  long per = 0, seed = 1, spp = 0, jobs = 0;
+  for (const char *s; (s = cli_next(&a));) {
+    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
+      fputs(HELP, stdout);
+      return 0;
+    } else if (cli_is(&a, s, "--scene")) {
+      if (!(scene_name = cli_value(&a, "--scene"))) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "-o") || cli_is(&a, s, "--output")) {
+      if (!(dir = cli_value(&a, "-o"))) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "--per-pattern")) {
+      if (!cli_int(&a, "--per-pattern", 1, 1000000, &per)) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "--seed")) {
+      if (!cli_int(&a, "--seed", 0, 2147483647L, &seed)) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "--spp")) {
+      if (!cli_int(&a, "--spp", 1, WV_SCENE_MAX_SPP, &spp)) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "--jobs")) {
+      if (!cli_int(&a, "--jobs", 1, 1024, &jobs)) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "--descriptor")) {
+      if (!(desc_name = cli_value(&a, "--descriptor"))) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "--vgg19-weights")) {
+      if (!(weights = cli_value(&a, "--vgg19-weights"))) return EXIT_USAGE;
+    } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
+      c.quiet = 1;
+    } else if (!strcmp(s, "--json")) {
+      c.json = 1;
+    } else {
+      return cli_usage_error(c.cmd, "unexpected argument '%s'", s);
+    }
+  }
+  if (!scene_name) return cli_usage_error(c.cmd, "--scene is required");
+  if (!dir) return cli_usage_error(c.cmd, "-o DIR is required");
+  if (!per) return cli_usage_error(c.cmd, "--per-pattern N is required");
+  wv_error err = {0};
+  wv_dataset_info want;
+  memset(&want, 0, sizeof want);
+  if (wv_scene_load(scene_name, &want.scene, &err)) return cli_fail(&c, &err);
+  char *sj = wv_scene_to_json(&want.scene);
+  if (!sj || strlen(sj) >= sizeof want.scene_json) {
+    free(sj);
+    return cli_usage_error(c.cmd, "scene description too long");
+  }
+  snprintf(want.scene_json, sizeof want.scene_json, "%s", sj);
+  free(sj);
+  want.version = WV_DATASET_VERSION, want.seed = (uint64_t)seed, want.per_pattern = (int)per;
+  want.spp = spp ? (int)spp : want.scene.spp;
+  if (jobs == 0) jobs = omp_get_max_threads();
+
+  /* One descriptor per job: descriptors keep scratch and are not thread-safe. */
+  wv_descriptor **desc = calloc((size_t)jobs, sizeof *desc);
+  if (!desc) return cli_usage_error(c.cmd, "out of memory");
+  int rc = 0;
+  for (long j = 0; j < jobs && !rc; j++)
+    if (wv_descriptor_create(desc_name, weights, &desc[j], &err)) rc = cli_fail(&c, &err);
+  if (!rc) {
+    snprintf(want.descriptor, sizeof want.descriptor, "%s", wv_descriptor_name(desc[0]));
+    want.n_feat = (int)wv_descriptor_size(desc[0]);
+  }
+
+  /* An existing dataset must have been made with the same settings. */
+  struct stat sb;
+  char path[4096];
+  snprintf(path, sizeof path, "%s/dataset.json", dir);
+  int existing = !rc && stat(path, &sb) == 0;
+  if (existing) {
+    wv_dataset_info have;
+    if (wv_dataset_info_read(dir, &have, &err)) {
+      rc = cli_fail(&c, &err);
+    } else {
+      wv_scene hs = have.scene;
+      char *hj = wv_scene_to_json(&hs);
+      char *wj = wv_scene_to_json(&want.scene);
+      const char *why = have.seed != want.seed              ? "seed"
+                        : strcmp(have.descriptor, want.descriptor) || have.n_feat != want.n_feat ? "descriptor"
+                        : have.spp != want.spp               ? "spp"
+                        : !hj || !wj || strcmp(hj, wj)       ? "scene"
+                                                             : NULL;
+      free(hj), free(wj);
+      if (why) {
+        fprintf(stderr,
+                "woven dataset: error: %s holds a dataset made with another %s (seed %llu, spp %d, descriptor "
+                "'%s', scene '%s'); refusing to mix samples: use another directory\n",
+                dir, why, (unsigned long long)have.seed, have.spp, have.descriptor, have.scene.name);
+        rc = WV_ERR_INVALID;
+      } else if (have.per_pattern > want.per_pattern) {
+        want.per_pattern = have.per_pattern; /* never shrink the recorded size */
+        cli_info(&c, "%s records %d per pattern; completing all of them\n", dir, have.per_pattern);
+      }
+    }
+  } else if (!rc) {
+    if (mkdir_p(dir) != 0) {
+      fprintf(stderr, "woven dataset: error: %s: cannot create directory: %s\n", dir, strerror(errno));
+      rc = WV_ERR_IO;
+    }
+  }
+  snprintf(path, sizeof path, "%s/samples", dir);
+  if (!rc && mkdir_p(path) != 0) {
+    fprintf(stderr, "woven dataset: error: %s: cannot create directory: %s\n", path, strerror(errno));
+    rc = WV_ERR_IO;
+  }
+  if (!rc) remove_stale_tmp(path);
+  /* dataset.json before any sample: a directory with samples always says what they are */
+  if (!rc && wv_dataset_info_write(dir, &want, &err)) rc = cli_fail(&c, &err);
+
+  int total = WV_NET_PATTERNS * want.per_pattern, ntodo = 0, nbefore = 0;
+  int *todo = rc ? NULL : malloc(sizeof(int) * (size_t)total);
+  if (!rc && !todo) rc = cli_usage_error(c.cmd, "out of memory");
+  if (!rc) {
+    for (int k = 0; k < total; k++) {
+      if (wv_dataset_sample_done(dir, &want, k))
+        nbefore++;
+      else
+        todo[ntodo++] = k;
+    }
+    cli_info(&c, "%s: %d samples (%d per pattern), %d done, %d to render at %d x %d, %d spp, %ld job(s)\n", dir,
+             total, want.per_pattern, nbefore, ntodo, want.scene.width, want.scene.height, want.spp, jobs);
+  }
+  double t0 = cli_now();
+  int done = 0, failed = 0, last_report = 0;
+  wv_error first_err = {0};
+  cli_progress bar;
+  cli_progress_start(&bar, &c, "dataset");
+  int tty = bar.enabled;
+  if (!rc && ntodo > 0) {
+    int nj = (int)(jobs < ntodo ? jobs : ntodo);
+    /* Samples in parallel with one render thread each beat one sample at a time with
+     * all threads (less synchronisation, the descriptor overlaps with rendering). */
+    int render_threads = nj > 1 ? 1 : 0;
+#pragma omp parallel num_threads(nj)
+    {
+      int tid = omp_get_thread_num();
+      float *feat = malloc(sizeof(float) * (size_t)want.n_feat);
+#pragma omp for schedule(dynamic, 1)
+      for (int t = 0; t < ntodo; t++) {
+        int stop;
+#pragma omp atomic read
+        stop = failed;
+        if (stop) continue;
+        wv_error e = {0};
+        wv_status st = feat ? make_sample(dir, &want, todo[t], render_threads, desc[tid], feat, &e)
+                            : wv_fail(&e, WV_ERR_NOMEM, "out of memory for features");
+#pragma omp critical(dataset_progress)
+        {
+          if (st) {
+            if (!failed) first_err = e;
+            failed = 1;
+          } else {
+            done++;
+            double f = (double)done / ntodo;
+            cli_progress_update(&bar, f);
+            /* without a terminal (logs, nohup): a line every 5% */
+            if (!tty && !c.quiet && !c.json && (int)(f * 20) > last_report) {
+              last_report = (int)(f * 20);
+              double el = cli_now() - t0;
+              fprintf(stderr, "dataset %d/%d  %.2f samples/s  %.0fs, %.0fs left\n", done, ntodo, done / el, el,
+                      el * (1 - f) / f);
+            }
+          }
+        }
+      }
+      free(feat);
+    }
+  }
+  cli_progress_end(&bar);
+  double el = cli_now() - t0;
+  if (!rc && failed) rc = cli_fail(&c, &first_err);
+  if (!rc) {
+    cli_info(&c, "%d samples rendered in %.1f s (%.3f samples/s); %s has %d of %d\n", done, el,
+             el > 0 ? done / el : 0.0, dir, nbefore + done, total);
+    if (c.json)
+      printf("{\"dir\": \"%s\", \"samples\": %d, \"done_before\": %d, \"rendered\": %d, \"seconds\": %.3f, "
+             "\"samples_per_s\": %.4f, \"spp\": %d, \"width\": %d, \"height\": %d, \"jobs\": %ld}\n",
+             dir, total, nbefore, done, el, el > 0 ? done / el : 0.0, want.spp, want.scene.width,
+             want.scene.height, jobs);
+  }
+  for (long j = 0; j < jobs; j++) wv_descriptor_free(desc[j]);
+  free(desc);
+  free(todo);
+  return rc;
+}

@@ -1,0 +1,167 @@
+/* woven: FabricNet's synthetic dataset on disk (format in docs/fabricnet.md). */
+#include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "util/hash.h"
+#include "woven/fabricnet.h"
+#include "woven/io.h"
+
+static const char *PATTERNS[WV_NET_PATTERNS] = {"plain", "twill", "satin", "twill90", "satin90"};
+
+const char *wv_net_pattern(int i) { return i >= 0 && i < WV_NET_PATTERNS ? PATTERNS[i] : NULL; }
+
+wv_status wv_dataset_info_write(const char *dir, const wv_dataset_info *info, wv_error *err) {
+  json_error_t je;
+  json_t *scene = json_loads(info->scene_json, 0, &je);
+  if (!scene) return wv_fail(err, WV_ERR_INTERNAL, "scene JSON does not parse: %s", je.text);
+  json_t *pats = json_array();
+  for (int i = 0; i < WV_NET_PATTERNS; i++) json_array_append_new(pats, json_string(PATTERNS[i]));
+  /* the seed is written as a string: JSON integers are signed 64-bit in jansson */
+  char seed[32];
+  snprintf(seed, sizeof seed, "%llu", (unsigned long long)info->seed);
+  json_t *o = json_pack("{s:s,s:i,s:s,s:i,s:o,s:i,s:{s:s,s:i,s:s},s:{s:i,s:i,s:s},s:o,s:s}", "kind",
+                        "woven-dataset", "version", WV_DATASET_VERSION, "seed", seed, "per_pattern",
+                        info->per_pattern, "patterns", pats, "spp", info->spp, "features", "descriptor",
+                        info->descriptor, "count", info->n_feat, "format", "f16le", "image", "width",
+                        info->scene.width, "height", info->scene.height, "format", "png8", "scene", scene,
+                        "sample_names", "samples/<pattern>_<i>.{json,png,feat}, sample k = pattern k%5, i = k/5");
+  if (!o) return wv_fail(err, WV_ERR_INTERNAL, "cannot build dataset.json");
+  char *text = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
+  json_decref(o);
+  char path[4096];
+  snprintf(path, sizeof path, "%s/dataset.json", dir);
+  wv_status st = text ? wv_write_file_atomic(path, text, strlen(text), err)
+                      : wv_fail(err, WV_ERR_NOMEM, "out of memory for dataset.json");
+  free(text);
+  return st;
+}
+
+wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error *err) {
+  char path[4096];
+  snprintf(path, sizeof path, "%s/dataset.json", dir);
+  struct stat sb;
+  if (stat(path, &sb) != 0)
+    return wv_fail(err, WV_ERR_IO, "%s is not a woven dataset (no %s); make one with 'woven dataset'", dir, path);
+  json_error_t je;
+  json_t *o = json_load_file(path, JSON_REJECT_DUPLICATES, &je);
+  if (!o) return wv_fail(err, WV_ERR_FORMAT, "%s: not valid JSON (line %d: %s)", path, je.line, je.text);
+  memset(info, 0, sizeof *info);
+  const char *kind = NULL, *seed = NULL, *desc = NULL, *fmt = NULL;
+  json_t *scene = NULL;
+  int version = 0, count = 0;
+  wv_status st = WV_OK;
+  if (json_unpack(o, "{s:s,s:i}", "kind", &kind, "version", &version) || strcmp(kind, "woven-dataset")) {
+    st = wv_fail(err, WV_ERR_FORMAT, "%s: not a woven dataset description", path);
+  } else if (version != WV_DATASET_VERSION) {
+    st = wv_fail(err, WV_ERR_FORMAT, "%s: dataset format version %d; this program reads version %d (make the dataset again)",
+                 path, version, WV_DATASET_VERSION);
+  } else if (json_unpack(o, "{s:s,s:i,s:i,s:{s:s,s:i,s:s},s:o}", "seed", &seed, "per_pattern", &info->per_pattern,
+                         "spp", &info->spp, "features", "descriptor", &desc, "count", &count, "format", &fmt,
+                         "scene", &scene) ||
+             strcmp(fmt, "f16le") || info->per_pattern < 1 || info->spp < 1 || count < 1) {
+    st = wv_fail(err, WV_ERR_FORMAT, "%s: missing or invalid fields (seed, per_pattern, spp, features, scene)", path);
+  } else {
+    char *end;
+    info->seed = strtoull(seed, &end, 10);
+    if (*end) st = wv_fail(err, WV_ERR_FORMAT, "%s: 'seed' is not an integer", path);
+    info->version = version, info->n_feat = count;
+    snprintf(info->descriptor, sizeof info->descriptor, "%s", desc);
+    char *sj = json_dumps(scene, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
+    if (!st && (!sj || strlen(sj) >= sizeof info->scene_json))
+      st = wv_fail(err, WV_ERR_FORMAT, "%s: scene description too long", path);
+    if (!st) snprintf(info->scene_json, sizeof info->scene_json, "%s", sj);
+    if (!st) st = wv_scene_parse(sj, path, &info->scene, err);
+    free(sj);
+  }
+  json_decref(o);
+  return st;
+}
+
+void wv_dataset_sample_name(int k, char *buf, size_t cap) {
+  snprintf(buf, cap, "%s_%d", PATTERNS[k % WV_NET_PATTERNS], k / WV_NET_PATTERNS);
+}
+
+void wv_dataset_path(const char *dir, int k, const char *ext, char *buf, size_t cap) {
+  char name[64];
+  wv_dataset_sample_name(k, name, sizeof name);
+  snprintf(buf, cap, "%s/samples/%s.%s", dir, name, ext);
+}
+
+wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params *p, wv_error *err) {
+  /* one independent stream per sample: resuming or reordering reproduces every draw */
+  uint64_t s = wv_hash4(info->seed, (uint64_t)(k % WV_NET_PATTERNS), (uint64_t)(k / WV_NET_PATTERNS), 0x64617461ULL);
+  return wv_params_sample_prior(PATTERNS[k % WV_NET_PATTERNS], s, p, err);
+}
+
+/* ---- feature files: "WVFT", u32 version 1, u32 count, u32 CRC-32 of the data, f16 data ---- */
+static void put_u32(unsigned char *b, uint32_t v) {
+  for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
+}
+static uint32_t get_u32(const unsigned char *b) {
+  return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+
+wv_status wv_dataset_write_features(const char *path, const float *x, int n, wv_error *err) {
+  size_t len = 16 + 2 * (size_t)n;
+  unsigned char *b = malloc(len);
+  if (!b) return wv_fail(err, WV_ERR_NOMEM, "out of memory for %s", path);
+  for (int i = 0; i < n; i++) {
+    uint16_t h = wv_f32_to_f16(x[i]);
+    b[16 + 2 * i] = (unsigned char)h, b[17 + 2 * i] = (unsigned char)(h >> 8);
+  }
+  memcpy(b, "WVFT", 4);
+  put_u32(b + 4, 1);
+  put_u32(b + 8, (uint32_t)n);
+  put_u32(b + 12, wv_crc32(0, b + 16, 2 * (size_t)n));
+  wv_status st = wv_write_file_atomic(path, b, len, err);
+  free(b);
+  return st;
+}
+
+wv_status wv_dataset_read_features(const char *path, int n, uint16_t *out, wv_error *err) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return wv_fail(err, WV_ERR_IO, "%s: cannot open", path);
+  unsigned char h[16];
+  wv_status st = WV_OK;
+  if (fread(h, 1, 16, f) != 16 || memcmp(h, "WVFT", 4) || get_u32(h + 4) != 1) {
+    st = wv_fail(err, WV_ERR_FORMAT, "%s: not a woven feature file (bad header)", path);
+  } else if (get_u32(h + 8) != (uint32_t)n) {
+    st = wv_fail(err, WV_ERR_FORMAT, "%s: holds %u features, the dataset says %d", path, get_u32(h + 8), n);
+  } else {
+    unsigned char *b = malloc(2 * (size_t)n);
+    if (!b) {
+      st = wv_fail(err, WV_ERR_NOMEM, "out of memory reading %s", path);
+    } else {
+      size_t got = fread(b, 1, 2 * (size_t)n, f);
+      if (got != 2 * (size_t)n || fgetc(f) != EOF)
+        st = wv_fail(err, WV_ERR_FORMAT, "%s: truncated or oversized feature file", path);
+      else if (wv_crc32(0, b, 2 * (size_t)n) != get_u32(h + 12))
+        st = wv_fail(err, WV_ERR_FORMAT, "%s: checksum mismatch (corrupt feature file)", path);
+      else
+        for (int i = 0; i < n; i++) out[i] = (uint16_t)(b[2 * i] | b[2 * i + 1] << 8);
+      free(b);
+    }
+  }
+  fclose(f);
+  return st;
+}
+
+int wv_dataset_sample_done(const char *dir, const wv_dataset_info *info, int k) {
+  char p[4096];
+  struct stat sb;
+  wv_dataset_path(dir, k, "json", p, sizeof p);
+  if (stat(p, &sb) != 0 || sb.st_size == 0) return 0;
+  wv_dataset_path(dir, k, "png", p, sizeof p);
+  if (stat(p, &sb) != 0 || sb.st_size == 0) return 0;
+  wv_dataset_path(dir, k, "feat", p, sizeof p);
+  if (stat(p, &sb) != 0 || sb.st_size != 16 + 2 * (off_t)info->n_feat) return 0;
+  uint16_t *tmp = malloc(2 * (size_t)info->n_feat);
+  if (!tmp) return 0;
+  wv_error e;
+  int ok = wv_dataset_read_features(p, info->n_feat, tmp, &e) == WV_OK;
+  free(tmp);
+  return ok;
+}

@@ -1,0 +1,447 @@
+/* woven: FabricNet, the fully connected head of SPEC section 7, and its files. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "woven/descriptor.h"
+#include "woven/fabricnet.h"
+#include "woven/io.h"
+#include "woven/nn.h"
+
+/* ---- outputs ---- */
+
+void wv_fabricnet_output_range(int k, double *lo, double *hi) {
+  if (k < 2) { /* densities: the full range of SPEC section 5 */
+    *lo = 20, *hi = 250;
+    return;
+  }
+  wv_param_range(k - 2, lo, hi);
+}
+
+const char *wv_fabricnet_output_name(int k) {
+  return k == 0 ? "density.warp" : k == 1 ? "density.weft" : wv_param_name(k - 2);
+}
+
+static double clamp01(double v) { return v < 0 ? 0 : v > 1 ? 1 : v; }
+
+void wv_fabricnet_targets(const wv_params *p, float *y) {
+  for (int k = 0; k < WV_NET_OUT; k++) {
+    double lo, hi;
+    wv_fabricnet_output_range(k, &lo, &hi);
+    double v = k < 2 ? p->density[k] : wv_param_get(p, k - 2);
+    y[k] = (float)clamp01((v - lo) / (hi - lo));
+  }
+}
+
+wv_status wv_fabricnet_params(const wv_fabricnet *n, const float *y, const char *pattern, wv_params *p,
+                              wv_error *err) {
+  wv_status st = wv_params_default(pattern, p, err);
+  if (st) return st;
+  for (int k = 0; k < WV_NET_OUT; k++) {
+    double plo, phi; /* the program's range: a model's stored range never widens it */
+    wv_fabricnet_output_range(k, &plo, &phi);
+    double v = n->range[k][0] + clamp01(y[k]) * (n->range[k][1] - n->range[k][0]);
+    v = v < plo ? plo : v > phi ? phi : v;
+    if (k < 2)
+      p->density[k] = floor(v + 0.5);
+    else
+      wv_param_set(p, k - 2, v);
+  }
+  return wv_params_validate(p, err);
+}
+
+/* ---- half floats, CRC-32 ---- */
+
+uint16_t wv_f32_to_f16(float f) {
+  uint32_t x;
+  memcpy(&x, &f, 4);
+  uint16_t sign = (uint16_t)((x >> 16) & 0x8000);
+  uint32_t ax = x & 0x7fffffff;
+  if (ax >= 0x7f800000) return sign | (ax > 0x7f800000 ? 0x7e00 : 0x7bff); /* NaN stays NaN; inf saturates */
+  if (ax >= 0x477ff000) return sign | 0x7bff;                               /* rounds past 65504: saturate */
+  if (ax < 0x33000001) return sign;                                         /* below half the smallest subnormal */
+  int e = (int)(ax >> 23) - 127;
+  uint32_t m = (ax & 0x7fffff) | 0x800000;
+  int shift = e < -14 ? 13 + (-14 - e) : 13; /* subnormals keep fewer bits */
+  uint32_t r = m >> shift, rem = m & ((1u << shift) - 1), half = 1u << (shift - 1);
+  if (rem > half || (rem == half && (r & 1))) r++; /* round to nearest even */
+  if (e < -14) return sign | (uint16_t)r;           /* may carry into the smallest normal: still right */
+  return sign | (uint16_t)((((uint32_t)(e + 15)) << 10) + (r - 0x400)); /* a mantissa carry bumps the exponent */
+}
+
+/* Byte-at-a-time table, built on the stack per call (1 kB, a few microseconds): no
+ * global state, and fast enough for the 64 MB checkpoints. */
+uint32_t wv_crc32(uint32_t crc, const void *data, size_t n) {
+  uint32_t tab[256];
+  for (uint32_t i = 0; i < 256; i++) {
+    uint32_t c = i;
+    for (int k = 0; k < 8; k++) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1)));
+    tab[i] = c;
+  }
+  const unsigned char *b = data;
+  crc = ~crc;
+  for (size_t i = 0; i < n; i++) crc = tab[(crc ^ b[i]) & 0xff] ^ (crc >> 8);
+  return ~crc;
+}
+
+/* ---- the network ---- */
+
+static size_t tensor_len(const wv_fabricnet *n, int i) {
+  static const int outs[3] = {WV_NET_HIDDEN, WV_NET_HIDDEN, WV_NET_OUT};
+  int in = i / 2 == 0 ? n->n_in : WV_NET_HIDDEN;
+  return i % 2 ? (size_t)outs[i / 2] : (size_t)outs[i / 2] * in;
+}
+
+size_t wv_fabricnet_param_count(const wv_fabricnet *n) {
+  size_t s = 0;
+  for (int i = 0; i < 6; i++) s += tensor_len(n, i);
+  return s;
+}
+
+void wv_fabricnet_tensors(wv_fabricnet *n, float **t, size_t *len) {
+  float *all[6] = {n->w1, n->b1, n->w2, n->b2, n->w3, n->b3};
+  for (int i = 0; i < 6; i++) t[i] = all[i], len[i] = tensor_len(n, i);
+}
+
+void wv_fabricnet_free(wv_fabricnet *n) {
+  if (!n) return;
+  free(n->w1); /* one block holds every array (alloc_net) */
+  n->mean = n->std = n->w1 = n->b1 = n->w2 = n->b2 = n->w3 = n->b3 = NULL;
+}
+
+/* All arrays in one block: stats, then the six tensors in file order. */
+static wv_status alloc_net(wv_fabricnet *n, wv_error *err) {
+  if (n->n_in < 1 || n->n_in > (1 << 24)) return wv_fail(err, WV_ERR_INVALID, "feature count %d out of range", n->n_in);
+  size_t p = wv_fabricnet_param_count(n);
+  float *b = calloc(p + 2 * (size_t)n->n_in, sizeof(float));
+  if (!b) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the network (%zu weights)", p);
+  n->w1 = b;
+  n->b1 = n->w1 + tensor_len(n, 0);
+  n->w2 = n->b1 + tensor_len(n, 1);
+  n->b2 = n->w2 + tensor_len(n, 2);
+  n->w3 = n->b2 + tensor_len(n, 3);
+  n->b3 = n->w3 + tensor_len(n, 4);
+  n->mean = n->b3 + tensor_len(n, 5);
+  n->std = n->mean + n->n_in;
+  return WV_OK;
+}
+
+static uint32_t scene_crc(const wv_scene *s) {
+  char *j = wv_scene_to_json(s);
+  uint32_t c = j ? wv_crc32(0, j, strlen(j)) : 0;
+  free(j);
+  return c;
+}
+
+wv_status wv_fabricnet_init(wv_fabricnet *n, const char *descriptor, int n_in, const wv_scene *s, uint64_t seed,
+                            wv_error *err) {
+  memset(n, 0, sizeof *n);
+  snprintf(n->descriptor, sizeof n->descriptor, "%s", descriptor);
+  snprintf(n->scene, sizeof n->scene, "%s", s->name);
+  n->n_in = n_in, n->scene_w = s->width, n->scene_h = s->height, n->scene_crc = scene_crc(s);
+  for (int k = 0; k < WV_NET_OUT; k++) wv_fabricnet_output_range(k, &n->range[k][0], &n->range[k][1]);
+  wv_status st = alloc_net(n, err);
+  if (st) return st;
+  wv_rng r;
+  wv_rng_seed(&r, seed);
+  float *t[6];
+  size_t len[6];
+  wv_fabricnet_tensors(n, t, len);
+  for (int i = 0; i < 6; i++) {
+    float b = 1.0f / sqrtf((float)(i / 2 == 0 ? n_in : WV_NET_HIDDEN));
+    wv_rng_fill_uniform(&r, t[i], len[i], -b, b);
+  }
+  for (int i = 0; i < n_in; i++) n->std[i] = 1.0f;
+  return WV_OK;
+}
+
+void wv_fabricnet_preprocess(const wv_fabricnet *n, float *x, int batch) {
+  for (int b = 0; b < batch; b++) {
+    float *r = x + (size_t)b * n->n_in;
+    for (int i = 0; i < n->n_in; i++) {
+      /* Gram entries span orders of magnitude: compress before standardising */
+      float v = r[i], l = v < 0 ? -log1pf(-v) : log1pf(v);
+      l = (l - n->mean[i]) / n->std[i];
+      r[i] = l < -WV_NET_CLIP ? -WV_NET_CLIP : l > WV_NET_CLIP ? WV_NET_CLIP : l; /* outliers stay bounded */
+    }
+  }
+}
+
+wv_status wv_fabricnet_acts_alloc(wv_fabricnet_acts *a, int batch, wv_error *err) {
+  size_t h = (size_t)batch * WV_NET_HIDDEN, o = (size_t)batch * WV_NET_OUT;
+  float *b = calloc(4 * h + 2 * o + 2 * h, sizeof(float));
+  if (!b) return wv_fail(err, WV_ERR_NOMEM, "out of memory for activations");
+  a->cap = batch;
+  a->h1 = b, a->a1 = b + h, a->h2 = b + 2 * h, a->a2 = b + 3 * h, a->out = b + 4 * h;
+  a->d_out = a->out + o, a->d_a2 = a->d_out + o, a->d_h2 = a->d_a2 + h;
+  a->d_a1 = a->d_a2; /* d_a2 is dead once d_h2 is computed, so d_a1 reuses its slot */
+  return WV_OK;
+}
+
+void wv_fabricnet_acts_free(wv_fabricnet_acts *a) {
+  free(a->h1);
+  memset(a, 0, sizeof *a);
+}
+
+void wv_fabricnet_forward(const wv_fabricnet *n, const float *x, int batch, wv_fabricnet_acts *a) {
+  size_t h = (size_t)batch * WV_NET_HIDDEN;
+  wv_nn_fc_forward(a->h1, x, n->w1, n->b1, batch, n->n_in, WV_NET_HIDDEN);
+  wv_nn_leaky_relu_forward(a->a1, a->h1, WV_NET_SLOPE, h);
+  wv_nn_fc_forward(a->h2, a->a1, n->w2, n->b2, batch, WV_NET_HIDDEN, WV_NET_HIDDEN);
+  wv_nn_leaky_relu_forward(a->a2, a->h2, WV_NET_SLOPE, h);
+  wv_nn_fc_forward(a->out, a->a2, n->w3, n->b3, batch, WV_NET_HIDDEN, WV_NET_OUT);
+  wv_nn_sigmoid_forward(a->out, a->out, (size_t)batch * WV_NET_OUT);
+}
+
+float wv_fabricnet_backward(const wv_fabricnet *n, const float *x, const float *y, int batch,
+                            wv_fabricnet_acts *a, float *const *g) {
+  size_t h = (size_t)batch * WV_NET_HIDDEN, o = (size_t)batch * WV_NET_OUT;
+  wv_fabricnet_forward(n, x, batch, a);
+  float loss = wv_nn_l1_forward(a->out, y, o);
+  /* dL/dout, then through the sigmoid in place (backward accumulates: zero first) */
+  memset(a->d_out, 0, o * sizeof(float));
+  wv_nn_l1_backward(a->d_out, a->out, y, 1.0f, o);
+  for (size_t i = 0; i < o; i++) a->d_out[i] *= a->out[i] * (1.0f - a->out[i]);
+  memset(a->d_a2, 0, h * sizeof(float));
+  wv_nn_fc_backward(a->d_a2, g[4], g[5], a->d_out, a->a2, n->w3, batch, WV_NET_HIDDEN, WV_NET_OUT);
+  memset(a->d_h2, 0, h * sizeof(float));
+  wv_nn_leaky_relu_backward(a->d_h2, a->h2, a->d_a2, WV_NET_SLOPE, h);
+  memset(a->d_a1, 0, h * sizeof(float));
+  wv_nn_fc_backward(a->d_a1, g[2], g[3], a->d_h2, a->a1, n->w2, batch, WV_NET_HIDDEN, WV_NET_HIDDEN);
+  memset(a->d_h2, 0, h * sizeof(float)); /* reused as d_h1 */
+  wv_nn_leaky_relu_backward(a->d_h2, a->h1, a->d_a1, WV_NET_SLOPE, h);
+  wv_nn_fc_backward(NULL, g[0], g[1], a->d_h2, x, n->w1, batch, n->n_in, WV_NET_HIDDEN);
+  return loss;
+}
+
+wv_status wv_fabricnet_predict(const wv_fabricnet *n, wv_descriptor *d, const wv_image *img, float *feat, float *y,
+                               wv_error *err) {
+  if (wv_descriptor_size(d) != (size_t)n->n_in)
+    return wv_fail(err, WV_ERR_INVALID, "descriptor gives %zu features, the model takes %d", wv_descriptor_size(d),
+                   n->n_in);
+  wv_status st = wv_descriptor_forward(d, img, feat, err);
+  if (st) return st;
+  wv_fabricnet_preprocess(n, feat, 1);
+  wv_fabricnet_acts a;
+  if ((st = wv_fabricnet_acts_alloc(&a, 1, err))) return st;
+  wv_fabricnet_forward(n, feat, 1, &a);
+  memcpy(y, a.out, WV_NET_OUT * sizeof(float));
+  wv_fabricnet_acts_free(&a);
+  return WV_OK;
+}
+
+wv_status wv_fabricnet_check(const wv_fabricnet *n, const char *path, const char *descriptor, size_t n_in,
+                             const wv_scene *s, wv_error *err) {
+  if (strcmp(n->descriptor, descriptor) || (size_t)n->n_in != n_in)
+    return wv_fail(err, WV_ERR_INVALID, "%s: model made for descriptor '%s' (%d features), not '%s' (%zu features)",
+                   path, n->descriptor, n->n_in, descriptor, n_in);
+  if (s && (strcmp(n->scene, s->name) || n->scene_w != s->width || n->scene_h != s->height))
+    return wv_fail(err, WV_ERR_INVALID,
+                   "%s: model trained on renders of scene '%s' (%d x %d), not '%s' (%d x %d); a network is "
+                   "scene-specific: train one for this scene or pass --force",
+                   path, n->scene, n->scene_w, n->scene_h, s->name, s->width, s->height);
+  return WV_OK;
+}
+
+/* ---- files ---- */
+
+#define HDR 504
+enum { KIND_MODEL = 1, KIND_CHECKPOINT = 2 };
+#define PREPROC_SLOG1P_STD 1
+#define TRAINSTATE_BYTES 32
+
+static void put32(unsigned char *b, uint32_t v) {
+  for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
+}
+static void put64(unsigned char *b, uint64_t v) {
+  for (int i = 0; i < 8; i++) b[i] = (unsigned char)(v >> (8 * i));
+}
+static uint32_t get32(const unsigned char *b) {
+  return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+static uint64_t get64(const unsigned char *b) { return (uint64_t)get32(b) | (uint64_t)get32(b + 4) << 32; }
+static void putf(unsigned char *b, float f) {
+  uint32_t u;
+  memcpy(&u, &f, 4);
+  put32(b, u);
+}
+static float getf(const unsigned char *b) {
+  uint32_t u = get32(b);
+  float f;
+  memcpy(&f, &u, 4);
+  return f;
+}
+
+/* Payload size: stats f32; weights f16 (model) or f32 (checkpoint); biases f32;
+ * a checkpoint adds the Adam moments and the trainer state. */
+static size_t payload_bytes(const wv_fabricnet *n, int kind) {
+  size_t s = 8 * (size_t)n->n_in;
+  for (int i = 0; i < 6; i++) s += tensor_len(n, i) * (i % 2 == 0 && kind == KIND_MODEL ? 2 : 4);
+  if (kind == KIND_CHECKPOINT) s += 8 * wv_fabricnet_param_count(n) + TRAINSTATE_BYTES;
+  return s;
+}
+
+static wv_status save(const char *path, const wv_fabricnet *n, int kind, const float *m, const float *v,
+                      const wv_fabricnet_trainstate *ts, wv_error *err) {
+  size_t pl = payload_bytes(n, kind), len = HDR + pl;
+  unsigned char *b = calloc(len, 1);
+  if (!b) return wv_fail(err, WV_ERR_NOMEM, "out of memory writing %s", path);
+  memcpy(b, WV_NET_MAGIC, 8);
+  put32(b + 8, WV_NET_VERSION);
+  put32(b + 12, (uint32_t)kind);
+  memcpy(b + 16, n->descriptor, strnlen(n->descriptor, 31));
+  put32(b + 48, (uint32_t)n->n_in);
+  memcpy(b + 52, n->scene, strnlen(n->scene, 63));
+  put32(b + 116, (uint32_t)n->scene_w);
+  put32(b + 120, (uint32_t)n->scene_h);
+  put32(b + 124, n->scene_crc);
+  const uint32_t layers[4] = {(uint32_t)n->n_in, WV_NET_HIDDEN, WV_NET_HIDDEN, WV_NET_OUT};
+  for (int i = 0; i < 4; i++) put32(b + 128 + 4 * i, layers[i]);
+  put32(b + 144, PREPROC_SLOG1P_STD);
+  put32(b + 148, WV_NET_OUT);
+  for (int k = 0; k < WV_NET_OUT; k++)
+    for (int j = 0; j < 2; j++) {
+      uint64_t u;
+      memcpy(&u, &n->range[k][j], 8);
+      put64(b + 152 + 16 * k + 8 * j, u);
+    }
+  put64(b + 488, pl);
+  unsigned char *p = b + HDR;
+  for (int i = 0; i < n->n_in; i++, p += 4) putf(p, n->mean[i]);
+  for (int i = 0; i < n->n_in; i++, p += 4) putf(p, n->std[i]);
+  const float *t[6] = {n->w1, n->b1, n->w2, n->b2, n->w3, n->b3};
+  for (int i = 0; i < 6; i++) {
+    size_t L = tensor_len(n, i);
+    if (i % 2 == 0 && kind == KIND_MODEL) {
+      for (size_t j = 0; j < L; j++, p += 2) {
+        uint16_t h = wv_f32_to_f16(t[i][j]);
+        p[0] = (unsigned char)h, p[1] = (unsigned char)(h >> 8);
+      }
+    } else {
+      for (size_t j = 0; j < L; j++, p += 4) putf(p, t[i][j]);
+    }
+  }
+  if (kind == KIND_CHECKPOINT) {
+    size_t P = wv_fabricnet_param_count(n);
+    for (size_t j = 0; j < P; j++, p += 4) putf(p, m[j]);
+    for (size_t j = 0; j < P; j++, p += 4) putf(p, v[j]);
+    put32(p, (uint32_t)ts->epoch);
+    put32(p + 4, (uint32_t)ts->best_epoch);
+    put64(p + 8, (uint64_t)ts->adam_t);
+    put64(p + 16, ts->rng);
+    putf(p + 24, ts->best_val);
+    p += TRAINSTATE_BYTES;
+  }
+  put32(b + 496, wv_crc32(0, b + HDR, pl));
+  put32(b + 500, wv_crc32(0, b, 500));
+  wv_status st = wv_write_file_atomic(path, b, len, err);
+  free(b);
+  return st;
+}
+
+wv_status wv_fabricnet_save(const char *path, const wv_fabricnet *n, wv_error *err) {
+  return save(path, n, KIND_MODEL, NULL, NULL, NULL, err);
+}
+
+wv_status wv_fabricnet_checkpoint_save(const char *path, const wv_fabricnet *n, const float *adam_m,
+                                       const float *adam_v, const wv_fabricnet_trainstate *ts, wv_error *err) {
+  return save(path, n, KIND_CHECKPOINT, adam_m, adam_v, ts, err);
+}
+
+static int str_field(const unsigned char *b, int cap, char *out) {
+  if (memchr(b, 0, (size_t)cap) == NULL) return 0; /* must be NUL-terminated inside its field */
+  memcpy(out, b, (size_t)cap);
+  return out[0] != 0;
+}
+
+static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, float **v, wv_fabricnet_trainstate *ts,
+                      wv_error *err) {
+  memset(n, 0, sizeof *n);
+  char *data;
+  size_t len;
+  wv_status st = wv_read_file(path, &data, &len, err);
+  if (st) return st;
+  const unsigned char *b = (const unsigned char *)data;
+  const char *what = kind == KIND_MODEL ? "FabricNet model" : "FabricNet training checkpoint";
+#define BAD(...) do { st = wv_fail(err, WV_ERR_FORMAT, __VA_ARGS__); goto done; } while (0)
+  if (len < 8 || memcmp(b, WV_NET_MAGIC, 8)) BAD("%s: not a %s (bad magic)", path, what);
+  if (len < HDR) BAD("%s: truncated %s (%zu bytes, header is %d)", path, what, len, HDR);
+  if (get32(b + 8) != WV_NET_VERSION)
+    BAD("%s: %s format version %u; this program reads version %d", path, what, get32(b + 8), WV_NET_VERSION);
+  if (get32(b + 500) != wv_crc32(0, b, 500)) BAD("%s: header checksum mismatch (corrupt file)", path);
+  if (get32(b + 12) != (uint32_t)kind)
+    BAD("%s: is a %s, not a %s", path, get32(b + 12) == KIND_MODEL ? "FabricNet model" : "training checkpoint", what);
+  if (!str_field(b + 16, 32, n->descriptor) || !str_field(b + 52, 64, n->scene))
+    BAD("%s: descriptor or scene name missing in the header", path);
+  n->n_in = (int)get32(b + 48);
+  n->scene_w = (int)get32(b + 116), n->scene_h = (int)get32(b + 120), n->scene_crc = get32(b + 124);
+  if (n->n_in < 1 || n->n_in > (1 << 24) || get32(b + 128) != (uint32_t)n->n_in || get32(b + 132) != WV_NET_HIDDEN ||
+      get32(b + 136) != WV_NET_HIDDEN || get32(b + 140) != WV_NET_OUT || get32(b + 148) != WV_NET_OUT)
+    BAD("%s: layer sizes %u-%u-%u-%u; this program's FabricNet is features-%d-%d-%d", path, get32(b + 128),
+        get32(b + 132), get32(b + 136), get32(b + 140), WV_NET_HIDDEN, WV_NET_HIDDEN, WV_NET_OUT);
+  if (get32(b + 144) != PREPROC_SLOG1P_STD) BAD("%s: unknown feature preprocessing %u", path, get32(b + 144));
+  if (n->scene_w < 1 || n->scene_h < 1 || n->scene_w > WV_SCENE_MAX_SIDE || n->scene_h > WV_SCENE_MAX_SIDE)
+    BAD("%s: invalid scene size %d x %d", path, n->scene_w, n->scene_h);
+  for (int k = 0; k < WV_NET_OUT; k++) {
+    uint64_t u0 = get64(b + 152 + 16 * k), u1 = get64(b + 160 + 16 * k);
+    memcpy(&n->range[k][0], &u0, 8), memcpy(&n->range[k][1], &u1, 8);
+    if (!isfinite(n->range[k][0]) || !isfinite(n->range[k][1]) || !(n->range[k][0] < n->range[k][1]))
+      BAD("%s: invalid range for output %d (%s)", path, k, wv_fabricnet_output_name(k));
+  }
+  size_t pl = payload_bytes(n, kind);
+  if (get64(b + 488) != pl) BAD("%s: payload size %llu does not match the header's layer sizes (%zu)", path,
+                                 (unsigned long long)get64(b + 488), pl);
+  if (len < HDR + pl) BAD("%s: truncated (%zu of %zu bytes)", path, len, HDR + pl);
+  if (len > HDR + pl) BAD("%s: %zu unexpected bytes after the payload", path, len - HDR - pl);
+  if (get32(b + 496) != wv_crc32(0, b + HDR, pl)) BAD("%s: payload checksum mismatch (corrupt file)", path);
+  if ((st = alloc_net(n, err))) goto done;
+  const unsigned char *p = b + HDR;
+  for (int i = 0; i < n->n_in; i++, p += 4) n->mean[i] = getf(p);
+  for (int i = 0; i < n->n_in; i++, p += 4) n->std[i] = getf(p);
+  float *t[6];
+  size_t L[6];
+  wv_fabricnet_tensors(n, t, L);
+  for (int i = 0; i < 6; i++) {
+    if (i % 2 == 0 && kind == KIND_MODEL)
+      for (size_t j = 0; j < L[i]; j++, p += 2) t[i][j] = wv_nn_f16_to_f32((uint16_t)(p[0] | p[1] << 8));
+    else
+      for (size_t j = 0; j < L[i]; j++, p += 4) t[i][j] = getf(p);
+  }
+  for (int i = 0; i < n->n_in; i++)
+    if (!isfinite(n->mean[i]) || !(n->std[i] > 0) || !isfinite(n->std[i])) BAD("%s: invalid feature statistics", path);
+  if (kind == KIND_CHECKPOINT) {
+    size_t P = wv_fabricnet_param_count(n);
+    *m = malloc(P * sizeof(float)), *v = malloc(P * sizeof(float));
+    if (!*m || !*v) {
+      st = wv_fail(err, WV_ERR_NOMEM, "out of memory reading %s", path);
+      goto done;
+    }
+    for (size_t j = 0; j < P; j++, p += 4) (*m)[j] = getf(p);
+    for (size_t j = 0; j < P; j++, p += 4) (*v)[j] = getf(p);
+    ts->epoch = (int)get32(p);
+    ts->best_epoch = (int)get32(p + 4);
+    ts->adam_t = (long)get64(p + 8);
+    ts->rng = get64(p + 16);
+    ts->best_val = getf(p + 24);
+  }
+#undef BAD
+done:
+  if (st) {
+    wv_fabricnet_free(n);
+    if (m && *m) free(*m), *m = NULL;
+    if (v && *v) free(*v), *v = NULL;
+  }
+  free(data);
+  return st;
+}
+
+wv_status wv_fabricnet_load(const char *path, wv_fabricnet *n, wv_error *err) {
+  return load(path, KIND_MODEL, n, NULL, NULL, NULL, err);
+}
+
+wv_status wv_fabricnet_checkpoint_load(const char *path, wv_fabricnet *n, float **adam_m, float **adam_v,
+                                       wv_fabricnet_trainstate *ts, wv_error *err) {
+  *adam_m = *adam_v = NULL;
+  return load(path, KIND_CHECKPOINT, n, adam_m, adam_v, ts, err);
+}

@@ -1,0 +1,110 @@
+#!/usr/bin/env bash
+# CLI behaviour of `woven dataset`, `woven train`, `woven predict` and `woven capture`:
+# resume without redoing finished samples, refusing mismatched or partial datasets and
+# bad models with a clear error, nothing lost. Usage: cli_fabricnet.sh WOVEN SOURCE_DIR
+set -u
+WOVEN=$1
+SRC=$2
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+check() { # check NAME EXPECTED_CODE NEEDLE -- command...
+  local name=$1 want=$2 needle=$3
+  shift 4
+  "$@" >"$T/out" 2>"$T/err"
+  local got=$?
+  if [[ $got != "$want" ]] || { [[ -n $needle ]] && ! grep -qF -- "$needle" "$T/err" "$T/out"; }; then
+    echo "FAIL $name: exit $got (wanted $want), output:"
+    cat "$T/out" "$T/err"
+    fails=$((fails + 1))
+  else
+    echo "ok   $name"
+  fi
+}
+fail() { echo "FAIL $*"; fails=$((fails + 1)); }
+scene='{"name":"tiny","image":{"width":64,"height":48,"spp":2},"camera":{"position_mm":[0,0,8],"look_at_mm":[0,0,0],"vfov_deg":12},"sample":{"shape":"plane"},"light":{"position_mm":[0,8,8],"intensity":300},"response":{"encoding":"gamma","gamma":2.2},"falloff":{"type":"gaussian","sigma_px":60}}'
+echo "$scene" >"$T/tiny.json"
+DS=$T/ds
+
+check "dataset" 0 '"rendered": 20' -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 4 -o "$DS" --seed 3 --json
+n=$(ls "$DS"/samples/*.feat | wc -l)
+[[ $n == 20 ]] || fail "dataset: $n feature files, wanted 20"
+[[ -s $DS/dataset.json && -s $DS/samples/twill90_3.png && -s $DS/samples/satin_0.json ]] || fail "dataset files missing"
+
+# Interruption: some samples lose files (as if killed before their features were
+# written); a rerun redoes exactly those and leaves the others untouched.
+(cd "$DS/samples" && md5sum *.json *.png *.feat | sort >"$T/before")
+touch -d '2001-01-01' "$DS"/samples/*
+rm "$DS/samples/plain_1.feat" "$DS/samples/satin_2.feat" "$DS/samples/satin_2.png" "$DS/samples/twill_3.json"
+printf 'partial' >"$DS/samples/twill90_0.feat.tmp.abcdef"
+check "train refuses a partial dataset" 2 "partial" -- "$WOVEN" train "$DS" -o "$T/m.bin"
+check "dataset resume" 0 '"rendered": 3' -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 4 -o "$DS" --seed 3 --json
+(cd "$DS/samples" && md5sum *.json *.png *.feat | sort >"$T/after")
+diff "$T/before" "$T/after" >/dev/null || fail "resumed samples differ from the first run"
+new=$(find "$DS/samples" -newermt '2002-01-01' -type f | sed 's|.*/||' | sort | tr '\n' ' ')
+[[ $new == "plain_1.feat plain_1.json plain_1.png satin_2.feat satin_2.json satin_2.png twill_3.feat twill_3.json twill_3.png " ]] ||
+  fail "resume rewrote '$new' (wanted only the 3 incomplete samples)"
+[[ ! -e $DS/samples/twill90_0.feat.tmp.abcdef ]] || fail "stale temporary file left"
+check "dataset extends" 0 '"rendered": 5' -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 5 -o "$DS" --seed 3 --json
+check "dataset other seed" 2 "seed" -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 5 -o "$DS" --seed 4
+check "dataset other scene" 2 "scene" -- "$WOVEN" dataset --scene flat45 --per-pattern 5 -o "$DS" --seed 3
+check "dataset other spp" 2 "spp" -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 5 -o "$DS" --seed 3 --spp 3
+cp -r "$DS" "$T/ds_v2"
+sed -i 's/"version": 1/"version": 2/' "$T/ds_v2/dataset.json"
+check "dataset other version" 4 "version 2" -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 5 -o "$T/ds_v2" --seed 3
+check "train other version" 4 "version 2" -- "$WOVEN" train "$T/ds_v2" -o "$T/m.bin"
+check "train not a dataset" 3 "not a woven dataset" -- "$WOVEN" train "$T" -o "$T/m.bin"
+printf 'junk' >"$T/ds_v2/samples/plain_0.feat"
+sed -i 's/"version": 2/"version": 1/' "$T/ds_v2/dataset.json"
+check "train corrupt features" 4 "plain_0.feat" -- "$WOVEN" train "$T/ds_v2" -o "$T/m.bin"
+
+# Training: loss curve, checkpoint, model; resume continues.
+check "train" 0 '"epochs": 3' -- "$WOVEN" train "$DS" -o "$T/m.bin" --epochs 3 --batch 4 --json
+for f in m.bin m.bin.train/checkpoint.bin m.bin.train/loss.csv m.bin.train/loss.svg m.bin.train/train.json; do
+  [[ -s $T/$f ]] || fail "train output $f missing"
+done
+[[ $(wc -l <"$T/m.bin.train/loss.csv") == 4 ]] || fail "loss.csv should have 3 epochs"
+check "train refuses to restart" 3 "--resume" -- "$WOVEN" train "$DS" -o "$T/m.bin" --epochs 3
+check "train resume" 0 '"epochs": 5' -- "$WOVEN" train "$DS" -o "$T/m.bin" --epochs 5 --batch 4 --resume --json
+[[ $(wc -l <"$T/m.bin.train/loss.csv") == 6 ]] || fail "loss.csv should have 5 epochs after the resume"
+
+# Prediction and capture.
+IMG=$DS/samples/twill_0.png
+check "predict" 0 '"pattern": "twill"' -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --pattern twill --model "$T/m.bin" -o "$T/p.json" --json
+check "predict output renders" 0 "" -- "$WOVEN" render --params "$T/p.json" --scene "$T/tiny.json" -o "$T/p.png" -q
+check "predict needs a pattern" 1 "--pattern" -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --model "$T/m.bin" -o "$T/p.json"
+check "predict other scene" 2 "scene-specific" -- "$WOVEN" predict "$IMG" --scene flat45 --pattern twill --model "$T/m.bin" -o "$T/p.json"
+check "predict default model missing" 3 "no default model" -- env WOVEN_MODEL_DIR="$T/none" "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --pattern twill -o "$T/p.json"
+check "capture" 0 '"ssim_fit"' -- "$WOVEN" capture "$IMG" --scene "$T/tiny.json" --pattern twill --model "$T/m.bin" -o "$T/cap" --iters 3 --iter-scale 1 --iter-spp 2 --json
+for f in network.json params.json render.png start.png compare.png loss.svg report.html maps/normal.png fit.json checkpoint.json; do
+  [[ -s $T/cap/$f ]] || fail "capture output $f missing"
+done
+grep -q "network" "$T/cap/report.html" || fail "report does not name the network start"
+check "capture resumes as a fit" 0 '"iterations": 4' -- "$WOVEN" fit --resume "$T/cap" --iters 4 --json
+
+# Bad models: clear error naming the file, non-zero exit, earlier results untouched.
+cp "$T/p.json" "$T/p.keep"
+cp -r "$T/cap" "$T/cap.keep"
+size=$(stat -c %s "$T/m.bin")
+head -c $((size / 2)) "$T/m.bin" >"$T/trunc.bin"
+check "truncated model" 4 "trunc.bin: truncated" -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --pattern twill --model "$T/trunc.bin" -o "$T/p.json"
+cp "$T/m.bin" "$T/corrupt.bin"
+printf '\x55' | dd of="$T/corrupt.bin" bs=1 seek=$((size - 100)) conv=notrunc 2>/dev/null
+check "corrupt model" 4 "corrupt.bin: payload checksum mismatch" -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --pattern twill --model "$T/corrupt.bin" -o "$T/p.json"
+printf 'hello' >"$T/junk.bin"
+check "not a model" 4 "junk.bin: not a FabricNet model" -- "$WOVEN" capture "$IMG" --scene "$T/tiny.json" --pattern twill --model "$T/junk.bin" -o "$T/cap" --force
+check "checkpoint is not a model" 4 "not a FabricNet model" -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --pattern twill --model "$T/m.bin.train/checkpoint.bin" -o "$T/p.json"
+# a model made for another descriptor: patch the name and fix the header checksum
+python3 - "$T/m.bin" "$T/vgg.bin" <<'EOF' || fail "could not patch a model"
+import sys, zlib, struct
+b = bytearray(open(sys.argv[1], 'rb').read())
+b[16:48] = b'vgg19'.ljust(32, b'\0')
+b[500:504] = struct.pack('<I', zlib.crc32(bytes(b[:500])))
+open(sys.argv[2], 'wb').write(b)
+EOF
+check "model for another descriptor" 2 "vgg.bin: model made for descriptor 'vgg19'" -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --pattern twill --model "$T/vgg.bin" -o "$T/p.json"
+cmp -s "$T/p.json" "$T/p.keep" || fail "a failed predict changed its output"
+diff -r "$T/cap" "$T/cap.keep" >/dev/null || fail "a failed capture changed its directory"
+
+echo "$fails failure(s)"
+[[ $fails == 0 ]]
