@@ -2,25 +2,7 @@
 # CLI behaviour of `woven dataset`, `woven train`, `woven predict` and `woven capture`:
 # resume without redoing finished samples, refusing mismatched or partial datasets and
 # bad models with a clear error, nothing lost. Usage: cli_fabricnet.sh WOVEN SOURCE_DIR
-set -u
-WOVEN=$1
-SRC=$2
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-check() { # check NAME EXPECTED_CODE NEEDLE -- command...
-  local name=$1 want=$2 needle=$3
-  shift 4
-  "$@" >"$T/out" 2>"$T/err"
-  local got=$?
-  if [[ $got != "$want" ]] || { [[ -n $needle ]] && ! grep -qF -- "$needle" "$T/err" "$T/out"; }; then
-    echo "FAIL $name: exit $got (wanted $want), output:"
-    cat "$T/out" "$T/err"
-    fails=$((fails + 1))
-  else
-    echo "ok   $name"
-  fi
-}
+source "$(dirname "$0")/cli_lib.bash"
 fail() { echo "FAIL $*"; fails=$((fails + 1)); }
 scene='{"name":"tiny","image":{"width":64,"height":48,"spp":2},"camera":{"position_mm":[0,0,8],"look_at_mm":[0,0,0],"vfov_deg":12},"sample":{"shape":"plane"},"light":{"position_mm":[0,8,8],"intensity":300},"response":{"encoding":"gamma","gamma":2.2},"falloff":{"type":"gaussian","sigma_px":60}}'
 echo "$scene" >"$T/tiny.json"
