@@ -63,6 +63,10 @@ typedef struct {
   int resume, iters_given;
 } fit_job;
 int fit_pipeline(cli_ctx *c, const fit_job *job);
+/* The fit's tuning options, shared by woven fit and woven capture: --iters,
+ * --iter-spp, --iter-scale, --seed, --align-radius, --threads. Sets *handled;
+ * returns EXIT_USAGE after printing a message for a bad value. */
+int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled);
 /* Shared with woven capture: the output directory check and fit.json (for --resume). */
 #include "woven/photo.h"
 int fit_prepare_dir(const char *cmd, const char *dir, int force, int resume);

@@ -40,6 +40,33 @@ static const char *HELP =
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), loss.svg,\n"
     "report.html, maps/, and fit.json + checkpoint.json (for --resume).\n";
 
+int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled) {
+  long v;
+  *handled = 1;
+  if (cli_is(a, s, "--iters")) {
+    if (!cli_int(a, "--iters", 0, 100000, &v)) return EXIT_USAGE;
+    o->iters = (int)v, *iters_given = 1;
+  } else if (cli_is(a, s, "--iter-spp")) {
+    if (!cli_int(a, "--iter-spp", 1, 4096, &v)) return EXIT_USAGE;
+    o->iter_spp = (int)v;
+  } else if (cli_is(a, s, "--iter-scale")) {
+    if (!cli_int(a, "--iter-scale", 1, 16, &v)) return EXIT_USAGE;
+    o->iter_scale = (int)v;
+  } else if (cli_is(a, s, "--seed")) {
+    if (!cli_int(a, "--seed", 0, 2147483647L, &v)) return EXIT_USAGE;
+    o->seed = (uint64_t)v;
+  } else if (cli_is(a, s, "--align-radius")) {
+    if (!cli_int(a, "--align-radius", 0, 230, &v)) return EXIT_USAGE;
+    o->align_radius = (int)v;
+  } else if (cli_is(a, s, "--threads")) {
+    if (!cli_int(a, "--threads", 1, 1024, &v)) return EXIT_USAGE;
+    o->threads = (int)v;
+  } else {
+    *handled = 0;
+  }
+  return 0;
+}
+
 int cli_parse_crop(const char *s, wv_crop *c) {
   char tail;
   return sscanf(s, "%d,%d,%d,%d%c", &c->x, &c->y, &c->w, &c->h, &tail) == 4 && c->w > 0 && c->h > 0 && c->x >= 0 &&
@@ -245,7 +272,9 @@ int cmd_fit(int argc, char **argv) {
   memset(&job, 0, sizeof job);
   wv_fit_opts_default(&job.opts);
   for (const char *s; (s = cli_next(&a));) {
-    long v;
+    int handled;
+    if (cli_parse_fit_opt(&a, s, &job.opts, &iters_given, &handled)) return EXIT_USAGE;
+    if (handled) continue;
     if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
       fputs(HELP, stdout);
       return 0;
@@ -259,24 +288,6 @@ int cmd_fit(int argc, char **argv) {
       if (!(dir = cli_value(&a, "-o"))) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--resume")) {
       if (!(resume = cli_value(&a, "--resume"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--iters")) {
-      if (!cli_int(&a, "--iters", 0, 100000, &v)) return EXIT_USAGE;
-      job.opts.iters = (int)v, iters_given = 1;
-    } else if (cli_is(&a, s, "--iter-spp")) {
-      if (!cli_int(&a, "--iter-spp", 1, 4096, &v)) return EXIT_USAGE;
-      job.opts.iter_spp = (int)v;
-    } else if (cli_is(&a, s, "--iter-scale")) {
-      if (!cli_int(&a, "--iter-scale", 1, 16, &v)) return EXIT_USAGE;
-      job.opts.iter_scale = (int)v;
-    } else if (cli_is(&a, s, "--seed")) {
-      if (!cli_int(&a, "--seed", 0, 2147483647L, &v)) return EXIT_USAGE;
-      job.opts.seed = (uint64_t)v;
-    } else if (cli_is(&a, s, "--align-radius")) {
-      if (!cli_int(&a, "--align-radius", 0, 100, &v)) return EXIT_USAGE;
-      job.opts.align_radius = (int)v;
-    } else if (cli_is(&a, s, "--threads")) {
-      if (!cli_int(&a, "--threads", 1, 1024, &v)) return EXIT_USAGE;
-      job.opts.threads = (int)v;
     } else if (cli_is(&a, s, "--descriptor")) {
       if (!(desc_name = cli_value(&a, "--descriptor"))) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--vgg19-weights")) {

@@ -26,11 +26,11 @@ static const char *PREDICT_HELP =
 static const char *CAPTURE_HELP =
     "usage: woven capture PHOTO --scene S.json|cylinder|flat45 --pattern NAME -o DIR\n"
     "                     [--model M] [--iters N] [--crop x,y,w,h] [--iter-spp N] [--iter-scale N]\n"
-    "                     [--seed N] [--threads N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
-    "                     [--force] [--quiet] [--json]\n"
+    "                     [--align-radius N] [--seed N] [--threads N] [--descriptor default|vgg19]\n"
+    "                     [--vgg19-weights FILE] [--force] [--quiet] [--json]\n"
     "\n"
     "The whole capture: FabricNet's estimate (as 'woven predict'), then the fit from it (as\n"
-    "'woven fit', 200 iterations by default).\n"
+    "'woven fit', 200 iterations by default; the fit options mean what 'woven fit --help' says).\n"
     "Writes to DIR: network.json (the estimate), params.json (the fit), render.png, start.png\n"
     "(the network's estimate rendered), compare.png (photo | network | fit), loss.svg,\n"
     "report.html, maps/, fit.json and checkpoint.json ('woven fit --resume DIR' continues).\n";
@@ -194,29 +194,15 @@ int cmd_capture(int argc, char **argv) {
   int iters_given = 0;
   for (const char *s; (s = cli_next(&a));) {
     int handled, rc;
-    long v;
     if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
       fputs(CAPTURE_HELP, stdout);
       return 0;
     }
     if ((rc = parse_common(&a, s, &pa, &handled))) return rc;
     if (handled) continue;
-    if (cli_is(&a, s, "--iters")) {
-      if (!cli_int(&a, "--iters", 0, 100000, &v)) return EXIT_USAGE;
-      job.opts.iters = (int)v, iters_given = 1;
-    } else if (cli_is(&a, s, "--iter-spp")) {
-      if (!cli_int(&a, "--iter-spp", 1, 4096, &v)) return EXIT_USAGE;
-      job.opts.iter_spp = (int)v;
-    } else if (cli_is(&a, s, "--iter-scale")) {
-      if (!cli_int(&a, "--iter-scale", 1, 16, &v)) return EXIT_USAGE;
-      job.opts.iter_scale = (int)v;
-    } else if (cli_is(&a, s, "--seed")) {
-      if (!cli_int(&a, "--seed", 0, 2147483647L, &v)) return EXIT_USAGE;
-      job.opts.seed = (uint64_t)v;
-    } else if (cli_is(&a, s, "--threads")) {
-      if (!cli_int(&a, "--threads", 1, 1024, &v)) return EXIT_USAGE;
-      job.opts.threads = (int)v;
-    } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
+    if (cli_parse_fit_opt(&a, s, &job.opts, &iters_given, &handled)) return EXIT_USAGE;
+    if (handled) continue;
+    if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
       c.quiet = 1;
     } else if (!strcmp(s, "--json")) {
       c.json = 1;
