@@ -343,6 +343,11 @@ int cmd_fit(int argc, char **argv) {
       return cli_fail(&c, &err);
     }
   }
+  if (scene.width < WV_FIT_MIN_SIDE || scene.height < WV_FIT_MIN_SIDE) {
+    fprintf(stderr, "woven fit: error: the scene's image (%d x %d) is too small for a fit (at least %d x %d)\n",
+            scene.width, scene.height, WV_FIT_MIN_SIDE, WV_FIT_MIN_SIDE);
+    return WV_ERR_INVALID;
+  }
   wv_image ph;
   wv_photo_info info;
   if (wv_photo_load(photo, &scene, &crop, &ph, &info, &err)) return cli_fail(&c, &err);

@@ -26,6 +26,8 @@ check "missing photo" 3 "nothere.png" -- "$WOVEN" fit "$T/nothere.png" --scene "
 check "photo too small" 2 "much smaller" -- "$WOVEN" fit "$T/photo.png" --scene cylinder --pattern satin -o "$T/fit" --force
 check "init and pattern disagree" 2 "disagrees" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --init "$SRC/examples/twill.json" --pattern satin -o "$T/fit" --force
 check "resume not a fit" 2 "not a fit directory" -- "$WOVEN" fit --resume "$T"
+echo "${scene/\"width\":64,\"height\":48/\"width\":20,\"height\":20}" >"$T/too_small.json"
+check "scene too small" 2 "too small for a fit" -- "$WOVEN" fit "$T/photo.png" --scene "$T/too_small.json" --pattern satin -o "$T/fit" --force
 check "bad crop" 1 "--crop" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit" --crop 1,2,3
 check "unknown descriptor" 2 "descriptor" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit" --force --descriptor alexnet
 check "vgg19 without weights" 2 "weights" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit" --force --descriptor vgg19

@@ -74,6 +74,9 @@ static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, 
                           int spp, const wv_fit_opts *o, wv_fit_timing *timing, wv_error *err) {
   memset(c, 0, sizeof *c);
   c->d = d, c->o = o, c->timing = timing;
+  if (s->width < WV_FIT_MIN_SIDE || s->height < WV_FIT_MIN_SIDE)
+    return wv_fail(err, WV_ERR_INVALID, "the scene's image (%d x %d) is too small for a fit (at least %d x %d)",
+                   s->width, s->height, WV_FIT_MIN_SIDE, WV_FIT_MIN_SIDE);
   c->scene = *s;
   if (scale > 1) {
     c->scene.width = s->width / scale, c->scene.height = s->height / scale;
