@@ -141,13 +141,6 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
   if (capture_out) memset(capture_out, 0, sizeof *capture_out);
   if (rec_out) *rec_out = NULL;
   if (!s || !p) return wv_fail(err, WV_ERR_INVALID, "render_grad: a scene and parameters are required");
-  wv_status st = wv_scene_validate(s, err);
-  if (st) return st;
-  wv_fabric fab;
-  if ((st = wv_fabric_prepare(p, &fab, err))) return st;
-  int spp = opt && opt->spp > 0 ? opt->spp : s->spp;
-  if (spp > WV_SCENE_MAX_SPP)
-    return wv_fail(err, WV_ERR_INVALID, "spp %d is above the limit %d", spp, WV_SCENE_MAX_SPP);
   int x0 = 0, y0 = 0, W = s->width, H = s->height, dbl = go && go->double_precision;
   if (go && (go->width || go->height)) {
     x0 = go->x0, y0 = go->y0, W = go->width, H = go->height;
@@ -155,9 +148,10 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
       return wv_fail(err, WV_ERR_INVALID, "window %d x %d at (%d, %d) is not inside the %d x %d image", W, H, x0,
                      y0, s->width, s->height);
   }
-  if ((long long)W * H * spp > WV_SCENE_MAX_SAMPLES)
-    return wv_fail(err, WV_ERR_NOMEM, "%d x %d pixels x %d spp is too many samples (limit %lld)", W, H, spp,
-                   (long long)WV_SCENE_MAX_SAMPLES);
+  wv_fabric fab;
+  int spp;
+  wv_status st = wv_render_setup(s, p, opt, W, H, &fab, &spp, err);
+  if (st) return st;
   if (!rec_out && (!dcap || !dcap->data || dcap->w != W || dcap->h != H || dcap->c != 3))
     return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", W, H,
                    dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);

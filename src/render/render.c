@@ -34,6 +34,20 @@ wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
   return WV_OK;
 }
 
+wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, int w, int h,
+                          wv_fabric *fab, int *spp, wv_error *err) {
+  wv_status st = wv_scene_validate(s, err);
+  if (st) return st;
+  if ((st = wv_fabric_prepare(p, fab, err))) return st;
+  *spp = opt && opt->spp > 0 ? opt->spp : s->spp;
+  if (*spp > WV_SCENE_MAX_SPP)
+    return wv_fail(err, WV_ERR_INVALID, "spp %d is above the limit %d", *spp, WV_SCENE_MAX_SPP);
+  if ((long long)w * h * *spp > WV_SCENE_MAX_SAMPLES)
+    return wv_fail(err, WV_ERR_NOMEM, "%d x %d pixels x %d spp is too many samples (limit %lld)", w, h, *spp,
+                   (long long)WV_SCENE_MAX_SAMPLES);
+  return WV_OK;
+}
+
 /* Radiance of one sample at fabric point (fx, fy), added to acc. */
 static inline void shade(const wv_fabric *f, const wv_dirs *d, float fx, float fy, float acc[3]) {
   wv_yarn_point yp;
@@ -79,16 +93,10 @@ static void render_pixel(const wv_camera_rig *rig, const wv_fabric *fab, int px,
 
 wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, wv_image *capture,
                     wv_image *radiance, wv_error *err) {
-  wv_status st = wv_scene_validate(s, err);
-  if (st) return st;
   wv_fabric fab;
-  if ((st = wv_fabric_prepare(p, &fab, err))) return st;
-  int spp = opt && opt->spp > 0 ? opt->spp : s->spp;
-  if (spp > WV_SCENE_MAX_SPP)
-    return wv_fail(err, WV_ERR_INVALID, "spp %d is above the limit %d", spp, WV_SCENE_MAX_SPP);
-  if ((long long)s->width * s->height * spp > WV_SCENE_MAX_SAMPLES)
-    return wv_fail(err, WV_ERR_NOMEM, "%d x %d pixels x %d spp is too many samples (limit %lld)", s->width,
-                   s->height, spp, (long long)WV_SCENE_MAX_SAMPLES);
+  int spp;
+  wv_status st = wv_render_setup(s, p, opt, s->width, s->height, &fab, &spp, err);
+  if (st) return st;
   int threads = opt && opt->threads > 0 ? opt->threads : omp_get_max_threads();
   wv_camera_rig rig;
   wv_rig_prepare(s, &rig);

@@ -9,6 +9,7 @@
 #include "util/fastmath.h"
 #include "util/hash.h"
 #include "woven/params.h"
+#include "woven/render.h"
 #include "woven/scene.h"
 #include "woven/yarn.h"
 
@@ -43,6 +44,10 @@ typedef struct {
 
 void wv_rig_prepare(const wv_scene *s, wv_camera_rig *rig);
 wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err);
+/* What every render starts with: the scene validated, the fabric prepared, the
+ * spp resolved (opt's, else the scene's) and the w x h x spp sample limit checked. */
+wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, int w, int h,
+                          wv_fabric *fab, int *spp, wv_error *err);
 
 /* Stratified jittered sample position s of spp inside pixel (px, py). */
 static inline void wv_pixel_sample(int px, int py, int s, int spp, int width, uint64_t seed, float *sx, float *sy) {
