@@ -36,17 +36,22 @@ static void opts(wv_fit_opts *o, int iters) {
   o->lr = 0.03;
 }
 
+/* The small scene, the target's parameters, its render as the photo, a descriptor. */
+static void setup(wv_scene *s, wv_params *tp, wv_image *photo, wv_descriptor **d) {
+  small_scene(s);
+  target(tp);
+  wv_render_opts ro = {0, 0, NULL, NULL};
+  assert_int_equal(wv_render(s, tp, &ro, photo, NULL, NULL), WV_OK);
+  assert_int_equal(wv_descriptor_create_default(d, NULL), WV_OK);
+}
+
 static void test_fit_improves(void **state) {
   (void)state;
   wv_scene s;
-  small_scene(&s);
   wv_params tp, start;
-  target(&tp);
   wv_image photo;
-  wv_render_opts ro = {0, 0, NULL, NULL};
-  assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
   wv_descriptor *d;
-  assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
+  setup(&s, &tp, &photo, &d);
   wv_params_default("twill", &start, NULL);
   start.density[WV_WARP] = 140, start.density[WV_WEFT] = 90;
   wv_fit_opts o;
@@ -82,14 +87,10 @@ static void test_fit_improves(void **state) {
 static void test_resume_equals_straight(void **state) {
   (void)state;
   wv_scene s;
-  small_scene(&s);
   wv_params tp, start;
-  target(&tp);
   wv_image photo;
-  wv_render_opts ro = {0, 0, NULL, NULL};
-  assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
   wv_descriptor *d;
-  assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
+  setup(&s, &tp, &photo, &d);
   wv_params_default("twill", &start, NULL);
   wv_fit_opts o;
   opts(&o, 12);
