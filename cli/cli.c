@@ -49,6 +49,12 @@ int cli_int(cli_args *a, const char *name, long lo, long hi, long *out) {
   return 1;
 }
 
+int cli_common_flag(cli_ctx *c, const char *s) {
+  if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) return c->quiet = 1;
+  if (!strcmp(s, "--json")) return c->json = 1;
+  return 0;
+}
+
 int cli_fail(const cli_ctx *c, const wv_error *err) {
   fprintf(stderr, "woven %s: error: %s\n", c->cmd, err->msg);
   return err->code ? (int)err->code : 2;

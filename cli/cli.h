@@ -32,6 +32,8 @@ int cli_is(cli_args *a, const char *arg, const char *name);
 const char *cli_value(cli_args *a, const char *name);
 int cli_int(cli_args *a, const char *name, long lo, long hi, long *out);
 
+/* The flags every command takes: --quiet (-q) and --json. Returns 1 if s was one. */
+int cli_common_flag(cli_ctx *c, const char *s);
 int cli_fail(const cli_ctx *c, const wv_error *err);       /* prints "woven CMD: msg", returns exit code */
 int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void cli_info(const cli_ctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));

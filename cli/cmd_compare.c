@@ -30,10 +30,8 @@ int cmd_compare(int argc, char **argv) {
       if (!strcmp(v, "luma")) mode = WV_SSIM_LUMA;
       else if (!strcmp(v, "rgb")) mode = WV_SSIM_RGB;
       else return cli_usage_error(c.cmd, "--channels must be luma or rgb");
-    } else if (!strcmp(s, "--json")) {
-      c.json = 1;
-    } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-      c.quiet = 1;
+    } else if (cli_common_flag(&c, s)) {
+      /* --quiet, -q, --json */
     } else if (s[0] == '-' && s[1]) {
       return cli_usage_error(c.cmd, "unknown option '%s'", s);
     } else if (nfiles < 2) {

@@ -103,10 +103,8 @@ int cmd_dataset(int argc, char **argv) {
       if (!(desc_name = cli_value(&a, "--descriptor"))) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--vgg19-weights")) {
       if (!(weights = cli_value(&a, "--vgg19-weights"))) return EXIT_USAGE;
-    } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-      c.quiet = 1;
-    } else if (!strcmp(s, "--json")) {
-      c.json = 1;
+    } else if (cli_common_flag(&c, s)) {
+      /* --quiet, -q, --json */
     } else {
       return cli_usage_error(c.cmd, "unexpected argument '%s'", s);
     }

@@ -298,10 +298,8 @@ int cmd_fit(int argc, char **argv) {
       if (!cli_parse_crop(cv, &crop)) return cli_usage_error(c.cmd, "--crop must be x,y,w,h (non-negative integers)");
     } else if (!strcmp(s, "--force")) {
       force = 1;
-    } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-      c.quiet = 1;
-    } else if (!strcmp(s, "--json")) {
-      c.json = 1;
+    } else if (cli_common_flag(&c, s)) {
+      /* --quiet, -q, --json */
     } else if (s[0] == '-' && s[1]) {
       return cli_usage_error(c.cmd, "unknown option '%s'", s);
     } else if (!photo) {

@@ -146,10 +146,8 @@ int cmd_predict(int argc, char **argv) {
     }
     if ((rc = parse_common(&a, s, &pa, &handled))) return rc;
     if (handled) continue;
-    if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-      c.quiet = 1;
-    } else if (!strcmp(s, "--json")) {
-      c.json = 1;
+    if (cli_common_flag(&c, s)) {
+      /* --quiet, -q, --json */
     } else if (s[0] == '-' && s[1]) {
       return cli_usage_error(c.cmd, "unknown option '%s'", s);
     } else if (!pa.photo) {
@@ -202,10 +200,8 @@ int cmd_capture(int argc, char **argv) {
     if (handled) continue;
     if (cli_parse_fit_opt(&a, s, &job.opts, &iters_given, &handled)) return EXIT_USAGE;
     if (handled) continue;
-    if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-      c.quiet = 1;
-    } else if (!strcmp(s, "--json")) {
-      c.json = 1;
+    if (cli_common_flag(&c, s)) {
+      /* --quiet, -q, --json */
     } else if (s[0] == '-' && s[1]) {
       return cli_usage_error(c.cmd, "unknown option '%s'", s);
     } else if (!pa.photo) {

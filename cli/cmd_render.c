@@ -70,10 +70,8 @@ int cmd_render(int argc, char **argv) {
       have_seed = 1;
     } else if (cli_is(&a, s, "--threads")) {
       if (!cli_int(&a, "--threads", 1, 1024, &threads)) return EXIT_USAGE;
-    } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-      c.quiet = 1;
-    } else if (!strcmp(s, "--json")) {
-      c.json = 1;
+    } else if (cli_common_flag(&c, s)) {
+      /* --quiet, -q, --json */
     } else {
       return cli_usage_error(c.cmd, "unknown argument '%s'", s);
     }
@@ -134,10 +132,8 @@ int cmd_maps(int argc, char **argv) {
       if (!(format = cli_value(&a, "--format"))) return EXIT_USAGE;
       if (strcmp(format, "png") && strcmp(format, "exr") && strcmp(format, "both"))
         return cli_usage_error(c.cmd, "--format must be png, exr or both");
-    } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-      c.quiet = 1;
-    } else if (!strcmp(s, "--json")) {
-      c.json = 1;
+    } else if (cli_common_flag(&c, s)) {
+      /* --quiet, -q, --json */
     } else {
       return cli_usage_error(c.cmd, "unknown argument '%s'", s);
     }

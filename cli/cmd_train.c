@@ -168,10 +168,8 @@ int cmd_train(int argc, char **argv) {
       force = 1;
     } else if (!strcmp(s, "--partial")) {
       partial = 1;
-    } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-      c.quiet = 1;
-    } else if (!strcmp(s, "--json")) {
-      c.json = 1;
+    } else if (cli_common_flag(&c, s)) {
+      /* --quiet, -q, --json */
     } else if (s[0] == '-' && s[1]) {
       return cli_usage_error(c.cmd, "unknown option '%s'", s);
     } else if (!dir) {
