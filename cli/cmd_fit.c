@@ -20,6 +20,7 @@ static const char *HELP =
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
+    "                 [--register-radius N]\n"
     "                 [--seed N] [--threads N]\n"
     "                 [--force] [--quiet] [--json]\n"
     "       woven fit --resume DIR [--iters N] [--quiet] [--json]\n"
@@ -33,6 +34,9 @@ static const char *HELP =
     "  --iter-spp N      samples per pixel while iterating (default 4)\n"
     "  --align-radius N  after the iterations, search each density +-N yarns/inch for the\n"
     "                    best SSIM in a centre window (default 230: the whole range; 0 = off)\n"
+    "  --register-radius N  then register the weave to the photo: densities on a 2-D grid\n"
+    "                    +-N yarns/inch refined to 0.1, and the weave's offset, by phase\n"
+    "                    correlation; kept if the SSIM rises (default 6; 0 = off)\n"
     "  --iter-scale N    iterate on the image downscaled N times (default 1); the final render\n"
     "                    and SSIM use the scene's full resolution and spp\n"
     "  --force           replace the results of an earlier fit in DIR\n"
@@ -58,6 +62,9 @@ int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_giv
   } else if (cli_is(a, s, "--align-radius")) {
     if (!cli_int(a, "--align-radius", 0, 230, &v)) return EXIT_USAGE;
     o->align_radius = (int)v;
+  } else if (cli_is(a, s, "--register-radius")) {
+    if (!cli_int(a, "--register-radius", 0, 50, &v)) return EXIT_USAGE;
+    o->register_radius = (int)v;
   } else if (cli_is(a, s, "--threads")) {
     if (!cli_int(a, "--threads", 1, 1024, &v)) return EXIT_USAGE;
     o->threads = (int)v;
@@ -163,7 +170,9 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   cli_info(c, "rendering start and fit at %d x %d, %d spp\n", job->scene->width, job->scene->height,
            job->scene->spp);
   rc = wv_render(job->scene, &st.start, &ro, &r_start, NULL, &err);
-  if (!rc) rc = wv_render(job->scene, &st.params, &ro, &r_fit, NULL, &err);
+  wv_scene fit_scene; /* with the registration's fabric offset */
+  wv_fit_scene(&st, job->scene, &fit_scene);
+  if (!rc) rc = wv_render(&fit_scene, &st.params, &ro, &r_fit, NULL, &err);
   if (!rc) rc = wv_ssim(job->photo, &r_start, WV_SSIM_LUMA, &ssim_start, &err);
   if (!rc) rc = wv_ssim(job->photo, &r_fit, WV_SSIM_LUMA, &ssim_fit, &err);
   const wv_image *side[3] = {job->photo, &r_start, &r_fit};
@@ -191,6 +200,12 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   if (!rc) rc = wv_maps_generate(&st.params, 1024, &maps, &err);
   if (!rc) rc = wv_maps_write(&maps, path, "png", &err);
   wv_maps_free(&maps);
+  /* scene.json: the scene with the registered offset, to re-render exactly this fit */
+  snprintf(path, sizeof path, "%s/scene.json", job->dir);
+  char *scene_text = rc ? NULL : wv_scene_to_json(&fit_scene);
+  if (!rc && !scene_text) rc = wv_fail(&err, WV_ERR_NOMEM, "out of memory for scene.json");
+  if (!rc) rc = wv_write_file_atomic(path, scene_text, strlen(scene_text), &err);
+  free(scene_text);
   /* params.json last: its presence marks a finished fit */
   snprintf(path, sizeof path, "%s/params.json", job->dir);
   if (!rc) rc = wv_params_write(path, &st.params, &err);
@@ -206,10 +221,13 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
     char *pj = wv_params_to_json(&st.params);
     printf("{\"dir\": \"%s\", \"iterations\": %d, \"ssim_start\": %.6f, \"ssim_fit\": %.6f, \"loss\": %.8f, "
            "\"time_s\": {\"total\": %.3f, \"render\": %.3f, \"gradient\": %.3f, \"descriptor\": %.3f, "
-           "\"discrete\": %.3f}, \"density_alignment_ssim\": [%.4f, %.4f], \"params\": %s}\n",
+           "\"discrete\": %.3f, \"registration\": %.3f}, \"density_alignment_ssim\": [%.4f, %.4f], "
+           "\"registration\": {\"offset_mm\": [%.6f, %.6f], \"ncc\": [%.4f, %.4f], \"window_ssim\": [%.4f, %.4f]}, "
+           "\"params\": %s}\n",
            job->dir, st.iter, ssim_start, ssim_fit, last ? last->loss : 0.0, st.timing.total, st.timing.render,
-           st.timing.gradient, st.timing.descriptor, st.timing.discrete, st.align_ssim_before, st.align_ssim_after,
-           pj ? pj : "null");
+           st.timing.gradient, st.timing.descriptor, st.timing.discrete, st.timing.registration,
+           st.align_ssim_before, st.align_ssim_after, st.offset_mm[0], st.offset_mm[1], st.reg_ncc_before,
+           st.reg_ncc_after, st.reg_ssim_before, st.reg_ssim_after, pj ? pj : "null");
     free(pj);
   }
   wv_fit_state_free(&st);

@@ -26,7 +26,7 @@ static const char *PREDICT_HELP =
 static const char *CAPTURE_HELP =
     "usage: woven capture PHOTO --scene S.json|cylinder|flat45 --pattern NAME -o DIR\n"
     "                     [--model M] [--iters N] [--crop x,y,w,h] [--iter-spp N] [--iter-scale N]\n"
-    "                     [--align-radius N] [--seed N] [--threads N] [--descriptor default|vgg19]\n"
+    "                     [--align-radius N] [--register-radius N] [--seed N] [--threads N] [--descriptor default|vgg19]\n"
     "                     [--vgg19-weights FILE] [--force] [--quiet] [--json]\n"
     "\n"
     "The whole capture: FabricNet's estimate (as 'woven predict'), then the fit from it (as\n"

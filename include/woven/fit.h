@@ -32,6 +32,7 @@ typedef struct {
   int threads;        /* 0: all cores */
   int checkpoint_every; /* 10 */
   int align_radius;   /* density alignment: search +-this many yarns/inch (230: the whole range; 0 = off) */
+  int register_radius; /* registration: 2-D density grid +-this many yarns/inch (6; 0 = off) */
 } wv_fit_opts;
 
 void wv_fit_opts_default(wv_fit_opts *o);
@@ -49,7 +50,7 @@ typedef struct {
 
 /* Time spent, seconds. */
 typedef struct {
-  double render, gradient, descriptor, discrete, total;
+  double render, gradient, descriptor, discrete, registration, total;
 } wv_fit_timing;
 
 /* Everything needed to continue a fit: parameters, Adam moments, RNG, history. */
@@ -58,6 +59,10 @@ typedef struct {
   int iter; /* iterations done */
   int aligned; /* the density alignment after the last iteration is done */
   double align_ssim_before, align_ssim_after; /* its criterion at the start and end */
+  int registered; /* the registration after the alignment is done */
+  double offset_mm[2]; /* fabric offset found by the registration (added to the scene's) */
+  double reg_ncc_before, reg_ncc_after;   /* phase correlation with the photo, centre window */
+  double reg_ssim_before, reg_ssim_after; /* SSIM in the same window: kept only if it rose */
   double adam_m[WV_P_COUNT], adam_v[WV_P_COUNT];
   uint64_t rng;
   wv_fit_record *log; /* iter entries */
@@ -80,6 +85,20 @@ typedef int (*wv_fit_callback)(void *user, const wv_fit_state *st, const wv_fit_
  * centre window (a criterion that does see yarn positions). */
 wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
                      const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err);
+
+/* Registration (after the alignment, flat and cylinder scenes alike): a real photo's
+ * weave has a phase (where the yarns start) and a density known only to a few
+ * yarns/inch, and SSIM compares pixels, so a render that looks right but is a
+ * quarter of a rib out of step scores like noise. The densities are searched on a
+ * 2-D grid (+-register_radius, then finer steps down to 0.1 yarns/inch) for the
+ * highest phase correlation with the photo (the maximum over all shifts of the
+ * normalised cross-correlation of the high-passed luminance, via FFT), and the
+ * best shift becomes a fabric offset. Kept only if the window's SSIM rises. */
+wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
+                          wv_error *err);
+
+/* The scene the fit's parameters are meant for: s with the registration's offset. */
+void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out);
 
 /* Loss terms of params against photo at the scene's own resolution and spp. */
 wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p,

@@ -24,4 +24,9 @@ typedef struct {
 wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, wv_image *capture,
                     wv_image *radiance, wv_error *err);
 
+/* Fabric coordinates (mm, the frame the weave is laid out in) seen at image
+ * position (x, y) in pixels (0.5, 0.5 is the first pixel's centre). Returns 0
+ * when the ray misses the sample or the point faces away. */
+int wv_render_fabric_at(const wv_scene *s, double x, double y, double f[2]);
+
 #endif

@@ -1,4 +1,5 @@
 #include "woven/fit.h"
+#include "fit/fit_internal.h"
 
 #include <jansson.h>
 #include <math.h>
@@ -27,6 +28,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->seed = 1;
   o->checkpoint_every = 10;
   o->align_radius = 230;
+  o->register_radius = 6;
 }
 
 void wv_fit_beta_prior(const char *pattern, double *mu, double *sigma) {
@@ -202,12 +204,20 @@ static int discrete_step(wv_params *p, uint64_t *rng, int iter, int iters) {
   return 1;
 }
 
-/* The centre w x h window of a scene (same pixels as the full image there). */
-static void centre_window(const wv_scene *s, int w, int h, wv_scene *out) {
+void wv_fit_centre_window(const wv_scene *s, int w, int h, wv_scene *out) {
   *out = *s;
   double t = tan(0.5 * s->vfov_deg * 3.14159265358979323846 / 180.0) * h / s->height;
   out->vfov_deg = 2.0 * atan(t) * 180.0 / 3.14159265358979323846;
   out->width = w, out->height = h;
+}
+
+wv_status wv_fit_centre_crop(const wv_image *full, int w, int h, wv_image *out, wv_error *err) {
+  wv_status rc = wv_image_alloc(out, w, h, 3, err);
+  if (rc) return rc;
+  int x0 = (full->w - w) / 2, y0 = (full->h - h) / 2;
+  for (int y = 0; y < h; y++)
+    memcpy(wv_image_px(out, 0, y), wv_image_px(full, x0, y0 + y), sizeof(float) * 3 * (size_t)w);
+  return WV_OK;
 }
 
 static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
@@ -215,14 +225,11 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
   int w = s->width < 160 ? s->width : 160, h = s->height < 80 ? s->height : 80;
   w -= (s->width - w) % 2, h -= (s->height - h) % 2; /* keep the window centred on whole pixels */
   wv_scene win;
-  centre_window(s, w, h, &win);
+  wv_fit_centre_window(s, w, h, &win);
   win.spp = o->iter_spp;
   wv_image ref;
-  wv_status rc = wv_image_alloc(&ref, w, h, 3, err);
+  wv_status rc = wv_fit_centre_crop(photo, w, h, &ref, err);
   if (rc) return rc;
-  int x0 = (s->width - w) / 2, y0 = (s->height - h) / 2;
-  for (int y = 0; y < h; y++)
-    memcpy(wv_image_px(&ref, 0, y), wv_image_px(photo, x0, y0 + y), sizeof(float) * 3 * (size_t)w);
   wv_render_opts ro = {win.spp, o->threads, NULL, NULL};
   /* Coordinate search: one density at a time over +-R with the other fixed, until
    * a full round changes nothing (each density alone already moves the SSIM). */
@@ -268,7 +275,7 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     if (!nl) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the fit log");
     st->log = nl, st->log_cap = o->iters;
   }
-  if (st->iter < o->iters) st->aligned = 0; /* more iterations: align again after them */
+  if (st->iter < o->iters) st->aligned = st->registered = 0; /* more iterations: align again after them */
   fit_ctx c;
   double t_start = omp_get_wtime();
   wv_status rc = ctx_init(&c, s, photo, d, o->iter_scale, o->iter_spp, o, &st->timing, err);
@@ -325,6 +332,12 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     st->timing.discrete += omp_get_wtime() - ta;
     st->timing.total += omp_get_wtime() - ta;
   }
+  if (!rc && st->iter >= o->iters && !st->registered && o->register_radius > 0) {
+    double ta = omp_get_wtime();
+    rc = wv_fit_register(st, s, photo, o, err);
+    st->timing.registration += omp_get_wtime() - ta;
+    st->timing.total += omp_get_wtime() - ta;
+  }
   return rc;
 }
 
@@ -351,6 +364,11 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_object_set_new(root, "descriptor", json_string(descriptor_name));
   json_object_set_new(root, "iter", json_integer(st->iter));
   json_object_set_new(root, "aligned", json_boolean(st->aligned));
+  json_object_set_new(root, "registration",
+                      json_pack("{s:b,s:[f,f],s:f,s:f,s:f,s:f}", "done", st->registered, "offset_mm",
+                                st->offset_mm[0], st->offset_mm[1], "ncc_before", st->reg_ncc_before, "ncc_after",
+                                st->reg_ncc_after, "ssim_before", st->reg_ssim_before, "ssim_after",
+                                st->reg_ssim_after));
   json_object_set_new(root, "start", params_json(&st->start));
   json_object_set_new(root, "params", params_json(&st->params));
   json_object_set_new(root, "adam_m", darray(st->adam_m, WV_P_COUNT));
@@ -367,6 +385,7 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
                                 o->down_h, "discrete_every", o->discrete_every, "iter_scale", o->iter_scale,
                                 "iter_spp", o->iter_spp, "seed", (json_int_t)o->seed, "align_radius",
                                 o->align_radius));
+  json_object_set_new(json_object_get(root, "opts"), "register_radius", json_integer(o->register_radius));
   json_t *log = json_array();
   for (int i = 0; i < st->iter; i++) {
     const wv_fit_record *r = &st->log[i];
@@ -432,6 +451,8 @@ wv_status wv_fit_checkpoint_read(const char *path, wv_fit_state *st, wv_fit_opts
     goto done;
   }
   o->seed = (uint64_t)seed;
+  json_t *rr = json_object_get(opts, "register_radius");
+  o->register_radius = json_is_integer(rr) ? (int)json_integer_value(rr) : 0;
   wv_params start;
   if ((rc = read_params_obj(root, path, "start", &start, err))) goto done;
   if ((rc = wv_fit_state_init(st, &start, o, err))) goto done;
@@ -448,6 +469,15 @@ wv_status wv_fit_checkpoint_read(const char *path, wv_fit_state *st, wv_fit_opts
   }
   st->rng = strtoull(rng, NULL, 16);
   st->aligned = json_is_true(json_object_get(root, "aligned"));
+  json_t *reg = json_object_get(root, "registration"); /* absent in checkpoints before it existed */
+  if (reg && json_unpack(reg, "{s:b,s:[F,F],s:F,s:F,s:F,s:F}", "done", &st->registered, "offset_mm",
+                         &st->offset_mm[0], &st->offset_mm[1], "ncc_before", &st->reg_ncc_before, "ncc_after",
+                         &st->reg_ncc_after, "ssim_before", &st->reg_ssim_before, "ssim_after",
+                         &st->reg_ssim_after)) {
+    rc = wv_fail(err, WV_ERR_FORMAT, "%s: 'registration' is malformed", path);
+    goto done;
+  }
+  if (!reg) st->registered = 1; /* an old fit: nothing to redo */
   snprintf(descriptor_name, name_cap, "%s", dn);
   st->iter = (int)it;
   for (int i = 0; i < st->iter; i++) {

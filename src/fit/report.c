@@ -150,8 +150,9 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                 "%s %.4f &rarr; fit %.4f. %d iterations, descriptor <code>%s</code>.</p>\n",
             r->start_label, r->ssim_start, r->ssim_fit, r->iters, r->descriptor);
   if (r->timing)
-    sb_printf(&b, "<p>Time: %.1f s in all (render %.1f s, gradient %.1f s, descriptor %.1f s, discrete search %.1f s).</p>\n",
-              r->timing->total, r->timing->render, r->timing->gradient, r->timing->descriptor, r->timing->discrete);
+    sb_printf(&b, "<p>Time: %.1f s in all (render %.1f s, gradient %.1f s, descriptor %.1f s, discrete search %.1f s, registration %.1f s).</p>\n",
+              r->timing->total, r->timing->render, r->timing->gradient, r->timing->descriptor, r->timing->discrete,
+              r->timing->registration);
   sb_printf(&b, "<h2>Parameters</h2>\n<table><tr><th>parameter</th><th>%s</th><th>fit</th></tr>\n", r->start_label);
   sb_printf(&b, "<tr><td>pattern</td><td>%s</td><td>%s</td></tr>\n", r->start->pattern, r->fit->pattern);
   sb_printf(&b, "<tr><td>density.warp (yarns/inch)</td><td>%.1f</td><td>%.1f</td></tr>\n", r->start->density[0],

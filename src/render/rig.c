@@ -112,3 +112,12 @@ void wv_footprint_prepare(const wv_camera_rig *rig, int px, int py, wv_footprint
   }
   if (fp->centre_hit) wv_dirs_from_hit(&c, &fp->dirs);
 }
+
+int wv_render_fabric_at(const wv_scene *s, double x, double y, double f[2]) {
+  wv_camera_rig rig;
+  wv_rig_prepare(s, &rig);
+  wv_hit hit;
+  if (!wv_rig_trace(&rig, (float)x, (float)y, &hit)) return 0;
+  f[0] = hit.fx, f[1] = hit.fy;
+  return 1;
+}
