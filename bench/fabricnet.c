@@ -89,8 +89,10 @@ int main(int argc, char **argv) {
         wv_fit_state st;
         wv_fit_record rec;
         wv_image r = {0};
+        wv_scene fs; /* with the registration's offset */
         if (wv_fit_state_init(&st, starts[j], &fo, &e) || wv_fit_run(&st, s, &photo, d, &fo, NULL, NULL, &e) ||
-            wv_fit_loss(s, &photo, d, &st.params, &fo, &rec, &e) || wv_render(s, &st.params, &ro, &r, NULL, &e) ||
+            (wv_fit_scene(&st, s, &fs), 0) || wv_fit_loss(&fs, &photo, d, &st.params, &fo, &rec, &e) ||
+            wv_render(&fs, &st.params, &ro, &r, NULL, &e) ||
             wv_ssim(&photo, &r, WV_SSIM_LUMA, &ssim[j], &e))
           return die(&e);
         loss[j] = rec.loss;

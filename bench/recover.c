@@ -27,9 +27,10 @@ static void die(const wv_error *e) {
   exit(1);
 }
 
-/* Fit p0 to photo; returns the fitted parameters and the fit time. */
+/* Fit p0 to photo; returns the fitted parameters, the scene they are registered
+ * to (s with the registration's offset) and the fit time. */
 static double run_fit(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p0,
-                      const wv_fit_opts *o, wv_params *out, wv_fit_timing *timing) {
+                      const wv_fit_opts *o, wv_params *out, wv_scene *out_scene, wv_fit_timing *timing) {
   wv_fit_state st;
   wv_error err = {0};
   if (wv_fit_state_init(&st, p0, o, &err)) die(&err);
@@ -37,6 +38,7 @@ static double run_fit(const wv_scene *s, const wv_image *photo, wv_descriptor *d
   if (wv_fit_run(&st, s, photo, d, o, NULL, NULL, &err)) die(&err);
   double t = bench_now() - t0;
   *out = st.params;
+  wv_fit_scene(&st, s, out_scene);
   if (timing) *timing = st.timing;
   wv_fit_state_free(&st);
   return t;
@@ -64,6 +66,7 @@ static int synthetic(int per, const wv_fit_opts *o, wv_descriptor *d) {
   for (int k = 0; k < 5; k++)
     for (int i = 0; i < per; i++) {
       wv_params target, start, fit;
+      wv_scene fs;
       if (wv_params_sample_prior(PATTERNS[k], 1000u * k + i, &target, &err)) die(&err);
       wv_render_opts ro = {0, o->threads, NULL, NULL};
       wv_image photo;
@@ -71,10 +74,11 @@ static int synthetic(int per, const wv_fit_opts *o, wv_descriptor *d) {
       wv_params_default(PATTERNS[k], &start, NULL);
       start.seed = target.seed + 7919; /* another noise seed than the target's */
       wv_fit_timing t;
-      time_sum += run_fit(&s, &photo, d, &start, o, &fit, &t);
+      time_sum += run_fit(&s, &photo, d, &start, o, &fit, &fs, &t);
       tsum.render += t.render, tsum.gradient += t.gradient, tsum.descriptor += t.descriptor;
       tsum.discrete += t.discrete;
-      double s0 = ssim_of(&s, &start, &photo, o->threads), s1 = ssim_of(&s, &fit, &photo, o->threads);
+      tsum.registration += t.registration;
+      double s0 = ssim_of(&s, &start, &photo, o->threads), s1 = ssim_of(&fs, &fit, &photo, o->threads);
       /* the ceiling: the true parameters rendered with the fit's noise seed */
       wv_params oracle = target;
       oracle.seed = start.seed;
@@ -101,10 +105,10 @@ static int synthetic(int per, const wv_fit_opts *o, wv_descriptor *d) {
   printf("{\"mode\": \"synthetic\", \"scene\": \"cylinder\", \"fits\": %d, \"iters\": %d, \"iter_spp\": %d, "
          "\"iter_scale\": %d, \"ssim_start_mean\": %.4f, \"ssim_fit_mean\": %.4f, \"ssim_truth_other_seed_mean\": %.4f, "
          "\"fit_s_mean\": %.2f, "
-         "\"fit_breakdown_s_mean\": {\"render\": %.2f, \"gradient\": %.2f, \"descriptor\": %.2f, \"discrete\": %.2f}, "
+         "\"fit_breakdown_s_mean\": {\"render\": %.2f, \"gradient\": %.2f, \"descriptor\": %.2f, \"discrete\": %.2f, \"registration\": %.2f}, "
          "\"normalised_error_fit\": {",
          n, o->iters, o->iter_spp, o->iter_scale, ssim_start_sum / n, ssim_sum / n, ssim_oracle_sum / n, time_sum / n, tsum.render / n,
-         tsum.gradient / n, tsum.descriptor / n, tsum.discrete / n);
+         tsum.gradient / n, tsum.descriptor / n, tsum.discrete / n, tsum.registration / n);
   for (int j = 0; j < WV_P_COUNT + 3; j++)
     printf("%s\"%s\": %.4f", j ? ", " : "",
            j < WV_P_COUNT ? wv_param_name(j) : j == WV_P_COUNT ? "density.warp" : j == WV_P_COUNT + 1 ? "density.weft" : "noise_level",
@@ -144,6 +148,7 @@ static int real(const char *dir, const wv_fit_opts *o, wv_descriptor *d) {
     for (int k = 0; k < 32 && names[i][k] && !(names[i][k] >= '0' && names[i][k] <= '9') && names[i][k] != '_'; k++)
       pattern[k] = names[i][k], pattern[k + 1] = 0;
     wv_params start, fit;
+    wv_scene fs;
     if (wv_params_default(pattern, &start, &err)) {
       fprintf(stderr, "recover: %s: no pattern in the file name (%s)\n", names[i], err.msg);
       continue;
@@ -152,8 +157,8 @@ static int real(const char *dir, const wv_fit_opts *o, wv_descriptor *d) {
     snprintf(path, sizeof path, "%s/%s", dir, names[i]);
     wv_image photo;
     if (wv_photo_load(path, &s, NULL, &photo, NULL, &err)) die(&err);
-    double t = run_fit(&s, &photo, d, &start, o, &fit, NULL);
-    double s0 = ssim_of(&s, &start, &photo, o->threads), s1 = ssim_of(&s, &fit, &photo, o->threads);
+    double t = run_fit(&s, &photo, d, &start, o, &fit, &fs, NULL);
+    double s0 = ssim_of(&s, &start, &photo, o->threads), s1 = ssim_of(&fs, &fit, &photo, o->threads);
     raised += s1 > s0;
     fprintf(stderr, "%s (%s): SSIM start %.4f fit %.4f (%.1f s)\n", names[i], pattern, s0, s1, t);
     jl += (size_t)snprintf(json + jl, sizeof json - jl, "%s{\"file\": \"%s\", \"pattern\": \"%s\", \"ssim_start\": %.4f, "
