@@ -3,6 +3,7 @@
  * wv_fit_register in fit.h for why. */
 #include <fftw3.h>
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -131,15 +132,51 @@ static double pc_best(phasecorr *p, const wv_image *img, int max_shift, double s
   return best;
 }
 
-/* Renders the window with the given densities and scores it. */
-static wv_status score(phasecorr *pc, const wv_scene *win, const wv_params *base, const double dens[2],
-                       const wv_render_opts *ro, int max_shift, double *out, double shift[2], wv_error *err) {
+/* One window size: its scene, the photo's pixels there and their spectrum. */
+typedef struct {
+  phasecorr pc;
+  wv_scene win;
+  wv_image ref;
+  int max_shift;
+  wv_render_opts ro;
+} level;
+
+static void level_free(level *l) {
+  pc_free(&l->pc);
+  wv_image_free(&l->ref);
+}
+
+static wv_status level_init(level *l, const wv_scene *full, const wv_image *photo, int size, const wv_fit_opts *o,
+                            wv_error *err) {
+  memset(l, 0, sizeof *l);
+  int w = full->width < size ? full->width : size, h = full->height < size ? full->height : size;
+  w -= (full->width - w) % 2, h -= (full->height - h) % 2; /* centred on whole pixels */
+  wv_fit_centre_window(full, w, h, &l->win);
+  l->win.spp = o->iter_spp;
+  l->max_shift = (w < h ? w : h) / 4;
+  l->ro = (wv_render_opts){l->win.spp, o->threads, NULL, NULL};
+  wv_status rc = wv_fit_centre_crop(photo, w, h, &l->ref, err);
+  if (!rc) rc = pc_init(&l->pc, w, h, err);
+  if (rc) {
+    wv_image_free(&l->ref);
+    return rc;
+  }
+  pc_prepare(&l->pc, &l->ref);
+  fftwf_execute(l->pc.fwd);
+  memcpy(l->pc.ref, l->pc.spec, sizeof(fftwf_complex) * (size_t)h * l->pc.nc);
+  return WV_OK;
+}
+
+/* Renders the window with the given densities and scores it (shifts up to the
+ * level's limit, or none with no_shift). */
+static wv_status score(level *l, const wv_scene *win, const wv_params *base, const double dens[2], int no_shift,
+                       double *out, double shift[2], wv_error *err) {
   wv_params p = *base;
   p.density[0] = dens[0], p.density[1] = dens[1];
   wv_image img;
-  wv_status rc = wv_render(win, &p, ro, &img, NULL, err);
+  wv_status rc = wv_render(win, &p, &l->ro, &img, NULL, err);
   if (rc) return rc;
-  *out = pc_best(pc, &img, max_shift, shift);
+  *out = pc_best(&l->pc, &img, no_shift ? 0 : l->max_shift, shift);
   wv_image_free(&img);
   return WV_OK;
 }
@@ -162,58 +199,162 @@ void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out) {
   out->fabric_offset[1] += st->offset_mm[1];
 }
 
+#define MAX_THREADS 16
+
+/* One window size, one copy per thread (renders and FFTs run one per thread:
+ * the windows are too small to split across threads). */
+typedef struct {
+  level lv[MAX_THREADS];
+  int n;
+} level_set;
+
+static void set_free(level_set *ls) {
+  for (int i = 0; i < ls->n; i++) level_free(&ls->lv[i]);
+  ls->n = 0;
+}
+
+static wv_status set_init(level_set *ls, const wv_scene *full, const wv_image *photo, int size, int threads,
+                          const wv_fit_opts *o, wv_error *err) {
+  ls->n = 0;
+  for (int i = 0; i < threads; i++) {
+    wv_status rc = level_init(&ls->lv[i], full, photo, size, o, err);
+    if (rc) {
+      set_free(ls);
+      return rc;
+    }
+    ls->lv[i].ro.threads = 1;
+    ls->n++;
+  }
+  return WV_OK;
+}
+
+/* Scores of count density pairs (out of range: -3), in parallel. */
+static wv_status eval_many(level_set *ls, const wv_params *base, const double (*d)[2], int count, double *out,
+                           wv_error *err) {
+  wv_status rc = WV_OK;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(ls->n)
+  for (int i = 0; i < count; i++) {
+    level *l = &ls->lv[omp_get_thread_num()];
+    out[i] = -3;
+    if (!in_range(d[i])) continue;
+    wv_error e = {0};
+    wv_status r = score(l, &l->win, base, d[i], 0, &out[i], NULL, &e);
+    if (r) {
+#pragma omp critical(wv_register_error)
+      if (!rc) {
+        rc = r;
+        if (err) *err = e;
+      }
+    }
+  }
+  return rc;
+}
+
+/* Moves cur to the best of its 8 neighbours while that raises the score, for
+ * each step size in turn. */
+static wv_status hill_climb(level_set *ls, const wv_params *base, const double *steps, int nsteps, double cur[2],
+                            double *best, wv_error *err) {
+  wv_status rc = WV_OK;
+  for (int k = 0; k < nsteps && !rc; k++)
+    for (int moves = 0; moves < 8 && !rc; moves++) {
+      double d[8][2], v[8];
+      int m = 0;
+      for (int a = -1; a <= 1; a++)
+        for (int b = -1; b <= 1; b++)
+          if (a || b) d[m][0] = cur[0] + a * steps[k], d[m][1] = cur[1] + b * steps[k], m++;
+      if ((rc = eval_many(ls, base, (const double(*)[2])d, 8, v, err))) break;
+      int bi = -1;
+      double bv = *best;
+      for (int i = 0; i < 8; i++)
+        if (v[i] > bv) bv = v[i], bi = i;
+      if (bi < 0) break;
+      *best = bv, cur[0] = d[bi][0], cur[1] = d[bi][1];
+    }
+  return rc;
+}
+
+#define GLOBAL_STEP 1.04 /* ratio between neighbouring densities of the coarse grid */
+#define WV_REGISTER_MIN_NCC 0.2 /* phase correlation that counts as the weave lining up */
+#define N_CAND 4         /* candidates from it refined in the larger window */
+
 wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                           wv_error *err) {
-  int w = s->width < 256 ? s->width : 256, h = s->height < 256 ? s->height : 256;
-  w -= (s->width - w) % 2, h -= (s->height - h) % 2; /* centred on whole pixels */
-  wv_scene full, win;
+  wv_scene full;
   wv_fit_scene(st, s, &full);
-  wv_fit_centre_window(&full, w, h, &win);
-  win.spp = o->iter_spp;
-  int max_shift = (w < h ? w : h) / 4;
-  wv_image ref;
-  wv_status rc = wv_fit_centre_crop(photo, w, h, &ref, err);
-  if (rc) return rc;
-  phasecorr pc;
-  if ((rc = pc_init(&pc, w, h, err))) {
-    wv_image_free(&ref);
-    return rc;
-  }
-  pc_prepare(&pc, &ref);
-  fftwf_execute(pc.fwd);
-  memcpy(pc.ref, pc.spec, sizeof(fftwf_complex) * (size_t)h * pc.nc);
-  wv_render_opts ro = {win.spp, o->threads, NULL, NULL};
+  int threads = o->threads > 0 ? o->threads : omp_get_max_threads();
+  threads = threads < 1 ? 1 : threads > MAX_THREADS ? MAX_THREADS : threads;
+  /* Four window sizes, the last the whole image: the narrow density peak of a
+   * large window is found from the wide one of a small window. */
+  level_set *S = calloc(4, sizeof *S);
+  if (!S) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration");
+  const int sizes[4] = {64, 128, 256, 1 << 30};
+  wv_status rc = WV_OK;
+  for (int i = 0; i < 4 && !rc; i++) rc = set_init(&S[i], &full, photo, sizes[i], threads, o, err);
+  const wv_params *base = &st->params;
+  double cur[2] = {base->density[0], base->density[1]}, best = -2, shift[2] = {0, 0};
+  level *top = &S[3].lv[0];
+  if (!rc) rc = score(top, &top->win, base, cur, 1, &st->reg_ncc_before, NULL, err);
 
-  double cur[2] = {st->params.density[0], st->params.density[1]}, best, shift[2];
-  rc = score(&pc, &win, &st->params, cur, &ro, 0, &st->reg_ncc_before, NULL, err);
-  if (!rc) rc = score(&pc, &win, &st->params, cur, &ro, max_shift, &best, NULL, err);
-  /* 2-D grid on whole yarns/inch: the peak is narrow (about one yarn across the
-   * window) and a one-at-a-time search walks off it. */
-  double centre[2] = {cur[0], cur[1]};
-  int R = o->register_radius;
-  for (int a = -R; a <= R && !rc; a++)
-    for (int b = -R; b <= R && !rc; b++) {
-      double d[2] = {centre[0] + a, centre[1] + b}, v;
-      if ((!a && !b) || !in_range(d)) continue;
-      if ((rc = score(&pc, &win, &st->params, d, &ro, max_shift, &v, NULL, err))) break;
-      if (v > best) best = v, cur[0] = d[0], cur[1] = d[1];
-    }
-  /* then finer steps around the best, 8 neighbours at a time */
-  static const double steps[] = {0.5, 0.25, 0.1};
-  for (int k = 0; k < 3 && !rc; k++)
-    for (int moves = 0; moves < 6 && !rc; moves++) {
-      double bd[2] = {cur[0], cur[1]}, bv = best;
-      for (int a = -1; a <= 1 && !rc; a++)
-        for (int b = -1; b <= 1 && !rc; b++) {
-          double d[2] = {cur[0] + a * steps[k], cur[1] + b * steps[k]}, v;
-          if ((!a && !b) || !in_range(d)) continue;
-          if ((rc = score(&pc, &win, &st->params, d, &ro, max_shift, &v, NULL, err))) break;
-          if (v > bv) bv = v, bd[0] = d[0], bd[1] = d[1];
-        }
-      if (bv <= best) break;
-      best = bv, cur[0] = bd[0], cur[1] = bd[1];
-    }
-  if (!rc) rc = score(&pc, &win, &st->params, cur, &ro, max_shift, &best, shift, err);
+  /* 1. The whole range 20..250 on a ratio grid in the small window: a density far
+   * from the fitted one (another aliasing of the same texture: twill2_R.png's
+   * weft went from 227 to 75) is found here. The best few, kept apart, go on. */
+  double cand[N_CAND + 1][2];
+  int nc = 0;
+  const int n = (int)floor(log(250.0 / 20.0) / log(GLOBAL_STEP)) + 1;
+  double(*gd)[2] = rc ? NULL : malloc(sizeof *gd * (size_t)n * n);
+  double *grid = rc ? NULL : malloc(sizeof(double) * (size_t)n * n);
+  if (!rc && (!gd || !grid)) rc = wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration grid");
+  for (int i = 0; i < n && !rc; i++)
+    for (int j = 0; j < n; j++)
+      gd[i * n + j][0] = 20.0 * pow(GLOBAL_STEP, i), gd[i * n + j][1] = 20.0 * pow(GLOBAL_STEP, j);
+  if (!rc) rc = eval_many(&S[0], base, (const double(*)[2])gd, n * n, grid, err);
+  for (int c = 0; c < N_CAND && !rc; c++) { /* best remaining, then blank its neighbourhood */
+    int bi = -1, bj = -1;
+    double bv = -2.5;
+    for (int i = 0; i < n; i++)
+      for (int j = 0; j < n; j++)
+        if (grid[(size_t)i * n + j] > bv) bv = grid[(size_t)i * n + j], bi = i, bj = j;
+    if (bi < 0) break;
+    cand[nc][0] = gd[bi * n + bj][0], cand[nc][1] = gd[bi * n + bj][1], nc++;
+    for (int i = bi - 3; i <= bi + 3; i++)
+      for (int j = bj - 3; j <= bj + 3; j++)
+        if (i >= 0 && j >= 0 && i < n && j < n) grid[(size_t)i * n + j] = -3;
+  }
+  free(grid), free(gd);
+  /* 2. In the middle window: the grid of whole yarns/inch +-register_radius around
+   * the fitted densities (the peak is narrow: a one-at-a-time search walks off
+   * it) gives one more candidate; each climbs with steps of 2, 1, 0.5. */
+  int R = o->register_radius, m = (2 * R + 1) * (2 * R + 1);
+  double(*ld)[2] = rc ? NULL : malloc(sizeof *ld * (size_t)m);
+  double *lv = rc ? NULL : malloc(sizeof(double) * (size_t)m);
+  if (!rc && (!ld || !lv)) rc = wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration grid");
+  for (int k = 0; k < m && !rc; k++) ld[k][0] = cur[0] + (k / (2 * R + 1) - R), ld[k][1] = cur[1] + (k % (2 * R + 1) - R);
+  if (!rc) rc = eval_many(&S[1], base, (const double(*)[2])ld, m, lv, err);
+  if (!rc) {
+    int bk = 0;
+    for (int k = 1; k < m; k++)
+      if (lv[k] > lv[bk]) bk = k;
+    cand[nc][0] = ld[bk][0], cand[nc][1] = ld[bk][1], nc++;
+  }
+  free(ld), free(lv);
+  static const double mid_steps[] = {2, 1, 0.5}, fine_steps[] = {0.5, 0.25, 0.1};
+  double mid_best = -2, mid[2] = {cur[0], cur[1]};
+  for (int c = 0; c < nc && !rc; c++) {
+    double d[2] = {cand[c][0], cand[c][1]}, v;
+    level *l = &S[1].lv[0];
+    if ((rc = score(l, &l->win, base, d, 0, &v, NULL, err))) break;
+    if ((rc = hill_climb(&S[1], base, mid_steps, 3, d, &v, err))) break;
+    if (v > mid_best) mid_best = v, mid[0] = d[0], mid[1] = d[1];
+  }
+  /* 3. In the large window, then the whole image (a tenth of a yarn/inch is a
+   * yarn of drift across 500 pixels): the last tenths, then the shift. */
+  cur[0] = mid[0], cur[1] = mid[1];
+  level *big = &S[2].lv[0];
+  if (!rc) rc = score(big, &big->win, base, cur, 0, &best, NULL, err);
+  if (!rc) rc = hill_climb(&S[2], base, fine_steps, 3, cur, &best, err);
+  if (!rc) rc = score(top, &top->win, base, cur, 0, &best, NULL, err);
+  if (!rc) rc = hill_climb(&S[3], base, fine_steps + 1, 2, cur, &best, err);
+  if (!rc) rc = score(top, &top->win, base, cur, 0, &best, shift, err);
   /* The shift becomes a fabric offset through the local map pixel -> fabric at
    * the centre: photo(x) ~ render(x - shift) means fabric(x) must become
    * fabric(x - shift). */
@@ -223,18 +364,20 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
       wv_render_fabric_at(&full, cx, cy + 1, fy)) {
     for (int i = 0; i < 2; i++) off[i] = -((fx[i] - f0[i]) * shift[0] + (fy[i] - f0[i]) * shift[1]);
   }
-  if (!rc) {
-    wv_params cand = st->params;
-    cand.density[0] = cur[0], cand.density[1] = cur[1];
-    wv_scene moved = win;
+  if (!rc) { /* kept only if the whole image's SSIM rises */
+    top->ro.threads = threads;
+    wv_params cand_p = *base;
+    cand_p.density[0] = cur[0], cand_p.density[1] = cur[1];
+    wv_scene moved = top->win;
     moved.fabric_offset[0] += off[0], moved.fabric_offset[1] += off[1];
     double before, after, ncc_after;
-    if (!(rc = window_ssim(&win, &st->params, &ref, &ro, &before, err)) &&
-        !(rc = window_ssim(&moved, &cand, &ref, &ro, &after, err)) &&
-        !(rc = score(&pc, &moved, &cand, cur, &ro, 0, &ncc_after, NULL, err))) {
+    if (!(rc = window_ssim(&top->win, base, &top->ref, &top->ro, &before, err)) &&
+        !(rc = window_ssim(&moved, &cand_p, &top->ref, &top->ro, &after, err)) &&
+        !(rc = score(top, &moved, &cand_p, cur, 1, &ncc_after, NULL, err))) {
       st->reg_ssim_before = before;
-      if (after > before) {
-        st->params = cand;
+      /* A rise without a correlation peak would only trade contrast for SSIM. */
+      if (after > before && ncc_after >= WV_REGISTER_MIN_NCC) {
+        st->params = cand_p;
         st->offset_mm[0] += off[0], st->offset_mm[1] += off[1];
         st->reg_ssim_after = after, st->reg_ncc_after = ncc_after;
       } else {
@@ -243,7 +386,7 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
       st->registered = 1;
     }
   }
-  pc_free(&pc);
-  wv_image_free(&ref);
+  for (int i = 0; i < 4; i++) set_free(&S[i]);
+  free(S);
   return rc;
 }
