@@ -51,19 +51,8 @@ static void render_pixel(const wv_camera_rig *rig, const wv_fabric *fab, int px,
   wv_footprint fp;
   wv_footprint_prepare(rig, px, py, &fp);
   float acc[3] = {0, 0, 0};
-  if (fp.fast) {
-    wv_render_fast_pixel(fab, &fp, px, py, spp, rig->width, acc);
-  } else { /* silhouette pixel: trace each sample */
-    for (int k = 0; k < spp; k++) {
-      float sx, sy;
-      wv_pixel_sample(px, py, k, spp, rig->width, fab->seed, &sx, &sy);
-      wv_hit hit;
-      if (!wv_rig_trace(rig, (float)px + sx, (float)py + sy, &hit)) continue;
-      wv_dirs d;
-      wv_dirs_from_hit(&hit, &d);
-      wv_shade(fab, &d, hit.fx, hit.fy, acc);
-    }
-  }
+  if (fp.fast) wv_render_fast_pixel(fab, &fp, px, py, spp, rig->width, acc);
+  else wv_render_traced_pixel(rig, fab, px, py, spp, acc); /* silhouette pixel */
   for (int c = 0; c < 3; c++) out[c] = acc[c] / (float)spp;
 }
 

@@ -138,5 +138,8 @@ static inline void wv_shade(const wv_fabric *f, const wv_dirs *d, float fx, floa
  * bit-identical to calling wv_shade on each (render_simd.c). */
 void wv_render_fast_pixel(const wv_fabric *f, const wv_footprint *fp, int px, int py, int spp, int width,
                           float acc[3]);
+/* The other pixels (on the silhouette, or beside the sample): every sample
+ * traced with wv_rig_trace, shaded with wv_shade, summed into acc in order. */
+void wv_render_traced_pixel(const wv_camera_rig *rig, const wv_fabric *f, int px, int py, int spp, float acc[3]);
 
 #endif

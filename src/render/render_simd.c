@@ -23,10 +23,13 @@
  * note that such an ABI differs between targets does not apply. */
 #pragma GCC diagnostic ignored "-Wpsabi"
 
+/* Defining WV_SIMD_CLONES (e.g. empty: the baseline only) builds other versions. */
+#ifndef WV_SIMD_CLONES
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11
 #define WV_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define WV_SIMD_CLONES
+#endif
 #endif
 
 #define W 8
@@ -98,11 +101,35 @@ INL v8f vexpf(v8f x) { /* wv_expf */
   return p * (v8f)((__builtin_convertvector(kf, v8i) + 127) << 23);
 }
 
-/* Per pixel: the constants of wv_shade and wv_yarn_eval_inline, as they round there. */
+/* wv_pixel_sample for eight consecutive samples of one pixel. */
 typedef struct {
-  uint64_t pixel_hash; /* wv_pixel_sample's first mixing round, the same for every sample */
+  uint64_t hash; /* wv_hash2's first mixing round, the same for every sample of the pixel */
   int nx;
   float fnx, fny, inx;
+} pixel_strata;
+
+INL void strata_init(pixel_strata *P, int px, int py, int spp, int width, uint64_t seed) {
+  P->hash = wv_mix64(((uint64_t)py * (uint64_t)width + (uint64_t)px) * 0x9e3779b97f4a7c15ULL +
+                     (seed ^ 0x70697865ULL));
+  P->nx = (int)ceilf(sqrtf((float)spp));
+  int ny = (spp + P->nx - 1) / P->nx;
+  P->fnx = (float)P->nx, P->fny = (float)ny, P->inx = 1.0f / (float)P->nx;
+}
+
+/* Positions in the pixel of samples s0 .. s0+7: stratum (s mod nx, s div nx), jitter from the hash. */
+INL void sample8(const pixel_strata *P, int s0, v8f *sx, v8f *sy) {
+  v8i s = s0 + (v8i){0, 1, 2, 3, 4, 5, 6, 7};
+  v8i row = vfloor((tof(s) + 0.5f) * P->inx), col = s - row * P->nx; /* off by one at most: see vmod */
+  v8i lo = col < 0, hi = col >= P->nx;
+  row += lo - hi, col += (lo & P->nx) - (hi & P->nx);
+  v8u h = vmix64(P->hash ^ (tou64(s) * 0xc2b2ae3d27d4eb4fULL));
+  v8f j1 = vu01(h), j2 = tof(__builtin_convertvector((h >> 16) & 0xffffffULL, v8i)) * (1.0f / 16777216.0f);
+  *sx = (tof(col) + j1) / P->fnx, *sy = (tof(row) + j2) / P->fny;
+}
+
+/* Per pixel: the constants of wv_shade and wv_yarn_eval_inline, as they round there. */
+typedef struct {
+  pixel_strata strata;
   float half_w[2], uos[2], vsc[2], beta[2], k[2], ia2m1[2], pia[2];
   float noise; /* 0.1 Q */
   float bm, four_mo, inv_pi;
@@ -115,14 +142,8 @@ INL int shade8(const wv_fabric *f, const wv_footprint *fp, const pixel_consts *C
   const wv_yarn_model *m = &f->ym;
   const wv_dirs *d = &fp->dirs;
 
-  /* wv_pixel_sample: stratum (s mod nx, s div nx) and jitter from the hash. */
-  v8i s = s0 + (v8i){0, 1, 2, 3, 4, 5, 6, 7};
-  v8i row = vfloor((tof(s) + 0.5f) * C->inx), col = s - row * C->nx; /* exact: see vmod */
-  v8i lo = col < 0, hi = col >= C->nx;
-  row += lo - hi, col += (lo & C->nx) - (hi & C->nx);
-  v8u h = vmix64(C->pixel_hash ^ (tou64(s) * 0xc2b2ae3d27d4eb4fULL));
-  v8f j1 = vu01(h), j2 = tof(__builtin_convertvector((h >> 16) & 0xffffffULL, v8i)) * (1.0f / 16777216.0f);
-  v8f sx = (tof(col) + j1) / C->fnx, sy = (tof(row) + j2) / C->fny;
+  v8f sx, sy;
+  sample8(&C->strata, s0, &sx, &sy);
 
   /* wv_footprint_at */
   v8f w00 = (1 - sx) * (1 - sy), w10 = sx * (1 - sy), w01 = (1 - sx) * sy, w11 = sx * sy;
@@ -220,11 +241,7 @@ void wv_render_fast_pixel(const wv_fabric *f, const wv_footprint *fp, int px, in
   /* Tiled maps wrap segment identities (period_rows/cols); the renderer never does. */
   if (m->period_rows == 0 && m->period_cols == 0) {
     pixel_consts C;
-    C.pixel_hash = wv_mix64(((uint64_t)py * (uint64_t)width + (uint64_t)px) * 0x9e3779b97f4a7c15ULL +
-                            (f->seed ^ 0x70697865ULL));
-    C.nx = (int)ceilf(sqrtf((float)spp));
-    int ny = (spp + C.nx - 1) / C.nx;
-    C.fnx = (float)C.nx, C.fny = (float)ny, C.inx = 1.0f / (float)C.nx;
+    strata_init(&C.strata, px, py, spp, width, f->seed);
     for (int t = 0; t < 2; t++) {
       float a = f->alpha[t];
       C.half_w[t] = 0.5f * m->spacing[t] * m->width;
@@ -248,5 +265,49 @@ void wv_render_fast_pixel(const wv_fabric *f, const wv_footprint *fp, int px, in
     wv_pixel_sample(px, py, k, spp, width, f->seed, &sx, &sy);
     wv_footprint_at(fp, sx, sy, &fx, &fy);
     wv_shade(f, &fp->dirs, fx, fy, acc);
+  }
+}
+
+/* Bit i set: the ray of sample s0 + i certainly misses the cylinder. The first
+ * steps of wv_rig_trace (rig.c), repeated operation for operation, so a lane
+ * rejected here is one wv_rig_trace would reject. */
+INL unsigned cylinder_misses8(const wv_camera_rig *r, const pixel_strata *P, int px, int py, int s0) {
+  v8f sx, sy;
+  sample8(P, s0, &sx, &sy);
+  v8f x = (float)px + sx, y = (float)py + sy;
+  v8f ndx = (2.0f * x / (float)r->width - 1.0f) * r->tan_half * r->aspect;
+  v8f ndy = (1.0f - 2.0f * y / (float)r->height) * r->tan_half;
+  v8f d0 = r->fwd[0] + ndx * r->right[0] + ndy * r->up[0];
+  v8f d1 = r->fwd[1] + ndx * r->right[1] + ndy * r->up[1];
+  v8f d2 = r->fwd[2] + ndx * r->right[2] + ndy * r->up[2];
+  v8f l = vsqrt(d0 * d0 + d1 * d1 + d2 * d2);
+  d1 /= l, d2 /= l;
+  const float *o = r->cpos;
+  v8f a = d1 * d1 + d2 * d2;
+  v8f b = o[1] * d1 + o[2] * d2;
+  float c = o[1] * o[1] + o[2] * o[2] - r->radius * r->radius;
+  v8i miss = (a < 1e-12f) | (b * b - a * c < 0.0f);
+  unsigned bits = 0;
+  for (int i = 0; i < W; i++) bits |= (unsigned)(miss[i] & 1) << i;
+  return bits;
+}
+
+WV_SIMD_CLONES
+void wv_render_traced_pixel(const wv_camera_rig *rig, const wv_fabric *f, int px, int py, int spp, float acc[3]) {
+  pixel_strata P;
+  strata_init(&P, px, py, spp, rig->width, f->seed);
+  for (int k0 = 0; k0 < spp; k0 += W) {
+    /* Most of these pixels lie wholly beside the cylinder: reject eight rays at once. */
+    unsigned miss = k0 + W <= spp && rig->shape == WV_SHAPE_CYLINDER ? cylinder_misses8(rig, &P, px, py, k0) : 0;
+    for (int k = k0; k < k0 + W && k < spp; k++) {
+      if (miss >> (k - k0) & 1) continue;
+      float sx, sy;
+      wv_pixel_sample(px, py, k, spp, rig->width, f->seed, &sx, &sy);
+      wv_hit hit;
+      if (!wv_rig_trace(rig, (float)px + sx, (float)py + sy, &hit)) continue;
+      wv_dirs d;
+      wv_dirs_from_hit(&hit, &d);
+      wv_shade(f, &d, hit.fx, hit.fy, acc);
+    }
   }
 }
