@@ -159,10 +159,10 @@ INL int shade8(const wv_fabric *f, const wv_footprint *fp, const pixel_consts *C
     if (!ok[i]) return 0;
   v8i I = vfloor(r), J = vfloor(c);
   v8f fr = r - tof(I), fc = c - tof(J);
-  v8i cell = vmod(I, m->weave.rows) * WV_WEAVE_MAX + vmod(J, m->weave.cols);
+  v8i wr = vmod(I, m->weave.rows), wc = vmod(J, m->weave.cols); /* wv_weave_at */
   v8i ty, len, idx;
   for (int i = 0; i < W; i++) { /* a gather: three bytes per lane */
-    const wv_weave_cell *ce = &m->weave.cell[0][0] + cell[i];
+    const wv_weave_cell *ce = &m->weave.cell[wr[i]][wc[i]];
     ty[i] = ce->type, len[i] = ce->len, idx[i] = ce->index;
   }
   v8i warp = ty == WV_WARP;
