@@ -12,7 +12,7 @@
 #define K_SIN wv_sin_hp
 #define K_COS wv_cos_hp
 #define K_SQRT sqrtf
-#define K_EXP expf
+#define K_EXP wv_expf
 #define K_DIRS kdirs_f
 #define K_PARAMS kparams_f
 #define K_LOAD_DIRS load_dirs_f

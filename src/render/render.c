@@ -5,8 +5,6 @@
 #include <string.h>
 
 #include "render/render_internal.h"
-#include "woven/brdf.h"
-#include "yarn/yarn_eval.h"
 
 wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
   memset(f, 0, sizeof *f);
@@ -48,46 +46,13 @@ wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render
   return WV_OK;
 }
 
-/* Radiance of one sample at fabric point (fx, fy), added to acc. */
-static inline void shade(const wv_fabric *f, const wv_dirs *d, float fx, float fy, float acc[3]) {
-  wv_yarn_point yp;
-  wv_yarn_eval_inline(&f->ym, fx, fy, &yp);
-  if (yp.type < 0) return; /* gap: nothing reflects */
-  int ty = yp.type;
-  float a = f->alpha[ty], k = 1.0f - a * a;
-  float ti = wv_dot3(yp.t, d->wi), to = wv_dot3(yp.t, d->wo), th = wv_dot3(yp.t, d->h);
-  float si2 = 1.0f - k * ti * ti, so2 = 1.0f - k * to * to;
-  float si = sqrtf(si2 > 0.0f ? si2 : 0.0f), so = sqrtf(so2 > 0.0f ? so2 : 0.0f);
-  float A = si / d->mi + so / d->mo;
-  float q = 1.0f + (1.0f / (a * a) - 1.0f) * th * th;
-  float D = 1.0f / (3.14159265358979f * a * q * q);
-  /* f_s mu_i = D (1 - exp(-T A)) / (4 mu_o A), times the glint factor */
-  float spec = A > 0.0f ? D * (1.0f - expf(-f->thickness * A)) / (4.0f * d->mo * A) : 0.0f;
-  spec *= wv_glint(f, fx, fy);
-  float ni = wv_dot3(d->wi, yp.n);
-  float diff = (f->blend * (ni > 0.0f ? ni : 0.0f) + (1.0f - f->blend) * d->mi) * (1.0f / 3.14159265358979f);
-  for (int c = 0; c < 3; c++) acc[c] += d->light * (f->ks[ty][c] * spec + f->kd[ty][c] * diff);
-}
-
 /* Average radiance of pixel (px, py). */
 static void render_pixel(const wv_camera_rig *rig, const wv_fabric *fab, int px, int py, int spp, float out[3]) {
   wv_footprint fp;
   wv_footprint_prepare(rig, px, py, &fp);
   float acc[3] = {0, 0, 0};
-  for (int k = 0; k < spp; k++) {
-    float sx, sy, fx, fy;
-    wv_pixel_sample(px, py, k, spp, rig->width, fab->seed, &sx, &sy);
-    if (fp.fast) {
-      wv_footprint_at(&fp, sx, sy, &fx, &fy);
-      shade(fab, &fp.dirs, fx, fy, acc);
-    } else { /* silhouette pixel: trace each sample */
-      wv_hit hit;
-      if (!wv_rig_trace(rig, (float)px + sx, (float)py + sy, &hit)) continue;
-      wv_dirs d;
-      wv_dirs_from_hit(&hit, &d);
-      shade(fab, &d, hit.fx, hit.fy, acc);
-    }
-  }
+  if (fp.fast) wv_render_fast_pixel(fab, &fp, px, py, spp, rig->width, acc);
+  else wv_render_traced_pixel(rig, fab, px, py, spp, acc); /* silhouette pixel */
   for (int c = 0; c < 3; c++) out[c] = acc[c] / (float)spp;
 }
 

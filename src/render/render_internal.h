@@ -8,10 +8,12 @@
 
 #include "util/fastmath.h"
 #include "util/hash.h"
+#include "woven/brdf.h"
 #include "woven/params.h"
 #include "woven/render.h"
 #include "woven/scene.h"
 #include "woven/yarn.h"
+#include "yarn/yarn_eval.h"
 
 typedef struct {
   int width, height;
@@ -108,5 +110,36 @@ static inline float wv_glint(const wv_fabric *f, float fx, float fy) {
   int64_t gx = wv_floor_ll(fx * f->inv_glint_cell[0]), gy = wv_floor_ll(fy * f->inv_glint_cell[1]);
   return f->glint_table[wv_hash2((uint64_t)gx, (uint64_t)gy, f->seed ^ 0x676c696eULL) >> 52];
 }
+
+/* Radiance of one sample at fabric point (fx, fy), added to acc. The 8-wide
+ * path (render_simd.c) and the gradient kernel repeat this arithmetic. */
+static inline void wv_shade(const wv_fabric *f, const wv_dirs *d, float fx, float fy, float acc[3]) {
+  wv_yarn_point yp;
+  wv_yarn_eval_inline(&f->ym, fx, fy, &yp);
+  if (yp.type < 0) return; /* gap: nothing reflects */
+  int ty = yp.type;
+  float a = f->alpha[ty], k = 1.0f - a * a;
+  float ti = wv_dot3(yp.t, d->wi), to = wv_dot3(yp.t, d->wo), th = wv_dot3(yp.t, d->h);
+  float si2 = 1.0f - k * ti * ti, so2 = 1.0f - k * to * to;
+  float si = sqrtf(si2 > 0.0f ? si2 : 0.0f), so = sqrtf(so2 > 0.0f ? so2 : 0.0f);
+  float A = si / d->mi + so / d->mo;
+  float q = 1.0f + (1.0f / (a * a) - 1.0f) * th * th;
+  float D = 1.0f / (3.14159265358979f * a * q * q);
+  /* f_s mu_i = D (1 - exp(-T A)) / (4 mu_o A), times the glint factor */
+  float spec = A > 0.0f ? D * (1.0f - wv_expf(-f->thickness * A)) / (4.0f * d->mo * A) : 0.0f;
+  spec *= wv_glint(f, fx, fy);
+  float ni = wv_dot3(d->wi, yp.n);
+  float diff = (f->blend * (ni > 0.0f ? ni : 0.0f) + (1.0f - f->blend) * d->mi) * (1.0f / 3.14159265358979f);
+  for (int c = 0; c < 3; c++) acc[c] += d->light * (f->ks[ty][c] * spec + f->kd[ty][c] * diff);
+}
+
+/* The samples of a pixel whose footprint is fast (fp->fast), eight at a time
+ * where the CPU allows: their radiance summed into acc in sample order,
+ * bit-identical to calling wv_shade on each (render_simd.c). */
+void wv_render_fast_pixel(const wv_fabric *f, const wv_footprint *fp, int px, int py, int spp, int width,
+                          float acc[3]);
+/* The other pixels (on the silhouette, or beside the sample): every sample
+ * traced with wv_rig_trace, shaded with wv_shade, summed into acc in order. */
+void wv_render_traced_pixel(const wv_camera_rig *rig, const wv_fabric *f, int px, int py, int spp, float acc[3]);
 
 #endif

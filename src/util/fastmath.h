@@ -4,6 +4,8 @@
 #ifndef WOVEN_FASTMATH_H
 #define WOVEN_FASTMATH_H
 
+#include <stdint.h>
+
 static inline float wv_sin_hp(float x) {
   float x2 = x * x;
   return x * (1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040 +
@@ -13,6 +15,23 @@ static inline float wv_cos_hp(float x) {
   float x2 = x * x;
   return 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 * (1.0f / 40320 +
          x2 * (-1.0f / 3628800 + x2 * (1.0f / 479001600))))));
+}
+
+/* exp(x) to about 1 ulp for x in [-87, 88] (clamped outside): x = k ln2 + r with
+ * |r| <= ln2/2, e^r by its Taylor series to r^7, 2^k from the exponent bits.
+ * Written with only +, -, *, compare and an int conversion so that the 8-wide
+ * copy in render/render_simd.c, which repeats it operation for operation,
+ * rounds identically: the forward renderer's vector and scalar paths and the
+ * gradient kernel must give bit-identical radiance. */
+static inline float wv_expf(float x) {
+  x = x > -87.0f ? x : -87.0f;
+  x = x < 88.0f ? x : 88.0f;
+  float kf = (x * 1.44269502f + 12582912.0f) - 12582912.0f; /* round to nearest: 1.5 * 2^23 */
+  float r = (x - kf * 0.693145751953125f) - kf * 1.42860677e-6f; /* ln 2 in two parts, kf ln2_hi exact */
+  float p = 1.0f + r * (1.0f + r * (0.5f + r * (1.0f / 6 + r * (1.0f / 24 + r * (1.0f / 120 +
+            r * (1.0f / 720 + r * (1.0f / 5040)))))));
+  union { int32_t i; float f; } s = {((int32_t)kf + 127) << 23}; /* 2^k, k in [-126, 127] */
+  return p * s.f;
 }
 
 /* floor as an integer: without SSE4.1 floorf is a library call or a long
