@@ -82,9 +82,25 @@ static void test_picks_true_pattern(void **state) {
   assert_int_equal(wrong, 0);
 }
 
+/* A photo of another size is an error naming both sizes, not a wrong answer. */
+static void test_photo_size(void **state) {
+  fixture *f = *state;
+  wv_error e = {0};
+  wv_image photo;
+  float y[WV_NET_OUT] = {0};
+  wv_pattern_choice c;
+  assert_int_equal(wv_image_alloc(&photo, 64, 64, 3, &e), WV_OK);
+  assert_int_equal(wv_fabricnet_choose_pattern(&f->net, f->d, &f->scene, &photo, f->gram, y, NULL, &c, &e),
+                   WV_ERR_INVALID);
+  assert_non_null(strstr(e.msg, "64 x 64"));
+  assert_non_null(strstr(e.msg, "96 x 64"));
+  wv_image_free(&photo);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_picks_true_pattern, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_photo_size, setup, teardown),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
