@@ -18,8 +18,9 @@ static const char *PREDICT_HELP =
     "FabricNet's estimate of the fabric parameters of PHOTO taken in the scene.\n"
     "  --pattern NAME  plain, twill, satin, twill90 or satin90. Without it the pattern is chosen\n"
     "                  (the network does not predict it): the estimate is rendered with each of\n"
-    "                  the five at 4 spp and the smallest texture (Gram) loss against the photo\n"
-    "                  wins (about 0.5 s more at 800 x 300); --json gives the five losses.\n"
+    "                  the five at 4 spp and the smallest fit loss (Gram + 0.2 pixel) against the\n"
+    "                  photo wins (about 0.5 s more at 800 x 300 on 2 idle cores); --json gives\n"
+    "                  the losses. Twill and satin are often confused (docs/fabricnet.md)\n"
     "                  The noise level Q is the pattern's prior value\n"
     "  --model M       a model from 'woven train' (default: models/fabricnet-<scene name>.bin;\n"
     "                  the directory can be changed with WOVEN_MODEL_DIR)\n"
@@ -123,11 +124,11 @@ static int run_predict(cli_ctx *c, const predict_args *pa, wv_scene *scene, wv_i
     /* why: the five losses, smallest first marked */
     const wv_pattern_choice *pc = &res->choice;
     char line[512];
-    int len = snprintf(line, sizeof line, "pattern %s chosen: smallest texture loss of the estimate rendered with "
-                                          "each pattern (%d spp, %.2f s):", wv_net_pattern(pc->best), pc->spp,
-                       pc->seconds);
+    int len = snprintf(line, sizeof line, "pattern %s chosen: smallest fit loss (Gram + %g pixel) of the estimate "
+                                          "rendered with each pattern (%d spp, %.2f s):", wv_net_pattern(pc->best),
+                       pc->w_pixel, pc->spp, pc->seconds);
     for (int i = 0; i < WV_NET_PATTERNS && len > 0 && (size_t)len < sizeof line; i++)
-      len += snprintf(line + len, sizeof line - (size_t)len, " %s%s %.6f", i ? "," : "", wv_net_pattern(i),
+      len += snprintf(line + len, sizeof line - (size_t)len, "%s %s %.6f", i ? "," : "", wv_net_pattern(i),
                       pc->loss[i]);
     cli_info(c, "%s\n", line);
   }

@@ -104,7 +104,7 @@ wv_status wv_fabricnet_predict_features(const wv_fabricnet *n, float *feat, floa
  * L_c = mean |down(photo) - down(render)| (16 x 8 area averages); the smallest wins.
  * Gram matrices are not rotation invariant, so a pattern and its 90-degree variant give
  * different losses. Cost: five renders and five descriptor passes (docs/fabricnet.md). */
-#define WV_PATTERN_SPP 4       /* the fit iterates at 4 spp too */
+#define WV_PATTERN_SPP 4       /* as the fit iterates; 16 helps twill vs satin at 2-3x the cost (docs/fabricnet.md) */
 #define WV_PATTERN_W_PIXEL 0.2 /* the fit's w2 */
 typedef struct {
   int spp;        /* samples per pixel of each candidate's render; 0: WV_PATTERN_SPP */
