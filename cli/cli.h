@@ -52,6 +52,7 @@ double cli_now(void);
 
 /* A fit to run (woven fit and woven capture). */
 #include "woven/descriptor.h"
+#include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/params.h"
 #include "woven/scene.h"
@@ -63,17 +64,19 @@ typedef struct {
   wv_fit_opts opts;
   const char *dir, *photo_path, *start_label, *title;
   int resume, iters_given;
+  const wv_pattern_choice *pattern_choice; /* capture without --pattern: how the start's pattern was chosen */
 } fit_job;
 int fit_pipeline(cli_ctx *c, const fit_job *job);
 /* The fit's tuning options, shared by woven fit and woven capture: --iters,
  * --iter-spp, --iter-scale, --seed, --align-radius, --threads. Sets *handled;
  * returns EXIT_USAGE after printing a message for a bad value. */
 int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled);
-/* Shared with woven capture: the output directory check and fit.json (for --resume). */
+/* Shared with woven capture: the output directory check and fit.json (for --resume; pc, when
+ * not NULL, is recorded there too). */
 #include "woven/photo.h"
 int fit_prepare_dir(const char *cmd, const char *dir, int force, int resume);
 wv_status fit_write_job(const char *dir, const char *photo, const wv_crop *crop, const wv_scene *s,
-                        const char *descriptor, const char *weights, wv_error *err);
+                        const char *descriptor, const char *weights, const wv_pattern_choice *pc, wv_error *err);
 int cli_parse_crop(const char *s, wv_crop *c);
 
 int cmd_render(int argc, char **argv);

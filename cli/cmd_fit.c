@@ -191,7 +191,8 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   snprintf(path, sizeof path, "%s/loss.svg", job->dir);
   if (!rc) rc = wv_write_file_atomic(path, svg, strlen(svg), &err);
   wv_report rep = {job->title,  pphoto,      pstart,     pfit,      job->start_label,      ssim_start, ssim_fit,
-                   &st.start,   &st.params,  svg,        &st.timing, st.iter,              wv_descriptor_name(job->desc)};
+                   &st.start,   &st.params,  svg,        &st.timing, st.iter,              wv_descriptor_name(job->desc),
+                   job->pattern_choice};
   snprintf(path, sizeof path, "%s/report.html", job->dir);
   if (!rc) rc = wv_report_write_html(path, &rep, &err);
   free(svg);
@@ -219,16 +220,17 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
            ssim_fit, st.iter, st.timing.total, job->dir);
   if (c->json) {
     char *pj = wv_params_to_json(&st.params);
+    char *pc = job->pattern_choice ? wv_pattern_choice_to_json(job->pattern_choice) : NULL;
     printf("{\"dir\": \"%s\", \"iterations\": %d, \"ssim_start\": %.6f, \"ssim_fit\": %.6f, \"loss\": %.8f, "
            "\"time_s\": {\"total\": %.3f, \"render\": %.3f, \"gradient\": %.3f, \"descriptor\": %.3f, "
            "\"discrete\": %.3f, \"registration\": %.3f}, \"density_alignment_ssim\": [%.4f, %.4f], "
            "\"registration\": {\"offset_mm\": [%.6f, %.6f], \"ncc\": [%.4f, %.4f], \"window_ssim\": [%.4f, %.4f]}, "
-           "\"params\": %s}\n",
+           "\"pattern_choice\": %s, \"params\": %s}\n",
            job->dir, st.iter, ssim_start, ssim_fit, last ? last->loss : 0.0, st.timing.total, st.timing.render,
            st.timing.gradient, st.timing.descriptor, st.timing.discrete, st.timing.registration,
            st.align_ssim_before, st.align_ssim_after, st.offset_mm[0], st.offset_mm[1], st.reg_ncc_before,
-           st.reg_ncc_after, st.reg_ssim_before, st.reg_ssim_after, pj ? pj : "null");
-    free(pj);
+           st.reg_ncc_after, st.reg_ssim_before, st.reg_ssim_after, pc ? pc : "null", pj ? pj : "null");
+    free(pj), free(pc);
   }
   wv_fit_state_free(&st);
   return 0;
@@ -236,13 +238,19 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
 
 /* fit.json records what a resume needs: the photo, crop, scene and descriptor. */
 wv_status fit_write_job(const char *dir, const char *photo, const wv_crop *crop, const wv_scene *s,
-                           const char *descriptor, const char *weights, wv_error *err) {
+                           const char *descriptor, const char *weights, const wv_pattern_choice *pc,
+                           wv_error *err) {
   char *sj = wv_scene_to_json(s);
   json_t *scene = json_loads(sj, 0, NULL);
   free(sj);
   json_t *o = json_pack("{s:s,s:i,s:s,s:[i,i,i,i],s:o,s:s,s:s*}", "kind", "woven-fit", "version", 1, "photo", photo,
                         "crop", crop->x, crop->y, crop->w, crop->h, "scene", scene, "descriptor", descriptor,
                         "vgg19_weights", weights);
+  if (pc) { /* informative: a resume does not need it */
+    char *pj = wv_pattern_choice_to_json(pc);
+    if (pj) json_object_set_new(o, "pattern_choice", json_loads(pj, 0, NULL));
+    free(pj);
+  }
   char *text = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
   json_decref(o);
   char path[4096];
@@ -374,7 +382,7 @@ int cmd_fit(int argc, char **argv) {
   }
   int rc = fit_prepare_dir(c.cmd, dir, force, resume != NULL);
   wv_crop used = {info.crop[0], info.crop[1], info.crop[2], info.crop[3]};
-  if (!rc && !resume && fit_write_job(dir, photo, &used, &scene, desc_name, weights, &err)) rc = cli_fail(&c, &err);
+  if (!rc && !resume && fit_write_job(dir, photo, &used, &scene, desc_name, weights, NULL, &err)) rc = cli_fail(&c, &err);
   if (!rc) {
     job.scene = &scene, job.photo = &ph, job.desc = desc, job.start = resume ? NULL : &start;
     job.dir = dir, job.photo_path = photo, job.resume = resume != NULL, job.iters_given = iters_given;

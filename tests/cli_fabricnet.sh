@@ -54,7 +54,15 @@ check "train resume" 0 '"epochs": 5' -- "$WOVEN" train "$DS" -o "$T/m.bin" --epo
 IMG=$DS/samples/twill_0.png
 check "predict" 0 '"pattern": "twill"' -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --pattern twill --model "$T/m.bin" -o "$T/p.json" --json
 check "predict output renders" 0 "" -- "$WOVEN" render --params "$T/p.json" --scene "$T/tiny.json" -o "$T/p.png" -q
-check "predict needs a pattern" 1 "--pattern" -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --model "$T/m.bin" -o "$T/p.json"
+# Without --pattern the pattern is chosen; the JSON names it and gives the five losses.
+check "predict chooses the pattern" 0 '"pattern_choice": {"chosen": "' -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --model "$T/m.bin" -o "$T/pc.json" --json
+chosen=$(sed -n 's/.*"pattern_choice": {"chosen": "\([a-z0-9]*\)".*/\1/p' "$T/out")
+[[ $chosen =~ ^(plain|twill|satin|twill90|satin90)$ ]] || fail "predict chose '$chosen'"
+grep -q "\"pattern\": \"$chosen\"" "$T/pc.json" || fail "predict output does not use the chosen pattern '$chosen'"
+for p in plain twill satin twill90 satin90; do grep -q "\"$p\": [0-9]" "$T/out" || fail "predict JSON lacks the loss of $p"; done
+check "predict says why" 0 "pattern $chosen chosen" -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --model "$T/m.bin" -o "$T/pc.json"
+check "predict given pattern: no choice" 0 '"pattern_choice": null' -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --pattern satin --model "$T/m.bin" -o "$T/pc.json" --json
+check "predict custom pattern" 2 "custom" -- "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --pattern custom --model "$T/m.bin" -o "$T/pc.json"
 check "predict other scene" 2 "scene-specific" -- "$WOVEN" predict "$IMG" --scene flat45 --pattern twill --model "$T/m.bin" -o "$T/p.json"
 check "predict default model missing" 3 "no default model" -- env WOVEN_MODEL_DIR="$T/none" "$WOVEN" predict "$IMG" --scene "$T/tiny.json" --pattern twill -o "$T/p.json"
 check "capture" 0 '"ssim_fit"' -- "$WOVEN" capture "$IMG" --scene "$T/tiny.json" --pattern twill --model "$T/m.bin" -o "$T/cap" --iters 3 --iter-scale 1 --iter-spp 2 --json
@@ -63,6 +71,10 @@ for f in network.json params.json render.png start.png compare.png loss.svg repo
 done
 grep -q "network" "$T/cap/report.html" || fail "report does not name the network start"
 check "capture resumes as a fit" 0 '"iterations": 4' -- "$WOVEN" fit --resume "$T/cap" --iters 4 --json
+check "capture chooses the pattern" 0 '"pattern_choice": {"chosen": "' -- "$WOVEN" capture "$IMG" --scene "$T/tiny.json" --model "$T/m.bin" -o "$T/capc" --iters 2 --iter-spp 2 --align-radius 0 --json
+grep -q '"pattern_choice"' "$T/capc/fit.json" || fail "capture fit.json lacks the pattern choice"
+grep -q "Pattern chosen automatically" "$T/capc/report.html" || fail "capture report does not explain the pattern"
+check "auto capture resumes as a fit" 0 '"iterations": 3' -- "$WOVEN" fit --resume "$T/capc" --iters 3 --json
 
 # Bad models: clear error naming the file, non-zero exit, earlier results untouched.
 cp "$T/p.json" "$T/p.keep"

@@ -9,7 +9,8 @@
  *
  * Outputs, in order: density warp, density weft (20..250 yarns per inch), then the 19
  * continuous parameters in wv_param_id order with wv_param_range's ranges. The weave
- * pattern is not predicted (the caller gives it) and the noise level Q is left to the fit. */
+ * pattern is not predicted: the caller gives it or wv_fabricnet_choose_pattern picks it by
+ * rendering; the noise level Q is left to the fit. */
 #ifndef WOVEN_FABRICNET_H
 #define WOVEN_FABRICNET_H
 
@@ -92,6 +93,49 @@ float wv_fabricnet_backward(const wv_fabricnet *n, const float *x, const float *
 struct wv_descriptor;
 wv_status wv_fabricnet_predict(const wv_fabricnet *n, struct wv_descriptor *d, const wv_image *img, float *feat,
                                float *y, wv_error *err);
+/* The same from the photo's raw descriptor features (n_in floats, preprocessed in place). */
+wv_status wv_fabricnet_predict_features(const wv_fabricnet *n, float *feat, float *y, wv_error *err);
+
+/* ---- the weave pattern: not an output of the network, chosen by the fit's loss ----
+ * The 21 outputs do not depend on the pattern; only the parameters built from them
+ * (wv_fabricnet_params) do. Each built-in pattern's parameters are rendered in the scene at
+ * a low spp and compared with the photo by the fit's loss terms: the Gram loss
+ * L_g = mean |Gram(photo) - Gram(render)| plus w_pixel times the pixel loss
+ * L_c = mean |down(photo) - down(render)| (16 x 8 area averages); the smallest wins.
+ * Gram matrices are not rotation invariant, so a pattern and its 90-degree variant give
+ * different losses. Cost: five renders and five descriptor passes (docs/fabricnet.md). */
+#define WV_PATTERN_SPP 4       /* as the fit iterates; 16 helps twill vs satin at 2-3x the cost (docs/fabricnet.md) */
+#define WV_PATTERN_W_PIXEL 0.2 /* the fit's w2 */
+typedef struct {
+  int spp;        /* samples per pixel of each candidate's render; 0: WV_PATTERN_SPP */
+  int threads;    /* render threads; 0: OpenMP default */
+  double w_pixel; /* weight of L_c in the criterion (the fit's w2 is 0.2) */
+} wv_pattern_opts;
+void wv_pattern_opts_default(wv_pattern_opts *o);
+typedef struct {
+  int best;                          /* the chosen pattern, an index for wv_net_pattern */
+  double loss[WV_NET_PATTERNS];      /* each candidate's criterion, gram + w_pixel pixel */
+  double gram[WV_NET_PATTERNS];      /* its L_g */
+  double pixel[WV_NET_PATTERNS];     /* its L_c */
+  wv_params params[WV_NET_PATTERNS]; /* each candidate (wv_fabricnet_params with its pattern) */
+  int spp;                           /* what the renders used */
+  double w_pixel;                    /* what the criterion used */
+  double seconds;                    /* renders and descriptor passes */
+} wv_pattern_choice;
+/* y: the network's normalised outputs; photo: the scene's capture image; gram_photo: its raw
+ * descriptor features (before preprocessing). o may be NULL (defaults). */
+wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, struct wv_descriptor *d, const wv_scene *s,
+                                      const wv_image *photo, const float *gram_photo, const float *y,
+                                      const wv_pattern_opts *o, wv_pattern_choice *out, wv_error *err);
+/* The whole estimate without a pattern: one descriptor pass over the photo serves both the
+ * network (y, 21 normalised outputs) and the choice. The result is out->params[out->best]. */
+wv_status wv_fabricnet_predict_pattern(const wv_fabricnet *n, struct wv_descriptor *d, const wv_scene *s,
+                                       const wv_image *photo, const wv_pattern_opts *o, float *y,
+                                       wv_pattern_choice *out, wv_error *err);
+/* {"chosen", "criterion", "spp", "w_pixel", "seconds", "loss", "gram_loss", "pixel_loss"}, the
+ * last three {pattern: value}; one line
+ * (malloc'ed, caller frees; NULL when out of memory). */
+char *wv_pattern_choice_to_json(const wv_pattern_choice *c);
 
 /* ---- model file: a header naming descriptor, scene, layer sizes and ranges, the
  * preprocessing statistics (f32) and the weights (f16), CRC-32 over header and payload. ---- */

@@ -4,6 +4,7 @@
 #define WOVEN_REPORT_H
 
 #include "woven/error.h"
+#include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/image.h"
 #include "woven/params.h"
@@ -24,6 +25,7 @@ typedef struct {
   const wv_fit_timing *timing;
   int iters;
   const char *descriptor;
+  const wv_pattern_choice *pattern_choice;     /* the pattern was chosen automatically (NULL: given) */
 } wv_report;
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err);

@@ -153,6 +153,17 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
     sb_printf(&b, "<p>Time: %.1f s in all (render %.1f s, gradient %.1f s, descriptor %.1f s, discrete search %.1f s, registration %.1f s).</p>\n",
               r->timing->total, r->timing->render, r->timing->gradient, r->timing->descriptor, r->timing->discrete,
               r->timing->registration);
+  const wv_pattern_choice *pc = r->pattern_choice;
+  if (pc) {
+    sb_printf(&b, "<p>Pattern chosen automatically: <b>%s</b>, the smallest texture (Gram) loss against the photo "
+                  "when the network's estimate is rendered with each built-in pattern (%d spp):</p>\n<table><tr>",
+              wv_net_pattern(pc->best), pc->spp);
+    for (int i = 0; i < WV_NET_PATTERNS; i++) sb_printf(&b, "<th>%s</th>", wv_net_pattern(i));
+    sb_printf(&b, "</tr>\n<tr>");
+    for (int i = 0; i < WV_NET_PATTERNS; i++)
+      sb_printf(&b, i == pc->best ? "<td><b>%.6f</b></td>" : "<td>%.6f</td>", pc->loss[i]);
+    sb_printf(&b, "</tr></table>\n");
+  }
   sb_printf(&b, "<h2>Parameters</h2>\n<table><tr><th>parameter</th><th>%s</th><th>fit</th></tr>\n", r->start_label);
   sb_printf(&b, "<tr><td>pattern</td><td>%s</td><td>%s</td></tr>\n", r->start->pattern, r->fit->pattern);
   sb_printf(&b, "<tr><td>density.warp (yarns/inch)</td><td>%.1f</td><td>%.1f</td></tr>\n", r->start->density[0],

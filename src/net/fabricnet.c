@@ -221,10 +221,14 @@ wv_status wv_fabricnet_predict(const wv_fabricnet *n, wv_descriptor *d, const wv
     return wv_fail(err, WV_ERR_INVALID, "descriptor gives %zu features, the model takes %d", wv_descriptor_size(d),
                    n->n_in);
   wv_status st = wv_descriptor_forward(d, img, feat, err);
-  if (st) return st;
+  return st ? st : wv_fabricnet_predict_features(n, feat, y, err);
+}
+
+wv_status wv_fabricnet_predict_features(const wv_fabricnet *n, float *feat, float *y, wv_error *err) {
   wv_fabricnet_preprocess(n, feat, 1);
   wv_fabricnet_acts a;
-  if ((st = wv_fabricnet_acts_alloc(&a, 1, err))) return st;
+  wv_status st = wv_fabricnet_acts_alloc(&a, 1, err);
+  if (st) return st;
   wv_fabricnet_forward(n, feat, 1, &a);
   memcpy(y, a.out, WV_NET_OUT * sizeof(float));
   wv_fabricnet_acts_free(&a);
