@@ -32,7 +32,7 @@ static double run(const wv_scene *s, int spp, int n) {
       wv_error e2;
       wv_params p;
       wv_image img = {0};
-      wv_render_opts ro = {spp, 1, NULL, NULL};
+      wv_render_opts ro = {spp, 1, NULL, NULL, NULL};
       if (wv_params_sample_prior(wv_net_pattern(k % WV_NET_PATTERNS), (uint64_t)k + 1000, &p, &e2) ||
           wv_render(s, &p, &ro, &img, NULL, &e2) || wv_descriptor_forward(d[omp_get_thread_num()], &img, feat, &e2))
         fprintf(stderr, "%s\n", e2.msg);

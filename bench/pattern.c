@@ -169,7 +169,7 @@ int main(int argc, char **argv) {
   int right_w[NW] = {0}, right_w_oracle[NW] = {0};
   double *secs = malloc(sizeof(double) * (size_t)total), margin_sum = 0;
   float *gram = malloc(sizeof(float) * wv_descriptor_size(d));
-  wv_render_opts ro = {target_spp, 0, NULL, NULL};
+  wv_render_opts ro = {target_spp, 0, NULL, NULL, NULL};
   for (int k = 0; k < total; k++) {
     wv_params truth;
     wv_image photo = {0};

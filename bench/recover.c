@@ -45,7 +45,7 @@ static double run_fit(const wv_scene *s, const wv_image *photo, wv_descriptor *d
 }
 
 static double ssim_of(const wv_scene *s, const wv_params *p, const wv_image *ref, int threads) {
-  wv_render_opts ro = {0, threads, NULL, NULL};
+  wv_render_opts ro = {0, threads, NULL, NULL, NULL};
   wv_image img;
   wv_error err = {0};
   if (wv_render(s, p, &ro, &img, NULL, &err)) die(&err);
@@ -68,7 +68,7 @@ static int synthetic(int per, const wv_fit_opts *o, wv_descriptor *d) {
       wv_params target, start, fit;
       wv_scene fs;
       if (wv_params_sample_prior(PATTERNS[k], 1000u * k + i, &target, &err)) die(&err);
-      wv_render_opts ro = {0, o->threads, NULL, NULL};
+      wv_render_opts ro = {0, o->threads, NULL, NULL, NULL};
       wv_image photo;
       if (wv_render(&s, &target, &ro, &photo, NULL, &err)) die(&err);
       wv_params_default(PATTERNS[k], &start, NULL);

@@ -60,7 +60,7 @@ static wv_status make_sample(const char *dir, const wv_dataset_info *info, int k
   wv_params p;
   wv_status st = wv_dataset_sample_params(info, k, &p, err);
   if (st) return st;
-  wv_render_opts ro = {info->spp, render_threads, NULL, NULL};
+  wv_render_opts ro = {info->spp, render_threads, NULL, NULL, NULL};
   wv_image img = {0};
   if ((st = wv_render(&info->scene, &p, &ro, &img, NULL, err))) return st;
   quantise8(&img);

@@ -164,7 +164,7 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
     return cli_fail(c, &err);
   }
   /* Final renders at full quality: the start and the fit. */
-  wv_render_opts ro = {0, o.threads, NULL, NULL};
+  wv_render_opts ro = {0, o.threads, NULL, NULL, NULL};
   wv_image r_start = {0}, r_fit = {0}, cmp = {0};
   double ssim_start = 0, ssim_fit = 0;
   cli_info(c, "rendering start and fit at %d x %d, %d spp\n", job->scene->width, job->scene->height,

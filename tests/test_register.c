@@ -27,7 +27,7 @@ static void truth(wv_params *p) {
 }
 
 static double ssim_of(const wv_scene *s, const wv_params *p, const wv_image *ref) {
-  wv_render_opts ro = {0, 0, NULL, NULL};
+  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
   wv_image img;
   assert_int_equal(wv_render(s, p, &ro, &img, NULL, NULL), WV_OK);
   double v;
@@ -44,7 +44,7 @@ static void run(const wv_params *from, const double shift[2], wv_fit_state *st, 
   truth(&tp);
   wv_scene shifted = *s;
   shifted.fabric_offset[0] = shift[0], shifted.fabric_offset[1] = shift[1];
-  wv_render_opts ro = {0, 0, NULL, NULL};
+  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
   assert_int_equal(wv_render(&shifted, &tp, &ro, photo, NULL, NULL), WV_OK);
   wv_fit_opts o;
   wv_fit_opts_default(&o);

@@ -28,7 +28,7 @@ static void render(const char *scene, const char *pattern, int w, int h, int spp
   if (w) crop_scene(&s, w, h);
   assert_int_equal(wv_params_default(pattern, &p, &err), WV_OK);
   p.seed = seed;
-  wv_render_opts o = {spp, threads, NULL, NULL};
+  wv_render_opts o = {spp, threads, NULL, NULL, NULL};
   if (wv_render(&s, &p, &o, out, NULL, &err)) fail_msg("%s", err.msg);
 }
 

@@ -11,12 +11,22 @@
 #include "woven/params.h"
 #include "woven/scene.h"
 
+/* Per-pixel camera geometry of one scene (where each pixel's corners land on the
+ * fabric, light and view directions). It does not depend on the fabric, so a fit
+ * or a search that renders one scene many times makes it once. */
+typedef struct wv_footprints wv_footprints;
+wv_status wv_footprints_create(const wv_scene *s, int threads, wv_footprints **out, wv_error *err);
+void wv_footprints_free(wv_footprints *f);
+
 typedef struct {
   int spp;            /* samples per pixel; 0 = the scene's */
   int threads;        /* 0 = OpenMP default */
   /* Called now and then from one thread with the fraction done (may be NULL). */
   void (*progress)(void *user, double fraction);
   void *progress_user;
+  /* Optional (NULL): footprints from wv_footprints_create for this scene's
+   * geometry (a render with another geometry is refused). Same image either way. */
+  const wv_footprints *footprints;
 } wv_render_opts;
 
 /* radiance (optional, may be NULL): linear radiance before the sensor response.

@@ -64,12 +64,14 @@ typedef struct {
   wv_descriptor *d;
   const wv_fit_opts *o;
   wv_fit_timing *timing;
+  wv_footprints *fp; /* the iteration scene's camera geometry, made once */
 } fit_ctx;
 
 static void ctx_free(fit_ctx *c) {
   wv_image_free(&c->photo), wv_image_free(&c->photo_down), wv_image_free(&c->render);
   wv_image_free(&c->dcap), wv_image_free(&c->dcap_pix), wv_image_free(&c->down), wv_image_free(&c->ddown);
   free(c->gram_photo), free(c->gram), free(c->dgram);
+  wv_footprints_free(c->fp);
 }
 
 static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, wv_descriptor *d, int scale,
@@ -103,14 +105,14 @@ static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, 
   if (!c->gram_photo || !c->gram || !c->dgram) return wv_fail(err, WV_ERR_NOMEM, "out of memory for Gram matrices");
   if ((st = wv_descriptor_forward(d, &c->photo, c->gram_photo, err))) return st;
   if ((st = wv_image_alloc(&c->dcap, c->scene.width, c->scene.height, 3, err))) return st;
-  return WV_OK;
+  return wv_footprints_create(&c->scene, o->threads, &c->fp, err);
 }
 
 /* Loss of p; with grad != NULL also dL/dtheta (file units). */
 static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, double grad[WV_P_COUNT],
                           wv_error *err) {
   const wv_fit_opts *o = c->o;
-  wv_render_opts ro = {c->scene.spp, o->threads, NULL, NULL};
+  wv_render_opts ro = {c->scene.spp, o->threads, NULL, NULL, c->fp};
   double t0 = omp_get_wtime();
   wv_image_free(&c->render);
   /* With a gradient wanted, render once and keep each pixel's derivative sums:
@@ -230,7 +232,12 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
   wv_image ref;
   wv_status rc = wv_fit_centre_crop(photo, w, h, &ref, err);
   if (rc) return rc;
-  wv_render_opts ro = {win.spp, o->threads, NULL, NULL};
+  wv_footprints *fp = NULL;
+  if ((rc = wv_footprints_create(&win, o->threads, &fp, err))) {
+    wv_image_free(&ref);
+    return rc;
+  }
+  wv_render_opts ro = {win.spp, o->threads, NULL, NULL, fp};
   /* Coordinate search: one density at a time over +-R with the other fixed, until
    * a full round changes nothing (each density alone already moves the SSIM). */
   wv_params cur = st->params;
@@ -261,6 +268,7 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
     cur.density[y] = best_d;
   }
   wv_image_free(&ref);
+  wv_footprints_free(fp);
   if (rc) return rc;
   st->params.density[0] = cur.density[0], st->params.density[1] = cur.density[1];
   st->align_ssim_before = before, st->align_ssim_after = best;

@@ -154,7 +154,7 @@ static wv_status level_init(level *l, const wv_scene *full, const wv_image *phot
   wv_fit_centre_window(full, w, h, &l->win);
   l->win.spp = o->iter_spp;
   l->max_shift = (w < h ? w : h) / 4;
-  l->ro = (wv_render_opts){l->win.spp, o->threads, NULL, NULL};
+  l->ro = (wv_render_opts){l->win.spp, o->threads, NULL, NULL, NULL};
   wv_status rc = wv_fit_centre_crop(photo, w, h, &l->ref, err);
   if (!rc) rc = pc_init(&l->pc, w, h, err);
   if (rc) {
@@ -206,11 +206,14 @@ void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out) {
 typedef struct {
   level lv[MAX_THREADS];
   int n;
+  wv_footprints *fp; /* the window's camera geometry, shared */
 } level_set;
 
 static void set_free(level_set *ls) {
   for (int i = 0; i < ls->n; i++) level_free(&ls->lv[i]);
   ls->n = 0;
+  wv_footprints_free(ls->fp);
+  ls->fp = NULL;
 }
 
 static wv_status set_init(level_set *ls, const wv_scene *full, const wv_image *photo, int size, int threads,
@@ -225,6 +228,12 @@ static wv_status set_init(level_set *ls, const wv_scene *full, const wv_image *p
     ls->lv[i].ro.threads = 1;
     ls->n++;
   }
+  wv_status rc = wv_footprints_create(&ls->lv[0].win, threads, &ls->fp, err);
+  if (rc) {
+    set_free(ls);
+    return rc;
+  }
+  for (int i = 0; i < ls->n; i++) ls->lv[i].ro.footprints = ls->fp;
   return WV_OK;
 }
 
@@ -273,7 +282,7 @@ static wv_status hill_climb(level_set *ls, const wv_params *base, const double *
   return rc;
 }
 
-#define GLOBAL_STEP 1.04 /* ratio between neighbouring densities of the coarse grid */
+#define GLOBAL_STEP 1.05 /* ratio between neighbouring densities of the coarse grid */
 #define WV_REGISTER_MIN_NCC 0.2 /* phase correlation that counts as the weave lining up */
 #define N_CAND 4         /* candidates from it refined in the larger window */
 
@@ -351,9 +360,9 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
   cur[0] = mid[0], cur[1] = mid[1];
   level *big = &S[2].lv[0];
   if (!rc) rc = score(big, &big->win, base, cur, 0, &best, NULL, err);
-  if (!rc) rc = hill_climb(&S[2], base, fine_steps, 3, cur, &best, err);
+  if (!rc) rc = hill_climb(&S[2], base, fine_steps, 2, cur, &best, err);
   if (!rc) rc = score(top, &top->win, base, cur, 0, &best, NULL, err);
-  if (!rc) rc = hill_climb(&S[3], base, fine_steps + 1, 2, cur, &best, err);
+  if (!rc) rc = hill_climb(&S[3], base, fine_steps + 2, 1, cur, &best, err);
   if (!rc) rc = score(top, &top->win, base, cur, 0, &best, shift, err);
   /* The shift becomes a fabric offset through the local map pixel -> fabric at
    * the centre: photo(x) ~ render(x - shift) means fabric(x) must become
@@ -372,6 +381,7 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
     moved.fabric_offset[0] += off[0], moved.fabric_offset[1] += off[1];
     double before, after, ncc_after;
     if (!(rc = window_ssim(&top->win, base, &top->ref, &top->ro, &before, err)) &&
+        (top->ro.footprints = NULL, 1) && /* the moved fabric has other footprints */
         !(rc = window_ssim(&moved, &cand_p, &top->ref, &top->ro, &after, err)) &&
         !(rc = score(top, &moved, &cand_p, cur, 1, &ncc_after, NULL, err))) {
       st->reg_ssim_before = before;

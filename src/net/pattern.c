@@ -35,7 +35,7 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
   wv_scene sc = *s;
   sc.spp = o->spp > 0 ? o->spp : WV_PATTERN_SPP;
   out->spp = sc.spp, out->w_pixel = o->w_pixel;
-  wv_render_opts ro = {sc.spp, o->threads, NULL, NULL};
+  wv_render_opts ro = {sc.spp, o->threads, NULL, NULL, NULL};
   wv_fit_opts fo; /* the pixel loss's resolution */
   wv_fit_opts_default(&fo);
   float *gram = malloc(sizeof(float) * ng);

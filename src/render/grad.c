@@ -152,6 +152,8 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
   int spp;
   wv_status st = wv_render_setup(s, p, opt, W, H, &fab, &spp, err);
   if (st) return st;
+  wv_camera_rig rig;
+  if ((st = wv_rig_prepare_opts(s, opt, &rig, err))) return st;
   if (!rec_out && (!dcap || !dcap->data || dcap->w != W || dcap->h != H || dcap->c != 3))
     return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", W, H,
                    dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
@@ -180,8 +182,6 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
     wv_record_free(rec);
     return st;
   }
-  wv_camera_rig rig;
-  wv_rig_prepare(s, &rig);
   int threads = opt && opt->threads > 0 ? opt->threads : omp_get_max_threads();
   int rows_done = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)

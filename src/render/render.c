@@ -64,7 +64,7 @@ wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts 
   if (st) return st;
   int threads = opt && opt->threads > 0 ? opt->threads : omp_get_max_threads();
   wv_camera_rig rig;
-  wv_rig_prepare(s, &rig);
+  if ((st = wv_rig_prepare_opts(s, opt, &rig, err))) return st;
   wv_image rad;
   if ((st = wv_image_alloc(&rad, s->width, s->height, 3, err))) return st;
   if ((st = wv_image_alloc(capture, s->width, s->height, 3, err))) {

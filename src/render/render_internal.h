@@ -22,6 +22,7 @@ typedef struct {
   int shape, warp_along_axis;
   float radius, rot_c, rot_s, off[2], scale;
   float lpos[3], lint;
+  const struct wv_footprint_s *cache; /* per-pixel footprints made once (wv_footprints) or NULL */
 } wv_camera_rig;
 
 /* Fabric parameters in the renderer's float form. */
@@ -45,6 +46,8 @@ typedef struct {
 } wv_hit;
 
 void wv_rig_prepare(const wv_scene *s, wv_camera_rig *rig);
+/* wv_rig_prepare plus opt's footprint cache, refused if made for another geometry. */
+wv_status wv_rig_prepare_opts(const wv_scene *s, const wv_render_opts *opt, wv_camera_rig *rig, wv_error *err);
 wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err);
 /* What every render starts with: the scene validated, the fabric prepared, the
  * spp resolved (opt's, else the scene's) and the w x h x spp sample limit checked. */
@@ -85,7 +88,7 @@ static inline void wv_dirs_from_hit(const wv_hit *hit, wv_dirs *d) {
 /* A pixel's footprint on the fabric: bilinear in the four corners when all four
  * and the centre hit the sample (exact for the plane up to perspective, and
  * within 1e-6 of a pixel on the cylinder away from its silhouette). */
-typedef struct {
+typedef struct wv_footprint_s {
   int fast;              /* 1: use corners and dirs; 0: trace every sample */
   float fx[4], fy[4];    /* corners (0,0), (1,0), (0,1), (1,1) */
   wv_dirs dirs;

@@ -1,4 +1,6 @@
 #include <math.h>
+#include <omp.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "render/render_internal.h"
@@ -103,6 +105,10 @@ int wv_rig_trace(const wv_camera_rig *r, float x, float y, wv_hit *hit) {
 }
 
 void wv_footprint_prepare(const wv_camera_rig *rig, int px, int py, wv_footprint *fp) {
+  if (rig->cache) {
+    *fp = rig->cache[(size_t)py * rig->width + px];
+    return;
+  }
   wv_hit c, k[4];
   fp->centre_hit = wv_rig_trace(rig, (float)px + 0.5f, (float)py + 0.5f, &c);
   fp->fast = fp->centre_hit;
@@ -120,4 +126,43 @@ int wv_render_fabric_at(const wv_scene *s, double x, double y, double f[2]) {
   if (!wv_rig_trace(&rig, (float)x, (float)y, &hit)) return 0;
   f[0] = hit.fx, f[1] = hit.fy;
   return 1;
+}
+
+struct wv_footprints {
+  wv_camera_rig rig; /* the geometry they were made for (cache NULL) */
+  wv_footprint *fp;  /* width x height */
+};
+
+wv_status wv_footprints_create(const wv_scene *s, int threads, wv_footprints **out, wv_error *err) {
+  *out = NULL;
+  wv_status st = wv_scene_validate(s, err);
+  if (st) return st;
+  wv_footprints *f = calloc(1, sizeof *f);
+  if (f) f->fp = malloc(sizeof *f->fp * (size_t)s->width * s->height);
+  if (!f || !f->fp) {
+    if (f) free(f);
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for the footprints of %d x %d pixels", s->width, s->height);
+  }
+  wv_rig_prepare(s, &f->rig);
+  threads = threads > 0 ? threads : omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+  for (int py = 0; py < s->height; py++)
+    for (int px = 0; px < s->width; px++) wv_footprint_prepare(&f->rig, px, py, &f->fp[(size_t)py * s->width + px]);
+  *out = f;
+  return WV_OK;
+}
+
+void wv_footprints_free(wv_footprints *f) {
+  if (!f) return;
+  free(f->fp);
+  free(f);
+}
+
+wv_status wv_rig_prepare_opts(const wv_scene *s, const wv_render_opts *opt, wv_camera_rig *rig, wv_error *err) {
+  wv_rig_prepare(s, rig);
+  if (!opt || !opt->footprints) return WV_OK;
+  if (memcmp(rig, &opt->footprints->rig, sizeof *rig))
+    return wv_fail(err, WV_ERR_INVALID, "render: the footprints were made for another scene geometry");
+  rig->cache = opt->footprints->fp;
+  return WV_OK;
 }
