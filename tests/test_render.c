@@ -10,6 +10,7 @@
 #define M_PI 3.14159265358979323846
 #include "woven/io.h"
 #include "woven/maps.h"
+#include "woven/grad.h"
 #include "woven/render.h"
 
 /* A centred w x h window of a scene: same pixels as the full image there. */
@@ -45,6 +46,41 @@ static void test_deterministic(void **state) {
   assert_true(wv_image_mad(&c, &d) > 1e-4);                /* another seed: other noise */
   for (size_t i = 0; i < n; i++) assert_true(isfinite(a.data[i]) && a.data[i] >= 0.0f && a.data[i] <= 1.0f);
   wv_image_free(&a), wv_image_free(&b), wv_image_free(&c), wv_image_free(&d);
+}
+
+/* Footprints made once give the same image as the per-render ones (forward and
+ * the gradient renderer's capture), and another geometry is refused. */
+static void test_footprints_cache(void **state) {
+  (void)state;
+  wv_scene s;
+  wv_params p;
+  wv_error err = {0};
+  assert_int_equal(wv_scene_preset("cylinder", &s, &err), WV_OK);
+  crop_scene(&s, 96, 160); /* taller than the cylinder's silhouette: traced pixels too */
+  s.vfov_deg *= 3;
+  assert_int_equal(wv_params_default("satin", &p, &err), WV_OK);
+  wv_footprints *fp;
+  assert_int_equal(wv_footprints_create(&s, 2, &fp, &err), WV_OK);
+  wv_render_opts plain = {8, 2, NULL, NULL, NULL}, cached = {8, 2, NULL, NULL, fp};
+  wv_image a, b;
+  assert_int_equal(wv_render(&s, &p, &plain, &a, NULL, &err), WV_OK);
+  assert_int_equal(wv_render(&s, &p, &cached, &b, NULL, &err), WV_OK);
+  size_t n = (size_t)a.w * a.h * 3;
+  assert_memory_equal(a.data, b.data, n * sizeof(float));
+  int dark = 0; /* the window shows background: both paths are exercised */
+  for (size_t i = 0; i < n; i += 3) dark += a.data[i] == 0.0f;
+  assert_true(dark > 0);
+  wv_image_free(&b);
+  wv_grad_record *rec = NULL;
+  assert_int_equal(wv_render_record(&s, &p, &cached, NULL, &b, &rec, &err), WV_OK);
+  assert_memory_equal(a.data, b.data, n * sizeof(float));
+  wv_record_free(rec);
+  wv_image_free(&b);
+  s.fabric_offset[0] += 0.5; /* another geometry */
+  assert_int_equal(wv_render(&s, &p, &cached, &b, NULL, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "footprints"));
+  wv_footprints_free(fp);
+  wv_image_free(&a);
 }
 
 /* SPEC 6: doubling the default spp changes the image by < 1% (mean absolute
@@ -176,7 +212,8 @@ static void test_golden(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_deterministic), cmocka_unit_test(test_default_spp_converged),
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_deterministic), cmocka_unit_test(test_footprints_cache),
+                                     cmocka_unit_test(test_default_spp_converged),
                                      cmocka_unit_test(test_twill90_is_mirrored_twill), cmocka_unit_test(test_maps_tile),
                                      cmocka_unit_test(test_golden)};
   return cmocka_run_group_tests(tests, NULL, NULL);
