@@ -48,6 +48,10 @@ static double run(const wv_scene *s, int spp, int n) {
 
 int main(int argc, char **argv) {
   int n = argc > 1 ? atoi(argv[1]) : 10, low = argc > 2 ? atoi(argv[2]) : 16;
+  if (n < 1 || low < 1) {
+    fprintf(stderr, "usage: dataset_speed [samples per setting >= 1, default 10] [low spp >= 1, default 16]\n");
+    return 2;
+  }
   wv_scene s;
   wv_error e;
   if (wv_scene_preset("cylinder", &s, &e)) return 1;
