@@ -12,13 +12,8 @@
 #include "woven/photo.h"
 #include "woven/render.h"
 
-static void small_scene(wv_scene *s) {
-  wv_scene_preset("flat45", s, NULL);
-  /* the centre 96 x 96 of flat45 */
-  s->vfov_deg = 2.0 * atan(tan(0.5 * 53.0 * 3.14159265358979 / 180.0) * 96.0 / 512.0) * 180.0 / 3.14159265358979;
-  s->width = s->height = 96;
-  s->spp = 16;
-}
+/* the centre 96 x 96 of flat45 */
+static void small_scene(wv_scene *s) { tu_centre_window(s, "flat45", 96, 96, 16); }
 
 static void target(wv_params *p) {
   wv_params_default("twill", p, NULL);

@@ -12,13 +12,6 @@
 #include "woven/metrics.h"
 #include "woven/render.h"
 
-static void scene128(wv_scene *s) {
-  wv_scene_preset("flat45", s, NULL);
-  /* the centre 128 x 128 of flat45 */
-  s->vfov_deg = 2.0 * atan(tan(0.5 * 53.0 * 3.14159265358979 / 180.0) * 128.0 / 512.0) * 180.0 / 3.14159265358979;
-  s->width = s->height = 128;
-  s->spp = 16;
-}
 
 static void truth(wv_params *p) {
   wv_params_default("twill", p, NULL);
@@ -39,7 +32,7 @@ static double ssim_of(const wv_scene *s, const wv_params *p, const wv_image *ref
 /* Runs the registration from 'from' (offset 0) against a photo of the truth
  * rendered with the fabric shifted by 'shift' mm. */
 static void run(const wv_params *from, const double shift[2], wv_fit_state *st, wv_scene *s, wv_image *photo) {
-  scene128(s);
+  tu_centre_window(s, "flat45", 128, 128, 16);
   wv_params tp;
   truth(&tp);
   wv_scene shifted = *s;
