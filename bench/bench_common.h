@@ -1,7 +1,10 @@
 /* Small helpers shared by the benchmarks: wall time and medians. */
 #ifndef WOVEN_BENCH_COMMON_H
 #define WOVEN_BENCH_COMMON_H
+#include <dirent.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 static inline double bench_now(void) {
@@ -23,5 +26,19 @@ static int bench_cmp(const void *a, const void *b) {
 static inline double bench_median(double *v, int n) {
   qsort(v, n, sizeof *v, bench_cmp);
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+/* The .png files of dir (at most 64), sorted by name; -1 when dir cannot be read. */
+static int bench_cmp_name(const void *a, const void *b) { return strcmp((const char *)a, (const char *)b); }
+static inline int bench_list_png(const char *dir, char names[64][256]) {
+  DIR *dd = opendir(dir);
+  if (!dd) return -1;
+  int n = 0;
+  for (struct dirent *e; (e = readdir(dd)) && n < 64;) {
+    size_t l = strlen(e->d_name);
+    if (l > 4 && !strcmp(e->d_name + l - 4, ".png")) snprintf(names[n++], 256, "%s", e->d_name);
+  }
+  closedir(dd);
+  qsort(names, (size_t)n, 256, bench_cmp_name);
+  return n;
 }
 #endif

@@ -11,7 +11,6 @@
  * --spp, --w-pixel: wv_pattern_opts (defaults WV_PATTERN_SPP, WV_PATTERN_W_PIXEL); the synthetic
  * mode also reports the accuracy the same renders give with other pixel weights.
  * Prints progress on stderr and one JSON object on the last line of stdout. */
-#include <dirent.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -84,19 +83,12 @@ static void stderr_matrix(const char *title, int m[WV_NET_PATTERNS][WV_NET_PATTE
 
 static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s, const char *dir,
                     const wv_pattern_opts *po) {
-  DIR *dd = opendir(dir);
-  if (!dd) {
+  char names[64][256];
+  int n = bench_list_png(dir, names);
+  if (n < 0) {
     fprintf(stderr, "pattern bench: cannot open %s\n", dir);
     return 1;
   }
-  char names[64][256];
-  int n = 0;
-  for (struct dirent *e; (e = readdir(dd)) && n < 64;) {
-    size_t l = strlen(e->d_name);
-    if (l > 4 && !strcmp(e->d_name + l - 4, ".png")) snprintf(names[n++], sizeof names[0], "%s", e->d_name);
-  }
-  closedir(dd);
-  qsort(names, (size_t)n, sizeof names[0], (int (*)(const void *, const void *))strcmp);
   printf("{\"mode\": \"real\", \"scene\": \"%s\", \"spp\": %d, \"photos\": [", s->name, po->spp);
   for (int i = 0; i < n; i++) {
     char path[4096];

@@ -9,7 +9,6 @@
  *     fit loss; both losses are printed.
  * SSIM is always measured on full-quality renders at the scene's resolution and spp.
  * Prints one line per fit, then one JSON object on the last line. */
-#include <dirent.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -128,19 +127,12 @@ static int real(const char *dir, const wv_fit_opts *o, wv_descriptor *d) {
   wv_scene s;
   wv_error err = {0};
   wv_scene_preset("flat45", &s, NULL);
-  DIR *dp = opendir(dir);
-  if (!dp) {
+  char names[64][256];
+  int n = bench_list_png(dir, names);
+  if (n < 0) {
     fprintf(stderr, "recover: cannot open %s\n", dir);
     return 1;
   }
-  char names[64][256];
-  int n = 0;
-  for (struct dirent *e; (e = readdir(dp)) && n < 64;) {
-    size_t l = strlen(e->d_name);
-    if (l > 4 && !strcmp(e->d_name + l - 4, ".png")) snprintf(names[n++], sizeof names[0], "%s", e->d_name);
-  }
-  closedir(dp);
-  qsort(names, n, sizeof names[0], (int (*)(const void *, const void *))strcmp);
   printf("{\"mode\": \"real\", \"scene\": \"flat45\", \"iters\": %d, \"photos\": [", o->iters);
   char json[8192] = "";
   size_t jl = 0;

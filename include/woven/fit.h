@@ -32,7 +32,7 @@ typedef struct {
   int threads;        /* 0: all cores */
   int checkpoint_every; /* 10 */
   int align_radius;   /* density alignment: search +-this many yarns/inch (230: the whole range; 0 = off) */
-  int register_radius; /* registration: 2-D density grid +-this many yarns/inch (6; 0 = off) */
+  int register_radius; /* registration: whole-yarn grid +-this many yarns/inch around the fit (6; 0 = off) */
 } wv_fit_opts;
 
 void wv_fit_opts_default(wv_fit_opts *o);
@@ -61,8 +61,8 @@ typedef struct {
   double align_ssim_before, align_ssim_after; /* its criterion at the start and end */
   int registered; /* the registration after the alignment is done */
   double offset_mm[2]; /* fabric offset found by the registration (added to the scene's) */
-  double reg_ncc_before, reg_ncc_after;   /* phase correlation with the photo, centre window */
-  double reg_ssim_before, reg_ssim_after; /* SSIM in the same window: kept only if it rose */
+  double reg_ncc_before, reg_ncc_after;   /* correlation with the photo at zero shift, whole image */
+  double reg_ssim_before, reg_ssim_after; /* SSIM of the whole image at the iteration spp */
   double adam_m[WV_P_COUNT], adam_v[WV_P_COUNT];
   uint64_t rng;
   wv_fit_record *log; /* iter entries */
@@ -89,11 +89,13 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
 /* Registration (after the alignment, flat and cylinder scenes alike): a real photo's
  * weave has a phase (where the yarns start) and a density known only to a few
  * yarns/inch, and SSIM compares pixels, so a render that looks right but is a
- * quarter of a rib out of step scores like noise. The densities are searched on a
- * 2-D grid (+-register_radius, then finer steps down to 0.1 yarns/inch) for the
- * highest phase correlation with the photo (the maximum over all shifts of the
- * normalised cross-correlation of the high-passed luminance, via FFT), and the
- * best shift becomes a fabric offset. Kept only if the window's SSIM rises. */
+ * quarter of a rib out of step scores like noise. The score is the phase
+ * correlation with the photo (the maximum over shifts of the normalised
+ * cross-correlation of high-passed luminance, via FFT). The densities are searched
+ * over the whole range in a small centre window, refined in larger windows and
+ * finally on the whole image to 0.1 yarns/inch (docs/fit.md); the best shift
+ * becomes a fabric offset. Kept only if the whole image's SSIM rises and the
+ * correlation at zero shift reaches 0.2. */
 wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                           wv_error *err);
 

@@ -8,6 +8,9 @@
 #include "woven/weave.h"
 #include "woven/yarn.h"
 
+#define WV_DENSITY_MIN 20.0  /* yarns per inch */
+#define WV_DENSITY_MAX 250.0
+
 typedef struct {
   char pattern[16];                  /* plain, twill, satin, twill90, satin90 or custom */
   int custom_rows;                   /* custom pattern only */

@@ -200,7 +200,7 @@ static int discrete_step(wv_params *p, uint64_t *rng, int iter, int iters) {
   } else {
     double *dens = &p->density[which - 1];
     double v = *dens + sign * dstep;
-    if (v < 20 || v > 250) return 0;
+    if (v < WV_DENSITY_MIN || v > WV_DENSITY_MAX) return 0;
     *dens = v;
   }
   return 1;
@@ -257,7 +257,7 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
     for (int k = -R; k <= R && !rc; k++) {
       wv_params trial = cur;
       trial.density[y] = centre + k;
-      if (k == 0 || trial.density[y] < 20 || trial.density[y] > 250) continue; /* k = 0 is best already */
+      if (k == 0 || trial.density[y] < WV_DENSITY_MIN || trial.density[y] > WV_DENSITY_MAX) continue; /* k = 0 is best already */
       if ((rc = wv_render(&win, &trial, &ro, &img, NULL, err))) break;
       double v;
       rc = wv_ssim(&ref, &img, WV_SSIM_LUMA, &v, err);

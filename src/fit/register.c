@@ -61,6 +61,20 @@ static wv_status pc_init(phasecorr *p, int w, int h, wv_error *err) {
   return WV_OK;
 }
 
+/* One pass of a separable blur along x (vertical 0) or y (1), edges clamped. */
+static void blur_pass(const float *in, float *out, int w, int h, int vertical, const double *g) {
+  for (int y = 0; y < h; y++)
+    for (int x = 0; x < w; x++) {
+      double s = 0;
+      for (int k = -HP_RAD; k <= HP_RAD; k++) {
+        int xx = vertical ? x : x + k < 0 ? 0 : x + k >= w ? w - 1 : x + k;
+        int yy = !vertical ? y : y + k < 0 ? 0 : y + k >= h ? h - 1 : y + k;
+        s += g[k + HP_RAD] * in[(size_t)yy * w + xx];
+      }
+      out[(size_t)y * w + x] = (float)s;
+    }
+}
+
 /* a = Hann * normalise(Y - gauss(Y)): luminance detail, zero mean, unit variance. */
 static void pc_prepare(phasecorr *p, const wv_image *img) {
   int w = p->w, h = p->h;
@@ -72,25 +86,8 @@ static void pc_prepare(phasecorr *p, const wv_image *img) {
       const float *c = wv_image_px(img, x, y);
       p->a[(size_t)y * w + x] = 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
     }
-  /* separable blur with clamped edges into corr (scratch), then detail = a - blur */
-  for (int y = 0; y < h; y++)
-    for (int x = 0; x < w; x++) {
-      double s = 0;
-      for (int k = -HP_RAD; k <= HP_RAD; k++) {
-        int xx = x + k < 0 ? 0 : x + k >= w ? w - 1 : x + k;
-        s += g[k + HP_RAD] * p->a[(size_t)y * w + xx];
-      }
-      p->tmp[(size_t)y * w + x] = (float)s;
-    }
-  for (int y = 0; y < h; y++)
-    for (int x = 0; x < w; x++) {
-      double s = 0;
-      for (int k = -HP_RAD; k <= HP_RAD; k++) {
-        int yy = y + k < 0 ? 0 : y + k >= h ? h - 1 : y + k;
-        s += g[k + HP_RAD] * p->tmp[(size_t)yy * w + x];
-      }
-      p->corr[(size_t)y * w + x] = (float)s;
-    }
+  blur_pass(p->a, p->tmp, w, h, 0, g); /* the blur lands in corr (scratch here) */
+  blur_pass(p->tmp, p->corr, w, h, 1, g);
   size_t n = (size_t)w * h;
   double m = 0, v = 0;
   for (size_t i = 0; i < n; i++) m += p->a[i] -= p->corr[i];
@@ -167,30 +164,34 @@ static wv_status level_init(level *l, const wv_scene *full, const wv_image *phot
   return WV_OK;
 }
 
-/* Renders the window with the given densities and scores it (shifts up to the
- * level's limit, or none with no_shift). */
-static wv_status score(level *l, const wv_scene *win, const wv_params *base, const double dens[2], int no_shift,
-                       double *out, double shift[2], wv_error *err) {
+/* Renders the level's window with the given densities and scores it (shifts
+ * up to the level's limit). */
+static wv_status score(level *l, const wv_params *base, const double dens[2], double *out, double shift[2],
+                       wv_error *err) {
   wv_params p = *base;
   p.density[0] = dens[0], p.density[1] = dens[1];
   wv_image img;
-  wv_status rc = wv_render(win, &p, &l->ro, &img, NULL, err);
+  wv_status rc = wv_render(&l->win, &p, &l->ro, &img, NULL, err);
   if (rc) return rc;
-  *out = pc_best(&l->pc, &img, no_shift ? 0 : l->max_shift, shift);
+  *out = pc_best(&l->pc, &img, l->max_shift, shift);
   wv_image_free(&img);
   return WV_OK;
 }
 
-static int in_range(const double d[2]) { return d[0] >= 20 && d[0] <= 250 && d[1] >= 20 && d[1] <= 250; }
-
-static wv_status window_ssim(const wv_scene *win, const wv_params *p, const wv_image *ref, const wv_render_opts *ro,
-                             double *out, wv_error *err) {
+/* Correlation at zero shift and SSIM of one render of win against the level's photo. */
+static wv_status measure(level *l, const wv_scene *win, const wv_params *p, const wv_render_opts *ro, double *ncc,
+                         double *ssim, wv_error *err) {
   wv_image img;
   wv_status rc = wv_render(win, p, ro, &img, NULL, err);
   if (rc) return rc;
-  rc = wv_ssim(ref, &img, WV_SSIM_LUMA, out, err);
+  *ncc = pc_best(&l->pc, &img, 0, NULL);
+  rc = wv_ssim(&l->ref, &img, WV_SSIM_LUMA, ssim, err);
   wv_image_free(&img);
   return rc;
+}
+
+static int in_range(const double d[2]) {
+  return d[0] >= WV_DENSITY_MIN && d[0] <= WV_DENSITY_MAX && d[1] >= WV_DENSITY_MIN && d[1] <= WV_DENSITY_MAX;
 }
 
 void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out) {
@@ -247,7 +248,7 @@ static wv_status eval_many(level_set *ls, const wv_params *base, const double (*
     out[i] = -3;
     if (!in_range(d[i])) continue;
     wv_error e = {0};
-    wv_status r = score(l, &l->win, base, d[i], 0, &out[i], NULL, &e);
+    wv_status r = score(l, base, d[i], &out[i], NULL, &e);
     if (r) {
 #pragma omp critical(wv_register_error)
       if (!rc) {
@@ -302,20 +303,23 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
   const wv_params *base = &st->params;
   double cur[2] = {base->density[0], base->density[1]}, best = -2, shift[2] = {0, 0};
   level *top = &S[3].lv[0];
-  if (!rc) rc = score(top, &top->win, base, cur, 1, &st->reg_ncc_before, NULL, err);
+  wv_render_opts top_ro = top->ro; /* the whole image, on every thread */
+  top_ro.threads = threads;
+  double ssim_before = 0;
+  if (!rc) rc = measure(top, &top->win, base, &top_ro, &st->reg_ncc_before, &ssim_before, err);
 
-  /* 1. The whole range 20..250 on a ratio grid in the small window: a density far
+  /* 1. The whole density range on a ratio grid in the small window: a density far
    * from the fitted one (another aliasing of the same texture: twill2_R.png's
    * weft went from 227 to 75) is found here. The best few, kept apart, go on. */
   double cand[N_CAND + 1][2];
   int nc = 0;
-  const int n = (int)floor(log(250.0 / 20.0) / log(GLOBAL_STEP)) + 1;
+  const int n = (int)floor(log(WV_DENSITY_MAX / WV_DENSITY_MIN) / log(GLOBAL_STEP)) + 1;
   double(*gd)[2] = rc ? NULL : malloc(sizeof *gd * (size_t)n * n);
   double *grid = rc ? NULL : malloc(sizeof(double) * (size_t)n * n);
   if (!rc && (!gd || !grid)) rc = wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration grid");
   for (int i = 0; i < n && !rc; i++)
     for (int j = 0; j < n; j++)
-      gd[i * n + j][0] = 20.0 * pow(GLOBAL_STEP, i), gd[i * n + j][1] = 20.0 * pow(GLOBAL_STEP, j);
+      gd[i * n + j][0] = WV_DENSITY_MIN * pow(GLOBAL_STEP, i), gd[i * n + j][1] = WV_DENSITY_MIN * pow(GLOBAL_STEP, j);
   if (!rc) rc = eval_many(&S[0], base, (const double(*)[2])gd, n * n, grid, err);
   for (int c = 0; c < N_CAND && !rc; c++) { /* best remaining, then blank its neighbourhood */
     int bi = -1, bj = -1;
@@ -350,20 +354,18 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
   double mid_best = -2, mid[2] = {cur[0], cur[1]};
   for (int c = 0; c < nc && !rc; c++) {
     double d[2] = {cand[c][0], cand[c][1]}, v;
-    level *l = &S[1].lv[0];
-    if ((rc = score(l, &l->win, base, d, 0, &v, NULL, err))) break;
+    if ((rc = score(&S[1].lv[0], base, d, &v, NULL, err))) break;
     if ((rc = hill_climb(&S[1], base, mid_steps, 3, d, &v, err))) break;
     if (v > mid_best) mid_best = v, mid[0] = d[0], mid[1] = d[1];
   }
   /* 3. In the large window, then the whole image (a tenth of a yarn/inch is a
    * yarn of drift across 500 pixels): the last tenths, then the shift. */
   cur[0] = mid[0], cur[1] = mid[1];
-  level *big = &S[2].lv[0];
-  if (!rc) rc = score(big, &big->win, base, cur, 0, &best, NULL, err);
+  if (!rc) rc = score(&S[2].lv[0], base, cur, &best, NULL, err);
   if (!rc) rc = hill_climb(&S[2], base, fine_steps, 2, cur, &best, err);
-  if (!rc) rc = score(top, &top->win, base, cur, 0, &best, NULL, err);
+  if (!rc) rc = score(top, base, cur, &best, NULL, err);
   if (!rc) rc = hill_climb(&S[3], base, fine_steps + 2, 1, cur, &best, err);
-  if (!rc) rc = score(top, &top->win, base, cur, 0, &best, shift, err);
+  if (!rc) rc = score(top, base, cur, &best, shift, err);
   /* The shift becomes a fabric offset through the local map pixel -> fabric at
    * the centre: photo(x) ~ render(x - shift) means fabric(x) must become
    * fabric(x - shift). */
@@ -374,24 +376,21 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
     for (int i = 0; i < 2; i++) off[i] = -((fx[i] - f0[i]) * shift[0] + (fy[i] - f0[i]) * shift[1]);
   }
   if (!rc) { /* kept only if the whole image's SSIM rises */
-    top->ro.threads = threads;
     wv_params cand_p = *base;
     cand_p.density[0] = cur[0], cand_p.density[1] = cur[1];
     wv_scene moved = top->win;
     moved.fabric_offset[0] += off[0], moved.fabric_offset[1] += off[1];
-    double before, after, ncc_after;
-    if (!(rc = window_ssim(&top->win, base, &top->ref, &top->ro, &before, err)) &&
-        (top->ro.footprints = NULL, 1) && /* the moved fabric has other footprints */
-        !(rc = window_ssim(&moved, &cand_p, &top->ref, &top->ro, &after, err)) &&
-        !(rc = score(top, &moved, &cand_p, cur, 1, &ncc_after, NULL, err))) {
-      st->reg_ssim_before = before;
+    top_ro.footprints = NULL; /* the moved fabric has other footprints */
+    double after, ncc_after;
+    if (!(rc = measure(top, &moved, &cand_p, &top_ro, &ncc_after, &after, err))) {
+      st->reg_ssim_before = ssim_before;
       /* A rise without a correlation peak would only trade contrast for SSIM. */
-      if (after > before && ncc_after >= WV_REGISTER_MIN_NCC) {
+      if (after > ssim_before && ncc_after >= WV_REGISTER_MIN_NCC) {
         st->params = cand_p;
         st->offset_mm[0] += off[0], st->offset_mm[1] += off[1];
         st->reg_ssim_after = after, st->reg_ncc_after = ncc_after;
       } else {
-        st->reg_ssim_after = before, st->reg_ncc_after = st->reg_ncc_before;
+        st->reg_ssim_after = ssim_before, st->reg_ncc_after = st->reg_ncc_before;
       }
       st->registered = 1;
     }

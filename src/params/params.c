@@ -16,7 +16,7 @@ typedef struct {
   const char *key;
   double lo, hi;
 } range;
-static const range R_DENSITY = {"density", 20, 250};
+static const range R_DENSITY = {"density", WV_DENSITY_MIN, WV_DENSITY_MAX};
 static const range R_BETA = {"heightfield", 0, 2};
 static const range R_KD = {"diffuse", 0, 1};
 static const range R_KS = {"specular", 0, 1};

@@ -140,7 +140,7 @@ wv_status wv_footprints_create(const wv_scene *s, int threads, wv_footprints **o
   wv_footprints *f = calloc(1, sizeof *f);
   if (f) f->fp = malloc(sizeof *f->fp * (size_t)s->width * s->height);
   if (!f || !f->fp) {
-    if (f) free(f);
+    free(f);
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for the footprints of %d x %d pixels", s->width, s->height);
   }
   wv_rig_prepare(s, &f->rig);
