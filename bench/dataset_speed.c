@@ -15,6 +15,12 @@
 #include "woven/render.h"
 
 static double run(const wv_scene *s, int spp, int n) {
+  wv_footprints *fp = NULL;
+  wv_error fe;
+  if (wv_footprints_create(s, omp_get_max_threads(), &fp, &fe)) {
+    fprintf(stderr, "%s\n", fe.msg);
+    exit(1);
+  }
   int jobs = omp_get_max_threads();
   wv_descriptor **d = calloc((size_t)jobs, sizeof *d);
   wv_error e;
@@ -32,7 +38,7 @@ static double run(const wv_scene *s, int spp, int n) {
       wv_error e2;
       wv_params p;
       wv_image img = {0};
-      wv_render_opts ro = {spp, 1, NULL, NULL, NULL};
+      wv_render_opts ro = {spp, 1, NULL, NULL, fp}; /* made once per scene, as woven dataset does */
       if (wv_params_sample_prior(wv_net_pattern(k % WV_NET_PATTERNS), (uint64_t)k + 1000, &p, &e2) ||
           wv_render(s, &p, &ro, &img, NULL, &e2) || wv_descriptor_forward(d[omp_get_thread_num()], &img, feat, &e2))
         fprintf(stderr, "%s\n", e2.msg);
@@ -42,6 +48,7 @@ static double run(const wv_scene *s, int spp, int n) {
   }
   double el = bench_now() - t0;
   for (int j = 0; j < jobs; j++) wv_descriptor_free(d[j]);
+  wv_footprints_free(fp);
   free(d);
   return n / el;
 }

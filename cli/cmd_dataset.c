@@ -56,11 +56,11 @@ static void quantise8(wv_image *img) {
 }
 
 static wv_status make_sample(const char *dir, const wv_dataset_info *info, int k, int render_threads,
-                             wv_descriptor *d, float *feat, wv_error *err) {
+                             const wv_footprints *fp, wv_descriptor *d, float *feat, wv_error *err) {
   wv_params p;
   wv_status st = wv_dataset_sample_params(info, k, &p, err);
   if (st) return st;
-  wv_render_opts ro = {info->spp, render_threads, NULL, NULL, NULL};
+  wv_render_opts ro = {info->spp, render_threads, NULL, NULL, fp};
   wv_image img = {0};
   if ((st = wv_render(&info->scene, &p, &ro, &img, NULL, err))) return st;
   quantise8(&img);
@@ -123,7 +123,7 @@ int cmd_dataset(int argc, char **argv) {
   }
   snprintf(want.scene_json, sizeof want.scene_json, "%s", sj);
   free(sj);
-  want.version = WV_DATASET_VERSION, want.seed = (uint64_t)seed, want.per_pattern = (int)per;
+  want.version = WV_DATASET_VERSION, want.renderer = WV_RENDER_VERSION, want.seed = (uint64_t)seed, want.per_pattern = (int)per;
   want.spp = spp ? (int)spp : want.scene.spp;
   if (jobs == 0) jobs = omp_get_max_threads();
 
@@ -154,6 +154,7 @@ int cmd_dataset(int argc, char **argv) {
       const char *why = have.seed != want.seed              ? "seed"
                         : strcmp(have.descriptor, want.descriptor) || have.n_feat != want.n_feat ? "descriptor"
                         : have.spp != want.spp               ? "spp"
+                        : have.renderer != want.renderer     ? "renderer version"
                         : !hj || !wj || strcmp(hj, wj)       ? "scene"
                                                              : NULL;
       free(hj), free(wj);
@@ -207,6 +208,9 @@ int cmd_dataset(int argc, char **argv) {
     /* Samples in parallel with one render thread each beat one sample at a time with
      * all threads (less synchronisation, the descriptor overlaps with rendering). */
     int render_threads = nj > 1 ? 1 : 0;
+    /* Every sample shares the scene: its per-pixel camera geometry is made once. */
+    wv_footprints *fp = NULL;
+    if (wv_footprints_create(&want.scene, (int)jobs, &fp, &err)) rc = cli_fail(&c, &err), ntodo = 0;
 #pragma omp parallel num_threads(nj)
     {
       int tid = omp_get_thread_num();
@@ -218,7 +222,7 @@ int cmd_dataset(int argc, char **argv) {
         stop = failed;
         if (stop) continue;
         wv_error e = {0};
-        wv_status st = feat ? make_sample(dir, &want, todo[t], render_threads, desc[tid], feat, &e)
+        wv_status st = feat ? make_sample(dir, &want, todo[t], render_threads, fp, desc[tid], feat, &e)
                             : wv_fail(&e, WV_ERR_NOMEM, "out of memory for features");
 #pragma omp critical(dataset_progress)
         {
@@ -241,6 +245,7 @@ int cmd_dataset(int argc, char **argv) {
       }
       free(feat);
     }
+    wv_footprints_free(fp);
   }
   cli_progress_end(&bar);
   double el = cli_now() - t0;

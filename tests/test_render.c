@@ -12,6 +12,7 @@
 #include "woven/maps.h"
 #include "woven/grad.h"
 #include "woven/render.h"
+#include "woven/fabricnet.h"
 
 /* A centred w x h window of a scene: same pixels as the full image there. */
 static void crop_scene(wv_scene *s, int w, int h) {
@@ -98,6 +99,22 @@ static void test_default_spp_converged(void **state) {
       render(scenes[si], pats[k], 200, 100, 2 * s.spp, 0, 1, &b);
       double mad = wv_image_mad(&a, &b), mean = wv_image_mean(&b);
       print_message("%s %s spp %d vs %d: MAD %.5f (mean %.3f)\n", scenes[si], pats[k], s.spp, 2 * s.spp, mad, mean);
+      assert_true(mad < 0.01);
+      wv_image_free(&a), wv_image_free(&b);
+    }
+    /* and prior draws of every pattern (bench/spp_convergence measures more) */
+    for (int k = 0; k < WV_NET_PATTERNS; k++) {
+      wv_params p;
+      wv_error err = {0};
+      assert_int_equal(wv_params_sample_prior(wv_net_pattern(k), (uint64_t)(90 + k), &p, &err), WV_OK);
+      wv_scene c = s;
+      crop_scene(&c, 200, 100);
+      wv_render_opts o1 = {s.spp, 0, NULL, NULL, NULL}, o2 = {2 * s.spp, 0, NULL, NULL, NULL};
+      wv_image a, b;
+      assert_int_equal(wv_render(&c, &p, &o1, &a, NULL, &err), WV_OK);
+      assert_int_equal(wv_render(&c, &p, &o2, &b, NULL, &err), WV_OK);
+      double mad = wv_image_mad(&a, &b);
+      print_message("%s prior %s spp %d vs %d: MAD %.5f\n", scenes[si], wv_net_pattern(k), s.spp, 2 * s.spp, mad);
       assert_true(mad < 0.01);
       wv_image_free(&a), wv_image_free(&b);
     }

@@ -165,6 +165,7 @@ wv_status wv_fabricnet_checkpoint_load(const char *path, wv_fabricnet *n, float 
 
 /* ---- synthetic dataset (docs/fabricnet.md) ----
  * DIR/dataset.json: kind "woven-dataset", version, seed, per_pattern, patterns, spp,
+ * renderer (WV_RENDER_VERSION that made the images; absent = 1),
  * scene (the full scene JSON), descriptor name and size, image size.
  * DIR/samples/<pattern>_<i>.json   parameters (the parameter file format)
  * DIR/samples/<pattern>_<i>.png    capture image, 8-bit
@@ -174,6 +175,7 @@ wv_status wv_fabricnet_checkpoint_load(const char *path, wv_fabricnet *n, float 
 #define WV_DATASET_VERSION 1
 typedef struct {
   int version;
+  int renderer; /* WV_RENDER_VERSION of the renderer that made the samples */
   uint64_t seed;
   int per_pattern;
   int spp;

@@ -11,6 +11,11 @@
 #include "woven/params.h"
 #include "woven/scene.h"
 
+/* Bumped when the same parameters, scene and seed render to another image (a new
+ * sampler, say): data made by an older renderer is not extended with newer images.
+ * 1: jittered samples (sessions 1-2); 2: correlated multi-jittered samples. */
+#define WV_RENDER_VERSION 2
+
 /* Per-pixel camera geometry of one scene (where each pixel's corners land on the
  * fabric, light and view directions). It does not depend on the fabric, so a fit
  * or a search that renders one scene many times makes it once. */

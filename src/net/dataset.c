@@ -22,8 +22,9 @@ wv_status wv_dataset_info_write(const char *dir, const wv_dataset_info *info, wv
   /* the seed is written as a string: JSON integers are signed 64-bit in jansson */
   char seed[32];
   snprintf(seed, sizeof seed, "%llu", (unsigned long long)info->seed);
-  json_t *o = json_pack("{s:s,s:i,s:s,s:i,s:o,s:i,s:{s:s,s:i,s:s},s:{s:i,s:i,s:s},s:o,s:s}", "kind",
-                        "woven-dataset", "version", WV_DATASET_VERSION, "seed", seed, "per_pattern",
+  json_t *o = json_pack("{s:s,s:i,s:i,s:s,s:i,s:o,s:i,s:{s:s,s:i,s:s},s:{s:i,s:i,s:s},s:o,s:s}", "kind",
+                        "woven-dataset", "version", WV_DATASET_VERSION, "renderer", info->renderer, "seed", seed,
+                        "per_pattern",
                         info->per_pattern, "patterns", pats, "spp", info->spp, "features", "descriptor",
                         info->descriptor, "count", info->n_feat, "format", "f16le", "image", "width",
                         info->scene.width, "height", info->scene.height, "format", "png8", "scene", scene,
@@ -68,6 +69,10 @@ wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error 
     info->seed = strtoull(seed, &end, 10);
     if (*end) st = wv_fail(err, WV_ERR_FORMAT, "%s: 'seed' is not an integer", path);
     info->version = version, info->n_feat = count;
+    json_t *r = json_object_get(o, "renderer"); /* datasets of sessions 1-2 lack it */
+    info->renderer = r ? (int)json_integer_value(r) : 1;
+    if (r && (!json_is_integer(r) || info->renderer < 1))
+      st = wv_fail(err, WV_ERR_FORMAT, "%s: 'renderer' is not a positive integer", path);
     snprintf(info->descriptor, sizeof info->descriptor, "%s", desc);
     char *sj = json_dumps(scene, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
     if (!st && (!sj || strlen(sj) >= sizeof info->scene_json))

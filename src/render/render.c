@@ -28,6 +28,11 @@ wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
     float u = (float)-log(1.0 - (i + 0.5) / 4096.0);
     f->glint_table[i] = u < 10.0f ? u : 10.0f;
   }
+  for (int r = 0; r < WV_WEAVE_MAX; r++)
+    for (int c = 0; c < WV_WEAVE_MAX; c++) {
+      const wv_weave_cell *ce = &f->ym.weave.cell[r][c];
+      f->cellpack[r * WV_WEAVE_MAX + c] = ce->type | ce->len << 8 | ce->index << 16;
+    }
   f->seed = (uint64_t)p->seed;
   return WV_OK;
 }
@@ -50,10 +55,11 @@ wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render
 static void render_pixel(const wv_camera_rig *rig, const wv_fabric *fab, int px, int py, int spp, float out[3]) {
   wv_footprint fp;
   wv_footprint_prepare(rig, px, py, &fp);
-  float acc[3] = {0, 0, 0};
+  float acc[WV_ACC_ROWS][3] = {{0}};
   if (fp.fast) wv_render_fast_pixel(fab, &fp, px, py, spp, rig->width, acc);
   else wv_render_traced_pixel(rig, fab, px, py, spp, acc); /* silhouette pixel */
-  for (int c = 0; c < 3; c++) out[c] = acc[c] / (float)spp;
+  wv_acc_total(acc, out);
+  for (int c = 0; c < 3; c++) out[c] /= (float)spp;
 }
 
 wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, wv_image *capture,

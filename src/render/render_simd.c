@@ -5,8 +5,8 @@
  * SIMD. Each lane repeats wv_shade() (render_internal.h, yarn_eval.h) operation
  * for operation, in the same order, with branches turned into selects; IEEE
  * +, -, *, / and sqrt round the same in a vector lane as in a scalar register,
- * so every sample's radiance is bit-identical to wv_shade's, and the sums are
- * still taken sample by sample in order. The image therefore does not depend
+ * so every sample's radiance is bit-identical to wv_shade's, and lane i adds the
+ * samples of row i of the pixel's sums in order, as the scalar paths do. The image therefore does not depend
  * on the path or the CPU, and the gradient kernel (grad_kernel.inc, scalar)
  * still returns exactly wv_render's capture (test_grad checks this).
  *
@@ -33,6 +33,7 @@
 #endif
 
 #define W 8
+_Static_assert(W == WV_ACC_ROWS, "a vector lane holds one row of the pixel's sums");
 typedef float v8f __attribute__((vector_size(4 * W)));
 typedef int32_t v8i __attribute__((vector_size(4 * W)));
 typedef int64_t v8l __attribute__((vector_size(8 * W)));
@@ -101,30 +102,49 @@ INL v8f vexpf(v8f x) { /* wv_expf */
   return p * (v8f)((__builtin_convertvector(kf, v8i) + 127) << 23);
 }
 
-/* wv_pixel_sample for eight consecutive samples of one pixel. */
+/* wv_pixel_sample for eight consecutive samples of one pixel: the pixel's
+ * permutations tabulated once (nx, ny <= 64 as spp <= WV_SCENE_MAX_SPP). */
 typedef struct {
-  uint64_t hash; /* wv_hash2's first mixing round, the same for every sample of the pixel */
+  uint64_t hash; /* wv_pixel_hash, the same for every sample of the pixel */
   int nx;
   float fnx, fny, inx;
+  float subx[64], suby[64]; /* wv_permute of the row (ny values) and of the column (nx values) */
 } pixel_strata;
 
 INL void strata_init(pixel_strata *P, int px, int py, int spp, int width, uint64_t seed) {
-  P->hash = wv_mix64(((uint64_t)py * (uint64_t)width + (uint64_t)px) * 0x9e3779b97f4a7c15ULL +
-                     (seed ^ 0x70697865ULL));
-  P->nx = (int)ceilf(sqrtf((float)spp));
-  int ny = (spp + P->nx - 1) / P->nx;
+  int ny;
+  wv_pixel_grid(spp, &P->nx, &ny);
+  P->hash = wv_pixel_hash(px, py, width, seed);
+  uint64_t keys = wv_pixel_keys(P->hash);
+  for (int i = 0; i < ny; i++) P->subx[i] = (float)wv_permute((uint32_t)i, (uint32_t)ny, (uint32_t)keys);
+  for (int i = 0; i < P->nx; i++) P->suby[i] = (float)wv_permute((uint32_t)i, (uint32_t)P->nx, (uint32_t)(keys >> 32));
   P->fnx = (float)P->nx, P->fny = (float)ny, P->inx = 1.0f / (float)P->nx;
 }
 
-/* Positions in the pixel of samples s0 .. s0+7: stratum (s mod nx, s div nx), jitter from the hash. */
+/* Positions in the pixel of samples s0 .. s0+7: cell (s mod nx, s div nx), the
+ * sub-cell from the permutations, jitter from the hash. */
 INL void sample8(const pixel_strata *P, int s0, v8f *sx, v8f *sy) {
   v8i s = s0 + (v8i){0, 1, 2, 3, 4, 5, 6, 7};
-  v8i row = vfloor((tof(s) + 0.5f) * P->inx), col = s - row * P->nx; /* off by one at most: see vmod */
-  v8i lo = col < 0, hi = col >= P->nx;
-  row += lo - hi, col += (lo & P->nx) - (hi & P->nx);
+  v8i row, col;
+  v8f subx, suby;
+  if (P->nx % W == 0) { /* 64, 256, ... spp: the eight samples lie in one row, side by side */
+    int r0 = s0 / P->nx, c0 = s0 - r0 * P->nx;
+    row = (v8i){0} + r0, col = c0 + (v8i){0, 1, 2, 3, 4, 5, 6, 7};
+    subx = (v8f){0} + P->subx[r0];
+    memcpy(&suby, P->suby + c0, sizeof suby);
+  } else {
+    row = vfloor((tof(s) + 0.5f) * P->inx), col = s - row * P->nx; /* off by one at most: see vmod */
+    v8i lo = col < 0, hi = col >= P->nx;
+    row += lo - hi, col += (lo & P->nx) - (hi & P->nx);
+    subx = (v8f){P->subx[row[0]], P->subx[row[1]], P->subx[row[2]], P->subx[row[3]],
+                 P->subx[row[4]], P->subx[row[5]], P->subx[row[6]], P->subx[row[7]]};
+    suby = (v8f){P->suby[col[0]], P->suby[col[1]], P->suby[col[2]], P->suby[col[3]],
+                 P->suby[col[4]], P->suby[col[5]], P->suby[col[6]], P->suby[col[7]]};
+  }
   v8u h = vmix64(P->hash ^ (tou64(s) * 0xc2b2ae3d27d4eb4fULL));
   v8f j1 = vu01(h), j2 = tof(__builtin_convertvector((h >> 16) & 0xffffffULL, v8i)) * (1.0f / 16777216.0f);
-  *sx = (tof(col) + j1) / P->fnx, *sy = (tof(row) + j2) / P->fny;
+  *sx = (tof(col) + (subx + j1) / P->fny) / P->fnx;
+  *sy = (tof(row) + (suby + j2) / P->fnx) / P->fny;
 }
 
 /* Per pixel: the constants of wv_shade and wv_yarn_eval_inline, as they round there. */
@@ -160,11 +180,12 @@ INL int shade8(const wv_fabric *f, const wv_footprint *fp, const pixel_consts *C
   v8i I = vfloor(r), J = vfloor(c);
   v8f fr = r - tof(I), fc = c - tof(J);
   v8i wr = vmod(I, m->weave.rows), wc = vmod(J, m->weave.cols); /* wv_weave_at */
-  v8i ty, len, idx;
-  for (int i = 0; i < W; i++) { /* a gather: three bytes per lane */
-    const wv_weave_cell *ce = &m->weave.cell[wr[i]][wc[i]];
-    ty[i] = ce->type, len[i] = ce->len, idx[i] = ce->index;
-  }
+  /* a gather of one packed word per lane, built as one vector (writing lanes one
+   * by one through memory stalls the read of the whole vector that follows) */
+  v8i ci = wr * WV_WEAVE_MAX + wc;
+  const int32_t *cpk = f->cellpack;
+  v8i pk = {cpk[ci[0]], cpk[ci[1]], cpk[ci[2]], cpk[ci[3]], cpk[ci[4]], cpk[ci[5]], cpk[ci[6]], cpk[ci[7]]};
+  v8i ty = pk & 0xff, len = (pk >> 8) & 0xff, idx = pk >> 16;
   v8i warp = ty == WV_WARP;
   const float dx = m->spacing[WV_WARP], dy = m->spacing[WV_WEFT];
   v8f L = tof(len), kk = tof(idx);
@@ -219,9 +240,8 @@ INL int shade8(const wv_fabric *f, const wv_footprint *fp, const pixel_consts *C
   spec = sel(A > 0.0f, spec, (v8f){0});
   if (f->glints) {
     v8u g = vhash2(tou64(vfloor(gxf)), tou64(vfloor(gyf)), f->seed ^ 0x676c696eULL) >> 52;
-    v8f us;
-    for (int i = 0; i < W; i++) us[i] = f->glint_table[g[i]];
-    spec *= us;
+    const float *gt = f->glint_table;
+    spec *= (v8f){gt[g[0]], gt[g[1]], gt[g[2]], gt[g[3]], gt[g[4]], gt[g[5]], gt[g[6]], gt[g[7]]};
   }
   v8f ni = d->wi[0] * n0 + d->wi[1] * n1 + d->wi[2] * nz;
   v8f diff = (f->blend * sel(ni > 0.0f, ni, (v8f){0}) + C->bm) * C->inv_pi;
@@ -235,7 +255,7 @@ INL int shade8(const wv_fabric *f, const wv_footprint *fp, const pixel_consts *C
 
 WV_SIMD_CLONES
 void wv_render_fast_pixel(const wv_fabric *f, const wv_footprint *fp, int px, int py, int spp, int width,
-                          float acc[3]) {
+                          float acc[WV_ACC_ROWS][3]) {
   const wv_yarn_model *m = &f->ym;
   int k0 = 0;
   /* Tiled maps wrap segment identities (period_rows/cols); the renderer never does. */
@@ -253,25 +273,33 @@ void wv_render_fast_pixel(const wv_fabric *f, const wv_footprint *fp, int px, in
     C.bm = (1.0f - f->blend) * fp->dirs.mi;
     C.four_mo = 4.0f * fp->dirs.mo;
     C.inv_pi = 1.0f / 3.14159265358979f;
+    v8f sum[3]; /* lane i: row i of acc */
+    for (int ch = 0; ch < 3; ch++)
+      for (int i = 0; i < W; i++) sum[ch][i] = acc[i][ch];
     for (; k0 + W <= spp; k0 += W) {
       v8f rad[3];
       if (!shade8(f, fp, &C, k0, rad)) break;
-      for (int i = 0; i < W; i++) /* in sample order, as the scalar loop adds */
-        for (int ch = 0; ch < 3; ch++) acc[ch] += rad[ch][i];
+      for (int ch = 0; ch < 3; ch++) sum[ch] += rad[ch];
     }
+    for (int ch = 0; ch < 3; ch++)
+      for (int i = 0; i < W; i++) acc[i][ch] = sum[ch][i];
   }
   for (int k = k0; k < spp; k++) { /* the rest, or everything when a block could not be done */
     float sx, sy, fx, fy;
     wv_pixel_sample(px, py, k, spp, width, f->seed, &sx, &sy);
     wv_footprint_at(fp, sx, sy, &fx, &fy);
-    wv_shade(f, &fp->dirs, fx, fy, acc);
+    wv_shade(f, &fp->dirs, fx, fy, acc[k % WV_ACC_ROWS]);
   }
 }
 
-/* Bit i set: the ray of sample s0 + i certainly misses the cylinder. The first
- * steps of wv_rig_trace (rig.c), repeated operation for operation, so a lane
- * rejected here is one wv_rig_trace would reject. */
-INL unsigned cylinder_misses8(const wv_camera_rig *r, const pixel_strata *P, int px, int py, int s0) {
+/* Bit i set: wv_rig_trace (rig.c) certainly rejects the ray of sample s0 + i: it
+ * misses the cylinder, or the light or the camera is clearly below the surface's
+ * horizon there (rows along the top and bottom of the cylinder, which would
+ * otherwise be traced sample by sample to no effect). The miss test repeats
+ * wv_rig_trace's first steps operation for operation; the horizon tests keep a
+ * margin of 1e-4 in the cosine, far above rounding, and leave closer calls to the
+ * scalar trace. */
+INL unsigned cylinder_rejects8(const wv_camera_rig *r, const pixel_strata *P, int px, int py, int s0) {
   v8f sx, sy;
   sample8(P, s0, &sx, &sy);
   v8f x = (float)px + sx, y = (float)py + sy;
@@ -281,24 +309,38 @@ INL unsigned cylinder_misses8(const wv_camera_rig *r, const pixel_strata *P, int
   v8f d1 = r->fwd[1] + ndx * r->right[1] + ndy * r->up[1];
   v8f d2 = r->fwd[2] + ndx * r->right[2] + ndy * r->up[2];
   v8f l = vsqrt(d0 * d0 + d1 * d1 + d2 * d2);
-  d1 /= l, d2 /= l;
+  d0 /= l, d1 /= l, d2 /= l;
   const float *o = r->cpos;
   v8f a = d1 * d1 + d2 * d2;
   v8f b = o[1] * d1 + o[2] * d2;
   float c = o[1] * o[1] + o[2] * o[2] - r->radius * r->radius;
-  v8i miss = (a < 1e-12f) | (b * b - a * c < 0.0f);
+  v8f disc = b * b - a * c;
+  v8i miss = (a < 1e-12f) | (disc < 0.0f);
+  /* where it hits: the nearest point in front, its normal, the two cosines */
+  v8f sa = sel(miss, (v8f){0} + 1, a), sq = vsqrt(sel(miss, (v8f){0}, disc));
+  v8f t = (-b - sq) / sa;
+  t = sel(t <= 0.0f, (-b + sq) / sa, t);
+  v8f p0 = o[0] + t * d0, p1 = o[1] + t * d1, p2 = o[2] + t * d2;
+  float inv = 1.0f / r->radius;
+  v8f n1 = p1 * inv, n2 = p2 * inv;
+  v8f cos_o = -(d1 * n1 + d2 * n2); /* |d| = 1 */
+  v8f l0 = r->lpos[0] - p0, l1 = r->lpos[1] - p1, l2 = r->lpos[2] - p2;
+  v8f ln = l1 * n1 + l2 * n2, ll = l0 * l0 + l1 * l1 + l2 * l2;
+  v8i below = (t > 0.0f) & ((cos_o < -1e-4f) | ((ln < 0.0f) & (ln * ln > 1e-8f * ll)));
+  miss |= ~miss & below;
   unsigned bits = 0;
   for (int i = 0; i < W; i++) bits |= (unsigned)(miss[i] & 1) << i;
   return bits;
 }
 
 WV_SIMD_CLONES
-void wv_render_traced_pixel(const wv_camera_rig *rig, const wv_fabric *f, int px, int py, int spp, float acc[3]) {
+void wv_render_traced_pixel(const wv_camera_rig *rig, const wv_fabric *f, int px, int py, int spp,
+                            float acc[WV_ACC_ROWS][3]) {
   pixel_strata P;
   strata_init(&P, px, py, spp, rig->width, f->seed);
   for (int k0 = 0; k0 < spp; k0 += W) {
-    /* Most of these pixels lie wholly beside the cylinder: reject eight rays at once. */
-    unsigned miss = k0 + W <= spp && rig->shape == WV_SHAPE_CYLINDER ? cylinder_misses8(rig, &P, px, py, k0) : 0;
+    /* Most of these pixels lie beside the cylinder or beyond its horizon: reject eight rays at once. */
+    unsigned miss = k0 + W <= spp && rig->shape == WV_SHAPE_CYLINDER ? cylinder_rejects8(rig, &P, px, py, k0) : 0;
     for (int k = k0; k < k0 + W && k < spp; k++) {
       if (miss >> (k - k0) & 1) continue;
       float sx, sy;
@@ -307,7 +349,7 @@ void wv_render_traced_pixel(const wv_camera_rig *rig, const wv_fabric *f, int px
       if (!wv_rig_trace(rig, (float)px + sx, (float)py + sy, &hit)) continue;
       wv_dirs d;
       wv_dirs_from_hit(&hit, &d);
-      wv_shade(f, &d, hit.fx, hit.fy, acc);
+      wv_shade(f, &d, hit.fx, hit.fy, acc[k % WV_ACC_ROWS]);
     }
   }
 }

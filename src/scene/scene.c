@@ -13,7 +13,7 @@ static const char *PRESET_CYLINDER =
     "{\n"
     "  \"name\": \"cylinder\",\n"
     "  \"comment\": \"The paper's rig (Fig. 6): fabric on a horizontal cylinder, phone camera 250 mm from the axis, flash 60 mm above the camera.\",\n"
-    "  \"image\": {\"width\": 800, \"height\": 300, \"spp\": 256},\n"
+    "  \"image\": {\"width\": 800, \"height\": 300, \"spp\": 64},\n"
     "  \"camera\": {\"position_mm\": [0, 0, 250], \"look_at_mm\": [0, 0, 0], \"up\": [0, 1, 0], \"vfov_deg\": 16.89},\n"
     "  \"sample\": {\"shape\": \"cylinder\", \"radius_mm\": 35, \"warp\": \"along_axis\", \"offset_mm\": [0, 0]},\n"
     "  \"light\": {\"position_mm\": [0, 60, 250], \"intensity\": 150000},\n"
