@@ -46,37 +46,6 @@ static void remove_stale_tmp(const char *dir) {
   closedir(d);
 }
 
-/* 8-bit quantisation, as the PNG stores it and as a photo arrives. */
-static void quantise8(wv_image *img) {
-  size_t n = (size_t)img->w * img->h * img->c;
-  for (size_t i = 0; i < n; i++) {
-    float v = img->data[i] < 0 ? 0 : img->data[i] > 1 ? 1 : img->data[i];
-    img->data[i] = floorf(v * 255.0f + 0.5f) / 255.0f;
-  }
-}
-
-static wv_status make_sample(const char *dir, const wv_dataset_info *info, int k, int render_threads,
-                             const wv_footprints *fp, wv_descriptor *d, float *feat, wv_error *err) {
-  wv_params p;
-  wv_status st = wv_dataset_sample_params(info, k, &p, err);
-  if (st) return st;
-  wv_render_opts ro = {info->spp, render_threads, NULL, NULL, fp};
-  wv_image img = {0};
-  if ((st = wv_render(&info->scene, &p, &ro, &img, NULL, err))) return st;
-  quantise8(&img);
-  char path[4096];
-  wv_dataset_path(dir, k, "json", path, sizeof path);
-  st = wv_params_write(path, &p, err);
-  wv_dataset_path(dir, k, "png", path, sizeof path);
-  if (!st) st = wv_image_write_png(path, &img, 8, err);
-  if (!st) st = wv_descriptor_forward(d, &img, feat, err);
-  /* features last: their presence marks a finished sample */
-  wv_dataset_path(dir, k, "feat", path, sizeof path);
-  if (!st) st = wv_dataset_write_features(path, feat, info->n_feat, err);
-  wv_image_free(&img);
-  return st;
-}
-
 int cmd_dataset(int argc, char **argv) {
   cli_ctx c = {0, 0, "dataset"};
   cli_args a;
@@ -222,7 +191,7 @@ int cmd_dataset(int argc, char **argv) {
         stop = failed;
         if (stop) continue;
         wv_error e = {0};
-        wv_status st = feat ? make_sample(dir, &want, todo[t], render_threads, fp, desc[tid], feat, &e)
+        wv_status st = feat ? wv_dataset_make_sample(dir, &want, todo[t], render_threads, fp, desc[tid], feat, &e)
                             : wv_fail(&e, WV_ERR_NOMEM, "out of memory for features");
 #pragma omp critical(dataset_progress)
         {

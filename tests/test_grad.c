@@ -165,6 +165,17 @@ static void test_capture_and_windows(void **state) {
     double g[WV_P_COUNT], dot;
     assert_int_equal(wv_render_grad_ex(&s, &p, NULL, NULL, &dc, g, &dot, &cap, &err), WV_OK);
     assert_int_equal(memcmp(ref.data, cap.data, sizeof(float) * 3 * s.width * s.height), 0);
+    /* Other sample counts take the 8-wide path's other branches: 64 (8 columns, a
+     * block is one row of the grid), 20 (5 columns, two blocks and a scalar tail). */
+    for (int t = 0; t < 2; t++) {
+      wv_render_opts o = {t ? 20 : 64, 0, NULL, NULL, NULL};
+      wv_image r2, c2;
+      double g2[WV_P_COUNT], d2;
+      assert_int_equal(wv_render(&s, &p, &o, &r2, NULL, &err), WV_OK);
+      assert_int_equal(wv_render_grad_ex(&s, &p, &o, NULL, &dc, g2, &d2, &c2, &err), WV_OK);
+      assert_int_equal(memcmp(r2.data, c2.data, sizeof(float) * 3 * s.width * s.height), 0);
+      wv_image_free(&r2), wv_image_free(&c2);
+    }
     /* Split into a top and a bottom window. */
     int hh = s.height / 2;
     double gsum[WV_P_COUNT] = {0}, dsum = 0;

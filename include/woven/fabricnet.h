@@ -195,6 +195,15 @@ wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params
 void wv_dataset_path(const char *dir, int k, const char *ext, char *buf, size_t cap);
 /* 1 when the sample's three files are complete. */
 int wv_dataset_sample_done(const char *dir, const wv_dataset_info *info, int k);
+/* Makes sample k in dir (whose samples/ exists): the prior draw rendered at info's
+ * spp with render_threads (0 = all) and the footprints fp (made for info's scene,
+ * or NULL), quantised to 8 bits as a photo arrives, then its parameter file, PNG
+ * and, last, its features computed by d into feat (n_feat floats of scratch). */
+struct wv_descriptor;
+struct wv_footprints;
+wv_status wv_dataset_make_sample(const char *dir, const wv_dataset_info *info, int k, int render_threads,
+                                 const struct wv_footprints *fp, struct wv_descriptor *d, float *feat,
+                                 wv_error *err);
 /* Features as f16 (n_feat values) with a header (magic, count, CRC). */
 wv_status wv_dataset_write_features(const char *path, const float *x, int n, wv_error *err);
 wv_status wv_dataset_read_features(const char *path, int n, uint16_t *out, wv_error *err);

@@ -1,13 +1,16 @@
 /* woven: FabricNet's synthetic dataset on disk (format in docs/fabricnet.md). */
 #include <jansson.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
 #include "util/hash.h"
+#include "woven/descriptor.h"
 #include "woven/fabricnet.h"
 #include "woven/io.h"
+#include "woven/render.h"
 
 static const char *PATTERNS[WV_NET_PATTERNS] = {"plain", "twill", "satin", "twill90", "satin90"};
 
@@ -99,6 +102,37 @@ wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params
   /* one independent stream per sample: resuming or reordering reproduces every draw */
   uint64_t s = wv_hash4(info->seed, (uint64_t)(k % WV_NET_PATTERNS), (uint64_t)(k / WV_NET_PATTERNS), 0x64617461ULL);
   return wv_params_sample_prior(PATTERNS[k % WV_NET_PATTERNS], s, p, err);
+}
+
+/* 8-bit quantisation, as the PNG stores it and as a photo arrives. */
+static void quantise8(wv_image *img) {
+  size_t n = (size_t)img->w * img->h * img->c;
+  for (size_t i = 0; i < n; i++) {
+    float v = img->data[i] < 0 ? 0 : img->data[i] > 1 ? 1 : img->data[i];
+    img->data[i] = floorf(v * 255.0f + 0.5f) / 255.0f;
+  }
+}
+
+wv_status wv_dataset_make_sample(const char *dir, const wv_dataset_info *info, int k, int render_threads,
+                                 const wv_footprints *fp, wv_descriptor *d, float *feat, wv_error *err) {
+  wv_params p;
+  wv_status st = wv_dataset_sample_params(info, k, &p, err);
+  if (st) return st;
+  wv_render_opts ro = {info->spp, render_threads, NULL, NULL, fp};
+  wv_image img = {0};
+  if ((st = wv_render(&info->scene, &p, &ro, &img, NULL, err))) return st;
+  quantise8(&img);
+  char path[4096];
+  wv_dataset_path(dir, k, "json", path, sizeof path);
+  st = wv_params_write(path, &p, err);
+  wv_dataset_path(dir, k, "png", path, sizeof path);
+  if (!st) st = wv_image_write_png(path, &img, 8, err);
+  if (!st) st = wv_descriptor_forward(d, &img, feat, err);
+  /* features last: their presence marks a finished sample */
+  wv_dataset_path(dir, k, "feat", path, sizeof path);
+  if (!st) st = wv_dataset_write_features(path, feat, info->n_feat, err);
+  wv_image_free(&img);
+  return st;
 }
 
 /* ---- feature files: "WVFT", u32 version 1, u32 count, u32 CRC-32 of the data, f16 data ---- */
