@@ -6,9 +6,10 @@
  * for operation, in the same order, with branches turned into selects; IEEE
  * +, -, *, / and sqrt round the same in a vector lane as in a scalar register,
  * so every sample's radiance is bit-identical to wv_shade's, and lane i adds the
- * samples of row i of the pixel's sums in order, as the scalar paths do. The image therefore does not depend
- * on the path or the CPU, and the gradient kernel (grad_kernel.inc, scalar)
- * still returns exactly wv_render's capture (test_grad checks this).
+ * samples of row i of the pixel's sums (WV_ACC_ROWS) in order, as the scalar paths
+ * do. The image therefore does not depend on the path or the CPU, and the
+ * gradient kernel (grad_kernel.inc, scalar) still returns exactly wv_render's
+ * capture (test_grad checks this).
  *
  * GCC vector extensions, compiled in several versions (target_clones): AVX-512
  * (64-bit multiplies for the hashes in one instruction), AVX2, and plain
