@@ -92,19 +92,30 @@ static inline uint64_t wv_pixel_keys(uint64_t pixel_hash) { return wv_mix64(pixe
  * sub-row given by a per-pixel permutation, so that the x values of all samples
  * fall in distinct 1/(nx ny) strata, and so do the y values. Yarn edges and the
  * glint grid are close to axis-aligned in the image: their coverage then comes
- * out nearly exact, where independent cells leave a sqrt(nx) error per edge. */
-static inline void wv_pixel_sample(int px, int py, int s, int spp, int width, uint64_t seed, float *sx, float *sy) {
+ * out nearly exact, where independent cells leave a sqrt(nx) error per edge.
+ * wv_pixel_sampler holds what every sample of the pixel shares. */
+typedef struct {
   int nx, ny;
-  wv_pixel_grid(spp, &nx, &ny);
-  uint64_t ph = wv_pixel_hash(px, py, width, seed), keys = wv_pixel_keys(ph);
-  uint64_t h = wv_mix64(ph ^ ((uint64_t)s * 0xc2b2ae3d27d4eb4fULL)); /* = wv_hash2(pixel, s, seed) */
+  uint64_t hash;       /* wv_pixel_hash */
+  uint32_t keyx, keyy; /* the permutations' keys (wv_pixel_keys) */
+} wv_pixel_sampler;
+
+static inline void wv_pixel_sampler_init(wv_pixel_sampler *ps, int px, int py, int spp, int width, uint64_t seed) {
+  wv_pixel_grid(spp, &ps->nx, &ps->ny);
+  ps->hash = wv_pixel_hash(px, py, width, seed);
+  uint64_t keys = wv_pixel_keys(ps->hash);
+  ps->keyx = (uint32_t)keys, ps->keyy = (uint32_t)(keys >> 32);
+}
+
+static inline void wv_pixel_sampler_at(const wv_pixel_sampler *ps, int s, float *sx, float *sy) {
+  uint64_t h = wv_mix64(ps->hash ^ ((uint64_t)s * 0xc2b2ae3d27d4eb4fULL)); /* = wv_hash2(pixel, s, seed) */
   float j1 = (float)(h >> 40) * (1.0f / 16777216.0f);
   float j2 = (float)((h >> 16) & 0xffffffULL) * (1.0f / 16777216.0f);
-  int col = s % nx, row = s / nx;
-  float subx = (float)wv_permute((uint32_t)row, (uint32_t)ny, (uint32_t)keys);
-  float suby = (float)wv_permute((uint32_t)col, (uint32_t)nx, (uint32_t)(keys >> 32));
-  *sx = ((float)col + (subx + j1) / (float)ny) / (float)nx;
-  *sy = ((float)row + (suby + j2) / (float)nx) / (float)ny;
+  int col = s % ps->nx, row = s / ps->nx;
+  float subx = (float)wv_permute((uint32_t)row, (uint32_t)ps->ny, ps->keyx);
+  float suby = (float)wv_permute((uint32_t)col, (uint32_t)ps->nx, ps->keyy);
+  *sx = ((float)col + (subx + j1) / (float)ps->ny) / (float)ps->nx;
+  *sy = ((float)row + (suby + j2) / (float)ps->nx) / (float)ps->ny;
 }
 
 /* Directions shared by all samples of a pixel. A pixel spans ~1e-3 rad seen from

@@ -103,7 +103,7 @@ INL v8f vexpf(v8f x) { /* wv_expf */
   return p * (v8f)((__builtin_convertvector(kf, v8i) + 127) << 23);
 }
 
-/* wv_pixel_sample for eight consecutive samples of one pixel: the pixel's
+/* wv_pixel_sampler_at for eight consecutive samples of one pixel: the pixel's
  * permutations tabulated once (nx, ny <= 64 as spp <= WV_SCENE_MAX_SPP). */
 typedef struct {
   uint64_t hash; /* wv_pixel_hash, the same for every sample of the pixel */
@@ -285,9 +285,11 @@ void wv_render_fast_pixel(const wv_fabric *f, const wv_footprint *fp, int px, in
     for (int ch = 0; ch < 3; ch++)
       for (int i = 0; i < W; i++) acc[i][ch] = sum[ch][i];
   }
+  wv_pixel_sampler ps;
+  if (k0 < spp) wv_pixel_sampler_init(&ps, px, py, spp, width, f->seed);
   for (int k = k0; k < spp; k++) { /* the rest, or everything when a block could not be done */
     float sx, sy, fx, fy;
-    wv_pixel_sample(px, py, k, spp, width, f->seed, &sx, &sy);
+    wv_pixel_sampler_at(&ps, k, &sx, &sy);
     wv_footprint_at(fp, sx, sy, &fx, &fy);
     wv_shade(f, &fp->dirs, fx, fy, acc[k % WV_ACC_ROWS]);
   }
@@ -339,13 +341,15 @@ void wv_render_traced_pixel(const wv_camera_rig *rig, const wv_fabric *f, int px
                             float acc[WV_ACC_ROWS][3]) {
   pixel_strata P;
   strata_init(&P, px, py, spp, rig->width, f->seed);
+  wv_pixel_sampler ps;
+  wv_pixel_sampler_init(&ps, px, py, spp, rig->width, f->seed);
   for (int k0 = 0; k0 < spp; k0 += W) {
     /* Most of these pixels lie beside the cylinder or beyond its horizon: reject eight rays at once. */
     unsigned miss = k0 + W <= spp && rig->shape == WV_SHAPE_CYLINDER ? cylinder_rejects8(rig, &P, px, py, k0) : 0;
     for (int k = k0; k < k0 + W && k < spp; k++) {
       if (miss >> (k - k0) & 1) continue;
       float sx, sy;
-      wv_pixel_sample(px, py, k, spp, rig->width, f->seed, &sx, &sy);
+      wv_pixel_sampler_at(&ps, k, &sx, &sy);
       wv_hit hit;
       if (!wv_rig_trace(rig, (float)px + sx, (float)py + sy, &hit)) continue;
       wv_dirs d;
