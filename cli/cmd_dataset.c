@@ -1,7 +1,6 @@
 /* woven dataset: FabricNet's synthetic training set (SPEC section 7), resumable. */
 #include <dirent.h>
 #include <errno.h>
-#include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
@@ -172,14 +171,14 @@ int cmd_dataset(int argc, char **argv) {
   cli_progress bar;
   cli_progress_start(&bar, &c, "dataset");
   int tty = bar.enabled;
+  /* Every sample shares the scene: its per-pixel camera geometry is made once. */
+  wv_footprints *fp = NULL;
+  if (!rc && ntodo > 0 && wv_footprints_create(&want.scene, (int)jobs, &fp, &err)) rc = cli_fail(&c, &err);
   if (!rc && ntodo > 0) {
     int nj = (int)(jobs < ntodo ? jobs : ntodo);
     /* Samples in parallel with one render thread each beat one sample at a time with
      * all threads (less synchronisation, the descriptor overlaps with rendering). */
     int render_threads = nj > 1 ? 1 : 0;
-    /* Every sample shares the scene: its per-pixel camera geometry is made once. */
-    wv_footprints *fp = NULL;
-    if (wv_footprints_create(&want.scene, (int)jobs, &fp, &err)) rc = cli_fail(&c, &err), ntodo = 0;
 #pragma omp parallel num_threads(nj)
     {
       int tid = omp_get_thread_num();
@@ -214,8 +213,8 @@ int cmd_dataset(int argc, char **argv) {
       }
       free(feat);
     }
-    wv_footprints_free(fp);
   }
+  wv_footprints_free(fp);
   cli_progress_end(&bar);
   double el = cli_now() - t0;
   if (!rc && failed) rc = cli_fail(&c, &first_err);

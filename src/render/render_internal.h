@@ -194,9 +194,12 @@ static inline void wv_shade(const wv_fabric *f, const wv_dirs *d, float fx, floa
  * keeps the rows in its vector lanes, so every path adds the same numbers in the
  * same order and the image does not depend on which one ran. */
 #define WV_ACC_ROWS 8
+/* The tree, for channel c of acc (float here, float or double in grad_kernel.inc). */
+#define WV_ACC_TREE(acc, c)                                                                   \
+  ((((acc)[0][c] + (acc)[1][c]) + ((acc)[2][c] + (acc)[3][c])) +                              \
+   (((acc)[4][c] + (acc)[5][c]) + ((acc)[6][c] + (acc)[7][c])))
 static inline void wv_acc_total(const float acc[WV_ACC_ROWS][3], float out[3]) {
-  for (int c = 0; c < 3; c++)
-    out[c] = ((acc[0][c] + acc[1][c]) + (acc[2][c] + acc[3][c])) + ((acc[4][c] + acc[5][c]) + (acc[6][c] + acc[7][c]));
+  for (int c = 0; c < 3; c++) out[c] = WV_ACC_TREE(acc, c);
 }
 
 /* The samples of a pixel whose footprint is fast (fp->fast), eight at a time

@@ -302,9 +302,7 @@ void wv_render_fast_pixel(const wv_fabric *f, const wv_footprint *fp, int px, in
  * wv_rig_trace's first steps operation for operation; the horizon tests keep a
  * margin of 1e-4 in the cosine, far above rounding, and leave closer calls to the
  * scalar trace. */
-INL unsigned cylinder_rejects8(const wv_camera_rig *r, const pixel_strata *P, int px, int py, int s0) {
-  v8f sx, sy;
-  sample8(P, s0, &sx, &sy);
+INL unsigned cylinder_rejects8(const wv_camera_rig *r, v8f sx, v8f sy, int px, int py) {
   v8f x = (float)px + sx, y = (float)py + sy;
   v8f ndx = (2.0f * x / (float)r->width - 1.0f) * r->tan_half * r->aspect;
   v8f ndy = (1.0f - 2.0f * y / (float)r->height) * r->tan_half;
@@ -330,7 +328,7 @@ INL unsigned cylinder_rejects8(const wv_camera_rig *r, const pixel_strata *P, in
   v8f l0 = r->lpos[0] - p0, l1 = r->lpos[1] - p1, l2 = r->lpos[2] - p2;
   v8f ln = l1 * n1 + l2 * n2, ll = l0 * l0 + l1 * l1 + l2 * l2;
   v8i below = (t > 0.0f) & ((cos_o < -1e-4f) | ((ln < 0.0f) & (ln * ln > 1e-8f * ll)));
-  miss |= ~miss & below;
+  miss |= below;
   unsigned bits = 0;
   for (int i = 0; i < W; i++) bits |= (unsigned)(miss[i] & 1) << i;
   return bits;
@@ -345,11 +343,18 @@ void wv_render_traced_pixel(const wv_camera_rig *rig, const wv_fabric *f, int px
   wv_pixel_sampler_init(&ps, px, py, spp, rig->width, f->seed);
   for (int k0 = 0; k0 < spp; k0 += W) {
     /* Most of these pixels lie beside the cylinder or beyond its horizon: reject eight rays at once. */
-    unsigned miss = k0 + W <= spp && rig->shape == WV_SHAPE_CYLINDER ? cylinder_rejects8(rig, &P, px, py, k0) : 0;
+    int block = k0 + W <= spp && rig->shape == WV_SHAPE_CYLINDER;
+    v8f bx, by; /* the block's positions, as wv_pixel_sampler_at gives them */
+    unsigned miss = 0;
+    if (block) {
+      sample8(&P, k0, &bx, &by);
+      miss = cylinder_rejects8(rig, bx, by, px, py);
+    }
     for (int k = k0; k < k0 + W && k < spp; k++) {
       if (miss >> (k - k0) & 1) continue;
       float sx, sy;
-      wv_pixel_sampler_at(&ps, k, &sx, &sy);
+      if (block) sx = bx[k - k0], sy = by[k - k0];
+      else wv_pixel_sampler_at(&ps, k, &sx, &sy);
       wv_hit hit;
       if (!wv_rig_trace(rig, (float)px + sx, (float)py + sy, &hit)) continue;
       wv_dirs d;
