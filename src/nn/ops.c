@@ -87,9 +87,15 @@ void wv_nn_avgpool2_backward(float *dx, const float *dy, int nc, int h, int w) {
 }
 
 void wv_nn_gram_forward(float *g, const float *f, int n, int c, int hw) {
-  for (int i = 0; i < n; i++)
+  for (int i = 0; i < n; i++) {
+    float *gi = g + (size_t)i * c * c;
     wv_nn_sgemm(0, 1, c, c, hw, 1.0f / hw, f + (size_t)i * c * hw, hw, f + (size_t)i * c * hw, hw,
-                0.0f, g + (size_t)i * c * c, c);
+                0.0f, gi, c);
+    /* sgemm's blocked kernels may round the two triangles differently; a Gram matrix is
+       symmetric, so mirror the upper one. */
+    for (int r = 1; r < c; r++)
+      for (int q = 0; q < r; q++) gi[(size_t)r * c + q] = gi[(size_t)q * c + r];
+  }
 }
 
 void wv_nn_gram_backward(float *df, const float *f, const float *dg, int n, int c, int hw) {
