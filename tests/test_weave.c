@@ -1,4 +1,5 @@
 /* Weave patterns: built-ins, segment table, custom patterns and their errors. */
+#include <stdio.h>
 #include <string.h>
 
 #include "testutil.h"
@@ -57,6 +58,68 @@ static void test_builtins(void **state) {
     for (int j = 0; j < 5; j++) assert_int_equal(s.cell[i][j].len, s.p[i][j] ? 4 : 1);
 }
 
+/* Every canonical built-in: its family prefix, a valid segment table, the float lengths of
+ * its family, and its 90-degree variant's definition. */
+static void test_library(void **state) {
+  (void)state;
+  int n = wv_weave_builtin_count();
+  assert_int_equal(n, 16);
+  assert_null(wv_weave_builtin_name(n));
+  assert_null(wv_weave_builtin_name(-1));
+  for (int k = 0; k < n; k++) {
+    const char *name = wv_weave_builtin_name(k);
+    wv_weave w;
+    wv_error err = {0};
+    assert_int_equal(wv_weave_builtin(name, &w, &err), WV_OK);
+    check_segments(&w);
+    const char *fam = wv_weave_family(name);
+    assert_int_equal(strncmp(name, fam, strlen(fam)), 0);
+    assert_string_equal(wv_weave_canonical(name), name);
+    int rot = strstr(name, "_90") != NULL;
+    if (rot) { /* the variant is 1 - P^T of its base */
+      char base[32];
+      snprintf(base, sizeof base, "%.*s", (int)(strlen(name) - 3), name);
+      wv_weave b;
+      assert_int_equal(wv_weave_builtin(base, &b, &err), WV_OK);
+      assert_int_equal(w.rows, b.cols);
+      for (int i = 0; i < w.rows; i++)
+        for (int j = 0; j < w.cols; j++) assert_int_equal(w.p[i][j], 1 - b.p[j][i]);
+      continue;
+    }
+    /* longest warp and weft floats of the base patterns */
+    int lw = 0, lf = 0;
+    for (int i = 0; i < w.rows; i++)
+      for (int j = 0; j < w.cols; j++) {
+        int *l = w.p[i][j] ? &lw : &lf;
+        if (w.cell[i][j].len > *l) *l = w.cell[i][j].len;
+      }
+    int a = 1, b = 1;
+    if (!strcmp(fam, "basket")) a = b = 2;
+    if (!strcmp(fam, "twill")) a = name[5] - '0', b = name[6] - '0';
+    if (!strcmp(fam, "satin")) a = w.rows - 1;
+    assert_int_equal(lw, a);
+    assert_int_equal(lf, b);
+    if (!strcmp(fam, "twill")) { /* S: the float start moves right going down; Z: left */
+      int dir = name[7] == 's' ? 1 : -1;
+      for (int i = 0; i < w.rows; i++)
+        for (int j = 0; j < w.cols; j++)
+          assert_int_equal(w.p[i][j], w.p[(i + 1) % w.rows][(j + dir + w.cols) % w.cols]);
+    }
+  }
+  /* earlier names load as their canonical patterns */
+  const char *alias[4][2] = {{"twill", "twill31s"}, {"satin", "satin5"}, {"twill90", "twill31s_90"},
+                             {"satin90", "satin5_90"}};
+  for (int k = 0; k < 4; k++) {
+    wv_weave a, b;
+    assert_int_equal(wv_weave_builtin(alias[k][0], &a, NULL), WV_OK);
+    assert_int_equal(wv_weave_builtin(alias[k][1], &b, NULL), WV_OK);
+    assert_memory_equal(a.p, b.p, sizeof a.p);
+    assert_string_equal(wv_weave_canonical(alias[k][0]), alias[k][1]);
+  }
+  assert_string_equal(wv_weave_family("custom"), "custom");
+  assert_null(wv_weave_canonical("custom"));
+}
+
 static void test_wraparound_lookup(void **state) {
   (void)state;
   wv_weave w;
@@ -90,7 +153,7 @@ static void test_custom(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_builtins), cmocka_unit_test(test_wraparound_lookup),
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_builtins), cmocka_unit_test(test_library), cmocka_unit_test(test_wraparound_lookup),
                                      cmocka_unit_test(test_custom)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

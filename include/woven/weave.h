@@ -26,9 +26,20 @@ typedef struct {
   wv_weave_cell cell[WV_WEAVE_MAX][WV_WEAVE_MAX];
 } wv_weave;
 
-/* Built-in names: plain, twill, satin, twill90, satin90. */
+/* The built-in library: plain, basket, twills 2/1, 2/2 and 3/1 in S and Z direction
+ * (twill21s ... twill31z), 5- and 8-harness satins (satin5, satin8), and the 90-degree
+ * variants of the asymmetric ones (name + "_90": floats run across the image). Each name
+ * starts with its family. The earlier names twill, satin, twill90 and satin90 still load
+ * (twill31s, satin5 and their _90 variants). */
 wv_status wv_weave_builtin(const char *name, wv_weave *w, wv_error *err);
 int wv_weave_is_builtin(const char *name);
+/* Canonical built-ins, in a fixed order (the index FabricNet's pattern head uses). */
+int wv_weave_builtin_count(void);
+const char *wv_weave_builtin_name(int i); /* NULL outside 0..count-1 */
+/* The canonical name of a built-in (also of an earlier alias), NULL when not built in. */
+const char *wv_weave_canonical(const char *name);
+/* "plain", "basket", "twill", "satin", or "custom" for any other name. */
+const char *wv_weave_family(const char *name);
 /* A custom pattern from n text rows of '0'/'1' of equal length (1..WV_WEAVE_MAX). */
 wv_status wv_weave_from_rows(const char *const *rows, int n, wv_weave *w, wv_error *err);
 /* Cell lookup for any integer row/column (wraps around the repeat). */

@@ -34,14 +34,17 @@ wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err) {
   snprintf(p->pattern, sizeof p->pattern, "%s", pattern);
   int rot = strstr(pattern, "90") != NULL;
   int wa = rot ? WV_WEFT : WV_WARP, we = rot ? WV_WARP : WV_WEFT;
-  /* Centres of the dataset priors (SPEC section 5). */
-  if (!strncmp(pattern, "plain", 5)) {
+  const char *fam = wv_weave_family(pattern);
+  /* A Z twill is the mirror image of its S twill, as is a 90-degree variant. */
+  int mirror = rot ^ (!strcmp(fam, "twill") && strchr(wv_weave_canonical(pattern), 'z') != NULL);
+  /* Centres of the dataset priors (SPEC section 5); basket takes plain's. */
+  if (!strcmp(fam, "plain") || !strcmp(fam, "basket")) {
     p->density[wa] = p->density[we] = 100;
     p->heightfield[wa] = p->heightfield[we] = 1.1;
     p->roughness[wa] = p->roughness[we] = 0.25;
     p->inclination_deg = 22.5;
     p->twist_deg = 0;
-  } else if (!strncmp(pattern, "twill", 5)) {
+  } else if (!strcmp(fam, "twill")) {
     p->density[wa] = 140, p->density[we] = 85;
     p->heightfield[wa] = p->heightfield[we] = 1.5;
     p->roughness[wa] = p->roughness[we] = 0.745;
@@ -54,7 +57,7 @@ wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err) {
     p->inclination_deg = 47.5;
     p->twist_deg = 0;
   }
-  if (rot) p->twist_deg = -p->twist_deg; /* the 90-degree pattern is a mirror image */
+  if (mirror) p->twist_deg = -p->twist_deg;
   for (int y = 0; y < 2; y++)
     for (int c = 0; c < 3; c++) {
       p->diffuse[y][c] = 0.5;
@@ -373,11 +376,12 @@ wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *
   uint64_t r = wv_mix64(seed ^ 0x7072696f72ULL);
   int rot = strstr(pattern, "90") != NULL;
   int wa = rot ? WV_WEFT : WV_WARP, we = rot ? WV_WARP : WV_WEFT; /* the base pattern's warp and weft */
+  const char *fam = wv_weave_family(pattern);
   double dlo[2], dhi[2], blo, bhi, alo[2], ahi[2], ulo, uhi;
-  if (!strncmp(pattern, "plain", 5)) {
+  if (!strcmp(fam, "plain") || !strcmp(fam, "basket")) {
     dlo[0] = dlo[1] = 60, dhi[0] = dhi[1] = 140, blo = 0.2, bhi = 2;
     alo[0] = alo[1] = 0.01, ahi[0] = ahi[1] = 0.49, ulo = 15, uhi = 30;
-  } else if (!strncmp(pattern, "twill", 5)) {
+  } else if (!strcmp(fam, "twill")) {
     dlo[0] = 80, dhi[0] = 200, dlo[1] = 50, dhi[1] = 120, blo = 1, bhi = 2;
     alo[0] = alo[1] = 0.49, ahi[0] = ahi[1] = 1, ulo = 20, uhi = 40;
   } else {

@@ -1,26 +1,69 @@
+/* Weave patterns: the built-in library, custom 0/1 matrices, and the segment table
+ * (which float each cell belongs to) that the yarn geometry reads. */
 #include "woven/weave.h"
 
 #include <string.h>
 
+/* The built-in library. Each entry is generated from its family's rule, so a pattern is
+ * one line: twills a/b (a warp over, b under) shift their float start by one column per
+ * row, S (rows run down to the right, "\\" ribs in the image, row 0 on top) or Z ("/");
+ * an n-harness satin has one weft cell per row, moving `step` columns per row. */
+typedef enum { FAM_PLAIN, FAM_BASKET, FAM_TWILL, FAM_SATIN } family;
+
 typedef struct {
   const char *name;
-  const char *rows[5];
-  int n;
-  int rotate; /* build as 1 - P^T of the named base */
+  family fam;
+  int a, b; /* twill a/b; satin: harness a, step b */
+  int dir;  /* twill: +1 S, -1 Z */
+  int rotate; /* the 90-degree variant: 1 - P^T of the base (floats run across) */
 } builtin;
 
+/* Canonical names first (the order is the library's index order); plain, basket and the
+ * 2/2 twills have no 90-degree variant because 1 - P^T of each is the same pattern
+ * shifted. */
 static const builtin BUILTINS[] = {
-    {"plain", {"10", "01"}, 2, 0},
-    {"twill", {"1110", "0111", "1011", "1101"}, 4, 0},
-    {"satin", {"11110", "11011", "01111", "11101", "10111"}, 5, 0},
-    {"twill90", {"1110", "0111", "1011", "1101"}, 4, 1},
-    {"satin90", {"11110", "11011", "01111", "11101", "10111"}, 5, 1},
+    {"plain", FAM_PLAIN, 1, 1, 0, 0},        {"basket", FAM_BASKET, 2, 2, 0, 0},
+    {"twill21s", FAM_TWILL, 2, 1, 1, 0},     {"twill21z", FAM_TWILL, 2, 1, -1, 0},
+    {"twill22s", FAM_TWILL, 2, 2, 1, 0},     {"twill22z", FAM_TWILL, 2, 2, -1, 0},
+    {"twill31s", FAM_TWILL, 3, 1, 1, 0},     {"twill31z", FAM_TWILL, 3, 1, -1, 0},
+    {"satin5", FAM_SATIN, 5, 2, 0, 0},       {"satin8", FAM_SATIN, 8, 3, 0, 0},
+    {"twill21s_90", FAM_TWILL, 2, 1, 1, 1},  {"twill21z_90", FAM_TWILL, 2, 1, -1, 1},
+    {"twill31s_90", FAM_TWILL, 3, 1, 1, 1},  {"twill31z_90", FAM_TWILL, 3, 1, -1, 1},
+    {"satin5_90", FAM_SATIN, 5, 2, 0, 1},    {"satin8_90", FAM_SATIN, 8, 3, 0, 1},
+    /* Earlier names, kept so existing parameter files load. */
+    {"twill", FAM_TWILL, 3, 1, 1, 0},        {"satin", FAM_SATIN, 5, 2, 0, 0},
+    {"twill90", FAM_TWILL, 3, 1, 1, 1},      {"satin90", FAM_SATIN, 5, 2, 0, 1},
 };
+enum { N_CANONICAL = 16 };
 
-int wv_weave_is_builtin(const char *name) {
+int wv_weave_builtin_count(void) { return N_CANONICAL; }
+
+const char *wv_weave_builtin_name(int i) {
+  return i >= 0 && i < N_CANONICAL ? BUILTINS[i].name : NULL;
+}
+
+static const builtin *find_builtin(const char *name) {
   for (size_t i = 0; i < sizeof BUILTINS / sizeof BUILTINS[0]; i++)
-    if (!strcmp(name, BUILTINS[i].name)) return 1;
-  return 0;
+    if (!strcmp(name, BUILTINS[i].name)) return &BUILTINS[i];
+  return NULL;
+}
+
+int wv_weave_is_builtin(const char *name) { return name && find_builtin(name) != NULL; }
+
+const char *wv_weave_canonical(const char *name) {
+  const builtin *b = name ? find_builtin(name) : NULL;
+  if (!b) return NULL;
+  for (int i = 0; i < N_CANONICAL; i++)
+    if (BUILTINS[i].fam == b->fam && BUILTINS[i].a == b->a && BUILTINS[i].b == b->b &&
+        BUILTINS[i].dir == b->dir && BUILTINS[i].rotate == b->rotate)
+      return BUILTINS[i].name;
+  return NULL;
+}
+
+const char *wv_weave_family(const char *name) {
+  static const char *const FAMILY[] = {"plain", "basket", "twill", "satin"};
+  const builtin *b = name ? find_builtin(name) : NULL;
+  return b ? FAMILY[b->fam] : "custom";
 }
 
 /* Fill the segment table: every maximal wrap-around run of 1s down a column is a
@@ -78,22 +121,36 @@ wv_status wv_weave_from_rows(const char *const *rows, int n, wv_weave *w, wv_err
 }
 
 wv_status wv_weave_builtin(const char *name, wv_weave *w, wv_error *err) {
-  for (size_t b = 0; b < sizeof BUILTINS / sizeof BUILTINS[0]; b++) {
-    const builtin *bi = &BUILTINS[b];
-    if (strcmp(name, bi->name)) continue;
-    wv_status st = wv_weave_from_rows(bi->rows, bi->n, w, err);
-    if (st || !bi->rotate) return st;
-    /* 90-degree version: transpose with warp and weft roles swapped (1 - P^T). */
-    wv_weave base = *w;
-    memset(w, 0, sizeof *w);
-    w->rows = base.cols;
-    w->cols = base.rows;
-    for (int i = 0; i < w->rows; i++)
-      for (int j = 0; j < w->cols; j++) w->p[i][j] = (uint8_t)(1 - base.p[j][i]);
-    build_segments(w);
-    return WV_OK;
-  }
-  return wv_fail(err, WV_ERR_INVALID,
-                 "unknown pattern '%s' (expected plain, twill, satin, twill90, satin90 or custom)",
-                 name);
+  const builtin *bi = name ? find_builtin(name) : NULL;
+  if (!bi)
+    return wv_fail(err, WV_ERR_INVALID,
+                   "unknown pattern '%s' (expected plain, basket, twill21s, twill21z, twill22s, "
+                   "twill22z, twill31s, twill31z, satin5, satin8, a twill or satin with _90, or "
+                   "custom)",
+                   name ? name : "");
+  wv_weave base;
+  memset(&base, 0, sizeof base);
+  int n = bi->fam == FAM_PLAIN ? 2 : bi->fam == FAM_BASKET ? 4 : bi->fam == FAM_TWILL ? bi->a + bi->b : bi->a;
+  base.rows = base.cols = n;
+  for (int i = 0; i < n; i++)
+    for (int j = 0; j < n; j++) {
+      int up;
+      switch (bi->fam) {
+      case FAM_PLAIN: up = (i + j + 1) % 2; break;
+      case FAM_BASKET: up = (i / 2 + j / 2 + 1) % 2; break;
+      case FAM_TWILL: up = (((j - bi->dir * i) % n) + n) % n < bi->a; break;
+      default: up = j != (((n - 1 - bi->b * i) % n) + n) % n; break;
+      }
+      base.p[i][j] = (uint8_t)up;
+    }
+  memset(w, 0, sizeof *w);
+  w->rows = n;
+  w->cols = n;
+  for (int i = 0; i < n; i++)
+    for (int j = 0; j < n; j++)
+      /* 90-degree version: transpose with warp and weft roles swapped (1 - P^T). */
+      w->p[i][j] = bi->rotate ? (uint8_t)(1 - base.p[j][i]) : base.p[i][j];
+  build_segments(w);
+  (void)err;
+  return WV_OK;
 }
