@@ -13,10 +13,16 @@ const char *wv_num_str(double v, char *buf) {
     snprintf(buf, 32, "%s", isnan(v) ? "nan" : v > 0 ? "inf" : "-inf");
     return buf;
   }
-  for (int prec = 1; prec <= 17; prec++) {
-    snprintf(buf, 32, "%.*g", prec, v);
+  /* The fewest significant digits that read back as v, then written positionally
+   * unless the exponent is large ("60", "10000", "60.0000000001", "1e+300"). */
+  int prec = 1;
+  for (; prec < 17; prec++) {
+    snprintf(buf, 32, "%.*e", prec - 1, v);
     if (strtod(buf, NULL) == v) break;
   }
+  snprintf(buf, 32, "%.*e", prec - 1, v);
+  int e10 = atoi(strchr(buf, 'e') + 1);
+  snprintf(buf, 32, "%.*g", e10 >= prec && e10 < 17 ? e10 + 1 : prec, v);
   return buf;
 }
 
