@@ -317,7 +317,7 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   wv_outdir od = {NULL, NULL, -1};
   int staged = 0;
   if (open_state(job, &st, &o, &od, &staged, work, sizeof work, &err)) {
-    wv_outdir_abort(&od);
+    wv_outdir_abort(&od, &err);
     return cli_fail(c, &err);
   }
   snprintf(ckpt, sizeof ckpt, "%s/checkpoint.json", work);
@@ -345,7 +345,7 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   if (!rc) rc = write_results(job, od.tmp, &st, &o, &fit_scene, &ssim_start, &ssim_fit, &err);
   if (!rc) rc = wv_outdir_commit(&od, &err);
   if (rc) {
-    wv_outdir_abort(&od);
+    wv_outdir_abort(&od, &err);
     wv_fit_state_free(&st);
     return cli_fail(c, &err);
   }
@@ -376,15 +376,14 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   return 0;
 }
 
-/* A photo path in fit.json: absolute, or (older files) relative to the fit directory,
- * else to the working directory. */
+/* A path in fit.json: absolute; a relative one (written by older versions, relative to
+ * the working directory of the time) is looked up from here, then from the fit directory. */
 static void resolve_recorded(const char *dir, const char *p, char *out, size_t cap) {
   struct stat sb;
-  if (p[0] != '/') {
-    snprintf(out, cap, "%s/%s", dir, p);
-    if (stat(out, &sb) == 0) return;
-  }
   snprintf(out, cap, "%s", p);
+  if (p[0] == '/' || stat(out, &sb) == 0) return;
+  snprintf(out, cap, "%s/%s", dir, p);
+  if (stat(out, &sb) != 0) snprintf(out, cap, "%s", p); /* the message names it as recorded */
 }
 
 static wv_status read_job(const char *dir, char *photo, size_t pcap, wv_crop *crop, wv_scene *s, char *desc,

@@ -10,6 +10,7 @@ scene='{"name":"tiny","image":{"width":64,"height":48,"spp":2},"camera":{"positi
 echo "$scene" >"$T/tiny.json"
 "$WOVEN" render --params "$SRC/examples/satin.json" --scene "$T/tiny.json" -o "$T/photo.png" -q || exit 1
 FIT=(--pattern satin --iters 2 --iter-spp 1 --align-radius 0 --register-radius 0)
+PRED=(--scene "$T/tiny.json" --pattern twill --model "$SRC/models/fabricnet-cylinder.bin" --force) # any model will do
 no_temps() { # no temporary file or directory left in $1
   find "$1" -name '*.tmp.*' | grep -q . && fail "$2: temporary files left: $(find "$1" -name '*.tmp.*')"
 }
@@ -17,13 +18,13 @@ no_temps() { # no temporary file or directory left in $1
 jpatch() { python3 -c "import json,sys; f=sys.argv[1]; d=json.load(open(f)); $2; json.dump(d, open(f,'w'))" "$1"; }
 
 # -- crops whose end overflows an int: refused with the photo's real size, also from fit.json
-CROP=2147483600,0,800,300
-check "predict huge crop" 2 "lies outside the 64 x 48 photo" -- "$WOVEN" predict "$T/photo.png" --scene cylinder --pattern twill --crop $CROP -o "$T/p.json"
+CROP=2147483600,0,800,48
+check "predict huge crop" 2 "lies outside the 64 x 48 photo" -- "$WOVEN" predict "$T/photo.png" "${PRED[@]}" --crop $CROP -o "$T/p.json"
 check "fit huge crop" 2 "lies outside the 64 x 48 photo" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" "${FIT[@]}" --crop $CROP -o "$T/cropfit"
-check "capture huge crop" 2 "lies outside the 64 x 48 photo" -- "$WOVEN" capture "$T/photo.png" --scene cylinder --pattern twill --crop $CROP -o "$T/cropcap"
+check "capture huge crop" 2 "lies outside the 64 x 48 photo" -- "$WOVEN" capture "$T/photo.png" "${PRED[@]}" --crop $CROP -o "$T/cropcap"
 check "crop beyond int" 1 "--crop" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" "${FIT[@]}" --crop 99999999999,0,8,8 -o "$T/cropfit"
 mkdir "$T/cropjob"
-echo "{\"kind\":\"woven-fit\",\"version\":1,\"photo\":\"$T/photo.png\",\"crop\":[2147483600,0,800,300],\"scene\":$scene,\"descriptor\":\"default\"}" >"$T/cropjob/fit.json"
+echo "{\"kind\":\"woven-fit\",\"version\":1,\"photo\":\"$T/photo.png\",\"crop\":[2147483600,0,800,48],\"scene\":$scene,\"descriptor\":\"default\"}" >"$T/cropjob/fit.json"
 check "resume huge crop" 2 "lies outside the 64 x 48 photo" -- "$WOVEN" fit --resume "$T/cropjob"
 [[ -e $T/cropfit || -e $T/cropcap || -e $T/p.json ]] && fail "a refused crop left an output"
 
@@ -46,7 +47,7 @@ check "scene below the descriptor's size" 2 "too small for a fit" -- "$WOVEN" fi
 
 # -- outputs that are inputs
 cp "$T/photo.png" "$T/keep.png"
-check "predict onto its photo" 2 "refusing to write over an input" -- "$WOVEN" predict "$T/photo.png" --scene cylinder --pattern twill -o "$T/photo.png"
+check "predict onto its photo" 2 "refusing to write over an input" -- "$WOVEN" predict "$T/photo.png" "${PRED[@]}" -o "$T/photo.png"
 cmp -s "$T/photo.png" "$T/keep.png" || fail "predict -o PHOTO changed the photo"
 mkdir "$T/own"
 cp "$T/photo.png" "$T/own/photo.png"
@@ -132,8 +133,8 @@ n_in = struct.unpack('<I', b[48:52])[0]
 w = bytearray(b); off = 504 + 8 * n_in; w[off:off + 2] = b'\x00\x7e'; seal(w) # first weight: f16 NaN
 open(sys.argv[2] + '/nan.bin', 'wb').write(w)
 EOF
-check "model of unknown kind" 4 "kind99.bin: unknown FabricNet file kind 99" -- "$WOVEN" predict "$T/photo.png" --scene cylinder --pattern twill --model "$T/kind99.bin" -o "$T/p.json"
-check "model with NaN weights" 4 "nan.bin: layer 1 weights hold NaN" -- "$WOVEN" predict "$T/photo.png" --scene cylinder --pattern twill --model "$T/nan.bin" -o "$T/p.json"
+check "model of unknown kind" 4 "kind99.bin: unknown FabricNet file kind 99" -- "$WOVEN" predict "$T/photo.png" "${PRED[@]}" --model "$T/kind99.bin" -o "$T/p.json"
+check "model with NaN weights" 4 "nan.bin: layer 1 weights hold NaN" -- "$WOVEN" predict "$T/photo.png" "${PRED[@]}" --model "$T/nan.bin" -o "$T/p.json"
 check "vgg19 weights a directory" 3 "is a directory" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" "${FIT[@]}" --descriptor vgg19 --vgg19-weights "$T" -o "$T/vggfit"
 
 echo "$fails failure(s)"

@@ -562,7 +562,7 @@ static void test_outdir(void **state) {
   assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_OK);
   snprintf(p, sizeof p, "%s/a.txt", od.tmp);
   assert_int_equal(wv_write_file_atomic(p, "new a", 5, &err), WV_OK);
-  wv_outdir_abort(&od);
+  wv_outdir_abort(&od, NULL);
   assert_int_equal(count_tmp_files(d), 0);
   snprintf(p, sizeof p, "%s/a.txt", target);
   assert_int_equal(wv_read_file(p, &data, &len, &err), WV_OK);
@@ -582,7 +582,7 @@ static void test_outdir(void **state) {
   make_old(p);
   assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_OK);
   assert_int_not_equal(stat(p, &st), 0);
-  wv_outdir_abort(&od);
+  wv_outdir_abort(&od, NULL);
   /* refused: a file the output does not consist of, a file as target, "." */
   snprintf(p, sizeof p, "%s/notes.txt", target);
   write_bytes(p, "mine", 4);

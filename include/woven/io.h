@@ -115,7 +115,9 @@ wv_status wv_outdir_begin(wv_outdir *od, const char *path, const char *const *ow
 /* Puts od->tmp in place of the target. On success or failure od is released and
  * no temporary directory is left; on failure the target is as it was. */
 wv_status wv_outdir_commit(wv_outdir *od, wv_error *err);
-/* Deletes od->tmp and releases od; the target is untouched. Safe on a released od. */
-void wv_outdir_abort(wv_outdir *od);
+/* Deletes od->tmp and releases od; the target is untouched. Safe on a released od.
+ * err, when not NULL, is the failure's message: the temporary directory's name in
+ * it is replaced by the target's, so it names the file the user asked for. */
+void wv_outdir_abort(wv_outdir *od, wv_error *err);
 
 #endif

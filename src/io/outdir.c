@@ -97,7 +97,7 @@ wv_status wv_outdir_begin(wv_outdir *od, const char *path, const char *const *ow
   od->tmp = od->path ? malloc(n + 12) : NULL;
   if (!parent || !od->tmp) {
     free(parent);
-    wv_outdir_abort(od);
+    wv_outdir_abort(od, NULL);
     return wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
   }
   wv_remove_stale_temps(parent, base);
@@ -108,7 +108,7 @@ wv_status wv_outdir_begin(wv_outdir *od, const char *path, const char *const *ow
     int e = errno;
     free(od->tmp);
     od->tmp = NULL;
-    wv_outdir_abort(od);
+    wv_outdir_abort(od, NULL);
     return wv_fail(err, WV_ERR_IO, "%s: cannot create a temporary directory beside it: %s", path,
                    wv_io_strerror(e, eb, sizeof eb));
   }
@@ -117,7 +117,7 @@ wv_status wv_outdir_begin(wv_outdir *od, const char *path, const char *const *ow
   od->fd = open(od->tmp, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (od->fd < 0 || flock(od->fd, LOCK_EX | LOCK_NB) != 0) {
     int e = errno;
-    wv_outdir_abort(od);
+    wv_outdir_abort(od, NULL);
     return wv_fail(err, WV_ERR_IO, "%s: cannot lock the temporary directory: %s", path,
                    wv_io_strerror(e, eb, sizeof eb));
   }
@@ -132,8 +132,25 @@ static void release(wv_outdir *od) {
   od->path = od->tmp = NULL;
 }
 
-void wv_outdir_abort(wv_outdir *od) {
+/* Every occurrence of from in msg becomes to (truncated to the message's size). */
+static void replace_in(char *msg, size_t cap, const char *from, const char *to) {
+  char out[sizeof ((wv_error *)0)->msg];
+  size_t n = 0, fl = strlen(from), tl = strlen(to);
+  for (const char *p = msg; *p && n + 1 < sizeof out && n + 1 < cap;) {
+    if (fl && !strncmp(p, from, fl)) {
+      for (size_t i = 0; i < tl && n + 1 < sizeof out; i++) out[n++] = to[i];
+      p += fl;
+    } else {
+      out[n++] = *p++;
+    }
+  }
+  out[n] = '\0';
+  memcpy(msg, out, n + 1);
+}
+
+void wv_outdir_abort(wv_outdir *od, wv_error *err) {
   if (!od) return;
+  if (err && od->tmp && od->path) replace_in(err->msg, sizeof err->msg, od->tmp, od->path);
   if (od->tmp) wv_io_remove_tree(od->tmp);
   release(od);
 }
@@ -182,7 +199,7 @@ wv_status wv_outdir_commit(wv_outdir *od, wv_error *err) {
   if (e) {
     wv_status st = wv_fail(err, WV_ERR_IO, "%s: cannot put the new directory in place: %s", od->path,
                            wv_io_strerror(e, eb, sizeof eb));
-    wv_outdir_abort(od);
+    wv_outdir_abort(od, NULL);
     return st;
   }
   release(od);

@@ -57,11 +57,12 @@ wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error 
   memset(info, 0, sizeof *info);
   const char *kind = NULL, *seed = NULL, *desc = NULL, *fmt = NULL;
   json_t *scene = NULL, *feats = json_object_get(o, "features");
-  int version = 0;
-  if (json_unpack(o, "{s:s,s:i}", "kind", &kind, "version", &version) || strcmp(kind, "woven-dataset")) {
+  json_t *jv = json_object_get(o, "version");
+  long long version = json_is_integer(jv) ? json_integer_value(jv) : -1;
+  if (json_unpack(o, "{s:s}", "kind", &kind) || strcmp(kind, "woven-dataset") || version < 0) {
     st = wv_fail(err, WV_ERR_FORMAT, "%s: not a woven dataset description", path);
   } else if (version != WV_DATASET_VERSION) {
-    st = wv_fail(err, WV_ERR_FORMAT, "%s: dataset format version %d; this program reads version %d (make the dataset again)",
+    st = wv_fail(err, WV_ERR_FORMAT, "%s: dataset format version %lld; this program reads version %d (make the dataset again)",
                  path, version, WV_DATASET_VERSION);
   } else if (json_unpack(o, "{s:s,s:{s:s,s:s},s:o}", "seed", &seed, "features", "descriptor", &desc, "format", &fmt,
                          "scene", &scene) ||
@@ -77,7 +78,7 @@ wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error 
     info->seed = strtoull(seed, &end, 10);
     if (!*seed || *end || seed[0] == '-' || errno == ERANGE)
       st = wv_fail(err, WV_ERR_FORMAT, "%s: 'seed' is not an unsigned 64-bit integer", path);
-    info->version = version;
+    info->version = (int)version;
     info->renderer = 1; /* datasets of the first renderer lack the key */
     if (!st && (st = wv_json_int(o, NULL, "renderer", 1, 1000000, 0, &info->renderer, err)))
       wv_error_prefix(err, "%s", path);

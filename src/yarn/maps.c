@@ -131,7 +131,7 @@ wv_status wv_maps_write(const wv_maps *m, const char *dir, const char *format, w
                      : wv_fail(err, WV_ERR_NOMEM, "%s: cannot format maps.json", dir);
   free(text);
   if (st) {
-    wv_outdir_abort(&od);
+    wv_outdir_abort(&od, err);
     return st;
   }
   return wv_outdir_commit(&od, err);
