@@ -532,6 +532,25 @@ static void test_stale_temps(void **state) {
   assert_false(wv_is_temp_name("a.tmp.Zz09a"));
 }
 
+/* Writes text into dir/name. */
+static void put_text(const char *dir, const char *name, const char *text) {
+  char p[700];
+  wv_error err = {0};
+  snprintf(p, sizeof p, "%s/%s", dir, name);
+  assert_int_equal(wv_write_file_atomic(p, text, strlen(text), &err), WV_OK);
+}
+
+/* dir/name holds text. */
+static void expect_text(const char *dir, const char *name, const char *text) {
+  char p[700], *data;
+  size_t len;
+  wv_error err = {0};
+  snprintf(p, sizeof p, "%s/%s", dir, name);
+  assert_int_equal(wv_read_file(p, &data, &len, &err), WV_OK);
+  assert_string_equal(data, text);
+  free(data);
+}
+
 /* A directory of outputs appears whole or not at all and replaces an earlier one whole. */
 static void test_outdir(void **state) {
   (void)state;
@@ -541,38 +560,27 @@ static void test_outdir(void **state) {
   snprintf(target, sizeof target, "%s/out", d);
   wv_outdir od;
   wv_error err = {0};
-  /* new */
-  assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_OK);
-  snprintf(p, sizeof p, "%s/a.txt", od.tmp);
-  assert_int_equal(wv_write_file_atomic(p, "old a", 5, &err), WV_OK);
-  snprintf(p, sizeof p, "%s/b.txt", od.tmp);
-  assert_int_equal(wv_write_file_atomic(p, "old b", 5, &err), WV_OK);
   struct stat st;
-  snprintf(p, sizeof p, "%s/a.txt", target);
-  assert_int_not_equal(stat(p, &st), 0); /* nothing visible before the commit */
+  /* new: nothing visible before the commit */
+  assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_OK);
+  put_text(od.tmp, "a.txt", "old a");
+  put_text(od.tmp, "b.txt", "old b");
+  assert_int_not_equal(stat(target, &st), 0);
   assert_int_equal(wv_outdir_commit(&od, &err), WV_OK);
   assert_null(od.tmp);
   assert_int_equal(count_tmp_files(d), 0);
-  char *data;
-  size_t len;
-  assert_int_equal(wv_read_file(p, &data, &len, &err), WV_OK);
-  assert_string_equal(data, "old a");
-  free(data);
+  expect_text(target, "a.txt", "old a");
   /* a run that fails half way: the old directory is untouched, nothing left */
   assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_OK);
-  snprintf(p, sizeof p, "%s/a.txt", od.tmp);
-  assert_int_equal(wv_write_file_atomic(p, "new a", 5, &err), WV_OK);
+  put_text(od.tmp, "a.txt", "new a");
   wv_outdir_abort(&od, NULL);
   assert_int_equal(count_tmp_files(d), 0);
-  snprintf(p, sizeof p, "%s/a.txt", target);
-  assert_int_equal(wv_read_file(p, &data, &len, &err), WV_OK);
-  assert_string_equal(data, "old a");
-  free(data);
+  expect_text(target, "a.txt", "old a");
   /* replaced whole: b.txt of the old run does not survive */
   assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_OK);
-  snprintf(p, sizeof p, "%s/a.txt", od.tmp);
-  assert_int_equal(wv_write_file_atomic(p, "new a", 5, &err), WV_OK);
+  put_text(od.tmp, "a.txt", "new a");
   assert_int_equal(wv_outdir_commit(&od, &err), WV_OK);
+  expect_text(target, "a.txt", "new a");
   snprintf(p, sizeof p, "%s/b.txt", target);
   assert_int_not_equal(stat(p, &st), 0);
   assert_int_equal(count_tmp_files(d), 0);
