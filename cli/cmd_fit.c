@@ -304,9 +304,12 @@ static wv_status open_state(const fit_job *job, wv_fit_state *st, wv_fit_opts *o
     if (!rc && !*staged) rc = wv_outdir_commit(od, err);
   }
   free(text);
+  if (rc) {
+    wv_fit_state_free(st);
+    return rc;
+  }
   snprintf(work, wcap, "%s", *staged ? od->tmp : job->dir);
-  if (rc) wv_fit_state_free(st);
-  return rc;
+  return WV_OK;
 }
 
 int fit_pipeline(cli_ctx *c, const fit_job *job) {
