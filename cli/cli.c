@@ -1,10 +1,15 @@
+/* Helpers shared by the woven subcommands: argument parsing, messages, --json
+ * output, output checks, progress bars. */
 #include "cli.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
+
+#include "woven/io.h"
 
 void cli_args_init(cli_args *a, int argc, char **argv, const char *cmd) {
   a->argc = argc, a->argv = argv, a->i = 0, a->cmd = cmd, a->inline_value = NULL;
@@ -109,4 +114,63 @@ void cli_progress_update(void *vp, double f) {
 
 void cli_progress_end(cli_progress *p) {
   if (p->enabled) fprintf(stderr, "\r\033[K");
+}
+
+void cli_print_json(json_t *o) {
+  char *t = o ? json_dumps(o, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(15)) : NULL;
+  if (t) printf("%s\n", t);
+  free(t);
+  json_decref(o);
+}
+
+json_t *cli_real(double v, int decimals) {
+  if (!isfinite(v)) return json_null();
+  double k = pow(10.0, decimals);
+  return json_real(round(v * k) / k);
+}
+
+json_t *cli_str(const char *s) {
+  if (!s) return json_null();
+  json_t *v = json_string(s);
+  if (v) return v;
+  /* Not UTF-8: each byte of an invalid sequence becomes U+FFFD. */
+  size_t n = strlen(s), k = 0;
+  char *b = malloc(3 * n + 1);
+  if (!b) return json_null();
+  for (size_t i = 0; i < n;) {
+    unsigned char ch = (unsigned char)s[i];
+    size_t len = ch < 0x80 ? 1 : (ch >> 5) == 6 ? 2 : (ch >> 4) == 14 ? 3 : (ch >> 3) == 30 ? 4 : 0;
+    json_t *probe = len && i + len <= n ? json_stringn(s + i, len) : NULL; /* checks the sequence */
+    if (probe) {
+      json_decref(probe);
+      memcpy(b + k, s + i, len), k += len, i += len;
+    } else {
+      memcpy(b + k, "\xef\xbf\xbd", 3), k += 3, i++;
+    }
+  }
+  v = json_stringn(b, k);
+  free(b);
+  return v ? v : json_null();
+}
+
+json_t *cli_json_text(char *text) {
+  json_t *v = text ? json_loads(text, 0, NULL) : NULL;
+  free(text);
+  return v ? v : json_null();
+}
+
+int cli_check_not_input(const cli_ctx *c, const char *out, int out_is_dir, const char *const *inputs, int n) {
+  wv_error err = {0};
+  if (wv_check_not_input(out, out_is_dir, inputs, n, &err)) return cli_fail(c, &err);
+  return 0;
+}
+
+void cli_clean_temps_beside(const char *path) {
+  const char *slash = strrchr(path, '/');
+  char dir[4096];
+  if (!slash)
+    snprintf(dir, sizeof dir, ".");
+  else
+    snprintf(dir, sizeof dir, "%.*s", slash == path ? 1 : (int)(slash - path), path);
+  wv_remove_stale_temps(dir, slash ? slash + 1 : path);
 }

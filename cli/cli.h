@@ -38,6 +38,22 @@ int cli_fail(const cli_ctx *c, const wv_error *err);       /* prints "woven CMD:
 int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void cli_info(const cli_ctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
+/* --json summaries are built with jansson (paths and names escaped), one line on
+ * stdout. cli_real rounds to the given decimals (NaN and infinities become null). */
+#include <jansson.h>
+void cli_print_json(json_t *o); /* prints and releases o */
+json_t *cli_real(double v, int decimals);
+/* A path or name as a JSON string (bytes that are not UTF-8 become U+FFFD). */
+json_t *cli_str(const char *s);
+/* A JSON text (e.g. wv_params_to_json) as a value; null when text is NULL. Frees text. */
+json_t *cli_json_text(char *text);
+
+/* Refuses (prints the message, returns the exit code) an output that would replace
+ * one of the inputs (wv_check_not_input); 0 when none would be. */
+int cli_check_not_input(const cli_ctx *c, const char *out, int out_is_dir, const char *const *inputs, int n);
+/* Removes stale temporary files an interrupted run left beside the output file path. */
+void cli_clean_temps_beside(const char *path);
+
 /* Progress bar on stderr, drawn only when stderr is a TTY and not quiet. */
 typedef struct {
   int enabled;
@@ -55,6 +71,7 @@ double cli_now(void);
 #include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/params.h"
+#include "woven/photo.h"
 #include "woven/scene.h"
 typedef struct {
   const wv_scene *scene;
@@ -63,20 +80,31 @@ typedef struct {
   const wv_params *start; /* NULL when resuming */
   wv_fit_opts opts;
   const char *dir, *photo_path, *start_label, *title;
-  int resume, iters_given;
+  int resume, iters_given, force;
   const wv_pattern_choice *pattern_choice; /* capture without --pattern: how the start's pattern was chosen */
+  /* For fit.json (a new fit): the crop used and the descriptor's weights file. */
+  wv_crop crop;
+  const char *weights;
+  /* A file written with fit.json (capture: network.json), or NULL. */
+  const char *extra_name, *extra_text;
+  /* Files read by the command: none may lie inside the directory, which is replaced whole. */
+  const char *inputs[6];
 } fit_job;
+/* The output directory check, before any slow step: refuses a file, a directory
+ * holding files that are not a fit's, an input inside it, and (unless --force or
+ * resuming) an earlier fit, finished or not. Returns the exit code (0: fine). */
+int fit_check_dir(const cli_ctx *c, const fit_job *job);
+/* Runs the fit and writes every output. The directory's life: fit.json and a
+ * checkpoint at iteration 0 appear first (one rename), checkpoints follow while
+ * fitting, and the results replace the directory whole at the end. When it holds
+ * a finished fit (--force, or --resume adding iterations) all of that happens in a
+ * temporary directory beside it, so the earlier fit stays whole until then. */
 int fit_pipeline(cli_ctx *c, const fit_job *job);
 /* The fit's tuning options, shared by woven fit and woven capture: --iters,
  * --iter-spp, --iter-scale, --seed, --align-radius, --threads. Sets *handled;
  * returns EXIT_USAGE after printing a message for a bad value. */
 int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled);
-/* Shared with woven capture: the output directory check and fit.json (for --resume; pc, when
- * not NULL, is recorded there too). */
-#include "woven/photo.h"
-int fit_prepare_dir(const char *cmd, const char *dir, int force, int resume);
-wv_status fit_write_job(const char *dir, const char *photo, const wv_crop *crop, const wv_scene *s,
-                        const char *descriptor, const char *weights, const wv_pattern_choice *pc, wv_error *err);
+/* x,y,w,h: non-negative integers, w and h positive. */
 int cli_parse_crop(const char *s, wv_crop *c);
 
 int cmd_render(int argc, char **argv);

@@ -1,3 +1,4 @@
+/* woven compare: SSIM and mean absolute difference of two images. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -58,8 +59,8 @@ int cmd_compare(int argc, char **argv) {
     return cli_fail(&c, &err);
   }
   if (c.json)
-    printf("{\"a\": \"%s\", \"b\": \"%s\", \"ssim\": %.6f, \"ssim_channels\": \"%s\", \"mae\": %.6f}\n", files[0],
-           files[1], ssim, mode == WV_SSIM_LUMA ? "luma" : "rgb", mae);
+    cli_print_json(json_pack("{s:o,s:o,s:o,s:s,s:o}", "a", cli_str(files[0]), "b", cli_str(files[1]), "ssim", cli_real(ssim, 6),
+                             "ssim_channels", mode == WV_SSIM_LUMA ? "luma" : "rgb", "mae", cli_real(mae, 6)));
   else if (!c.quiet)
     printf("SSIM (%s) %.4f  MAE %.5f\n", mode == WV_SSIM_LUMA ? "luma" : "rgb", ssim, mae);
   return 0;

@@ -1,5 +1,4 @@
 /* woven dataset: FabricNet's synthetic training set (SPEC section 7), resumable. */
-#include <dirent.h>
 #include <errno.h>
 #include <omp.h>
 #include <stdlib.h>
@@ -32,19 +31,6 @@ static int mkdir_p(const char *dir) {
   return mkdir(dir, 0777);
 }
 
-/* Temporary files an interrupted atomic write left behind. */
-static void remove_stale_tmp(const char *dir) {
-  DIR *d = opendir(dir);
-  if (!d) return;
-  char p[4096];
-  for (struct dirent *e; (e = readdir(d));)
-    if (strstr(e->d_name, ".tmp.")) {
-      snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
-      unlink(p);
-    }
-  closedir(d);
-}
-
 int cmd_dataset(int argc, char **argv) {
   cli_ctx c = {0, 0, "dataset"};
   cli_args a;
@@ -60,7 +46,7 @@ int cmd_dataset(int argc, char **argv) {
     } else if (cli_is(&a, s, "-o") || cli_is(&a, s, "--output")) {
       if (!(dir = cli_value(&a, "-o"))) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--per-pattern")) {
-      if (!cli_int(&a, "--per-pattern", 1, 1000000, &per)) return EXIT_USAGE;
+      if (!cli_int(&a, "--per-pattern", 1, WV_DATASET_MAX_PER_PATTERN, &per)) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--seed")) {
       if (!cli_int(&a, "--seed", 0, 2147483647L, &seed)) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--spp")) {
@@ -80,6 +66,14 @@ int cmd_dataset(int argc, char **argv) {
   if (!scene_name) return cli_usage_error(c.cmd, "--scene is required");
   if (!dir) return cli_usage_error(c.cmd, "-o DIR is required");
   if (!per) return cli_usage_error(c.cmd, "--per-pattern N is required");
+  /* The dataset grows in place: no input may be one of its files. */
+  char own[2][4096];
+  snprintf(own[0], sizeof own[0], "%s/dataset.json", dir);
+  snprintf(own[1], sizeof own[1], "%s/samples", dir);
+  const char *inputs[2] = {scene_name, weights};
+  int rc = cli_check_not_input(&c, own[0], 0, inputs, 2);
+  if (!rc) rc = cli_check_not_input(&c, own[1], 1, inputs, 2);
+  if (rc) return rc;
   wv_error err = {0};
   wv_dataset_info want;
   memset(&want, 0, sizeof want);
@@ -98,7 +92,6 @@ int cmd_dataset(int argc, char **argv) {
   /* One descriptor per job: descriptors keep scratch and are not thread-safe. */
   wv_descriptor **desc = calloc((size_t)jobs, sizeof *desc);
   if (!desc) return cli_usage_error(c.cmd, "out of memory");
-  int rc = 0;
   for (long j = 0; j < jobs && !rc; j++)
     if (wv_descriptor_create(desc_name, weights, &desc[j], &err)) rc = cli_fail(&c, &err);
   if (!rc) {
@@ -148,7 +141,8 @@ int cmd_dataset(int argc, char **argv) {
     fprintf(stderr, "woven dataset: error: %s: cannot create directory: %s\n", path, strerror(errno));
     rc = WV_ERR_IO;
   }
-  if (!rc) remove_stale_tmp(path);
+  if (!rc) wv_remove_stale_temps(path, NULL);
+  if (!rc) cli_clean_temps_beside(own[0]);
   /* dataset.json before any sample: a directory with samples always says what they are */
   if (!rc && wv_dataset_info_write(dir, &want, &err)) rc = cli_fail(&c, &err);
 
@@ -222,10 +216,10 @@ int cmd_dataset(int argc, char **argv) {
     cli_info(&c, "%d samples rendered in %.1f s (%.3f samples/s); %s has %d of %d\n", done, el,
              el > 0 ? done / el : 0.0, dir, nbefore + done, total);
     if (c.json)
-      printf("{\"dir\": \"%s\", \"samples\": %d, \"done_before\": %d, \"rendered\": %d, \"seconds\": %.3f, "
-             "\"samples_per_s\": %.4f, \"spp\": %d, \"width\": %d, \"height\": %d, \"jobs\": %ld}\n",
-             dir, total, nbefore, done, el, el > 0 ? done / el : 0.0, want.spp, want.scene.width,
-             want.scene.height, jobs);
+      cli_print_json(json_pack("{s:o,s:i,s:i,s:i,s:o,s:o,s:i,s:i,s:i,s:I}", "dir", cli_str(dir), "samples", total,
+                               "done_before", nbefore, "rendered", done, "seconds", cli_real(el, 3), "samples_per_s",
+                               cli_real(el > 0 ? done / el : 0.0, 4), "spp", want.spp, "width", want.scene.width,
+                               "height", want.scene.height, "jobs", (json_int_t)jobs));
   }
   for (long j = 0; j < jobs; j++) wv_descriptor_free(desc[j]);
   free(desc);

@@ -1,4 +1,5 @@
 /* woven fit: refine parameters from a photo; also the back half of woven capture. */
+#define _DEFAULT_SOURCE /* realpath */
 #include <errno.h>
 #include <jansson.h>
 #include <math.h>
@@ -7,6 +8,7 @@
 #include <sys/stat.h>
 
 #include "cli.h"
+#include "util/json.h"
 #include "woven/descriptor.h"
 #include "woven/fit.h"
 #include "woven/io.h"
@@ -39,31 +41,33 @@ static const char *HELP =
     "                    correlation; kept if the SSIM rises (default 6; 0 = off)\n"
     "  --iter-scale N    iterate on the image downscaled N times (default 1); the final render\n"
     "                    and SSIM use the scene's full resolution and spp\n"
-    "  --force           replace the results of an earlier fit in DIR\n"
-    "  --resume DIR      continue a fit that was stopped (checkpoints every 10 iterations)\n"
+    "  --force           replace an earlier fit in DIR (it stays whole until the new one is done)\n"
+    "  --resume DIR      continue a fit that was stopped (checkpoints at the start and every 10\n"
+    "                    iterations), or add iterations to a finished one\n"
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), loss.svg,\n"
-    "report.html, maps/, and fit.json + checkpoint.json (for --resume).\n";
+    "report.html, maps/, and fit.json + checkpoint.json (for --resume). DIR is replaced whole at\n"
+    "the end; it may not hold other files, nor any input.\n";
 
 int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled) {
   long v;
   *handled = 1;
   if (cli_is(a, s, "--iters")) {
-    if (!cli_int(a, "--iters", 0, 100000, &v)) return EXIT_USAGE;
+    if (!cli_int(a, "--iters", 0, WV_FIT_MAX_ITERS, &v)) return EXIT_USAGE;
     o->iters = (int)v, *iters_given = 1;
   } else if (cli_is(a, s, "--iter-spp")) {
-    if (!cli_int(a, "--iter-spp", 1, 4096, &v)) return EXIT_USAGE;
+    if (!cli_int(a, "--iter-spp", 1, WV_SCENE_MAX_SPP, &v)) return EXIT_USAGE;
     o->iter_spp = (int)v;
   } else if (cli_is(a, s, "--iter-scale")) {
-    if (!cli_int(a, "--iter-scale", 1, 16, &v)) return EXIT_USAGE;
+    if (!cli_int(a, "--iter-scale", 1, WV_FIT_MAX_ITER_SCALE, &v)) return EXIT_USAGE;
     o->iter_scale = (int)v;
   } else if (cli_is(a, s, "--seed")) {
     if (!cli_int(a, "--seed", 0, 2147483647L, &v)) return EXIT_USAGE;
     o->seed = (uint64_t)v;
   } else if (cli_is(a, s, "--align-radius")) {
-    if (!cli_int(a, "--align-radius", 0, 230, &v)) return EXIT_USAGE;
+    if (!cli_int(a, "--align-radius", 0, WV_FIT_MAX_ALIGN_RADIUS, &v)) return EXIT_USAGE;
     o->align_radius = (int)v;
   } else if (cli_is(a, s, "--register-radius")) {
-    if (!cli_int(a, "--register-radius", 0, 50, &v)) return EXIT_USAGE;
+    if (!cli_int(a, "--register-radius", 0, WV_FIT_MAX_REGISTER_RADIUS, &v)) return EXIT_USAGE;
     o->register_radius = (int)v;
   } else if (cli_is(a, s, "--threads")) {
     if (!cli_int(a, "--threads", 1, 1024, &v)) return EXIT_USAGE;
@@ -74,10 +78,27 @@ int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_giv
   return 0;
 }
 
+/* strtol-based: sscanf's %d has undefined behaviour on overflow. */
+static int parse_nonneg_int(const char *s, char **end, int *out) {
+  if (*s < '0' || *s > '9') return 0;
+  errno = 0;
+  long v = strtol(s, end, 10);
+  if (errno == ERANGE || v > 2147483647L) return 0;
+  *out = (int)v;
+  return 1;
+}
+
 int cli_parse_crop(const char *s, wv_crop *c) {
-  char tail;
-  return sscanf(s, "%d,%d,%d,%d%c", &c->x, &c->y, &c->w, &c->h, &tail) == 4 && c->w > 0 && c->h > 0 && c->x >= 0 &&
-         c->y >= 0;
+  int v[4];
+  char *end = (char *)s;
+  for (int i = 0; i < 4; i++) {
+    if (!parse_nonneg_int(end, &end, &v[i])) return 0;
+    if (*end != (i < 3 ? ',' : '\0')) return 0;
+    if (i < 3) end++;
+  }
+  if (v[2] < 1 || v[3] < 1) return 0;
+  c->x = v[0], c->y = v[1], c->w = v[2], c->h = v[3];
+  return 1;
 }
 
 typedef struct {
@@ -107,50 +128,202 @@ static int on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
   return 0;
 }
 
-/* A directory for results: created if missing; refused if it holds an earlier fit
- * and the user did not say --force. */
-int fit_prepare_dir(const char *cmd, const char *dir, int force, int resume) {
+/* What a fit directory may hold (woven capture adds network.json). */
+static const char *const FIT_FILES[] = {"fit.json",    "checkpoint.json", "params.json", "render.png",
+                                        "start.png",   "photo.png",       "compare.png", "loss.svg",
+                                        "report.html", "maps",            "scene.json",  "network.json",
+                                        NULL};
+
+typedef enum { FIT_DIR_NONE, FIT_DIR_UNFINISHED, FIT_DIR_FINISHED } fit_dir_state;
+
+/* params.json, written last, marks a finished fit; fit.json alone one in progress. */
+static fit_dir_state dir_state(const char *dir) {
+  char p[4096];
   struct stat sb;
-  if (stat(dir, &sb) == 0) {
-    if (!S_ISDIR(sb.st_mode)) {
-      fprintf(stderr, "woven %s: error: %s exists and is not a directory\n", cmd, dir);
-      return WV_ERR_IO;
-    }
-    char p[4096];
-    snprintf(p, sizeof p, "%s/params.json", dir);
-    if (!resume && !force && stat(p, &sb) == 0) {
-      fprintf(stderr, "woven %s: error: %s already holds a fit (params.json); use --force to replace it\n", cmd, dir);
-      return WV_ERR_IO;
-    }
-    return 0;
+  snprintf(p, sizeof p, "%s/params.json", dir);
+  if (stat(p, &sb) == 0) return FIT_DIR_FINISHED;
+  snprintf(p, sizeof p, "%s/fit.json", dir);
+  if (stat(p, &sb) == 0) return FIT_DIR_UNFINISHED;
+  return FIT_DIR_NONE;
+}
+
+int fit_check_dir(const cli_ctx *c, const fit_job *job) {
+  wv_error err = {0};
+  if (wv_outdir_check(job->dir, FIT_FILES, &err)) return cli_fail(c, &err);
+  int rc = cli_check_not_input(c, job->dir, 1, job->inputs, (int)(sizeof job->inputs / sizeof job->inputs[0]));
+  if (rc || job->resume || job->force) return rc;
+  fit_dir_state ds = dir_state(job->dir);
+  if (ds == FIT_DIR_FINISHED) {
+    fprintf(stderr, "woven %s: error: %s already holds a fit (params.json); use --force to replace it\n", c->cmd,
+            job->dir);
+    return WV_ERR_IO;
   }
-  if (mkdir(dir, 0777) != 0) {
-    fprintf(stderr, "woven %s: error: %s: cannot create directory: %s\n", cmd, dir, strerror(errno));
+  if (ds == FIT_DIR_UNFINISHED) {
+    fprintf(stderr,
+            "woven %s: error: %s holds an unfinished fit (fit.json, no params.json); continue it with 'woven fit "
+            "--resume %s' or replace it with --force\n",
+            c->cmd, job->dir, job->dir);
     return WV_ERR_IO;
   }
   return 0;
 }
 
+/* dir/name -> into/name; a missing optional file is skipped. */
+static wv_status copy_into(const char *dir, const char *name, const char *into, int optional, wv_error *err) {
+  char from[4096], to[4096];
+  struct stat sb;
+  snprintf(from, sizeof from, "%s/%s", dir, name);
+  snprintf(to, sizeof to, "%s/%s", into, name);
+  if (optional && stat(from, &sb) != 0) return WV_OK;
+  char *data;
+  size_t len;
+  wv_status st = wv_read_file_max(from, WV_JSON_MAX_BYTES, &data, &len, err);
+  if (st) return st;
+  st = wv_write_file_atomic(to, data, len, err);
+  free(data);
+  return st;
+}
+
+static wv_status write_text(const char *dir, const char *name, const char *text, wv_error *err) {
+  char path[4096];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  if (!text) return wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
+  return wv_write_file_atomic(path, text, strlen(text), err);
+}
+
+/* fit.json records what a resume needs: the photo (absolute, so a resume works from any
+ * directory), crop, scene and descriptor; also the start's label for the report. */
+static char *job_json(const fit_job *job) {
+  char *photo = realpath(job->photo_path, NULL), *weights = job->weights ? realpath(job->weights, NULL) : NULL;
+  char *sj = wv_scene_to_json(job->scene);
+  json_t *scene = sj ? json_loads(sj, 0, NULL) : NULL;
+  free(sj);
+  json_t *o = json_pack("{s:s,s:i,s:o,s:[i,i,i,i],s:o,s:s,s:s}", "kind", "woven-fit", "version", 1, "photo",
+                        cli_str(photo ? photo : job->photo_path), "crop", job->crop.x, job->crop.y, job->crop.w,
+                        job->crop.h, "scene", scene ? scene : json_null(), "descriptor",
+                        wv_descriptor_name(job->desc), "start_label", job->start_label);
+  if (o && job->weights) json_object_set_new(o, "vgg19_weights", cli_str(weights ? weights : job->weights));
+  free(photo), free(weights);
+  if (o && job->pattern_choice) /* informative: a resume does not need it */
+    json_object_set_new(o, "pattern_choice", cli_json_text(wv_pattern_choice_to_json(job->pattern_choice)));
+  char *text = o ? json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17)) : NULL;
+  json_decref(o);
+  return text;
+}
+
+/* The results of a finished fit, written into dir (a temporary directory). */
+static wv_status write_results(const fit_job *job, const char *dir, const wv_fit_state *st, const wv_fit_opts *o,
+                               const wv_scene *fit_scene, double *ssim_start, double *ssim_fit, wv_error *err) {
+  wv_render_opts ro = {0, o->threads, NULL, NULL, NULL};
+  wv_image r_start = {0}, r_fit = {0}, cmp = {0};
+  char path[4096], pphoto[4096], pstart[4096], pfit[4096];
+  wv_status rc = wv_render(job->scene, &st->start, &ro, &r_start, NULL, err);
+  if (!rc) rc = wv_render(fit_scene, &st->params, &ro, &r_fit, NULL, err);
+  if (!rc) rc = wv_ssim(job->photo, &r_start, WV_SSIM_LUMA, ssim_start, err);
+  if (!rc) rc = wv_ssim(job->photo, &r_fit, WV_SSIM_LUMA, ssim_fit, err);
+  const wv_image *side[3] = {job->photo, &r_start, &r_fit};
+  if (!rc) rc = wv_image_hconcat(side, 3, 4, &cmp, err);
+  snprintf(pphoto, sizeof pphoto, "%s/photo.png", dir);
+  snprintf(pstart, sizeof pstart, "%s/start.png", dir);
+  snprintf(pfit, sizeof pfit, "%s/render.png", dir);
+  if (!rc) rc = wv_image_write_png(pphoto, job->photo, 8, err);
+  if (!rc) rc = wv_image_write_png(pstart, &r_start, 8, err);
+  if (!rc) rc = wv_image_write_png(pfit, &r_fit, 8, err);
+  snprintf(path, sizeof path, "%s/compare.png", dir);
+  if (!rc) rc = wv_image_write_png(path, &cmp, 8, err);
+  wv_image_free(&r_start), wv_image_free(&r_fit), wv_image_free(&cmp);
+  char *svg = rc ? NULL : wv_loss_svg(st->log, st->iter, o);
+  if (!rc) rc = write_text(dir, "loss.svg", svg, err);
+  wv_report rep = {job->title,  pphoto,      pstart,     pfit,       job->start_label, *ssim_start, *ssim_fit,
+                   &st->start,  &st->params, svg,        &st->timing, st->iter,        wv_descriptor_name(job->desc),
+                   job->pattern_choice};
+  snprintf(path, sizeof path, "%s/report.html", dir);
+  if (!rc) rc = wv_report_write_html(path, &rep, err);
+  free(svg);
+  wv_maps maps = {0};
+  snprintf(path, sizeof path, "%s/maps", dir);
+  if (!rc) rc = wv_maps_generate(&st->params, 1024, &maps, err);
+  if (!rc) rc = wv_maps_write(&maps, path, "png", err);
+  wv_maps_free(&maps);
+  /* scene.json: the scene with the registered offset, to re-render exactly this fit */
+  char *scene_text = rc ? NULL : wv_scene_to_json(fit_scene);
+  if (!rc) rc = write_text(dir, "scene.json", scene_text, err);
+  free(scene_text);
+  /* params.json last: its presence marks a finished fit */
+  snprintf(path, sizeof path, "%s/params.json", dir);
+  if (!rc) rc = wv_params_write(path, &st->params, err);
+  return rc;
+}
+
+/* The state a run starts from and the directory its checkpoints go to (work): the
+ * fit directory itself while it holds no finished fit, otherwise od's temporary
+ * directory (*staged), so the finished fit stays whole until the new one replaces it. */
+static wv_status open_state(const fit_job *job, wv_fit_state *st, wv_fit_opts *o, wv_outdir *od, int *staged,
+                            char *work, size_t wcap, wv_error *err) {
+  fit_dir_state ds = dir_state(job->dir);
+  char ckpt[4096];
+  wv_status rc;
+  *staged = ds == FIT_DIR_FINISHED;
+  if (job->resume) {
+    if (*staged) {
+      if ((rc = wv_outdir_begin(od, job->dir, FIT_FILES, err))) return rc;
+      if ((rc = copy_into(job->dir, "fit.json", od->tmp, 0, err)) ||
+          (rc = copy_into(job->dir, "checkpoint.json", od->tmp, 0, err)) ||
+          (rc = copy_into(job->dir, "network.json", od->tmp, 1, err)))
+        return rc;
+      snprintf(work, wcap, "%s", od->tmp);
+    } else {
+      snprintf(work, wcap, "%s", job->dir);
+      wv_remove_stale_temps(job->dir, NULL); /* left by a run that was killed while writing */
+    }
+    char dname[64];
+    snprintf(ckpt, sizeof ckpt, "%s/checkpoint.json", job->dir); /* the copy in work is the same */
+    struct stat sb;
+    if (stat(ckpt, &sb) != 0)
+      return wv_fail(err, WV_ERR_IO, "%s holds no checkpoint.json (stopped before its first checkpoint by an older "
+                     "woven): start the fit again with --force", job->dir);
+    if ((rc = wv_fit_checkpoint_read(ckpt, st, o, dname, sizeof dname, err))) return rc;
+    if (strcmp(dname, wv_descriptor_name(job->desc))) {
+      wv_fit_state_free(st);
+      return wv_fail(err, WV_ERR_INVALID, "%s/checkpoint.json was made with descriptor '%s', not '%s'", job->dir,
+                     dname, wv_descriptor_name(job->desc));
+    }
+    if (job->opts.iters > 0 && job->iters_given) o->iters = job->opts.iters;
+    if (st->iter > o->iters) o->iters = st->iter;
+    return WV_OK;
+  }
+  /* A new fit: fit.json and the iteration-0 checkpoint appear together, so a fit
+   * stopped at any point can be resumed. */
+  if ((rc = wv_fit_state_init(st, job->start, o, err))) return rc;
+  char *text = job_json(job);
+  if (!(rc = wv_outdir_begin(od, job->dir, FIT_FILES, err))) {
+    snprintf(ckpt, sizeof ckpt, "%s/checkpoint.json", od->tmp);
+    rc = write_text(od->tmp, "fit.json", text, err);
+    if (!rc && job->extra_name) rc = write_text(od->tmp, job->extra_name, job->extra_text, err);
+    if (!rc) rc = wv_fit_checkpoint_write(ckpt, st, o, wv_descriptor_name(job->desc), err);
+    if (!rc && !*staged) rc = wv_outdir_commit(od, err);
+  }
+  free(text);
+  if (rc) {
+    wv_fit_state_free(st);
+    return rc;
+  }
+  snprintf(work, wcap, "%s", *staged ? od->tmp : job->dir);
+  return WV_OK;
+}
+
 int fit_pipeline(cli_ctx *c, const fit_job *job) {
   wv_error err = {0};
-  char path[4096], ckpt[4096];
-  snprintf(ckpt, sizeof ckpt, "%s/checkpoint.json", job->dir);
+  char work[4096], ckpt[4096];
   wv_fit_state st;
   wv_fit_opts o = job->opts;
-  if (job->resume) {
-    char dname[64];
-    if (wv_fit_checkpoint_read(ckpt, &st, &o, dname, sizeof dname, &err)) return cli_fail(c, &err);
-    if (strcmp(dname, wv_descriptor_name(job->desc))) {
-      wv_fit_state_free(&st);
-      fprintf(stderr, "woven %s: error: %s was made with descriptor '%s', not '%s'\n", c->cmd, ckpt, dname,
-              wv_descriptor_name(job->desc));
-      return WV_ERR_INVALID;
-    }
-    if (job->opts.iters > 0 && job->iters_given) o.iters = job->opts.iters;
-    if (st.iter > o.iters) o.iters = st.iter;
-  } else if (wv_fit_state_init(&st, job->start, &o, &err)) {
+  wv_outdir od = {NULL, NULL, -1};
+  int staged = 0;
+  if (open_state(job, &st, &o, &od, &staged, work, sizeof work, &err)) {
+    wv_outdir_abort(&od, &err);
     return cli_fail(c, &err);
   }
+  snprintf(ckpt, sizeof ckpt, "%s/checkpoint.json", work);
   fit_cb_ctx u = {c, {0}, ckpt, wv_descriptor_name(job->desc), &err, 0};
   cli_progress_start(&u.bar, c, "fit");
   if (!job->resume || st.iter < o.iters)
@@ -159,59 +332,23 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   wv_status rc = wv_fit_run(&st, job->scene, job->photo, job->desc, &o, on_iter, &u, &err);
   cli_progress_end(&u.bar);
   if (!rc && !u.ckpt_failed) rc = wv_fit_checkpoint_write(ckpt, &st, &o, u.descriptor, &err); /* with the alignment */
-  if (rc || u.ckpt_failed) {
-    wv_fit_state_free(&st);
-    return cli_fail(c, &err);
+  if (u.ckpt_failed && !rc) rc = err.code;
+  /* The results go into a temporary directory that then replaces the fit directory. */
+  if (!rc && !staged && !(rc = wv_outdir_begin(&od, job->dir, FIT_FILES, &err))) {
+    if (!(rc = copy_into(job->dir, "fit.json", od.tmp, 0, &err)) &&
+        !(rc = copy_into(job->dir, "checkpoint.json", od.tmp, 0, &err)))
+      rc = copy_into(job->dir, "network.json", od.tmp, 1, &err);
   }
-  /* Final renders at full quality: the start and the fit. */
-  wv_render_opts ro = {0, o.threads, NULL, NULL, NULL};
-  wv_image r_start = {0}, r_fit = {0}, cmp = {0};
   double ssim_start = 0, ssim_fit = 0;
-  cli_info(c, "rendering start and fit at %d x %d, %d spp\n", job->scene->width, job->scene->height,
-           job->scene->spp);
-  rc = wv_render(job->scene, &st.start, &ro, &r_start, NULL, &err);
   wv_scene fit_scene; /* with the registration's fabric offset */
   wv_fit_scene(&st, job->scene, &fit_scene);
-  if (!rc) rc = wv_render(&fit_scene, &st.params, &ro, &r_fit, NULL, &err);
-  if (!rc) rc = wv_ssim(job->photo, &r_start, WV_SSIM_LUMA, &ssim_start, &err);
-  if (!rc) rc = wv_ssim(job->photo, &r_fit, WV_SSIM_LUMA, &ssim_fit, &err);
-  const wv_image *side[3] = {job->photo, &r_start, &r_fit};
-  if (!rc) rc = wv_image_hconcat(side, 3, 4, &cmp, &err);
-  char pphoto[4096], pstart[4096], pfit[4096];
-  snprintf(pphoto, sizeof pphoto, "%s/photo.png", job->dir);
-  snprintf(pstart, sizeof pstart, "%s/start.png", job->dir);
-  snprintf(pfit, sizeof pfit, "%s/render.png", job->dir);
-  if (!rc) rc = wv_image_write_png(pphoto, job->photo, 8, &err);
-  if (!rc) rc = wv_image_write_png(pstart, &r_start, 8, &err);
-  if (!rc) rc = wv_image_write_png(pfit, &r_fit, 8, &err);
-  snprintf(path, sizeof path, "%s/compare.png", job->dir);
-  if (!rc) rc = wv_image_write_png(path, &cmp, 8, &err);
-  char *svg = rc ? NULL : wv_loss_svg(st.log, st.iter, &o);
-  if (!rc && !svg) rc = wv_fail(&err, WV_ERR_NOMEM, "out of memory for the loss plot");
-  snprintf(path, sizeof path, "%s/loss.svg", job->dir);
-  if (!rc) rc = wv_write_file_atomic(path, svg, strlen(svg), &err);
-  wv_report rep = {job->title,  pphoto,      pstart,     pfit,      job->start_label,      ssim_start, ssim_fit,
-                   &st.start,   &st.params,  svg,        &st.timing, st.iter,              wv_descriptor_name(job->desc),
-                   job->pattern_choice};
-  snprintf(path, sizeof path, "%s/report.html", job->dir);
-  if (!rc) rc = wv_report_write_html(path, &rep, &err);
-  free(svg);
-  wv_maps maps = {0};
-  snprintf(path, sizeof path, "%s/maps", job->dir);
-  if (!rc) rc = wv_maps_generate(&st.params, 1024, &maps, &err);
-  if (!rc) rc = wv_maps_write(&maps, path, "png", &err);
-  wv_maps_free(&maps);
-  /* scene.json: the scene with the registered offset, to re-render exactly this fit */
-  snprintf(path, sizeof path, "%s/scene.json", job->dir);
-  char *scene_text = rc ? NULL : wv_scene_to_json(&fit_scene);
-  if (!rc && !scene_text) rc = wv_fail(&err, WV_ERR_NOMEM, "out of memory for scene.json");
-  if (!rc) rc = wv_write_file_atomic(path, scene_text, strlen(scene_text), &err);
-  free(scene_text);
-  /* params.json last: its presence marks a finished fit */
-  snprintf(path, sizeof path, "%s/params.json", job->dir);
-  if (!rc) rc = wv_params_write(path, &st.params, &err);
-  wv_image_free(&r_start), wv_image_free(&r_fit), wv_image_free(&cmp);
+  if (!rc)
+    cli_info(c, "rendering start and fit at %d x %d, %d spp\n", job->scene->width, job->scene->height,
+             job->scene->spp);
+  if (!rc) rc = write_results(job, od.tmp, &st, &o, &fit_scene, &ssim_start, &ssim_fit, &err);
+  if (!rc) rc = wv_outdir_commit(&od, &err);
   if (rc) {
+    wv_outdir_abort(&od, &err);
     wv_fit_state_free(&st);
     return cli_fail(c, &err);
   }
@@ -219,67 +356,75 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   cli_info(c, "SSIM %s %.4f -> fit %.4f; %d iterations in %.1f s; results in %s/\n", job->start_label, ssim_start,
            ssim_fit, st.iter, st.timing.total, job->dir);
   if (c->json) {
-    char *pj = wv_params_to_json(&st.params);
-    char *pc = job->pattern_choice ? wv_pattern_choice_to_json(job->pattern_choice) : NULL;
-    printf("{\"dir\": \"%s\", \"iterations\": %d, \"ssim_start\": %.6f, \"ssim_fit\": %.6f, \"loss\": %.8f, "
-           "\"time_s\": {\"total\": %.3f, \"render\": %.3f, \"gradient\": %.3f, \"descriptor\": %.3f, "
-           "\"discrete\": %.3f, \"registration\": %.3f}, \"density_alignment_ssim\": [%.4f, %.4f], "
-           "\"registration\": {\"offset_mm\": [%.6f, %.6f], \"ncc\": [%.4f, %.4f], \"window_ssim\": [%.4f, %.4f]}, "
-           "\"pattern_choice\": %s, \"params\": %s}\n",
-           job->dir, st.iter, ssim_start, ssim_fit, last ? last->loss : 0.0, st.timing.total, st.timing.render,
-           st.timing.gradient, st.timing.descriptor, st.timing.discrete, st.timing.registration,
-           st.align_ssim_before, st.align_ssim_after, st.offset_mm[0], st.offset_mm[1], st.reg_ncc_before,
-           st.reg_ncc_after, st.reg_ssim_before, st.reg_ssim_after, pc ? pc : "null", pj ? pj : "null");
-    free(pj), free(pc);
+    json_t *o_json = json_pack(
+        "{s:o,s:i,s:o,s:o,s:o,s:{s:o,s:o,s:o,s:o,s:o,s:o},s:[o,o],s:{s:[o,o],s:[o,o],s:[o,o]}}", "dir",
+        cli_str(job->dir), "iterations", st.iter, "ssim_start", cli_real(ssim_start, 6), "ssim_fit",
+        cli_real(ssim_fit, 6), "loss", cli_real(last ? last->loss : 0.0, 8), "time_s", "total",
+        cli_real(st.timing.total, 3), "render", cli_real(st.timing.render, 3), "gradient",
+        cli_real(st.timing.gradient, 3), "descriptor", cli_real(st.timing.descriptor, 3), "discrete",
+        cli_real(st.timing.discrete, 3), "registration", cli_real(st.timing.registration, 3),
+        "density_alignment_ssim", cli_real(st.align_ssim_before, 4), cli_real(st.align_ssim_after, 4),
+        "registration", "offset_mm", cli_real(st.offset_mm[0], 6), cli_real(st.offset_mm[1], 6), "ncc",
+        cli_real(st.reg_ncc_before, 4), cli_real(st.reg_ncc_after, 4), "window_ssim", cli_real(st.reg_ssim_before, 4),
+        cli_real(st.reg_ssim_after, 4));
+    if (o_json) {
+      json_object_set_new(o_json, "pattern_choice",
+                          job->pattern_choice ? cli_json_text(wv_pattern_choice_to_json(job->pattern_choice))
+                                              : json_null());
+      json_object_set_new(o_json, "params", cli_json_text(wv_params_to_json(&st.params)));
+    }
+    cli_print_json(o_json);
   }
   wv_fit_state_free(&st);
   return 0;
 }
 
-/* fit.json records what a resume needs: the photo, crop, scene and descriptor. */
-wv_status fit_write_job(const char *dir, const char *photo, const wv_crop *crop, const wv_scene *s,
-                           const char *descriptor, const char *weights, const wv_pattern_choice *pc,
-                           wv_error *err) {
-  char *sj = wv_scene_to_json(s);
-  json_t *scene = json_loads(sj, 0, NULL);
-  free(sj);
-  json_t *o = json_pack("{s:s,s:i,s:s,s:[i,i,i,i],s:o,s:s,s:s*}", "kind", "woven-fit", "version", 1, "photo", photo,
-                        "crop", crop->x, crop->y, crop->w, crop->h, "scene", scene, "descriptor", descriptor,
-                        "vgg19_weights", weights);
-  if (pc) { /* informative: a resume does not need it */
-    char *pj = wv_pattern_choice_to_json(pc);
-    if (pj) json_object_set_new(o, "pattern_choice", json_loads(pj, 0, NULL));
-    free(pj);
-  }
-  char *text = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
-  json_decref(o);
-  char path[4096];
-  snprintf(path, sizeof path, "%s/fit.json", dir);
-  wv_status st = wv_write_file_atomic(path, text, strlen(text), err);
-  free(text);
-  return st;
+/* A path in fit.json: absolute; a relative one (written by older versions, relative to
+ * the working directory of the time) is looked up from here, then from the fit directory. */
+static void resolve_recorded(const char *dir, const char *p, char *out, size_t cap) {
+  struct stat sb;
+  snprintf(out, cap, "%s", p);
+  if (p[0] == '/' || stat(out, &sb) == 0) return;
+  snprintf(out, cap, "%s/%s", dir, p);
+  if (stat(out, &sb) != 0) snprintf(out, cap, "%s", p); /* the message names it as recorded */
 }
 
 static wv_status read_job(const char *dir, char *photo, size_t pcap, wv_crop *crop, wv_scene *s, char *desc,
-                          size_t dcap, char *weights, size_t wcap, wv_error *err) {
+                          size_t dcap, char *weights, size_t wcap, char *label, size_t lcap, wv_error *err) {
   char path[4096];
   snprintf(path, sizeof path, "%s/fit.json", dir);
-  json_error_t je;
-  json_t *o = json_load_file(path, JSON_REJECT_DUPLICATES, &je);
-  if (!o) return wv_fail(err, WV_ERR_INVALID, "%s is not a fit directory (no readable fit.json: %s)", dir, je.text);
-  const char *ph = NULL, *de = NULL, *we = NULL, *kind = NULL;
-  json_t *scene = NULL;
-  wv_status st = WV_OK;
-  if (json_unpack(o, "{s:s,s:s,s:[i,i,i,i],s:o,s:s,s?s}", "kind", &kind, "photo", &ph, "crop", &crop->x, &crop->y,
-                  &crop->w, &crop->h, "scene", &scene, "descriptor", &de, "vgg19_weights", &we) ||
-      strcmp(kind, "woven-fit")) {
+  struct stat sb;
+  if (stat(path, &sb) != 0)
+    return wv_fail(err, WV_ERR_INVALID, "%s is not a fit directory (no fit.json)", dir);
+  json_t *o;
+  wv_status st = wv_json_load_file(path, &o, err);
+  if (st) return st;
+  const char *ph = NULL, *de = NULL, *we = NULL, *kind = NULL, *lb = NULL;
+  json_t *scene = NULL, *cr = json_object_get(o, "crop");
+  if (json_unpack(o, "{s:s,s:s,s:o,s:s,s?s,s?s}", "kind", &kind, "photo", &ph, "scene", &scene, "descriptor", &de,
+                  "vgg19_weights", &we, "start_label", &lb) ||
+      strcmp(kind, "woven-fit") || !json_is_array(cr) || json_array_size(cr) != 4) {
     st = wv_fail(err, WV_ERR_FORMAT, "%s: not a woven fit description", path);
   } else {
-    snprintf(photo, pcap, "%s", ph);
+    static const char *names[4] = {"crop[0]", "crop[1]", "crop[2]", "crop[3]"};
+    int *dst[4] = {&crop->x, &crop->y, &crop->w, &crop->h};
+    for (int i = 0; i < 4 && !st; i++) {
+      long long v;
+      st = wv_json_integer_value(json_array_get(cr, (size_t)i), names[i], i < 2 ? 0 : 1, 2147483647LL, &v, err);
+      if (!st) *dst[i] = (int)v;
+    }
+    if (st) wv_error_prefix(err, "%s", path);
+  }
+  if (!st) {
+    resolve_recorded(dir, ph, photo, pcap);
     snprintf(desc, dcap, "%s", de);
-    snprintf(weights, wcap, "%s", we ? we : "");
+    if (we)
+      resolve_recorded(dir, we, weights, wcap);
+    else
+      weights[0] = '\0';
+    snprintf(label, lcap, "%s", lb ? lb : "start");
     char *sj = json_dumps(scene, JSON_REAL_PRECISION(17));
-    st = wv_scene_parse(sj, path, s, err);
+    st = sj ? wv_scene_parse(sj, path, s, err) : wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
     free(sj);
   }
   json_decref(o);
@@ -336,14 +481,14 @@ int cmd_fit(int argc, char **argv) {
   }
   wv_error err = {0};
   wv_scene scene;
-  char photo_buf[4096], desc_buf[64], weights_buf[4096];
+  char photo_buf[4096], desc_buf[64], weights_buf[4096], label_buf[32];
   if (resume) {
     if (init || pattern || scene_name || dir)
       return cli_usage_error(c.cmd, "--resume DIR takes its photo, scene, start and output from DIR");
     if (read_job(resume, photo_buf, sizeof photo_buf, &crop, &scene, desc_buf, sizeof desc_buf, weights_buf,
-                 sizeof weights_buf, &err))
+                 sizeof weights_buf, label_buf, sizeof label_buf, &err))
       return cli_fail(&c, &err);
-    if (photo && strcmp(photo, photo_buf))
+    if (photo && !wv_same_file(photo, photo_buf))
       return cli_usage_error(c.cmd, "%s was fitted to %s, not %s", resume, photo_buf, photo);
     photo = photo_buf, desc_name = desc_buf, weights = weights_buf[0] ? weights_buf : NULL, dir = resume;
   } else {
@@ -353,7 +498,12 @@ int cmd_fit(int argc, char **argv) {
     if (!init && !pattern) return cli_usage_error(c.cmd, "give --init P.json or --pattern NAME");
     if (wv_scene_load(scene_name, &scene, &err)) return cli_fail(&c, &err);
   }
-  /* Everything is checked before anything is written. */
+  /* Everything is checked before anything is written; the directory first (cheap). */
+  job.dir = dir, job.resume = resume != NULL, job.force = force;
+  const char *inputs[] = {photo, resume ? NULL : scene_name, init, weights};
+  memcpy(job.inputs, inputs, sizeof inputs);
+  int rc = fit_check_dir(&c, &job);
+  if (rc) return rc;
   wv_params start;
   if (!resume) {
     if (init) {
@@ -367,29 +517,22 @@ int cmd_fit(int argc, char **argv) {
       return cli_fail(&c, &err);
     }
   }
-  if (scene.width < WV_FIT_MIN_SIDE || scene.height < WV_FIT_MIN_SIDE) {
-    fprintf(stderr, "woven fit: error: the scene's image (%d x %d) is too small for a fit (at least %d x %d)\n",
-            scene.width, scene.height, WV_FIT_MIN_SIDE, WV_FIT_MIN_SIDE);
-    return WV_ERR_INVALID;
-  }
-  wv_image ph;
-  wv_photo_info info;
-  if (wv_photo_load(photo, &scene, &crop, &ph, &info, &err)) return cli_fail(&c, &err);
   wv_descriptor *desc;
-  if (wv_descriptor_create(desc_name, weights, &desc, &err)) {
-    wv_image_free(&ph);
+  if (wv_descriptor_create(desc_name, weights, &desc, &err)) return cli_fail(&c, &err);
+  wv_image ph = {0};
+  wv_photo_info info;
+  if ((!resume && wv_fit_check_sizes(&scene, desc, &job.opts, &err)) ||
+      wv_photo_load(photo, &scene, &crop, &ph, &info, &err)) {
+    wv_descriptor_free(desc);
     return cli_fail(&c, &err);
   }
-  int rc = fit_prepare_dir(c.cmd, dir, force, resume != NULL);
-  wv_crop used = {info.crop[0], info.crop[1], info.crop[2], info.crop[3]};
-  if (!rc && !resume && fit_write_job(dir, photo, &used, &scene, desc_name, weights, NULL, &err)) rc = cli_fail(&c, &err);
-  if (!rc) {
-    job.scene = &scene, job.photo = &ph, job.desc = desc, job.start = resume ? NULL : &start;
-    job.dir = dir, job.photo_path = photo, job.resume = resume != NULL, job.iters_given = iters_given;
-    job.start_label = init ? "start" : "prior";
-    job.title = "woven fit";
-    rc = fit_pipeline(&c, &job);
-  }
+  job.crop = (wv_crop){info.crop[0], info.crop[1], info.crop[2], info.crop[3]};
+  job.weights = weights;
+  job.scene = &scene, job.photo = &ph, job.desc = desc, job.start = resume ? NULL : &start;
+  job.photo_path = photo, job.iters_given = iters_given;
+  job.start_label = resume ? label_buf : init ? "start" : "prior";
+  job.title = "woven fit";
+  rc = fit_pipeline(&c, &job);
   wv_descriptor_free(desc);
   wv_image_free(&ph);
   return rc;

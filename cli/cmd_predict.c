@@ -194,6 +194,9 @@ int cmd_predict(int argc, char **argv) {
   }
   int rc = check_required(c.cmd, &pa);
   if (rc) return rc;
+  const char *inputs[] = {pa.photo, pa.scene_name, pa.model, pa.weights};
+  if ((rc = cli_check_not_input(&c, pa.out, 0, inputs, 4))) return rc;
+  cli_clean_temps_beside(pa.out);
   wv_scene scene;
   wv_image img = {0};
   wv_photo_info info;
@@ -204,13 +207,11 @@ int cmd_predict(int argc, char **argv) {
   if (wv_params_write(pa.out, &res.params, &err)) rc = cli_fail(&c, &err);
   if (!rc) {
     cli_info(&c, "%s: network estimate written to %s in %.2f s\n", pa.photo, pa.out, res.seconds);
-    if (c.json) {
-      char *pj = wv_params_to_json(&res.params);
-      char *pc = res.chosen ? wv_pattern_choice_to_json(&res.choice) : NULL;
-      printf("{\"output\": \"%s\", \"seconds\": %.4f, \"pattern\": \"%s\", \"pattern_choice\": %s, \"params\": %s}\n",
-             pa.out, res.seconds, res.params.pattern, pc ? pc : "null", pj ? pj : "null");
-      free(pj), free(pc);
-    }
+    if (c.json)
+      cli_print_json(json_pack("{s:o,s:o,s:s,s:o,s:o}", "output", cli_str(pa.out), "seconds",
+                               cli_real(res.seconds, 4), "pattern", res.params.pattern, "pattern_choice",
+                               res.chosen ? cli_json_text(wv_pattern_choice_to_json(&res.choice)) : json_null(),
+                               "params", cli_json_text(wv_params_to_json(&res.params))));
   }
   wv_image_free(&img);
   wv_descriptor_free(desc);
@@ -249,31 +250,40 @@ int cmd_capture(int argc, char **argv) {
   }
   int rc = check_required(c.cmd, &pa);
   if (rc) return rc;
+  /* Everything is checked before anything is written; the directory first (cheap). */
+  job.dir = pa.out, job.resume = 0, job.force = pa.force;
+  const char *inputs[] = {pa.photo, pa.scene_name, pa.model, pa.weights};
+  memcpy(job.inputs, inputs, sizeof inputs);
+  if ((rc = fit_check_dir(&c, &job))) return rc;
   wv_scene scene;
   wv_image img = {0};
   wv_photo_info info;
   wv_descriptor *desc = NULL;
   predict_result res;
+  wv_error err = {0};
+  wv_scene probe; /* the fit's size limits, before the network runs */
+  if (wv_scene_load(pa.scene_name, &probe, &err)) return cli_fail(&c, &err);
+  if (wv_fit_check_sizes(&probe, NULL, &job.opts, &err)) return cli_fail(&c, &err);
   if ((rc = run_predict(&c, &pa, &scene, &img, &info, &desc, &res))) return rc;
   cli_info(&c, "network estimate in %.2f s\n", res.seconds);
-  /* Everything is checked before anything is written. */
-  rc = fit_prepare_dir(c.cmd, pa.out, pa.force, 0);
-  wv_error err = {0};
-  char path[4096];
-  snprintf(path, sizeof path, "%s/network.json", pa.out);
-  if (!rc && wv_params_write(path, &res.params, &err)) rc = cli_fail(&c, &err);
-  wv_crop used = {info.crop[0], info.crop[1], info.crop[2], info.crop[3]};
-  if (!rc && fit_write_job(pa.out, pa.photo, &used, &scene, wv_descriptor_name(desc), pa.weights,
-                          res.chosen ? &res.choice : NULL, &err))
+  char *network = wv_params_to_json(&res.params), *nl = network ? realloc(network, strlen(network) + 2) : NULL;
+  if (nl) strcat(nl, "\n"), network = nl; /* as wv_params_write writes it */
+  if (wv_fit_check_sizes(&scene, desc, &job.opts, &err)) {
     rc = cli_fail(&c, &err);
-  if (!rc) {
+  } else if (!network) {
+    rc = cli_fail(&c, &(wv_error){WV_ERR_NOMEM, "out of memory"});
+  } else {
+    job.crop = (wv_crop){info.crop[0], info.crop[1], info.crop[2], info.crop[3]};
+    job.weights = pa.weights;
+    job.extra_name = "network.json", job.extra_text = network;
     job.scene = &scene, job.photo = &img, job.desc = desc, job.start = &res.params;
     job.pattern_choice = res.chosen ? &res.choice : NULL;
-    job.dir = pa.out, job.photo_path = pa.photo, job.resume = 0, job.iters_given = iters_given;
+    job.photo_path = pa.photo, job.iters_given = iters_given;
     job.start_label = "network";
     job.title = "woven capture";
     rc = fit_pipeline(&c, &job);
   }
+  free(network);
   wv_descriptor_free(desc);
   wv_image_free(&img);
   return rc;

@@ -1,3 +1,5 @@
+/* woven render and woven maps: parameters to an image in a capture scene, and to
+ * tileable texture maps. */
 #include <libgen.h>
 #include <stdlib.h>
 #include <string.h>
@@ -81,6 +83,10 @@ int cmd_render(int argc, char **argv) {
   int exr = has_ext(out, ".exr");
   if (!exr && !has_ext(out, ".png")) return cli_usage_error(c.cmd, "output '%s' must end in .png or .exr", out);
   if (!check_writable_dir(c.cmd, out)) return WV_ERR_IO;
+  const char *inputs[2] = {params_path, scene_name};
+  int rc = cli_check_not_input(&c, out, 0, inputs, 2);
+  if (rc) return rc;
+  cli_clean_temps_beside(out);
 
   wv_error err = {0};
   wv_params p;
@@ -107,8 +113,8 @@ int cmd_render(int argc, char **argv) {
   if (st) return cli_fail(&c, &err);
   cli_info(&c, "wrote %s (%d x %d, %d spp, %.0f ms)\n", out, s.width, s.height, used_spp, ms);
   if (c.json)
-    printf("{\"output\": \"%s\", \"width\": %d, \"height\": %d, \"spp\": %d, \"ms\": %.1f, \"mean\": %.6f}\n", out,
-           s.width, s.height, used_spp, ms, mean);
+    cli_print_json(json_pack("{s:o,s:i,s:i,s:i,s:o,s:o}", "output", cli_str(out), "width", s.width, "height", s.height, "spp",
+                             used_spp, "ms", cli_real(ms, 1), "mean", cli_real(mean, 6)));
   return 0;
 }
 
@@ -140,6 +146,8 @@ int cmd_maps(int argc, char **argv) {
   }
   if (!params_path) return cli_usage_error(c.cmd, "--params is required");
   if (!out) return cli_usage_error(c.cmd, "-o DIR is required");
+  int rc = cli_check_not_input(&c, out, 1, &params_path, 1);
+  if (rc) return rc;
   wv_error err = {0};
   wv_params p;
   if (wv_params_read(params_path, &p, &err)) return cli_fail(&c, &err);
@@ -151,7 +159,7 @@ int cmd_maps(int argc, char **argv) {
   if (st) return cli_fail(&c, &err);
   cli_info(&c, "wrote %ld x %ld maps to %s (tile %.3f x %.3f mm)\n", size, size, out, tw, th);
   if (c.json)
-    printf("{\"output\": \"%s\", \"size\": %ld, \"format\": \"%s\", \"tile_mm\": [%.6f, %.6f]}\n", out, size, format,
-           tw, th);
+    cli_print_json(json_pack("{s:o,s:I,s:s,s:[o,o]}", "output", cli_str(out), "size", (json_int_t)size, "format", format,
+                             "tile_mm", cli_real(tw, 6), cli_real(th, 6)));
   return 0;
 }

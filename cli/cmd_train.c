@@ -151,7 +151,7 @@ int cmd_train(int argc, char **argv) {
     } else if (cli_is(&a, s, "-o") || cli_is(&a, s, "--output")) {
       if (!(model = cli_value(&a, "-o"))) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--epochs")) {
-      if (!cli_int(&a, "--epochs", 1, 100000, &epochs)) return EXIT_USAGE;
+      if (!cli_int(&a, "--epochs", 1, WV_NET_MAX_EPOCHS, &epochs)) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--batch")) {
       if (!cli_int(&a, "--batch", 1, 4096, &batch)) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--seed")) {
@@ -194,6 +194,22 @@ int cmd_train(int argc, char **argv) {
   char work[4096], ckpt[4096], path[4096];
   snprintf(work, sizeof work, "%s.train", model);
   snprintf(ckpt, sizeof ckpt, "%s/checkpoint.bin", work);
+  { /* MODEL and MODEL.train/ must not land on the dataset's files */
+    char ds[2][4096];
+    snprintf(ds[0], sizeof ds[0], "%s/dataset.json", dir);
+    snprintf(ds[1], sizeof ds[1], "%s/samples", dir);
+    const char *outs[2] = {model, work};
+    for (int i = 0; i < 2; i++) {
+      const char *in = ds[0];
+      if (wv_check_not_input(outs[i], 0, &in, 1, &err) ||
+          (wv_path_within(outs[i], ds[1]) &&
+           wv_fail(&err, WV_ERR_INVALID, "%s lies inside the dataset's samples directory %s; write the model elsewhere",
+                   outs[i], ds[1])))
+        return cli_fail(&c, &err);
+    }
+  }
+  cli_clean_temps_beside(model);
+  wv_remove_stale_temps(work, NULL);
   struct stat sb;
   if (!resume && !force && stat(ckpt, &sb) == 0) {
     fprintf(stderr, "woven train: error: %s holds a checkpoint of an earlier run; use --resume to continue it or "
@@ -327,12 +343,21 @@ int cmd_train(int argc, char **argv) {
   }
   if (!rc) {
     snprintf(path, sizeof path, "%s/train.json", work);
-    char text[1024];
-    int len = snprintf(text, sizeof text,
-                       "{\"kind\": \"woven-train\", \"dataset\": \"%s\", \"samples\": %d, \"train\": %d, \"validation\": %d, "
-                       "\"val_frac\": %g, \"batch\": %ld, \"lr\": %g, \"seed\": %ld, \"epochs\": %ld}\n",
-                       dir, n, ntr, nva, vf, batch, lr, seed, epochs);
-    if (wv_write_file_atomic(path, text, (size_t)len, &err)) rc = cli_fail(&c, &err);
+    json_t *tj = json_pack("{s:s,s:o,s:i,s:i,s:i,s:f,s:I,s:f,s:I,s:I}", "kind", "woven-train", "dataset", cli_str(dir),
+                           "samples", n, "train", ntr, "validation", nva, "val_frac", vf, "batch", (json_int_t)batch,
+                           "lr", lr, "seed", (json_int_t)seed, "epochs", (json_int_t)epochs);
+    char *text = tj ? json_dumps(tj, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(15)) : NULL;
+    json_decref(tj);
+    size_t len = text ? strlen(text) : 0;
+    char *tl = text ? realloc(text, len + 2) : NULL;
+    if (!tl) {
+      free(text);
+      rc = cli_fail(&c, &(wv_error){WV_ERR_NOMEM, "out of memory for train.json"});
+    } else {
+      tl[len] = '\n', tl[len + 1] = '\0';
+      if (wv_write_file_atomic(path, tl, len + 1, &err)) rc = cli_fail(&c, &err);
+      free(tl);
+    }
   }
 
   size_t P = rc ? 0 : wv_fabricnet_param_count(&net);
@@ -419,11 +444,12 @@ int cmd_train(int argc, char **argv) {
       cli_info(&c, "%d epochs in %.1f s; %s: best epoch %d, validation L1 %.5f (f16 weights %.5f)\n",
                ts.epoch - start_epoch, el, model, ts.best_epoch, ts.best_val, val);
       if (c.json) {
-        printf("{\"model\": \"%s\", \"epochs\": %d, \"seconds\": %.3f, \"train_samples\": %d, \"val_samples\": %d, "
-               "\"best_epoch\": %d, \"val_l1\": %.6f, \"final_train_l1\": %.6f, \"val_l1_per_output\": {",
-               model, ts.epoch, el, ntr, nva, ts.best_epoch, val, nhist ? hist[nhist - 1].train : 0.0);
-        for (int k = 0; k < WV_NET_OUT; k++) printf("%s\"%s\": %.5f", k ? ", " : "", wv_fabricnet_output_name(k), per[k]);
-        printf("}}\n");
+        json_t *po = json_object();
+        for (int k = 0; k < WV_NET_OUT; k++) json_object_set_new(po, wv_fabricnet_output_name(k), cli_real(per[k], 5));
+        cli_print_json(json_pack("{s:o,s:i,s:o,s:i,s:i,s:i,s:o,s:o,s:o}", "model", cli_str(model), "epochs", ts.epoch,
+                                 "seconds", cli_real(el, 3), "train_samples", ntr, "val_samples", nva, "best_epoch",
+                                 ts.best_epoch, "val_l1", cli_real(val, 6), "final_train_l1",
+                                 cli_real(nhist ? hist[nhist - 1].train : 0.0, 6), "val_l1_per_output", po));
       }
     }
   }

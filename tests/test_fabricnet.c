@@ -160,6 +160,14 @@ static void write_bytes(const char *path, const unsigned char *b, size_t n) {
   fclose(f);
 }
 
+/* Recomputes the payload and header checksums of a patched model file. */
+static void reseal(unsigned char *b, size_t n) {
+  uint32_t c = wv_crc32(0, b + 504, n - 504);
+  for (int i = 0; i < 4; i++) b[496 + i] = (unsigned char)(c >> (8 * i));
+  c = wv_crc32(0, b, 500);
+  for (int i = 0; i < 4; i++) b[500 + i] = (unsigned char)(c >> (8 * i));
+}
+
 static void expect_load_fails(const char *path, const char *needle) {
   wv_fabricnet m;
   wv_error e = {0};
@@ -256,6 +264,31 @@ static void test_files(void **state) {
   for (int i = 0; i < 6; i++) assert_memory_equal(tn[i], tm[i], len[i] * sizeof(float)); /* f32: exact */
   free(am), free(av), free(mm);
   wv_fabricnet_free(&m);
+  /* the trainer's counters are checked: a negative epoch would index the loss history */
+  mm = calloc(wv_fabricnet_param_count(&n), sizeof(float));
+  wv_fabricnet_trainstate bad_ts[3] = {{.epoch = -5, .best_val = 1},
+                                       {.epoch = 3, .best_epoch = 7, .best_val = 1},
+                                       {.epoch = 200000, .best_epoch = 1, .best_val = 1}};
+  const char *bad_key[3] = {"'epoch' = -5", "'best_epoch' = 7", "'epoch' = 200000"};
+  for (int i = 0; i < 3; i++) {
+    assert_int_equal(wv_fabricnet_checkpoint_save(bad, &n, mm, mm, &bad_ts[i], &e), WV_OK);
+    assert_int_equal(wv_fabricnet_checkpoint_load(bad, &m, &am, &av, &ts2, &e), WV_ERR_FORMAT);
+    assert_non_null(strstr(e.msg, bad_key[i]));
+    assert_non_null(strstr(e.msg, bad));
+    assert_null(am);
+  }
+  free(mm);
+  /* an unknown kind, and NaN weights: named as such, with the file (checksums resealed) */
+  memcpy(b, data, n_bytes);
+  b[12] = 99;
+  reseal(b, n_bytes);
+  write_bytes(bad, b, n_bytes);
+  expect_load_fails(bad, "unknown FabricNet file kind 99");
+  memcpy(b, data, n_bytes);
+  b[504 + 8 * 100] = 0x00, b[504 + 8 * 100 + 1] = 0x7e; /* the first f16 weight: NaN */
+  reseal(b, n_bytes);
+  write_bytes(bad, b, n_bytes);
+  expect_load_fails(bad, "layer 1 weights hold NaN");
   /* missing file: an I/O error naming it */
   snprintf(bad, sizeof bad, "%s/none.bin", dir);
   assert_int_equal(wv_fabricnet_load(bad, &m, &e), WV_ERR_IO);

@@ -157,14 +157,50 @@ static void test_photo_load(void **state) {
   wv_crop bad = {150, 0, 100, 100};
   assert_int_equal(wv_photo_load(path, &s, &bad, &out, NULL, &err), WV_ERR_INVALID);
   assert_non_null(strstr(err.msg, "crop"));
+  /* x + w beyond INT_MAX: refused (not wrapped and copied from far outside), with the
+   * photo's real size */
+  wv_crop huge = {2147483600, 0, 800, 100};
+  assert_int_equal(wv_photo_load(path, &s, &huge, &out, NULL, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "outside the 200 x 100 photo"));
   s.width = s.height = 300;
   assert_int_equal(wv_photo_load(path, &s, NULL, &out, NULL, &err), WV_ERR_INVALID);
   assert_non_null(strstr(err.msg, "much smaller"));
   wv_image_free(&img);
 }
 
+/* Sizes the fit cannot work at are refused before it starts (the descriptor's
+ * minimum, also at the iteration scale), and so are options out of range. */
+static void test_limits(void **state) {
+  (void)state;
+  wv_descriptor *d;
+  wv_error err = {0};
+  assert_int_equal(wv_descriptor_create("default", NULL, &d, &err), WV_OK);
+  wv_fit_opts o;
+  wv_fit_opts_default(&o);
+  wv_scene s;
+  tu_centre_window(&s, "flat45", 64, 48, 4);
+  assert_int_equal(wv_fit_check_sizes(&s, d, &o, &err), WV_OK);
+  s.height = 32; /* above WV_FIT_MIN_SIDE, below the descriptor's minimum */
+  assert_int_equal(wv_fit_check_sizes(&s, d, &o, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "64 x 32"));
+  tu_centre_window(&s, "flat45", 160, 96, 4);
+  o.iter_scale = 2; /* 80 x 48: fine; 3: 53 x 32, too small */
+  assert_int_equal(wv_fit_check_sizes(&s, d, &o, &err), WV_OK);
+  o.iter_scale = 3;
+  assert_int_equal(wv_fit_check_sizes(&s, d, &o, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "iter-scale"));
+  wv_fit_opts_default(&o);
+  o.down_w = 0;
+  assert_int_equal(wv_fit_opts_validate(&o, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "'down_w' = 0"));
+  wv_fit_opts_default(&o);
+  o.register_radius = 100000; /* (2R+1)^2 would overflow */
+  assert_int_equal(wv_fit_opts_validate(&o, &err), WV_ERR_INVALID);
+  wv_descriptor_free(d);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fit_improves), cmocka_unit_test(test_resume_equals_straight),
-                                     cmocka_unit_test(test_photo_load)};
+                                     cmocka_unit_test(test_photo_load), cmocka_unit_test(test_limits)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,5 +1,6 @@
 /* Image and file I/O: round trips, foreign files written with the codec
  * libraries directly, corrupt input, and atomic replacement. */
+#define _DEFAULT_SOURCE /* flock */
 #include "testutil.h"
 
 #include <dirent.h>
@@ -9,6 +10,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -346,6 +349,259 @@ static void test_too_large_rejected(void **state) {
   wv_error err = {0};
   wv_image_read(path, &img, NULL, &err);
   assert_non_null(strstr(err.msg, "too large"));
+}
+
+/* A PNG IHDR of w x h pixels (8-bit RGB) and an empty IDAT: the header reads completely. */
+static void write_png_header(const char *path, uint32_t w, uint32_t h) {
+  unsigned char f[8 + 25 + 12] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  unsigned char *ihdr = f + 8;
+  put32(ihdr, 13);
+  memcpy(ihdr + 4, "IHDR", 4);
+  put32(ihdr + 8, w);
+  put32(ihdr + 12, h);
+  ihdr[16] = 8;
+  ihdr[17] = 2;
+  put32(ihdr + 21, crc32_of(ihdr + 4, 17));
+  unsigned char *idat = ihdr + 25;
+  put32(idat, 0);
+  memcpy(idat + 4, "IDAT", 4);
+  put32(idat + 8, crc32_of(idat + 4, 4));
+  write_bytes(path, f, sizeof f);
+}
+
+/* The read limits (16384 per side, 64 Mpixel) hold in every format, checked from the
+ * header alone: tiny files that claim huge images are refused before allocating. */
+static void test_read_size_limits(void **state) {
+  (void)state;
+  char path[600];
+  wv_image img;
+  wv_error err = {0};
+  write_png_header(in_dir(path, sizeof path, "wide.png"), 20000, 1); /* one side over */
+  assert_int_equal(expect_read_failure(path), WV_ERR_NOMEM);
+  write_png_header(path, 9000, 9000); /* 81 Mpixel: each side fine, the total not */
+  assert_int_equal(expect_read_failure(path), WV_ERR_NOMEM);
+  wv_image_read(path, &img, NULL, &err);
+  assert_non_null(strstr(err.msg, "too large"));
+
+  /* A JPEG whose frame header claims 65470 x 1530. */
+  unsigned char px[16 * 8 * 3];
+  memset(px, 90, sizeof px);
+  write_jpeg(in_dir(path, sizeof path, "claims.jpg"), 16, 8, 3, px);
+  char *data;
+  size_t len;
+  assert_int_equal(wv_read_file(path, &data, &len, &err), WV_OK);
+  size_t sof = 0;
+  for (size_t i = 2; i + 9 < len && !sof; i++)
+    if ((unsigned char)data[i] == 0xff && (unsigned char)data[i + 1] == 0xc0) sof = i;
+  assert_true(sof > 0);
+  data[sof + 5] = (char)(1530 >> 8), data[sof + 6] = (char)(1530 & 0xff);
+  data[sof + 7] = (char)(65470 >> 8), data[sof + 8] = (char)(65470 & 0xff);
+  write_bytes(path, data, len);
+  free(data);
+  assert_int_equal(expect_read_failure(path), WV_ERR_NOMEM);
+
+  /* An EXR whose data window claims 4063296 x 32. */
+  wv_image small = make_image(4, 32, 3);
+  fill_pattern(&small, 5);
+  assert_int_equal(wv_image_write_exr(in_dir(path, sizeof path, "claims.exr"), &small, &err), WV_OK);
+  wv_image_free(&small);
+  assert_int_equal(wv_read_file(path, &data, &len, &err), WV_OK);
+  static const char key[] = "dataWindow\0box2i";
+  char *at = NULL;
+  for (size_t i = 0; i + sizeof key + 20 < len && !at; i++)
+    if (!memcmp(data + i, key, sizeof key)) at = data + i + sizeof key + 4; /* after the size field */
+  assert_non_null(at);
+  int32_t xmax = 4063295;
+  memcpy(at + 8, &xmax, 4); /* box2i: xmin, ymin, xmax, ymax (little-endian) */
+  write_bytes(path, data, len);
+  free(data);
+  assert_int_equal(expect_read_failure(path), WV_ERR_NOMEM);
+}
+
+/* Whole-file reads stop at their limit, also on endless devices; directories are named. */
+static void test_read_limits(void **state) {
+  (void)state;
+  char *data = NULL;
+  size_t len;
+  wv_error err = {0};
+  assert_int_equal(wv_read_file_max("/dev/zero", 1 << 20, &data, &len, &err), WV_ERR_NOMEM);
+  assert_null(data);
+  assert_non_null(strstr(err.msg, "/dev/zero: more than 1048576 bytes"));
+  char path[600];
+  char big[3000];
+  memset(big, 'x', sizeof big);
+  write_bytes(in_dir(path, sizeof path, "big.txt"), big, sizeof big);
+  assert_int_equal(wv_read_file_max(path, 2999, &data, &len, &err), WV_ERR_NOMEM);
+  assert_non_null(strstr(err.msg, "over the limit"));
+  assert_int_equal(wv_read_file_max(path, 3000, &data, &len, &err), WV_OK);
+  assert_int_equal(len, 3000);
+  free(data);
+  assert_int_equal(wv_read_file(dir, &data, &len, &err), WV_ERR_IO);
+  assert_non_null(strstr(err.msg, "is a directory"));
+}
+
+/* wv_png_check finds truncated and damaged files without decoding. */
+static void test_png_check(void **state) {
+  (void)state;
+  char path[600], bad[600];
+  wv_image img = make_image(40, 30, 3);
+  fill_pattern(&img, 9);
+  wv_error err = {0};
+  assert_int_equal(wv_image_write_png(in_dir(path, sizeof path, "whole.png"), &img, 8, &err), WV_OK);
+  wv_image_free(&img);
+  assert_int_equal(wv_png_check(path, &err), WV_OK);
+  size_t n = file_size(path);
+  truncate_copy(path, in_dir(bad, sizeof bad, "cut.png"), n - 13);
+  assert_int_equal(wv_png_check(bad, &err), WV_ERR_FORMAT);
+  char *data;
+  size_t len;
+  assert_int_equal(wv_read_file(path, &data, &len, &err), WV_OK);
+  data[len / 2] ^= 0x20; /* inside IDAT */
+  write_bytes(bad, data, len);
+  free(data);
+  assert_int_equal(wv_png_check(bad, &err), WV_ERR_FORMAT);
+  assert_non_null(strstr(err.msg, "checksum"));
+}
+
+/* Outputs never land on inputs: the same file under another name, or inside a
+ * directory that is replaced whole. */
+static void test_same_file(void **state) {
+  (void)state;
+  char a[600], link[600], sub[600], inner[600], ghost[600], other[600];
+  in_dir(a, sizeof a, "same_a.txt");
+  write_bytes(a, "a", 1);
+  in_dir(link, sizeof link, "same_link.txt");
+  unlink(link);
+  assert_int_equal(symlink("same_a.txt", link), 0); /* relative to the link's directory */
+  assert_true(wv_same_file(a, link));
+  assert_false(wv_same_file(a, in_dir(ghost, sizeof ghost, "same_none.txt")));
+  in_dir(sub, sizeof sub, "outdir");
+  mkdir(sub, 0777);
+  snprintf(inner, sizeof inner, "%s/../outdir/photo.png", sub);
+  write_bytes(inner, "p", 1);
+  assert_true(wv_path_within(inner, sub));
+  assert_true(wv_path_within(sub, sub));
+  assert_false(wv_path_within(a, sub));
+  snprintf(ghost, sizeof ghost, "%s/not/yet/there", sub); /* counted where it would be */
+  assert_true(wv_path_within(ghost, sub));
+  wv_error err = {0};
+  const char *in[3] = {NULL, link, inner};
+  assert_int_equal(wv_check_not_input(a, 0, in, 2, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "refusing to write over an input"));
+  assert_int_equal(wv_check_not_input(sub, 1, in + 2, 1, &err), WV_ERR_INVALID);
+  assert_non_null(strstr(err.msg, "inside this output directory"));
+  assert_int_equal(wv_check_not_input(in_dir(other, sizeof other, "elsewhere"), 1, in, 3, &err), WV_OK);
+}
+
+static void make_old(const char *path) {
+  struct timespec t[2] = {{1000000000, 0}, {1000000000, 0}}; /* 2001 */
+  assert_int_equal(utimensat(AT_FDCWD, path, t, 0), 0);
+}
+
+/* Only stale temporary names are removed: old, unlocked, of the named target. */
+static void test_stale_temps(void **state) {
+  (void)state;
+  const char *d = tu_tmpdir("stale");
+  char p[8][600];
+  const char *names[8] = {"x.png.tmp.AAAAAA", "x.png.tmp.BBBBBB", "x.png.tmp.CCCCCC", "other.tmp.DDDDDD",
+                          "x.png.tmp.toolong", "x.png.tmp.EEEEEE", "x.png", "x.png.tmp.FF-FFF"};
+  for (int i = 0; i < 8; i++) snprintf(p[i], sizeof p[i], "%s/%s", d, names[i]);
+  for (int i = 0; i < 8; i++)
+    if (i != 5) write_bytes(p[i], "t", 1);
+  assert_int_equal(mkdir(p[5], 0777), 0); /* a temporary directory with content */
+  char inner[700];
+  snprintf(inner, sizeof inner, "%s/file", p[5]);
+  write_bytes(inner, "f", 1);
+  make_old(inner);
+  for (int i = 0; i < 8; i++)
+    if (i != 1) make_old(p[i]); /* BBBBBB stays fresh */
+  int fd = open(p[2], O_RDONLY); /* CCCCCC is held by a live writer */
+  assert_true(fd >= 0);
+  assert_int_equal(flock(fd, LOCK_EX), 0);
+  assert_int_equal(wv_remove_stale_temps(d, "x.png"), 2); /* AAAAAA and the directory */
+  struct stat st;
+  assert_int_not_equal(stat(p[0], &st), 0);
+  assert_int_not_equal(stat(p[5], &st), 0);
+  for (int i = 1; i < 8; i++)
+    if (i != 5) assert_int_equal(stat(p[i], &st), 0);
+  assert_int_equal(wv_remove_stale_temps(d, NULL), 1); /* other.tmp.DDDDDD */
+  close(fd);
+  assert_int_equal(wv_remove_stale_temps(d, NULL), 1); /* CCCCCC, now unlocked */
+  assert_true(wv_is_temp_name("a.tmp.Zz09aB"));
+  assert_false(wv_is_temp_name(".tmp.Zz09aB"));
+  assert_false(wv_is_temp_name("a.tmp.Zz09a"));
+}
+
+/* Writes text into dir/name. */
+static void put_text(const char *dir, const char *name, const char *text) {
+  char p[700];
+  wv_error err = {0};
+  snprintf(p, sizeof p, "%s/%s", dir, name);
+  assert_int_equal(wv_write_file_atomic(p, text, strlen(text), &err), WV_OK);
+}
+
+/* dir/name holds text. */
+static void expect_text(const char *dir, const char *name, const char *text) {
+  char p[700], *data;
+  size_t len;
+  wv_error err = {0};
+  snprintf(p, sizeof p, "%s/%s", dir, name);
+  assert_int_equal(wv_read_file(p, &data, &len, &err), WV_OK);
+  assert_string_equal(data, text);
+  free(data);
+}
+
+/* A directory of outputs appears whole or not at all and replaces an earlier one whole. */
+static void test_outdir(void **state) {
+  (void)state;
+  const char *d = tu_tmpdir("outdir");
+  static const char *const own[] = {"a.txt", "b.txt", NULL};
+  char target[600], p[700];
+  snprintf(target, sizeof target, "%s/out", d);
+  wv_outdir od;
+  wv_error err = {0};
+  struct stat st;
+  /* new: nothing visible before the commit */
+  assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_OK);
+  put_text(od.tmp, "a.txt", "old a");
+  put_text(od.tmp, "b.txt", "old b");
+  assert_int_not_equal(stat(target, &st), 0);
+  assert_int_equal(wv_outdir_commit(&od, &err), WV_OK);
+  assert_null(od.tmp);
+  assert_int_equal(count_tmp_files(d), 0);
+  expect_text(target, "a.txt", "old a");
+  /* a run that fails half way: the old directory is untouched, nothing left */
+  assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_OK);
+  put_text(od.tmp, "a.txt", "new a");
+  wv_outdir_abort(&od, NULL);
+  assert_int_equal(count_tmp_files(d), 0);
+  expect_text(target, "a.txt", "old a");
+  /* replaced whole: b.txt of the old run does not survive */
+  assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_OK);
+  put_text(od.tmp, "a.txt", "new a");
+  assert_int_equal(wv_outdir_commit(&od, &err), WV_OK);
+  expect_text(target, "a.txt", "new a");
+  snprintf(p, sizeof p, "%s/b.txt", target);
+  assert_int_not_equal(stat(p, &st), 0);
+  assert_int_equal(count_tmp_files(d), 0);
+  /* a stale temporary directory of the target is removed by the next begin */
+  snprintf(p, sizeof p, "%s.tmp.Zz0000", target);
+  assert_int_equal(mkdir(p, 0777), 0);
+  make_old(p);
+  assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_OK);
+  assert_int_not_equal(stat(p, &st), 0);
+  wv_outdir_abort(&od, NULL);
+  /* refused: a file the output does not consist of, a file as target, "." */
+  snprintf(p, sizeof p, "%s/notes.txt", target);
+  write_bytes(p, "mine", 4);
+  assert_int_equal(wv_outdir_begin(&od, target, own, &err), WV_ERR_IO);
+  assert_non_null(strstr(err.msg, "notes.txt"));
+  assert_int_equal(wv_outdir_begin(&od, p, own, &err), WV_ERR_IO);
+  assert_non_null(strstr(err.msg, "not a directory"));
+  assert_int_equal(wv_outdir_check(".", own, &err), WV_ERR_INVALID);
+  snprintf(p, sizeof p, "%s/no/such/parent", d);
+  assert_int_equal(wv_outdir_check(p, own, &err), WV_ERR_IO);
+  assert_int_equal(count_tmp_files(d), 0);
 }
 
 /* ---- EXR ---- */
@@ -754,6 +1010,12 @@ int main(void) {
       cmocka_unit_test(test_unwritable_path),
       cmocka_unit_test(test_file_round_trip),
       cmocka_unit_test(test_threads),
+      cmocka_unit_test(test_read_size_limits),
+      cmocka_unit_test(test_read_limits),
+      cmocka_unit_test(test_png_check),
+      cmocka_unit_test(test_same_file),
+      cmocka_unit_test(test_stale_temps),
+      cmocka_unit_test(test_outdir),
   };
   return cmocka_run_group_tests(tests, setup_dir, NULL);
 }

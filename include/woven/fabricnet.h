@@ -150,6 +150,8 @@ wv_status wv_fabricnet_check(const wv_fabricnet *n, const char *path, const char
 
 /* ---- training checkpoint: the same header, f32 weights, Adam moments and the
  * trainer's counters. ---- */
+#define WV_NET_MAX_EPOCHS 100000   /* most epochs a training may run */
+#define WV_DATASET_MAX_PER_PATTERN 1000000 /* most samples per pattern in a dataset */
 typedef struct {
   int epoch;             /* epochs done */
   long adam_t;
@@ -159,7 +161,9 @@ typedef struct {
 } wv_fabricnet_trainstate;
 wv_status wv_fabricnet_checkpoint_save(const char *path, const wv_fabricnet *n, const float *adam_m,
                                        const float *adam_v, const wv_fabricnet_trainstate *ts, wv_error *err);
-/* n, *adam_m and *adam_v (param_count floats, malloc'ed; caller frees) are allocated here. */
+/* n, *adam_m and *adam_v (param_count floats, malloc'ed; caller frees) are allocated here.
+ * Every value is checked (epochs 0..WV_NET_MAX_EPOCHS, best epoch within them, step
+ * count, finite weights and moments); messages name the file. */
 wv_status wv_fabricnet_checkpoint_load(const char *path, wv_fabricnet *n, float **adam_m, float **adam_v,
                                        wv_fabricnet_trainstate *ts, wv_error *err);
 
@@ -171,7 +175,8 @@ wv_status wv_fabricnet_checkpoint_load(const char *path, wv_fabricnet *n, float 
  * DIR/samples/<pattern>_<i>.png    capture image, 8-bit
  * DIR/samples/<pattern>_<i>.feat   descriptor features: 16-byte header + f16 values
  * The feature file is written last (each file atomically): a sample is done when its
- * three files exist and the feature file is complete and its CRC matches. */
+ * parameter file reads back with the sample's pattern, its PNG is whole (every chunk's
+ * CRC, wv_png_check) and the feature file is complete and its CRC matches. */
 #define WV_DATASET_VERSION 1
 typedef struct {
   int version;

@@ -37,9 +37,24 @@ typedef struct {
 
 void wv_fit_opts_default(wv_fit_opts *o);
 
+/* Ranges of the options (the command line and checkpoints are held to them). */
+#define WV_FIT_MAX_ITERS 100000
+#define WV_FIT_MAX_ITER_SCALE 16
+#define WV_FIT_MAX_ALIGN_RADIUS 230
+#define WV_FIT_MAX_REGISTER_RADIUS 50
+/* Every option within its range (iter_spp 1..WV_SCENE_MAX_SPP, down_w and down_h
+ * 1..1024, ...); the message names the option. */
+wv_status wv_fit_opts_validate(const wv_fit_opts *o, wv_error *err);
+
 /* The smallest scene image a fit accepts (SSIM needs 11 x 11 windows; the
  * descriptor and the 16 x 8 pixel loss need a little more). */
 #define WV_FIT_MIN_SIDE 32
+
+/* Can the scene be fitted with descriptor d (NULL: not checked) and these options?
+ * The image must be at least WV_FIT_MIN_SIDE and the descriptor's minimum per
+ * side, and so must the image at the iteration scale (and hold the pixel loss's
+ * down_w x down_h). Checked by wv_fit_run; call it before writing anything. */
+wv_status wv_fit_check_sizes(const wv_scene *s, const wv_descriptor *d, const wv_fit_opts *o, wv_error *err);
 
 /* One iteration's record. */
 typedef struct {
@@ -106,7 +121,10 @@ void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out);
 wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p,
                       const wv_fit_opts *o, wv_fit_record *out, wv_error *err);
 
-/* Checkpoints (JSON, written atomically): the state and the options. */
+/* Checkpoints (JSON, written atomically): the state and the options. Reading checks
+ * every value (options as wv_fit_opts_validate, iteration count against the log,
+ * RNG state as 16 hex digits, registration offset within WV_SCENE_MAX_OFFSET_MM,
+ * finite Adam moments, ...); messages name the file and the key. */
 wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, const wv_fit_opts *o,
                                   const char *descriptor_name, wv_error *err);
 wv_status wv_fit_checkpoint_read(const char *path, wv_fit_state *st, wv_fit_opts *o, char *descriptor_name,

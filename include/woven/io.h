@@ -3,7 +3,8 @@
  * integers map to [0,1], EXR keeps its float values. Colour encoding is the caller's
  * business (the scene says whether a photo is sRGB, gamma or linear).
  * Writers never leave a partial file: they write to a temporary file next to the
- * target and rename it into place, so an earlier result survives any failure. */
+ * target and rename it into place, so an earlier result survives any failure.
+ * Directories of outputs are written the same way (wv_outdir below). */
 #ifndef WOVEN_IO_H
 #define WOVEN_IO_H
 
@@ -17,13 +18,24 @@ typedef struct {
   int channels_in_file; /* 1 (grey), 2 (grey+alpha), 3 or 4 */
 } wv_image_info;
 
+/* Largest image read: the size in the file's header is checked before any pixel
+ * memory is allocated, so a small file claiming a huge image is refused at once. */
+#define WV_IMAGE_READ_MAX_SIDE 16384          /* pixels per side */
+#define WV_IMAGE_READ_MAX_PIXELS (64L << 20)  /* 64 Mpixel (768 MB as RGB floats) */
+
 /* Reads any supported image (detected from its magic bytes, not its name) and
  * returns it with 3 channels (grey is replicated, alpha dropped). info may be NULL.
- * Images over WV_IMAGE_MAX_PIXELS are rejected before decoding.
+ * Images over WV_IMAGE_READ_MAX_SIDE or WV_IMAGE_READ_MAX_PIXELS are refused
+ * (WV_ERR_NOMEM) before decoding.
  * Limits: CMYK JPEGs are refused; for EXR the first part is read, it must be a
  * scanline part (tiled and deep are refused) with half or float R,G,B or Y channels,
  * and its data window becomes the image. On failure *img is left empty. */
 wv_status wv_image_read(const char *path, wv_image *img, wv_image_info *info, wv_error *err);
+
+/* Checks that a PNG file is whole without decoding it: signature, IHDR first, every
+ * chunk's CRC-32 and an IEND chunk (one pass over the file; catches truncated and
+ * damaged files). */
+wv_status wv_png_check(const char *path, wv_error *err);
 
 /* Writes by extension: .png (8-bit, values clamped to [0,1], no colour encoding
  * applied: pass already-encoded values), .exr (32-bit float, linear).
@@ -35,8 +47,77 @@ wv_status wv_image_write_exr(const char *path, const wv_image *img, wv_error *er
 
 /* Atomically replaces path with len bytes of data. */
 wv_status wv_write_file_atomic(const char *path, const void *data, size_t len, wv_error *err);
-/* Reads a whole file (NUL-terminated for convenience); caller frees *data.
- * len may be NULL. */
+
+/* Limits on whole-file reads: a file (or a device such as /dev/zero) longer than
+ * the limit is refused with WV_ERR_NOMEM after reading at most limit + 1 bytes. */
+#define WV_READ_MAX_BYTES ((size_t)1 << 30)  /* any file read whole: 1 GiB */
+#define WV_JSON_MAX_BYTES ((size_t)64 << 20) /* JSON files (parameters, scenes, checkpoints): 64 MiB */
+/* Reads a whole file of at most max bytes (NUL-terminated for convenience); caller
+ * frees *data. len may be NULL. A directory is refused ("is a directory"). */
+wv_status wv_read_file_max(const char *path, size_t max, char **data, size_t *len, wv_error *err);
+/* wv_read_file_max with WV_READ_MAX_BYTES. */
 wv_status wv_read_file(const char *path, char **data, size_t *len, wv_error *err);
+
+/* ---- never write over an input ---- */
+
+/* 1 when a and b name the same existing file (same device and inode, links
+ * followed), 0 otherwise (also when either does not exist). */
+int wv_same_file(const char *a, const char *b);
+/* 1 when path is dir itself or lies anywhere below it (symbolic links and ".."
+ * resolved; a path that does not exist yet counts where its nearest existing
+ * ancestor is); 0 otherwise, also when dir does not exist. */
+int wv_path_within(const char *path, const char *dir);
+/* Refuses (WV_ERR_INVALID, naming both) an output that would replace one of the
+ * inputs: output_is_dir 0: output is a file and must not be any input;
+ * output_is_dir 1: output is a directory replaced as a whole and no input may lie
+ * inside it. NULL entries in inputs are skipped. */
+wv_status wv_check_not_input(const char *output, int output_is_dir, const char *const *inputs, int n_inputs,
+                             wv_error *err);
+
+/* ---- temporary files of interrupted runs ---- */
+
+/* Temporary names are "<target>.tmp.XXXXXX" (six letters or digits). Removes, in
+ * dir, those whose target is named prefix (any target when prefix is NULL) and
+ * that are stale: owned by this user, not locked by a live writer (writers hold
+ * a lock on them) and unchanged for WV_TMP_STALE_SECONDS. Files and whole
+ * directories are removed; nothing else is touched. Returns how many. */
+#define WV_TMP_STALE_SECONDS 10
+int wv_remove_stale_temps(const char *dir, const char *prefix);
+/* 1 when name has the form of a temporary name. */
+int wv_is_temp_name(const char *name);
+
+/* ---- directories of outputs, written whole ---- */
+
+/* A directory of outputs appears whole or not at all: the caller writes every file
+ * into od->tmp, a new directory beside the target ("<path>.tmp.XXXXXX", same file
+ * system), and commit renames it into place. An existing target is exchanged with
+ * it atomically (renameat2 RENAME_EXCHANGE; where the file system cannot, the old
+ * directory is renamed aside first and put back if the new one cannot take its
+ * place) and then deleted, so on any failure or kill the old directory is intact.
+ * While it is being written the temporary directory is locked, so a concurrent
+ * wv_remove_stale_temps leaves it alone; after a kill it is stale and removed by
+ * the next wv_outdir_begin of the same target. */
+typedef struct {
+  char *path; /* the target (owned copy; a symbolic link to a directory is resolved) */
+  char *tmp;  /* the directory to write into (owned) */
+  int fd;     /* open on tmp, holding its lock; -1 when closed */
+} wv_outdir;
+
+/* Checks that path can be replaced: absent, or a directory whose entries are all
+ * named in own (a NULL-terminated list of the names the output consists of;
+ * temporary names are ignored). Anything else (a file, or a directory holding
+ * other files, which the replacement would delete) is refused with a message
+ * naming it. Call it before long work; wv_outdir_begin checks again. */
+wv_status wv_outdir_check(const char *path, const char *const *own, wv_error *err);
+/* wv_outdir_check, removes stale temporary directories of this target, then
+ * creates od->tmp. On failure od holds nothing to release. */
+wv_status wv_outdir_begin(wv_outdir *od, const char *path, const char *const *own, wv_error *err);
+/* Puts od->tmp in place of the target. On success or failure od is released and
+ * no temporary directory is left; on failure the target is as it was. */
+wv_status wv_outdir_commit(wv_outdir *od, wv_error *err);
+/* Deletes od->tmp and releases od; the target is untouched. Safe on a released od.
+ * err, when not NULL, is the failure's message: the temporary directory's name in
+ * it is replaced by the target's, so it names the file the user asked for. */
+void wv_outdir_abort(wv_outdir *od, wv_error *err);
 
 #endif

@@ -28,7 +28,8 @@ void wv_maps_free(wv_maps *m);
 /* Writes <dir>/<map>.png (8-bit: vectors as 0.5 v + 0.5, albedos sRGB-encoded,
  * height normalised by height_max) and/or <dir>/<map>.exr (raw floats), plus
  * <dir>/maps.json describing tile size and encodings. format: "png", "exr" or "both".
- * Creates dir if needed; each file is written atomically. */
+ * The directory is written whole (wv_outdir): it appears, or replaces an earlier
+ * maps directory, complete or not at all; a directory holding other files is refused. */
 wv_status wv_maps_write(const wv_maps *m, const char *dir, const char *format, wv_error *err);
 
 #endif

@@ -37,6 +37,8 @@ typedef struct {
 #define WV_SCENE_MAX_SIDE 16384
 #define WV_SCENE_MAX_SPP 4096
 #define WV_SCENE_MAX_SAMPLES (1LL << 34)
+#define WV_SCENE_MAX_MM 1e6        /* |coordinate| of the camera, look-at, up and light: 1 km */
+#define WV_SCENE_MAX_OFFSET_MM 1e4 /* |sample.offset_mm|: any offset is equivalent to one within a weave repeat */
 
 wv_status wv_scene_parse(const char *json, const char *source, wv_scene *s, wv_error *err);
 wv_status wv_scene_read(const char *path, wv_scene *s, wv_error *err);

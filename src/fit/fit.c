@@ -1,14 +1,18 @@
+/* woven: the fit (paper section 4.3): loss, Adam and discrete steps, density
+ * alignment, option ranges, checkpoints. */
 #include "woven/fit.h"
 #include "fit/fit_internal.h"
 
 #include <jansson.h>
 #include <math.h>
 #include <omp.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "util/hash.h"
+#include "util/json.h"
 #include "woven/grad.h"
 #include "woven/imgops.h"
 #include "woven/io.h"
@@ -29,6 +33,91 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->checkpoint_every = 10;
   o->align_radius = 230;
   o->register_radius = 6;
+}
+
+/* Every option's range, in one table: wv_fit_opts_validate and the checkpoint
+ * reader use it (in_ckpt: stored in checkpoints; 2: optional there). */
+typedef struct {
+  const char *key;
+  size_t off;
+  char type; /* 'i' int, 'd' double, 'u' uint64_t */
+  double lo, hi;
+  int in_ckpt;
+} opt_range;
+#define OPT(k, t, lo, hi, c) {#k, offsetof(wv_fit_opts, k), t, lo, hi, c}
+static const opt_range OPT_RANGES[] = {
+    OPT(iters, 'i', 0, WV_FIT_MAX_ITERS, 1),
+    OPT(lr, 'd', 1e-9, 1, 1),
+    OPT(w_prior, 'd', 0, 1e6, 1),
+    OPT(w_pixel, 'd', 0, 1e6, 1),
+    OPT(down_w, 'i', 1, 1024, 1),
+    OPT(down_h, 'i', 1, 1024, 1),
+    OPT(discrete_every, 'i', 0, WV_FIT_MAX_ITERS, 1),
+    OPT(iter_scale, 'i', 1, WV_FIT_MAX_ITER_SCALE, 1),
+    OPT(iter_spp, 'i', 1, WV_SCENE_MAX_SPP, 1),
+    OPT(seed, 'u', 0, 4611686018427387904.0, 1), /* 2^62 */
+    OPT(threads, 'i', 0, 1024, 0),
+    OPT(checkpoint_every, 'i', 0, WV_FIT_MAX_ITERS, 0),
+    OPT(align_radius, 'i', 0, WV_FIT_MAX_ALIGN_RADIUS, 1),
+    OPT(register_radius, 'i', 0, WV_FIT_MAX_REGISTER_RADIUS, 2),
+};
+#undef OPT
+#define N_OPTS (sizeof OPT_RANGES / sizeof OPT_RANGES[0])
+
+static double opt_get(const wv_fit_opts *o, const opt_range *r) {
+  const char *p = (const char *)o + r->off;
+  if (r->type == 'i') return *(const int *)(const void *)p;
+  if (r->type == 'u') return (double)*(const uint64_t *)(const void *)p;
+  return *(const double *)(const void *)p;
+}
+
+wv_status wv_fit_opts_validate(const wv_fit_opts *o, wv_error *err) {
+  char a[32], b[32], c[32];
+  for (size_t i = 0; i < N_OPTS; i++) {
+    const opt_range *r = &OPT_RANGES[i];
+    double v = opt_get(o, r);
+    if (!(v >= r->lo && v <= r->hi))
+      return wv_fail(err, WV_ERR_INVALID, "fit option '%s' = %s is outside %s..%s", r->key, wv_num_str(v, a),
+                     wv_num_str(r->lo, b), wv_num_str(r->hi, c));
+  }
+  return WV_OK;
+}
+
+/* Reads the stored options of a checkpoint ("opts"), each range-checked. */
+static wv_status read_opts(json_t *opts, wv_fit_opts *o, wv_error *err) {
+  if (!json_is_object(opts)) return wv_fail(err, WV_ERR_INVALID, "missing 'opts'");
+  for (size_t i = 0; i < N_OPTS; i++) {
+    const opt_range *r = &OPT_RANGES[i];
+    if (!r->in_ckpt) continue;
+    char *p = (char *)o + r->off;
+    wv_status st;
+    if (r->type == 'd') {
+      st = wv_json_number(opts, "opts", r->key, r->lo, r->hi, r->in_ckpt == 1, (double *)(void *)p, err);
+    } else {
+      long long v = (long long)opt_get(o, r);
+      st = wv_json_integer(opts, "opts", r->key, (long long)r->lo, (long long)r->hi, r->in_ckpt == 1, &v, err);
+      if (!st && r->type == 'i') *(int *)(void *)p = (int)v;
+      if (!st && r->type == 'u') *(uint64_t *)(void *)p = (uint64_t)v;
+    }
+    if (st) return st;
+  }
+  return WV_OK;
+}
+
+wv_status wv_fit_check_sizes(const wv_scene *s, const wv_descriptor *d, const wv_fit_opts *o, wv_error *err) {
+  int need = d ? wv_descriptor_min_side(d) : 0, scale = o->iter_scale > 0 ? o->iter_scale : 1;
+  need = need > WV_FIT_MIN_SIDE ? need : WV_FIT_MIN_SIDE;
+  if (s->width < need || s->height < need)
+    return wv_fail(err, WV_ERR_INVALID, "the scene's image (%d x %d) is too small for a fit (at least %d x %d%s%s)",
+                   s->width, s->height, need, need, d ? " for descriptor " : "", d ? wv_descriptor_name(d) : "");
+  int w = s->width / scale, h = s->height / scale, dmin = d ? wv_descriptor_min_side(d) : 0;
+  if (w < dmin || h < dmin || w < o->down_w || h < o->down_h)
+    return wv_fail(err, WV_ERR_INVALID,
+                   "iterating at 1/%d scale makes the scene's %d x %d image %d x %d, too small for the fit (at "
+                   "least %d x %d); use a smaller --iter-scale",
+                   scale, s->width, s->height, w, h, dmin > o->down_w ? dmin : o->down_w,
+                   dmin > o->down_h ? dmin : o->down_h);
+  return WV_OK;
 }
 
 void wv_fit_beta_prior(const char *pattern, double *mu, double *sigma) {
@@ -78,9 +167,10 @@ static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, 
                           int spp, const wv_fit_opts *o, wv_fit_timing *timing, wv_error *err) {
   memset(c, 0, sizeof *c);
   c->d = d, c->o = o, c->timing = timing;
-  if (s->width < WV_FIT_MIN_SIDE || s->height < WV_FIT_MIN_SIDE)
-    return wv_fail(err, WV_ERR_INVALID, "the scene's image (%d x %d) is too small for a fit (at least %d x %d)",
-                   s->width, s->height, WV_FIT_MIN_SIDE, WV_FIT_MIN_SIDE);
+  wv_fit_opts so = *o;
+  so.iter_scale = scale;
+  wv_status st = wv_fit_check_sizes(s, d, &so, err);
+  if (st) return st;
   c->scene = *s;
   if (scale > 1) {
     c->scene.width = s->width / scale, c->scene.height = s->height / scale;
@@ -90,7 +180,6 @@ static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, 
   if (photo->w != s->width || photo->h != s->height)
     return wv_fail(err, WV_ERR_INVALID, "the photo is %d x %d but the scene renders %d x %d", photo->w, photo->h,
                    s->width, s->height);
-  wv_status st;
   if (c->scene.width == photo->w && c->scene.height == photo->h) {
     if ((st = wv_image_alloc(&c->photo, photo->w, photo->h, 3, err))) return st;
     memcpy(c->photo.data, photo->data, sizeof(float) * 3 * (size_t)photo->w * photo->h);
@@ -278,6 +367,8 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
 
 wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
                      const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err) {
+  wv_status vs = wv_fit_opts_validate(o, err);
+  if (vs) return vs;
   if (o->iters > st->log_cap) {
     wv_fit_record *nl = realloc(st->log, sizeof *nl * (size_t)o->iters);
     if (!nl) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the fit log");
@@ -420,87 +511,118 @@ static wv_status read_params_obj(json_t *o, const char *path, const char *key, w
   return st;
 }
 
-static wv_status read_darray(json_t *o, const char *path, const char *key, double *v, int n, wv_error *err) {
+static wv_status read_darray(json_t *o, const char *key, double *v, int n, double lo, double hi, wv_error *err) {
   json_t *a = json_object_get(o, key);
   if (!json_is_array(a) || (int)json_array_size(a) != n)
-    return wv_fail(err, WV_ERR_FORMAT, "%s: '%s' must be an array of %d numbers", path, key, n);
+    return wv_fail(err, WV_ERR_INVALID, "'%s' must be an array of %d numbers", key, n);
+  char name[64];
   for (int i = 0; i < n; i++) {
-    json_t *x = json_array_get(a, i);
-    if (!json_is_number(x)) return wv_fail(err, WV_ERR_FORMAT, "%s: '%s[%d]' is not a number", path, key, i);
-    v[i] = json_number_value(x);
+    snprintf(name, sizeof name, "%s[%d]", key, i);
+    wv_status st = wv_json_number_value(json_array_get(a, i), name, lo, hi, &v[i], err);
+    if (st) return st;
   }
+  return WV_OK;
+}
+
+/* Every value of a checkpoint is checked: it sizes arrays, seeds the search and
+ * moves the weave; messages name the key (the caller adds the file). */
+static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *st, wv_fit_opts *o,
+                                 char *descriptor_name, size_t name_cap, wv_error *err) {
+  wv_status rc;
+  json_t *kind = json_object_get(root, "kind");
+  if (!json_is_string(kind) || strcmp(json_string_value(kind), "woven-fit-checkpoint") ||
+      !json_is_integer(json_object_get(root, "version")) || json_integer_value(json_object_get(root, "version")) != 1)
+    return wv_fail(err, WV_ERR_FORMAT, "not a woven fit checkpoint (version 1)");
+  wv_fit_opts_default(o);
+  o->register_radius = 0; /* absent in checkpoints older than the registration */
+  if ((rc = read_opts(json_object_get(root, "opts"), o, err))) return rc;
+  wv_params start;
+  if ((rc = read_params_obj(root, path, "start", &start, err))) return rc;
+  if ((rc = wv_fit_state_init(st, &start, o, err))) return rc;
+  if ((rc = read_params_obj(root, path, "params", &st->params, err))) return rc;
+  if ((rc = read_darray(root, "adam_m", st->adam_m, WV_P_COUNT, -1e30, 1e30, err))) return rc;
+  if ((rc = read_darray(root, "adam_v", st->adam_v, WV_P_COUNT, 0, 1e60, err))) return rc;
+  /* The RNG state is written as exactly 16 hex digits. */
+  json_t *jr = json_object_get(root, "rng");
+  const char *rng = json_string_value(jr);
+  if (!rng || strlen(rng) != 16 || strspn(rng, "0123456789abcdefABCDEF") != 16)
+    return wv_fail(err, WV_ERR_INVALID, "'rng' must be a string of 16 hexadecimal digits");
+  st->rng = strtoull(rng, NULL, 16);
+  const char *dn = json_string_value(json_object_get(root, "descriptor"));
+  if (!dn || !*dn || strlen(dn) >= name_cap) return wv_fail(err, WV_ERR_INVALID, "'descriptor' must be a name");
+  long long it = 0;
+  if ((rc = wv_json_integer(root, NULL, "iter", 0, o->iters, 1, &it, err))) return rc;
+  json_t *log = json_object_get(root, "log");
+  if (!json_is_array(log) || (long long)json_array_size(log) != it)
+    return wv_fail(err, WV_ERR_INVALID, "'log' must hold one entry per iteration done (%lld)", it);
+  json_t *al = json_object_get(root, "aligned");
+  if (!json_is_boolean(al)) return wv_fail(err, WV_ERR_INVALID, "'aligned' must be true or false");
+  st->aligned = json_is_true(al);
+  json_t *reg = json_object_get(root, "registration"); /* absent in checkpoints before it existed */
+  if (reg) {
+    json_t *done = json_object_get(reg, "done"), *off = json_object_get(reg, "offset_mm");
+    if (!json_is_boolean(done)) return wv_fail(err, WV_ERR_INVALID, "'registration.done' must be true or false");
+    st->registered = json_is_true(done);
+    if (!json_is_array(off) || json_array_size(off) != 2)
+      return wv_fail(err, WV_ERR_INVALID, "'registration.offset_mm' must be an array of 2 numbers");
+    for (int i = 0; i < 2; i++) {
+      char name[40];
+      snprintf(name, sizeof name, "registration.offset_mm[%d]", i);
+      if ((rc = wv_json_number_value(json_array_get(off, i), name, -WV_SCENE_MAX_OFFSET_MM, WV_SCENE_MAX_OFFSET_MM,
+                                     &st->offset_mm[i], err)))
+        return rc;
+    }
+    if ((rc = wv_json_number(reg, "registration", "ncc_before", -2, 2, 1, &st->reg_ncc_before, err)) ||
+        (rc = wv_json_number(reg, "registration", "ncc_after", -2, 2, 1, &st->reg_ncc_after, err)) ||
+        (rc = wv_json_number(reg, "registration", "ssim_before", -2, 2, 1, &st->reg_ssim_before, err)) ||
+        (rc = wv_json_number(reg, "registration", "ssim_after", -2, 2, 1, &st->reg_ssim_after, err)))
+      return rc;
+  } else {
+    st->registered = 1; /* an old fit: nothing to redo */
+  }
+  snprintf(descriptor_name, name_cap, "%s", dn);
+  st->iter = (int)it;
+  for (int i = 0; i < st->iter; i++) {
+    wv_fit_record *r = &st->log[i];
+    json_t *e = json_array_get(log, i);
+    if (!json_is_array(e) || json_array_size(e) != 7)
+      return wv_fail(err, WV_ERR_INVALID, "'log[%d]' must be an array of 7 values", i);
+    double *v[4] = {&r->loss, &r->gram, &r->prior, &r->pixel};
+    long long x;
+    char name[40];
+    snprintf(name, sizeof name, "log[%d][0]", i);
+    if ((rc = wv_json_integer_value(json_array_get(e, 0), name, i, i, &x, err))) return rc;
+    r->iter = i;
+    for (int k = 0; k < 4; k++) {
+      snprintf(name, sizeof name, "log[%d][%d]", i, k + 1);
+      if ((rc = wv_json_number_value(json_array_get(e, (size_t)k + 1), name, -1e30, 1e30, v[k], err))) return rc;
+    }
+    for (int k = 0; k < 2; k++) {
+      snprintf(name, sizeof name, "log[%d][%d]", i, k + 5);
+      if ((rc = wv_json_integer_value(json_array_get(e, (size_t)k + 5), name, 0, 1, &x, err))) return rc;
+      *(k ? &r->discrete_kept : &r->discrete_tried) = (int)x;
+    }
+  }
+  json_t *tm = json_object_get(root, "timing"); /* informative: absent or odd values are not fatal */
+  double *tv[5] = {&st->timing.render, &st->timing.gradient, &st->timing.descriptor, &st->timing.discrete,
+                   &st->timing.total};
+  static const char *tk[5] = {"render", "gradient", "descriptor", "discrete", "total"};
+  for (int k = 0; k < 5; k++)
+    if ((rc = wv_json_number(tm, "timing", tk[k], 0, 1e12, 0, tv[k], err))) return rc;
   return WV_OK;
 }
 
 wv_status wv_fit_checkpoint_read(const char *path, wv_fit_state *st, wv_fit_opts *o, char *descriptor_name,
                                  size_t name_cap, wv_error *err) {
   memset(st, 0, sizeof *st);
-  json_error_t je;
-  json_t *root = json_load_file(path, JSON_REJECT_DUPLICATES, &je);
-  if (!root) {
-    if (je.line < 0) return wv_fail(err, WV_ERR_IO, "%s: %s", path, je.text);
-    return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", path, je.line, je.column, je.text);
+  json_t *root;
+  wv_status rc = wv_json_load_file(path, &root, err);
+  if (rc) return rc;
+  rc = read_checkpoint(root, path, st, o, descriptor_name, name_cap, err);
+  if (rc) {
+    if (err && strncmp(err->msg, path, strlen(path))) wv_error_prefix(err, "%s", path);
+    wv_fit_state_free(st);
   }
-  wv_status rc = WV_OK;
-  json_t *kind = json_object_get(root, "kind");
-  if (!json_is_string(kind) || strcmp(json_string_value(kind), "woven-fit-checkpoint") ||
-      json_integer_value(json_object_get(root, "version")) != 1) {
-    rc = wv_fail(err, WV_ERR_FORMAT, "%s: not a woven fit checkpoint (version 1)", path);
-    goto done;
-  }
-  json_t *opts = json_object_get(root, "opts");
-  wv_fit_opts_default(o);
-  json_int_t seed = 1;
-  if (json_unpack(opts, "{s:i,s:F,s:F,s:F,s:i,s:i,s:i,s:i,s:i,s:I,s:i}", "iters", &o->iters, "lr", &o->lr,
-                  "w_prior", &o->w_prior, "w_pixel", &o->w_pixel, "down_w", &o->down_w, "down_h", &o->down_h,
-                  "discrete_every", &o->discrete_every, "iter_scale", &o->iter_scale, "iter_spp", &o->iter_spp,
-                  "seed", &seed, "align_radius", &o->align_radius)) {
-    rc = wv_fail(err, WV_ERR_FORMAT, "%s: checkpoint options are incomplete", path);
-    goto done;
-  }
-  o->seed = (uint64_t)seed;
-  json_t *rr = json_object_get(opts, "register_radius");
-  o->register_radius = json_is_integer(rr) ? (int)json_integer_value(rr) : 0;
-  wv_params start;
-  if ((rc = read_params_obj(root, path, "start", &start, err))) goto done;
-  if ((rc = wv_fit_state_init(st, &start, o, err))) goto done;
-  if ((rc = read_params_obj(root, path, "params", &st->params, err))) goto done;
-  if ((rc = read_darray(root, path, "adam_m", st->adam_m, WV_P_COUNT, err))) goto done;
-  if ((rc = read_darray(root, path, "adam_v", st->adam_v, WV_P_COUNT, err))) goto done;
-  const char *rng = json_string_value(json_object_get(root, "rng"));
-  const char *dn = json_string_value(json_object_get(root, "descriptor"));
-  json_t *log = json_object_get(root, "log");
-  json_int_t it = json_integer_value(json_object_get(root, "iter"));
-  if (!rng || !dn || !json_is_array(log) || it < 0 || it > o->iters || (json_int_t)json_array_size(log) != it) {
-    rc = wv_fail(err, WV_ERR_FORMAT, "%s: checkpoint is inconsistent (iter, log, rng or descriptor)", path);
-    goto done;
-  }
-  st->rng = strtoull(rng, NULL, 16);
-  st->aligned = json_is_true(json_object_get(root, "aligned"));
-  json_t *reg = json_object_get(root, "registration"); /* absent in checkpoints before it existed */
-  if (reg && json_unpack(reg, "{s:b,s:[F,F],s:F,s:F,s:F,s:F}", "done", &st->registered, "offset_mm",
-                         &st->offset_mm[0], &st->offset_mm[1], "ncc_before", &st->reg_ncc_before, "ncc_after",
-                         &st->reg_ncc_after, "ssim_before", &st->reg_ssim_before, "ssim_after",
-                         &st->reg_ssim_after)) {
-    rc = wv_fail(err, WV_ERR_FORMAT, "%s: 'registration' is malformed", path);
-    goto done;
-  }
-  if (!reg) st->registered = 1; /* an old fit: nothing to redo */
-  snprintf(descriptor_name, name_cap, "%s", dn);
-  st->iter = (int)it;
-  for (int i = 0; i < st->iter; i++) {
-    wv_fit_record *r = &st->log[i];
-    if (json_unpack(json_array_get(log, i), "[i,F,F,F,F,i,i]", &r->iter, &r->loss, &r->gram, &r->prior, &r->pixel,
-                    &r->discrete_tried, &r->discrete_kept)) {
-      rc = wv_fail(err, WV_ERR_FORMAT, "%s: log entry %d is malformed", path, i);
-      goto done;
-    }
-  }
-  json_unpack(json_object_get(root, "timing"), "{s:F,s:F,s:F,s:F,s:F}", "render", &st->timing.render, "gradient",
-              &st->timing.gradient, "descriptor", &st->timing.descriptor, "discrete", &st->timing.discrete, "total",
-              &st->timing.total);
-done:
-  if (rc && st->log) wv_fit_state_free(st);
   json_decref(root);
   return rc;
 }

@@ -1,3 +1,5 @@
+/* woven: a photo brought to a scene's image: read, cropped (the one place a crop is
+ * checked against the photo), response applied to linear photos, area-averaged. */
 #include "woven/photo.h"
 
 #include <string.h>
@@ -13,12 +15,13 @@ wv_status wv_photo_load(const char *path, const wv_scene *s, const wv_crop *crop
   wv_status st = wv_image_read(path, &raw, &ii, err);
   if (st) return st;
   int x0, y0, cw, ch, rw = raw.w, rh = raw.h;
-  if (crop && crop->w > 0 && crop->h > 0) {
+  if (crop && (crop->w != 0 || crop->h != 0)) {
     x0 = crop->x, y0 = crop->y, cw = crop->w, ch = crop->h;
-    if (x0 < 0 || y0 < 0 || x0 + cw > raw.w || y0 + ch > raw.h) {
+    /* in 64 bits: x0 + cw can exceed INT_MAX */
+    if (x0 < 0 || y0 < 0 || cw < 1 || ch < 1 || (long long)x0 + cw > rw || (long long)y0 + ch > rh) {
       wv_image_free(&raw);
       return wv_fail(err, WV_ERR_INVALID, "%s: crop %d,%d,%d,%d lies outside the %d x %d photo", path, x0, y0, cw,
-                     ch, raw.w, raw.h);
+                     ch, rw, rh);
     }
   } else { /* largest centred rectangle with the scene's aspect */
     double aspect = (double)s->width / s->height;

@@ -289,6 +289,9 @@ static wv_status hill_climb(level_set *ls, const wv_params *base, const double *
 
 wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                           wv_error *err) {
+  if (o->register_radius < 0 || o->register_radius > WV_FIT_MAX_REGISTER_RADIUS)
+    return wv_fail(err, WV_ERR_INVALID, "fit option 'register_radius' = %d is outside 0..%d", o->register_radius,
+                   WV_FIT_MAX_REGISTER_RADIUS);
   wv_scene full;
   wv_fit_scene(st, s, &full);
   int threads = o->threads > 0 ? o->threads : omp_get_max_threads();

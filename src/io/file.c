@@ -1,10 +1,12 @@
 /* woven: whole-file reads and atomic file replacement. */
+#define _DEFAULT_SOURCE /* flock */
 #include <errno.h>
 #include <fcntl.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -19,10 +21,11 @@ const char *wv_io_strerror(int errnum, char *buf, size_t len) {
 wv_status wv_io_check_size(const char *path, long long w, long long h, wv_error *err) {
   if (w <= 0 || h <= 0)
     return wv_fail(err, WV_ERR_FORMAT, "%s: invalid image size %lld x %lld", path, w, h);
-  if (w > WV_IMAGE_MAX_PIXELS || h > WV_IMAGE_MAX_PIXELS || w * h > WV_IMAGE_MAX_PIXELS)
+  if (w > WV_IMAGE_READ_MAX_SIDE || h > WV_IMAGE_READ_MAX_SIDE || w * h > WV_IMAGE_READ_MAX_PIXELS)
     return wv_fail(err, WV_ERR_NOMEM,
-                   "%s: image of %lld x %lld pixels is too large (limit %ld pixels)", path, w, h,
-                   (long)WV_IMAGE_MAX_PIXELS);
+                   "%s: image of %lld x %lld pixels is too large (limit %d pixels per side and %ld "
+                   "pixels in all)",
+                   path, w, h, WV_IMAGE_READ_MAX_SIDE, (long)WV_IMAGE_READ_MAX_PIXELS);
   return WV_OK;
 }
 
@@ -38,6 +41,10 @@ wv_status wv_io_check_image(const char *path, const wv_image *img, wv_error *err
 /* ---- whole-file read ---- */
 
 wv_status wv_read_file(const char *path, char **data, size_t *len, wv_error *err) {
+  return wv_read_file_max(path, WV_READ_MAX_BYTES, data, len, err);
+}
+
+wv_status wv_read_file_max(const char *path, size_t max, char **data, size_t *len, wv_error *err) {
   char eb[128];
   if (!path || !data) return wv_fail(err, WV_ERR_INVALID, "wv_read_file: missing path or output");
   *data = NULL;
@@ -52,21 +59,32 @@ wv_status wv_read_file(const char *path, char **data, size_t *len, wv_error *err
     close(fd);
     return wv_fail(err, WV_ERR_IO, "%s: is a directory", path);
   }
-  /* The size is only a hint: pipes report 0 and files may grow while read. Room for
-   * one byte more than expected lets the final read see end of file without growing. */
+  if (have_st && S_ISREG(st.st_mode) && (unsigned long long)st.st_size > max) {
+    close(fd);
+    return wv_fail(err, WV_ERR_NOMEM, "%s: file of %lld bytes is over the limit of %zu bytes for this kind of file",
+                   path, (long long)st.st_size, max);
+  }
+  /* The size is only a hint: pipes and devices report 0 and files may grow while
+   * read, so the limit is enforced on what is read. Room for one byte more than
+   * expected lets the final read see end of file without growing. */
   size_t cap = (have_st && S_ISREG(st.st_mode) && st.st_size > 0) ? (size_t)st.st_size + 2 : 4096;
   size_t n = 0;
   char *buf = malloc(cap);
   wv_status s = buf ? WV_OK : wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
   while (s == WV_OK) {
+    if (n > max) {
+      s = wv_fail(err, WV_ERR_NOMEM, "%s: more than %zu bytes, the limit for this kind of file", path, max);
+      break;
+    }
     if (n + 1 >= cap) {
-      char *nb = cap < SIZE_MAX / 2 ? realloc(buf, cap * 2) : NULL;
+      size_t ncap = cap < max / 2 + 2 ? cap * 2 : max + 2; /* never more than max + 2 bytes */
+      char *nb = ncap > cap ? realloc(buf, ncap) : NULL;
       if (!nb) {
         s = wv_fail(err, WV_ERR_NOMEM, "%s: file too large to read into memory", path);
         break;
       }
       buf = nb;
-      cap *= 2;
+      cap = ncap;
     }
     ssize_t r = read(fd, buf + n, cap - 1 - n);
     if (r < 0 && errno == EINTR) continue;
@@ -90,7 +108,7 @@ wv_status wv_read_file(const char *path, char **data, size_t *len, wv_error *err
 /* ---- atomic replacement ---- */
 
 /* The umask cannot be read without setting it (racy in threads), so ask the kernel. */
-static mode_t current_umask(void) {
+mode_t wv_io_umask(void) {
   mode_t mask = 022;
   int fd = open("/proc/self/status", O_RDONLY | O_CLOEXEC);
   FILE *f = fd >= 0 ? fdopen(fd, "r") : NULL;
@@ -114,7 +132,7 @@ static mode_t current_umask(void) {
 static void set_final_mode(int fd, const char *path) {
   struct stat st;
   mode_t mode = (stat(path, &st) == 0 && S_ISREG(st.st_mode)) ? (st.st_mode & 07777)
-                                                              : (0666 & ~current_umask());
+                                                              : (0666 & ~wv_io_umask());
   (void)fchmod(fd, mode); /* best effort: the data matters more than the mode */
 }
 
@@ -150,6 +168,8 @@ wv_status wv_io_atomic_open(wv_io_atomic *af, const char *path, wv_error *err) {
                    wv_io_strerror(e, eb, sizeof eb));
   }
   set_final_mode(af->fd, path);
+  /* Marks the file as in use: wv_remove_stale_temps leaves locked files alone. */
+  (void)flock(af->fd, LOCK_EX | LOCK_NB);
   return WV_OK;
 }
 

@@ -9,16 +9,25 @@
 /* Thread-safe strerror: formats errnum into buf and returns buf. */
 const char *wv_io_strerror(int errnum, char *buf, size_t len);
 
-/* Rejects a decoded header whose size is invalid or over WV_IMAGE_MAX_PIXELS,
- * before any pixel memory is allocated. */
+/* The process's umask, read without changing it. */
+#include <sys/types.h>
+mode_t wv_io_umask(void);
+
+/* Deletes a file or a directory tree (symbolic links are removed, never followed);
+ * best effort. */
+void wv_io_remove_tree(const char *path);
+
+/* Rejects a decoded header whose size is invalid or over the read limits
+ * (WV_IMAGE_READ_MAX_SIDE, WV_IMAGE_READ_MAX_PIXELS), before any pixel memory
+ * is allocated. */
 wv_status wv_io_check_size(const char *path, long long w, long long h, wv_error *err);
 
 /* Rejects images a writer cannot store (NULL data, bad shape). */
 wv_status wv_io_check_image(const char *path, const wv_image *img, wv_error *err);
 
 /* Replaces a file atomically: data goes to a temporary file next to the target
- * ("<path>.tmp.XXXXXX"), which is renamed over the target on commit and removed
- * on abort, so readers never see a partial file. */
+ * ("<path>.tmp.XXXXXX", locked while open), which is renamed over the target on
+ * commit and removed on abort, so readers never see a partial file. */
 typedef struct {
   const char *path; /* final name (borrowed) */
   char *tmp;        /* temporary name (owned) */

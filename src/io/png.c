@@ -5,6 +5,8 @@
 #include <errno.h>
 #include <png.h>
 #include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <zlib.h>
@@ -167,6 +169,49 @@ wv_status wv_io_read_png(const char *path, FILE *fp, wv_image *img, wv_image_inf
   *img = j.img;
   if (info) *info = j.meta;
   return WV_OK;
+}
+
+/* ---- integrity check without decoding ---- */
+
+static uint32_t be32(const unsigned char *b) {
+  return (uint32_t)b[0] << 24 | (uint32_t)b[1] << 16 | (uint32_t)b[2] << 8 | (uint32_t)b[3];
+}
+
+wv_status wv_png_check(const char *path, wv_error *err) {
+  static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  char eb[128];
+  FILE *f = fopen(path, "rb");
+  if (!f) return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path, wv_io_strerror(errno, eb, sizeof eb));
+  unsigned char h[8], buf[1 << 14];
+  wv_status st = WV_OK;
+  int chunks = 0, idat = 0, end = 0;
+  if (fread(h, 1, 8, f) != 8 || memcmp(h, sig, 8)) st = wv_fail(err, WV_ERR_FORMAT, "%s: not a PNG file", path);
+  while (!st && !end) {
+    if (fread(h, 1, 8, f) != 8) {
+      st = wv_fail(err, WV_ERR_FORMAT, "%s: truncated PNG (no IEND chunk)", path);
+      break;
+    }
+    uint32_t len = be32(h);
+    if (len > 0x7fffffffu || (chunks == 0 && memcmp(h + 4, "IHDR", 4))) {
+      st = wv_fail(err, WV_ERR_FORMAT, "%s: corrupt PNG chunk structure", path);
+      break;
+    }
+    uLong crc = crc32(crc32(0L, Z_NULL, 0), h + 4, 4);
+    for (uint32_t left = len; left > 0 && !st;) {
+      size_t want = left < sizeof buf ? left : sizeof buf;
+      if (fread(buf, 1, want, f) != want) st = wv_fail(err, WV_ERR_FORMAT, "%s: truncated PNG data", path);
+      crc = crc32(crc, buf, (uInt)want);
+      left -= (uint32_t)want;
+    }
+    if (!st && (fread(buf, 1, 4, f) != 4 || be32(buf) != (uint32_t)crc))
+      st = wv_fail(err, WV_ERR_FORMAT, "%s: corrupt PNG data (chunk checksum mismatch)", path);
+    idat |= !memcmp(h + 4, "IDAT", 4);
+    end = !memcmp(h + 4, "IEND", 4);
+    chunks++;
+  }
+  if (!st && !idat) st = wv_fail(err, WV_ERR_FORMAT, "%s: PNG without image data", path);
+  fclose(f);
+  return st;
 }
 
 /* ---- write ---- */

@@ -1,4 +1,5 @@
 /* woven: FabricNet's synthetic dataset on disk (format in docs/fabricnet.md). */
+#include <errno.h>
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -7,6 +8,7 @@
 #include <sys/stat.h>
 
 #include "util/hash.h"
+#include "util/json.h"
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
 #include "woven/io.h"
@@ -49,33 +51,37 @@ wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error 
   struct stat sb;
   if (stat(path, &sb) != 0)
     return wv_fail(err, WV_ERR_IO, "%s is not a woven dataset (no %s); make one with 'woven dataset'", dir, path);
-  json_error_t je;
-  json_t *o = json_load_file(path, JSON_REJECT_DUPLICATES, &je);
-  if (!o) return wv_fail(err, WV_ERR_FORMAT, "%s: not valid JSON (line %d: %s)", path, je.line, je.text);
+  json_t *o;
+  wv_status st = wv_json_load_file(path, &o, err);
+  if (st) return st;
   memset(info, 0, sizeof *info);
   const char *kind = NULL, *seed = NULL, *desc = NULL, *fmt = NULL;
-  json_t *scene = NULL;
-  int version = 0, count = 0;
-  wv_status st = WV_OK;
-  if (json_unpack(o, "{s:s,s:i}", "kind", &kind, "version", &version) || strcmp(kind, "woven-dataset")) {
+  json_t *scene = NULL, *feats = json_object_get(o, "features");
+  json_t *jv = json_object_get(o, "version");
+  long long version = json_is_integer(jv) ? json_integer_value(jv) : -1;
+  if (json_unpack(o, "{s:s}", "kind", &kind) || strcmp(kind, "woven-dataset") || version < 0) {
     st = wv_fail(err, WV_ERR_FORMAT, "%s: not a woven dataset description", path);
   } else if (version != WV_DATASET_VERSION) {
-    st = wv_fail(err, WV_ERR_FORMAT, "%s: dataset format version %d; this program reads version %d (make the dataset again)",
+    st = wv_fail(err, WV_ERR_FORMAT, "%s: dataset format version %lld; this program reads version %d (make the dataset again)",
                  path, version, WV_DATASET_VERSION);
-  } else if (json_unpack(o, "{s:s,s:i,s:i,s:{s:s,s:i,s:s},s:o}", "seed", &seed, "per_pattern", &info->per_pattern,
-                         "spp", &info->spp, "features", "descriptor", &desc, "count", &count, "format", &fmt,
+  } else if (json_unpack(o, "{s:s,s:{s:s,s:s},s:o}", "seed", &seed, "features", "descriptor", &desc, "format", &fmt,
                          "scene", &scene) ||
-             strcmp(fmt, "f16le") || info->per_pattern < 1 || info->spp < 1 || count < 1) {
-    st = wv_fail(err, WV_ERR_FORMAT, "%s: missing or invalid fields (seed, per_pattern, spp, features, scene)", path);
+             strcmp(fmt, "f16le")) {
+    st = wv_fail(err, WV_ERR_FORMAT, "%s: missing or invalid fields (seed, features, scene)", path);
+  } else if ((st = wv_json_int(o, NULL, "per_pattern", 1, WV_DATASET_MAX_PER_PATTERN, 1, &info->per_pattern, err)) ||
+             (st = wv_json_int(o, NULL, "spp", 1, WV_SCENE_MAX_SPP, 1, &info->spp, err)) ||
+             (st = wv_json_int(feats, "features", "count", 1, 1 << 24, 1, &info->n_feat, err))) {
+    wv_error_prefix(err, "%s", path);
   } else {
     char *end;
+    errno = 0;
     info->seed = strtoull(seed, &end, 10);
-    if (*end) st = wv_fail(err, WV_ERR_FORMAT, "%s: 'seed' is not an integer", path);
-    info->version = version, info->n_feat = count;
-    json_t *r = json_object_get(o, "renderer"); /* datasets of sessions 1-2 lack it */
-    info->renderer = r ? (int)json_integer_value(r) : 1;
-    if (r && (!json_is_integer(r) || info->renderer < 1))
-      st = wv_fail(err, WV_ERR_FORMAT, "%s: 'renderer' is not a positive integer", path);
+    if (!*seed || *end || seed[0] == '-' || errno == ERANGE)
+      st = wv_fail(err, WV_ERR_FORMAT, "%s: 'seed' is not an unsigned 64-bit integer", path);
+    info->version = (int)version;
+    info->renderer = 1; /* datasets of the first renderer lack the key */
+    if (!st && (st = wv_json_int(o, NULL, "renderer", 1, 1000000, 0, &info->renderer, err)))
+      wv_error_prefix(err, "%s", path);
     snprintf(info->descriptor, sizeof info->descriptor, "%s", desc);
     char *sj = json_dumps(scene, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
     if (!st && (!sj || strlen(sj) >= sizeof info->scene_json))
@@ -191,15 +197,18 @@ wv_status wv_dataset_read_features(const char *path, int n, uint16_t *out, wv_er
 int wv_dataset_sample_done(const char *dir, const wv_dataset_info *info, int k) {
   char p[4096];
   struct stat sb;
+  wv_error e;
+  wv_params prm;
+  /* The parameters must read back as this sample's pattern, and the PNG must be whole
+   * (its chunk checksums: cheap, no decoding). */
   wv_dataset_path(dir, k, "json", p, sizeof p);
-  if (stat(p, &sb) != 0 || sb.st_size == 0) return 0;
+  if (wv_params_read(p, &prm, &e) || strcmp(prm.pattern, PATTERNS[k % WV_NET_PATTERNS])) return 0;
   wv_dataset_path(dir, k, "png", p, sizeof p);
-  if (stat(p, &sb) != 0 || sb.st_size == 0) return 0;
+  if (wv_png_check(p, &e)) return 0;
   wv_dataset_path(dir, k, "feat", p, sizeof p);
   if (stat(p, &sb) != 0 || sb.st_size != 16 + 2 * (off_t)info->n_feat) return 0;
   uint16_t *tmp = malloc(2 * (size_t)info->n_feat);
   if (!tmp) return 0;
-  wv_error e;
   int ok = wv_dataset_read_features(p, info->n_feat, tmp, &e) == WV_OK;
   free(tmp);
   return ok;

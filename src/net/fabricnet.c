@@ -374,8 +374,11 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
   if (get32(b + 8) != WV_NET_VERSION)
     BAD("%s: %s format version %u; this program reads version %d", path, what, get32(b + 8), WV_NET_VERSION);
   if (get32(b + 500) != wv_crc32(0, b, 500)) BAD("%s: header checksum mismatch (corrupt file)", path);
-  if (get32(b + 12) != (uint32_t)kind)
+  if (get32(b + 12) != (uint32_t)kind) {
+    if (get32(b + 12) != KIND_MODEL && get32(b + 12) != KIND_CHECKPOINT)
+      BAD("%s: unknown FabricNet file kind %u (1 is a model, 2 a training checkpoint)", path, get32(b + 12));
     BAD("%s: is a %s, not a %s", path, get32(b + 12) == KIND_MODEL ? "FabricNet model" : "training checkpoint", what);
+  }
   if (!str_field(b + 16, 32, n->descriptor) || !str_field(b + 52, 64, n->scene))
     BAD("%s: descriptor or scene name missing in the header", path);
   n->n_in = (int)get32(b + 48);
@@ -414,6 +417,11 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
   }
   for (int i = 0; i < n->n_in; i++)
     if (!isfinite(n->mean[i]) || !(n->std[i] > 0) || !isfinite(n->std[i])) BAD("%s: invalid feature statistics", path);
+  static const char *tensor_names[6] = {"layer 1 weights", "layer 1 biases", "layer 2 weights",
+                                        "layer 2 biases",  "layer 3 weights", "layer 3 biases"};
+  for (int i = 0; i < 6; i++)
+    for (size_t j = 0; j < L[i]; j++)
+      if (!isfinite(t[i][j])) BAD("%s: %s hold NaN or infinite values (corrupt %s)", path, tensor_names[i], what);
   if (kind == KIND_CHECKPOINT) {
     size_t P = wv_fabricnet_param_count(n);
     *m = malloc(P * sizeof(float)), *v = malloc(P * sizeof(float));
@@ -423,11 +431,27 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
     }
     for (size_t j = 0; j < P; j++, p += 4) (*m)[j] = getf(p);
     for (size_t j = 0; j < P; j++, p += 4) (*v)[j] = getf(p);
-    ts->epoch = (int)get32(p);
-    ts->best_epoch = (int)get32(p + 4);
-    ts->adam_t = (long)get64(p + 8);
+    for (size_t j = 0; j < P; j++)
+      if (!isfinite((*m)[j]) || !((*v)[j] >= 0) || !isfinite((*v)[j]))
+        BAD("%s: Adam moments hold invalid values (NaN, infinite or a negative second moment)", path);
+    /* The trainer's counters index arrays and scale steps: each within what training makes. */
+    int32_t epoch = (int32_t)get32(p), best_epoch = (int32_t)get32(p + 4);
+    uint64_t adam_t = get64(p + 8);
+    float best_val = getf(p + 24);
+    if (epoch < 0 || epoch > WV_NET_MAX_EPOCHS)
+      BAD("%s: training state 'epoch' = %d is outside 0..%d", path, (int)epoch, WV_NET_MAX_EPOCHS);
+    if (best_epoch < 0 || best_epoch > epoch)
+      BAD("%s: training state 'best_epoch' = %d is outside 0..%d (the epochs done)", path, (int)best_epoch,
+          (int)epoch);
+    if (adam_t > ((uint64_t)1 << 53))
+      BAD("%s: training state 'adam_t' = %llu is outside 0..2^53", path, (unsigned long long)adam_t);
+    if (best_epoch > 0 ? !(best_val >= 0 && isfinite(best_val)) : !(best_val >= 0))
+      BAD("%s: training state 'best_val' = %g is not a loss", path, (double)best_val);
+    ts->epoch = epoch;
+    ts->best_epoch = best_epoch;
+    ts->adam_t = (long)adam_t;
     ts->rng = get64(p + 16);
-    ts->best_val = getf(p + 24);
+    ts->best_val = best_val;
   }
 #undef BAD
 done:

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/types.h>
 
 #include "woven/nn.h"
@@ -129,6 +130,13 @@ wv_status wv_st_open(wv_safetensors *st, const char *path, wv_error *err) {
   memset(st, 0, sizeof *st);
   FILE *f = fopen(path, "rb");
   if (!f) return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+  struct stat sb; /* a directory opens, then reports a nonsensical size */
+  int have = fstat(fileno(f), &sb) == 0;
+  if (!have || !S_ISREG(sb.st_mode)) {
+    int dir = have && S_ISDIR(sb.st_mode);
+    fclose(f);
+    return wv_fail(err, WV_ERR_IO, "%s: %s", path, dir ? "is a directory" : "is not a regular file");
+  }
   st->file = f;
   st->path = strdup(path);
   wv_status rc = WV_OK;

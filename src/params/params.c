@@ -1,3 +1,4 @@
+/* woven: fabric parameters: priors, ranges (SPEC section 5), validation, JSON. */
 #include "woven/params.h"
 
 #include <jansson.h>
@@ -7,6 +8,7 @@
 #include <string.h>
 
 #include "util/hash.h"
+#include "util/json.h"
 #include "woven/io.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
@@ -73,9 +75,10 @@ wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err) {
 }
 
 static wv_status check(const range *r, const char *sub, double v, wv_error *err) {
+  char a[32], b[32], c[32];
   if (!isfinite(v) || v < r->lo || v > r->hi)
-    return wv_fail(err, WV_ERR_INVALID, "'%s%s%s' = %g is outside %g..%g", r->key, sub ? "." : "",
-                   sub ? sub : "", v, r->lo, r->hi);
+    return wv_fail(err, WV_ERR_INVALID, "'%s%s%s' = %s is outside %s..%s", r->key, sub ? "." : "",
+                   sub ? sub : "", wv_num_str(v, a), wv_num_str(r->lo, b), wv_num_str(r->hi, c));
   return WV_OK;
 }
 
@@ -224,11 +227,7 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
     if (x && (st = get_number(x, scalars[i].key, scalars[i].dst, err))) return st;
   }
   json_t *x;
-  if ((x = json_object_get(root, "noise_level"))) {
-    if (!json_is_integer(x)) return wv_fail(err, WV_ERR_INVALID, "'noise_level' must be an integer 0..10");
-    json_int_t q = json_integer_value(x);
-    p->noise_level = q < -1 ? -1 : q > 11 ? 11 : (int)q; /* validated below */
-  }
+  if ((st = wv_json_int(root, NULL, "noise_level", 0, 10, 0, &p->noise_level, err))) return st;
   if ((x = json_object_get(root, "seed"))) {
     if (!json_is_integer(x)) return wv_fail(err, WV_ERR_INVALID, "'seed' must be an integer");
     p->seed = (int64_t)json_integer_value(x);
@@ -253,13 +252,8 @@ wv_status wv_params_parse(const char *text, const char *source, wv_params *p, wv
 
 wv_status wv_params_read(const char *path, wv_params *p, wv_error *err) {
   char *text;
-  size_t len;
-  wv_status st = wv_read_file(path, &text, &len, err);
+  wv_status st = wv_json_read_text(path, &text, err);
   if (st) return st;
-  if (strlen(text) != len) {
-    free(text);
-    return wv_fail(err, WV_ERR_FORMAT, "%s: file contains a NUL byte; not a JSON text", path);
-  }
   st = wv_params_parse(text, path, p, err);
   free(text);
   return st;

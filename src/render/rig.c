@@ -100,6 +100,9 @@ int wv_rig_trace(const wv_camera_rig *r, float x, float y, wv_hit *hit) {
   hit->wo[1] = -(d[0] * B[0] + d[1] * B[1] + d[2] * B[2]);
   hit->wo[2] = -(d[0] * N[0] + d[1] * N[1] + d[2] * N[2]);
   if (hit->wi[2] <= 0.0f || hit->wo[2] <= 0.0f) return 0;
+  /* A ray grazing the plane meets it absurdly far away: beyond 1000 km of fabric a
+   * float cannot place a yarn, and the yarn index would overflow an integer. */
+  if (!(fabsf(hit->fx) < 1e9f && fabsf(hit->fy) < 1e9f)) return 0;
   hit->light = r->lint / r2;
   return 1;
 }

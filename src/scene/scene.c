@@ -1,3 +1,5 @@
+/* woven: capture scenes: the presets, JSON reading and writing, and the one
+ * validation every scene passes (ranges of every value). */
 #include "woven/scene.h"
 
 #include <jansson.h>
@@ -6,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "util/json.h"
 #include "woven/io.h"
 
 /* The presets. scenes/cylinder.json and scenes/flat45.json hold the same text (a test checks they agree). */
@@ -75,15 +78,9 @@ static wv_status only_keys(json_t *o, const char *obj, const char *const *keys, 
   return WV_OK;
 }
 
-static wv_status get_int(json_t *o, const char *obj, const char *key, int *out, int required, wv_error *err) {
-  json_t *v = json_object_get(o, key);
-  if (!v) return required ? wv_fail(err, WV_ERR_INVALID, "missing '%s.%s'", obj, key) : WV_OK;
-  if (!json_is_integer(v)) return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be an integer", obj, key);
-  json_int_t x = json_integer_value(v);
-  if (x < -1000000000 || x > 1000000000)
-    return wv_fail(err, WV_ERR_INVALID, "'%s.%s' = %lld is out of range", obj, key, (long long)x);
-  *out = (int)x;
-  return WV_OK;
+static wv_status get_int(json_t *o, const char *obj, const char *key, int *out, int lo, int hi, int required,
+                         wv_error *err) {
+  return wv_json_int(o, obj, key, lo, hi, required, out, err);
 }
 
 static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
@@ -103,10 +100,10 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
   json_t *o = json_object_get(r, "image");
   if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'image'");
   if ((st = only_keys(o, "image", k_img, err))) return st;
-  if ((st = get_int(o, "image", "width", &s->width, 1, err))) return st;
-  if ((st = get_int(o, "image", "height", &s->height, 1, err))) return st;
+  if ((st = get_int(o, "image", "width", &s->width, 1, WV_SCENE_MAX_SIDE, 1, err))) return st;
+  if ((st = get_int(o, "image", "height", &s->height, 1, WV_SCENE_MAX_SIDE, 1, err))) return st;
   s->spp = 64;
-  if ((st = get_int(o, "image", "spp", &s->spp, 0, err))) return st;
+  if ((st = get_int(o, "image", "spp", &s->spp, 1, WV_SCENE_MAX_SPP, 0, err))) return st;
 
   o = json_object_get(r, "camera");
   if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'camera'");
@@ -180,7 +177,19 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
   return wv_scene_validate(s, err);
 }
 
+/* v[0..n-1] within -lim..lim; the message names 'key[i]'. */
+static wv_status check_vec(const double *v, int n, const char *key, double lim, wv_error *err) {
+  char a[32], b[32], c[32];
+  for (int i = 0; i < n; i++)
+    if (!(v[i] >= -lim && v[i] <= lim))
+      return wv_fail(err, WV_ERR_INVALID, "'%s[%d]' = %s is outside %s..%s", key, i, wv_num_str(v[i], a),
+                     wv_num_str(-lim, b), wv_num_str(lim, c));
+  return WV_OK;
+}
+
 wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
+  char a[32];
+  wv_status st;
   if (s->width < 1 || s->width > WV_SCENE_MAX_SIDE || s->height < 1 || s->height > WV_SCENE_MAX_SIDE)
     return wv_fail(err, WV_ERR_INVALID, "'image' size %d x %d is outside 1..%d per side", s->width, s->height,
                    WV_SCENE_MAX_SIDE);
@@ -189,32 +198,41 @@ wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
   if ((long long)s->width * s->height * s->spp > WV_SCENE_MAX_SAMPLES)
     return wv_fail(err, WV_ERR_NOMEM, "'image': %d x %d pixels x %d spp is too many samples (limit %lld)",
                    s->width, s->height, s->spp, (long long)WV_SCENE_MAX_SAMPLES);
+  /* Magnitudes first: the geometric checks below are meaningless on absurd values. */
+  if ((st = check_vec(s->cam_pos, 3, "camera.position_mm", WV_SCENE_MAX_MM, err)) ||
+      (st = check_vec(s->cam_look_at, 3, "camera.look_at_mm", WV_SCENE_MAX_MM, err)) ||
+      (st = check_vec(s->cam_up, 3, "camera.up", WV_SCENE_MAX_MM, err)) ||
+      (st = check_vec(s->light_pos, 3, "light.position_mm", WV_SCENE_MAX_MM, err)) ||
+      (st = check_vec(s->fabric_offset, 2, "sample.offset_mm", WV_SCENE_MAX_OFFSET_MM, err)))
+    return st;
   if (!(s->vfov_deg > 0.01 && s->vfov_deg < 179))
-    return wv_fail(err, WV_ERR_INVALID, "'camera.vfov_deg' = %g is outside (0.01, 179)", s->vfov_deg);
+    return wv_fail(err, WV_ERR_INVALID, "'camera.vfov_deg' = %s is outside (0.01, 179)", wv_num_str(s->vfov_deg, a));
   double f[3], l2 = 0, c2 = 0;
   for (int i = 0; i < 3; i++) f[i] = s->cam_look_at[i] - s->cam_pos[i], l2 += f[i] * f[i];
   if (!(l2 > 1e-12)) return wv_fail(err, WV_ERR_INVALID, "'camera.look_at_mm' equals 'camera.position_mm'");
   double cr[3] = {f[1] * s->cam_up[2] - f[2] * s->cam_up[1], f[2] * s->cam_up[0] - f[0] * s->cam_up[2],
                   f[0] * s->cam_up[1] - f[1] * s->cam_up[0]};
   for (int i = 0; i < 3; i++) c2 += cr[i] * cr[i];
-  if (!(c2 > 1e-12 * l2)) return wv_fail(err, WV_ERR_INVALID, "'camera.up' is parallel to the view direction");
+  if (!(c2 > 1e-12 * l2)) return wv_fail(err, WV_ERR_INVALID, "'camera.up' is parallel to the view direction (or zero)");
   if (s->shape == WV_SHAPE_CYLINDER && !(s->radius > 0 && s->radius < 1e6))
-    return wv_fail(err, WV_ERR_INVALID, "'sample.radius_mm' = %g must be positive", s->radius);
+    return wv_fail(err, WV_ERR_INVALID, "'sample.radius_mm' = %s must be in (0, 1000000)", wv_num_str(s->radius, a));
+  if (s->shape == WV_SHAPE_PLANE && !(s->rotation_deg >= -360 && s->rotation_deg <= 360))
+    return wv_fail(err, WV_ERR_INVALID, "'sample.rotation_deg' = %s is outside -360..360",
+                   wv_num_str(s->rotation_deg, a));
   if (!(s->mm_per_unit > 1e-6 && s->mm_per_unit < 1e6))
-    return wv_fail(err, WV_ERR_INVALID, "'sample.mm_per_unit' = %g must be positive", s->mm_per_unit);
-  if (!(s->light_intensity >= 0 && isfinite(s->light_intensity)))
-    return wv_fail(err, WV_ERR_INVALID, "'light.intensity' = %g must be >= 0", s->light_intensity);
-  if (!(s->exposure > 0 && isfinite(s->exposure)))
-    return wv_fail(err, WV_ERR_INVALID, "'response.exposure' = %g must be > 0", s->exposure);
-  if (!isfinite(s->clip)) return wv_fail(err, WV_ERR_INVALID, "'response.clip' must be finite");
+    return wv_fail(err, WV_ERR_INVALID, "'sample.mm_per_unit' = %s must be in (1e-06, 1000000)",
+                   wv_num_str(s->mm_per_unit, a));
+  if (!(s->light_intensity >= 0 && s->light_intensity <= 1e15))
+    return wv_fail(err, WV_ERR_INVALID, "'light.intensity' = %s is outside 0..1e+15", wv_num_str(s->light_intensity, a));
+  if (!(s->exposure > 0 && s->exposure <= 1e6))
+    return wv_fail(err, WV_ERR_INVALID, "'response.exposure' = %s must be in (0, 1000000]", wv_num_str(s->exposure, a));
+  if (!(s->clip >= -1e6 && s->clip <= 1e6))
+    return wv_fail(err, WV_ERR_INVALID, "'response.clip' = %s is outside -1000000..1000000", wv_num_str(s->clip, a));
   if (s->encoding == WV_ENC_GAMMA && !(s->gamma > 0.1 && s->gamma < 10))
-    return wv_fail(err, WV_ERR_INVALID, "'response.gamma' = %g is outside 0.1..10", s->gamma);
-  if (s->falloff && !(s->falloff_sigma > 0))
-    return wv_fail(err, WV_ERR_INVALID, "'falloff.sigma_px' = %g must be > 0", s->falloff_sigma);
-  for (int i = 0; i < 3; i++)
-    if (!isfinite(s->cam_pos[i]) || !isfinite(s->light_pos[i]) || !isfinite(s->cam_up[i]) ||
-        !isfinite(s->cam_look_at[i]))
-      return wv_fail(err, WV_ERR_INVALID, "camera and light positions must be finite");
+    return wv_fail(err, WV_ERR_INVALID, "'response.gamma' = %s is outside (0.1, 10)", wv_num_str(s->gamma, a));
+  if (s->falloff && !(s->falloff_sigma > 0 && s->falloff_sigma <= 1e9))
+    return wv_fail(err, WV_ERR_INVALID, "'falloff.sigma_px' = %s must be in (0, 1e+09]",
+                   wv_num_str(s->falloff_sigma, a));
   return WV_OK;
 }
 
@@ -231,11 +249,9 @@ wv_status wv_scene_parse(const char *text, const char *source, wv_scene *s, wv_e
 
 wv_status wv_scene_read(const char *path, wv_scene *s, wv_error *err) {
   char *text;
-  size_t len;
-  wv_status st = wv_read_file(path, &text, &len, err);
+  wv_status st = wv_json_read_text(path, &text, err);
   if (st) return st;
-  if (strlen(text) != len) st = wv_fail(err, WV_ERR_FORMAT, "%s: file contains a NUL byte; not a JSON text", path);
-  else st = wv_scene_parse(text, path, s, err);
+  st = wv_scene_parse(text, path, s, err);
   free(text);
   return st;
 }

@@ -1,3 +1,4 @@
+/* woven: tileable texture maps of one weave repeat, and their directory on disk. */
 #include "woven/maps.h"
 
 #include <errno.h>
@@ -86,12 +87,16 @@ static wv_status write_png_map(const char *path, const wv_image *src, int kind, 
   return st;
 }
 
+/* What a maps directory holds: an existing directory with anything else is not replaced. */
+static const char *const MAP_FILES[] = {"normal.png",    "normal.exr",  "tangent.png",  "tangent.exr",
+                                        "yarn_id.png",   "yarn_id.exr", "height.png",   "height.exr",
+                                        "diffuse.png",   "diffuse.exr", "specular.png", "specular.exr",
+                                        "roughness.png", "roughness.exr", "maps.json",  NULL};
+
 wv_status wv_maps_write(const wv_maps *m, const char *dir, const char *format, wv_error *err) {
   int png = !strcmp(format, "png") || !strcmp(format, "both");
   int exr = !strcmp(format, "exr") || !strcmp(format, "both");
   if (!png && !exr) return wv_fail(err, WV_ERR_INVALID, "map format '%s' must be png, exr or both", format);
-  if (mkdir(dir, 0777) != 0 && errno != EEXIST)
-    return wv_fail(err, WV_ERR_IO, "%s: cannot create directory: %s", dir, strerror(errno));
   struct {
     const char *name;
     const wv_image *img;
@@ -99,16 +104,18 @@ wv_status wv_maps_write(const wv_maps *m, const char *dir, const char *format, w
   } maps[] = {{"normal", &m->normal, 0},     {"tangent", &m->tangent, 0},   {"yarn_id", &m->yarn_id, 3},
               {"height", &m->height, 2},     {"diffuse", &m->diffuse, 1},   {"specular", &m->specular, 1},
               {"roughness", &m->roughness, 3}};
+  wv_outdir od;
+  wv_status st = wv_outdir_begin(&od, dir, MAP_FILES, err);
+  if (st) return st;
   char path[4096];
-  wv_status st;
-  for (size_t i = 0; i < sizeof maps / sizeof maps[0]; i++) {
+  for (size_t i = 0; i < sizeof maps / sizeof maps[0] && !st; i++) {
     if (png) {
-      snprintf(path, sizeof path, "%s/%s.png", dir, maps[i].name);
-      if ((st = write_png_map(path, maps[i].img, maps[i].kind, m->height_max, err))) return st;
+      snprintf(path, sizeof path, "%s/%s.png", od.tmp, maps[i].name);
+      st = write_png_map(path, maps[i].img, maps[i].kind, m->height_max, err);
     }
-    if (exr) {
-      snprintf(path, sizeof path, "%s/%s.exr", dir, maps[i].name);
-      if ((st = wv_image_write_exr(path, maps[i].img, err))) return st;
+    if (exr && !st) {
+      snprintf(path, sizeof path, "%s/%s.exr", od.tmp, maps[i].name);
+      st = wv_image_write_exr(path, maps[i].img, err);
     }
   }
   json_t *o = json_pack(
@@ -119,8 +126,13 @@ wv_status wv_maps_write(const wv_maps *m, const char *dir, const char *format, w
       "height / height_max_mm", "diffuse", "sRGB", "specular", "sRGB", "roughness", "SGGX alpha, linear");
   char *text = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
   json_decref(o);
-  snprintf(path, sizeof path, "%s/maps.json", dir);
-  st = wv_write_file_atomic(path, text, strlen(text), err);
+  snprintf(path, sizeof path, "%s/maps.json", od.tmp);
+  if (!st) st = text ? wv_write_file_atomic(path, text, strlen(text), err)
+                     : wv_fail(err, WV_ERR_NOMEM, "%s: cannot format maps.json", dir);
   free(text);
-  return st;
+  if (st) {
+    wv_outdir_abort(&od, err);
+    return st;
+  }
+  return wv_outdir_commit(&od, err);
 }
