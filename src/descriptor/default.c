@@ -9,15 +9,20 @@
  * that they are mostly band-pass. Each level: valid convolution (no padding, so
  * no border artefacts), ReLU, Gram / (H W). 5 levels x 64 filters: 20,480 floats.
  *
- * Speed: each level runs as one fused pass over blocks of output positions, each
- * block on one OpenMP thread: im2col, sgemm, ReLU, Gram update (ssyrk) and, for the
- * gradient, dF = (dG + dG^T) F / HW, the ReLU mask, W^T dF and col2im, all on data
- * that stays in the thread's L2 cache; the feature maps are never stored whole.
- * Forward and backward take one pass, since dF needs dG and F but not G. Each thread
- * keeps its own Gram and input-gradient sums, added in thread order at the end. */
-#include <cblas.h>
+ * Speed: all levels' output rows are cut into chunks of a few rows, shared out to
+ * the OpenMP threads; a chunk runs the fused kernel of default_kernel.inc (conv,
+ * ReLU, Gram sums and, for the gradient, dF = (dG + dG^T) F / HW, the ReLU mask,
+ * W^T dF and col2im) with its data in the thread's cache, so the feature maps are
+ * never stored whole. Forward and backward take one pass, since dF needs dG and F
+ * but not G; without a Gram output the backward skips the Gram sums. Each chunk
+ * keeps its own Gram sums and writes the input gradient of the two rows it shares
+ * with the next chunk to a halo; both are added in chunk order at the end, so the
+ * result does not depend on the thread count or on which thread ran what. The
+ * kernel is compiled for AVX-512, AVX2 and the baseline and chosen when the
+ * descriptor is created. */
 #include <math.h>
 #include <omp.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -25,31 +30,130 @@
 #include "woven/nn.h"
 
 #define RMF_LEVELS 5
-#define RMF_MAXC 64
-static const int rmf_k[RMF_LEVELS] = {3, 3, 3, 3, 3};      /* filter sizes */
-static const int rmf_c[RMF_LEVELS] = {64, 64, 64, 64, 64}; /* filters per level */
+#define RMF_C 64 /* filters per level */
+#define RMF_K 3  /* filter size */
+static const int rmf_c[RMF_LEVELS] = {RMF_C, RMF_C, RMF_C, RMF_C, RMF_C};
 #define RMF_DC 0.1f /* kept fraction of each filter's mean (see create) */
 /* Fixed seed: the weights are part of the descriptor's definition. */
 #define RMF_SEED 0x776f76656e524d46ULL /* "wovenRMF" */
-#define RMF_BLOCK_FLOATS (3 << 16) /* 768 kB */
+#define RMF_TAPS (3 * RMF_K * RMF_K)
+
+/* One pyramid level as the kernel sees it (default_kernel.inc). */
+typedef struct {
+  const float *x; /* 3 padded planes: rows of xs floats, zeros past the image */
+  float *dx;      /* the gradient, same layout */
+  int xs, ow, npv, fs; /* row stride, outputs per row, vectors per row, F's row stride */
+  size_t plane;        /* plane stride (floats) */
+  const float *w, *wt; /* filters (64 x 27) and their transpose (27 x 64) */
+  const float *S;      /* (dG + dG^T) / (H W), or NULL for no gradient */
+} rmf_level;
+
+/* One thread's working set. */
+typedef struct {
+  float *f, *df, *gv, *carry;
+} rmf_scratch;
 
 typedef struct {
-  float *w[RMF_LEVELS]; /* (c, 3, k, k) per level */
+  void (*chunk)(const rmf_level *L, const rmf_scratch *sc, int y0, int y1, float *gsum,
+                float *halo);
+  int kv;  /* floats per vector */
+  int sub; /* vectors per gradient sub-block */
+  int id;  /* WV_DESC_KERNEL_* */
+} rmf_isa;
+
+/* The kernel compiled for AVX-512, AVX2 + FMA and the baseline; the multiply-adds
+ * may contract into FMAs (a rounding difference only). */
+/* Kernel helpers pass vectors by value but are always inlined, so the note that
+ * such an ABI differs between targets does not apply. */
+#pragma GCC diagnostic ignored "-Wpsabi"
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define RMF_X86 1
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=fast")
+#pragma GCC target("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma")
+#define KV 16
+#define KN(n) n##_avx512
+#define KID WV_DESC_KERNEL_AVX512
+#define KA_O 8
+#define KA_P 3
+#define KB_I 4
+#define KB_J 4
+#define KC_O 8
+#define KC_P 3
+#include "descriptor/default_kernel.inc"
+#pragma GCC pop_options
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=fast")
+#pragma GCC target("avx2,fma")
+#define KV 8
+#define KN(n) n##_avx2
+#define KID WV_DESC_KERNEL_AVX2
+#define KA_O 4
+#define KA_P 3
+#define KB_I 2
+#define KB_J 4
+#define KC_O 4
+#define KC_P 3
+#include "descriptor/default_kernel.inc"
+#pragma GCC pop_options
+#endif
+#define KV 4
+#define KN(n) n##_base
+#define KID WV_DESC_KERNEL_BASE
+#define KA_O 4
+#define KA_P 2
+#define KB_I 2
+#define KB_J 4
+#define KC_O 4
+#define KC_P 2
+#include "descriptor/default_kernel.inc"
+
+/* The widest kernel the CPU runs, at most `limit` (WV_DESC_KERNEL_*). */
+static const rmf_isa *pick_isa(int limit) {
+#ifdef RMF_X86
+  __builtin_cpu_init();
+  if (limit >= WV_DESC_KERNEL_AVX512 && __builtin_cpu_supports("avx512f") &&
+      __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw") &&
+      __builtin_cpu_supports("avx512dq"))
+    return &isa_avx512;
+  if (limit >= WV_DESC_KERNEL_AVX2 && __builtin_cpu_supports("avx2") &&
+      __builtin_cpu_supports("fma"))
+    return &isa_avx2;
+#endif
+  (void)limit;
+  return &isa_base;
+}
+
+/* A chunk: rows [y0, y1) of one level. */
+typedef struct {
+  int level, y0, y1, last; /* last: the level's last chunk (no halo) */
+} rmf_chunk_t;
+
+typedef struct {
+  float *w[RMF_LEVELS];  /* (c, 3, k, k) per level */
+  float *wt[RMF_LEVELS]; /* transposed (3 k k, c) */
+  const rmf_isa *isa;
   int w_img, h_img, nthreads;
-  float *lev[RMF_LEVELS], *dlev[RMF_LEVELS]; /* lev[0], dlev[0] are the caller's */
-  int lw[RMF_LEVELS], lh[RMF_LEVELS];
-  int blk[RMF_LEVELS];                        /* output positions per block */
-  float *scratch, *gpart, *dxpart;
-  size_t per_thread;
+  float *lev[RMF_LEVELS], *dlev[RMF_LEVELS]; /* unpadded; lev[0], dlev[0] are the caller's */
+  float *pad[RMF_LEVELS], *dpad[RMF_LEVELS]; /* padded copies (rmf_level) */
+  int lw[RMF_LEVELS], lh[RMF_LEVELS], xs[RMF_LEVELS], npv[RMF_LEVELS];
+  rmf_chunk_t *chunks;
+  int nchunks, first[RMF_LEVELS + 1]; /* chunks of level s: first[s] .. first[s + 1] */
+  float *gch;                         /* per chunk: 64 x 64 Gram sums (upper triangle) */
+  float *halo;                        /* per chunk: 3 planes x 2 rows x halo_stride */
+  size_t halo_stride;
+  float *scratch;
+  size_t per_thread, f_floats, df_floats, gv_floats;
 } rmf_net;
 
 static void free_buffers(rmf_net *m) {
-  for (int s = 1; s < RMF_LEVELS; s++) {
-    free(m->lev[s]), free(m->dlev[s]);
-    m->lev[s] = m->dlev[s] = NULL;
+  for (int s = 0; s < RMF_LEVELS; s++) {
+    if (s) free(m->lev[s]), free(m->dlev[s]);
+    free(m->pad[s]), free(m->dpad[s]);
+    m->lev[s] = m->dlev[s] = m->pad[s] = m->dpad[s] = NULL;
   }
-  free(m->scratch), free(m->gpart), free(m->dxpart);
-  m->scratch = m->gpart = m->dxpart = NULL;
+  free(m->chunks), free(m->gch), free(m->halo), free(m->scratch);
+  m->chunks = NULL, m->gch = m->halo = m->scratch = NULL;
   m->w_img = m->h_img = 0;
 }
 
@@ -57,8 +161,12 @@ static void rmf_destroy(void *impl) {
   rmf_net *m = impl;
   if (!m) return;
   free_buffers(m);
-  for (int s = 0; s < RMF_LEVELS; s++) free(m->w[s]);
+  for (int s = 0; s < RMF_LEVELS; s++) free(m->w[s]), free(m->wt[s]);
   free(m);
+}
+
+static float *falloc(size_t n) { /* vector-aligned */
+  return aligned_alloc(64, ((n * sizeof(float) + 63) / 64) * 64);
 }
 
 static wv_status ensure_buffers(rmf_net *m, int w, int h, wv_error *err) {
@@ -67,33 +175,48 @@ static wv_status ensure_buffers(rmf_net *m, int w, int h, wv_error *err) {
   if (m->w_img == w && m->h_img == h && m->nthreads == nt) return WV_OK;
   free_buffers(m);
   m->nthreads = nt;
-  size_t per = 0;
+  int kv = m->isa->kv, nch = 0, rows[RMF_LEVELS];
   for (int s = 0; s < RMF_LEVELS; s++) {
     m->lw[s] = s ? m->lw[s - 1] / 2 : w;
     m->lh[s] = s ? m->lh[s - 1] / 2 : h;
-    int k = rmf_k[s], kk = 3 * k * k, c = rmf_c[s];
-    int oh = m->lh[s] - k + 1, ow = m->lw[s] - k + 1;
-    /* A block's columns, features and their gradient stay in L2. */
-    long npos = (long)oh * ow, len = RMF_BLOCK_FLOATS / (kk + 2 * c);
-    if (len < 256) len = 256;
-    long nb = (npos + len - 1) / len;
-    if (nb < 4 * nt) nb = 4 * nt; /* balance */
-    if (nb > npos) nb = npos;
-    m->blk[s] = (int)((npos + nb - 1) / nb);
-    size_t need = (size_t)m->blk[s] * (kk + 2 * c); /* col, F, dF */
-    if (need > per) per = need;
+    int oh = m->lh[s] - RMF_K + 1, ow = m->lw[s] - RMF_K + 1;
+    m->npv[s] = (ow + kv - 1) / kv;
+    m->xs[s] = (m->npv[s] + 1) * kv; /* the taps of the last vector and its spill */
+    /* At least 16 chunks for balance, 2 to 8 rows each (a halo is 2 rows). The split
+     * does not depend on the thread count, nor then do the results. */
+    int r = (oh + 15) / 16;
+    rows[s] = r < 2 ? 2 : r > 8 ? 8 : r;
+    nch += (oh + rows[s] - 1) / rows[s];
+    size_t n = (size_t)3 * m->xs[s] * m->lh[s];
+    if (!(m->pad[s] = falloc(n)) || !(m->dpad[s] = falloc(n))) goto oom;
+    memset(m->pad[s], 0, sizeof(float) * n);
     if (s) {
-      size_t n = (size_t)3 * m->lw[s] * m->lh[s];
+      n = (size_t)3 * m->lw[s] * m->lh[s];
       if (!(m->lev[s] = malloc(sizeof(float) * n)) || !(m->dlev[s] = malloc(sizeof(float) * n)))
         goto oom;
     }
   }
-  m->per_thread = per;
-  /* Threads other than the first accumulate input gradients in their own copy. */
-  if (!(m->scratch = malloc(sizeof(float) * per * nt)) ||
-      !(m->gpart = malloc(sizeof(float) * (size_t)RMF_MAXC * RMF_MAXC * nt)) ||
-      !(m->dxpart = malloc(sizeof(float) * 3 * (size_t)w * h * (nt > 1 ? nt - 1 : 1))))
+  m->halo_stride = (size_t)6 * m->xs[0];
+  if (!(m->chunks = malloc(sizeof *m->chunks * nch)) ||
+      !(m->gch = falloc((size_t)nch * RMF_C * RMF_C)) || !(m->halo = falloc(m->halo_stride * nch)))
     goto oom;
+  m->nchunks = 0;
+  for (int s = 0; s < RMF_LEVELS; s++) {
+    int oh = m->lh[s] - RMF_K + 1;
+    m->first[s] = m->nchunks;
+    for (int y = 0; y < oh; y += rows[s]) {
+      rmf_chunk_t *c = &m->chunks[m->nchunks++];
+      c->level = s, c->y0 = y, c->y1 = y + rows[s] < oh ? y + rows[s] : oh;
+      c->last = c->y1 == oh;
+    }
+  }
+  m->first[RMF_LEVELS] = m->nchunks;
+  /* Per thread: F for a row, dF for a sub-block, the Gram lane sums, the carries. */
+  m->f_floats = (size_t)RMF_C * m->npv[0] * kv;
+  m->df_floats = (size_t)RMF_C * m->isa->sub * kv;
+  m->gv_floats = (size_t)RMF_C * RMF_C * kv;
+  m->per_thread = m->f_floats + m->df_floats + m->gv_floats + (size_t)18 * kv;
+  if (!(m->scratch = falloc(m->per_thread * nt))) goto oom;
   m->w_img = w, m->h_img = h;
   return WV_OK;
 oom:
@@ -102,86 +225,108 @@ oom:
                  w, h);
 }
 
-/* One pyramid level: Gram into gram (c x c); with S = (dG + dG^T) / HW, also adds the
- * input gradient into dx (zero on entry). Blocks go to threads in a fixed order and
- * partial sums are added in thread order, so results are deterministic. */
-static void level_pass(rmf_net *m, int s, const float *S, float *gram, float *dx) {
-  const float *x = m->lev[s];
-  const float *W = m->w[s];
-  int w = m->lw[s], h = m->lh[s], k = rmf_k[s], c = rmf_c[s], kk = 3 * k * k;
-  int oh = h - k + 1, ow = w - k + 1, npos = oh * ow, bl = m->blk[s];
-  int nb = (npos + bl - 1) / bl, nt = m->nthreads;
-  size_t nx = (size_t)3 * w * h;
-#pragma omp parallel num_threads(nt)
-  {
-    int tid = omp_get_thread_num();
-    float *col = m->scratch + (size_t)tid * m->per_thread;
-    float *f = col + (size_t)kk * bl, *df = f + (size_t)c * bl;
-    float *gp = m->gpart + (size_t)tid * c * c;
-    float *dxt = tid ? m->dxpart + (size_t)(tid - 1) * nx : dx;
-    memset(gp, 0, sizeof(float) * c * c);
-    if (S && tid) memset(dxt, 0, sizeof(float) * nx);
-#pragma omp for schedule(static)
-    for (int b = 0; b < nb; b++) {
-      int p0 = b * bl, p1 = p0 + bl < npos ? p0 + bl : npos, len = p1 - p0;
-      wv_nn_im2col(x, 3, h, w, k, 1, 0, ow, p0, p1, col);
-      cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, c, len, kk, 1.0f, W, kk, col, len,
-                  0.0f, f, len);
-#pragma omp simd /* -O2 alone leaves these loops scalar */
-      for (size_t i = 0; i < (size_t)c * len; i++) f[i] = f[i] > 0.0f ? f[i] : 0.0f;
-      cblas_ssyrk(CblasRowMajor, CblasUpper, CblasNoTrans, c, len, 1.0f, f, len, 1.0f, gp, c);
-      if (S) {
-        cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, c, len, c, 1.0f, S, c, f, len,
-                    0.0f, df, len);
-#pragma omp simd
-        for (size_t i = 0; i < (size_t)c * len; i++) df[i] = f[i] > 0.0f ? df[i] : 0.0f;
-        cblas_sgemm(CblasRowMajor, CblasTrans, CblasNoTrans, kk, len, c, 1.0f, W, kk, df, len,
-                    0.0f, col, len);
-        wv_nn_col2im(col, 3, h, w, k, 1, 0, ow, p0, p1, dxt);
-      }
-    }
-    if (S && nt > 1) {
-#pragma omp for schedule(static)
-      for (size_t i = 0; i < nx; i++) {
-        float v = dx[i];
-        for (int t = 1; t < nt; t++) v += m->dxpart[(size_t)(t - 1) * nx + i];
-        dx[i] = v;
-      }
-    }
-  }
-  /* Sum the threads' upper triangles in thread order, mirror, normalise. */
-  float inv = 1.0f / (float)npos;
-  for (int i = 0; i < c; i++)
-    for (int j = i; j < c; j++) {
-      float v = 0.0f;
-      for (int t = 0; t < nt; t++) v += m->gpart[(size_t)t * c * c + (size_t)i * c + j];
-      gram[(size_t)i * c + j] = gram[(size_t)j * c + i] = v * inv;
-    }
-}
-
 static wv_status rmf_run(wv_descriptor *d, const float *x, int w, int h, const float *dgram,
                          float *gram, float *dx, wv_error *err) {
   rmf_net *m = d->impl;
   wv_status rc = ensure_buffers(m, w, h, err);
   if (rc) return rc;
-  wv_nn_blas_serial();
   m->lev[0] = (float *)x; /* read only */
   m->dlev[0] = dx;
   for (int s = 1; s < RMF_LEVELS; s++)
     wv_nn_avgpool2_forward(m->lev[s], m->lev[s - 1], 3, m->lh[s - 1], m->lw[s - 1]);
-  float S[RMF_MAXC * RMF_MAXC];
+  float S[RMF_LEVELS][RMF_C * RMF_C];
+  rmf_level L[RMF_LEVELS];
   for (int s = 0; s < RMF_LEVELS; s++) {
-    int c = rmf_c[s];
-    const float *Sp = NULL;
+    int oh = m->lh[s] - RMF_K + 1, ow = m->lw[s] - RMF_K + 1;
+    L[s] = (rmf_level){m->pad[s], m->dpad[s], m->xs[s], ow, m->npv[s], m->npv[s] * m->isa->kv,
+                       (size_t)m->xs[s] * m->lh[s], m->w[s], m->wt[s], NULL};
     if (dgram) {
       const float *dg = dgram + d->layer_off[s];
-      float inv = 1.0f / (float)((m->lh[s] - rmf_k[s] + 1) * (m->lw[s] - rmf_k[s] + 1));
-      for (int i = 0; i < c; i++)
-        for (int j = 0; j < c; j++) S[i * c + j] = (dg[i * c + j] + dg[j * c + i]) * inv;
-      memset(m->dlev[s], 0, sizeof(float) * 3 * m->lw[s] * m->lh[s]);
-      Sp = S;
+      float inv = 1.0f / (float)(oh * ow);
+      for (int i = 0; i < RMF_C; i++)
+        for (int j = 0; j < RMF_C; j++)
+          S[s][i * RMF_C + j] = (dg[i * RMF_C + j] + dg[j * RMF_C + i]) * inv;
+      L[s].S = S[s];
     }
-    level_pass(m, s, Sp, gram + d->layer_off[s], m->dlev[s]);
+  }
+  int nt = m->nthreads, nch = m->nchunks;
+#pragma omp parallel num_threads(nt)
+  {
+    /* The padded copies of the pyramid. */
+    for (int s = 0; s < RMF_LEVELS; s++) {
+      int lw = m->lw[s], lh = m->lh[s];
+#pragma omp for schedule(static) nowait
+      for (int r = 0; r < 3 * lh; r++)
+        memcpy(m->pad[s] + (size_t)r * m->xs[s], m->lev[s] + (size_t)r * lw, sizeof(float) * lw);
+    }
+#pragma omp barrier
+    rmf_scratch sc;
+    sc.f = m->scratch + (size_t)omp_get_thread_num() * m->per_thread;
+    sc.df = sc.f + m->f_floats, sc.gv = sc.df + m->df_floats, sc.carry = sc.gv + m->gv_floats;
+    /* Larger levels first: their chunks cost most. */
+#pragma omp for schedule(dynamic, 1)
+    for (int k = 0; k < nch; k++) {
+      const rmf_chunk_t *c = &m->chunks[k];
+      const rmf_level *lv = &L[c->level];
+      float *halo = NULL;
+      if (dgram) {
+        /* Zero the rows this chunk owns: its own, or up to the plane's end. */
+        int ye = c->last ? m->lh[c->level] : c->y1;
+        for (int ch = 0; ch < 3; ch++)
+          memset(lv->dx + ch * lv->plane + (size_t)c->y0 * lv->xs, 0,
+                 sizeof(float) * lv->xs * (ye - c->y0));
+        if (!c->last) {
+          halo = m->halo + m->halo_stride * k;
+          memset(halo, 0, sizeof(float) * 6 * lv->xs);
+        }
+      }
+      m->isa->chunk(lv, &sc, c->y0, c->y1, gram ? m->gch + (size_t)k * RMF_C * RMF_C : NULL, halo);
+    }
+    if (dgram) {
+      /* Halos into the rows below their chunk (those chunks are done: the loop's barrier). */
+#pragma omp for schedule(static)
+      for (int k = 0; k < nch; k++) {
+        const rmf_chunk_t *c = &m->chunks[k];
+        if (c->last) continue;
+        const rmf_level *lv = &L[c->level];
+        const float *hp = m->halo + m->halo_stride * k;
+        for (int ch = 0; ch < 3; ch++)
+          for (int r = 0; r < 2; r++) {
+            float *dst = lv->dx + ch * lv->plane + (size_t)(c->y1 + r) * lv->xs;
+            const float *src = hp + (size_t)(ch * 2 + r) * lv->xs;
+            for (int i = 0; i < lv->xs; i++) dst[i] += src[i];
+          }
+      }
+      /* The padded gradients into the unpadded ones. */
+      for (int s = 0; s < RMF_LEVELS; s++) {
+        int lw = m->lw[s], lh = m->lh[s];
+#pragma omp for schedule(static) nowait
+        for (int r = 0; r < 3 * lh; r++)
+          memcpy(m->dlev[s] + (size_t)r * lw, m->dpad[s] + (size_t)r * m->xs[s],
+                 sizeof(float) * lw);
+      }
+    }
+    if (gram) {
+      /* Sum the chunks' Gram sums in chunk order, mirror, normalise. */
+#pragma omp for schedule(static)
+      for (int row = 0; row < RMF_LEVELS * RMF_C; row++) {
+        int s = row / RMF_C, i = row % RMF_C;
+        float *g = gram + d->layer_off[s];
+        float inv = 1.0f / (float)((m->lh[s] - RMF_K + 1) * (m->lw[s] - RMF_K + 1));
+        for (int j = i; j < RMF_C; j++) {
+          float v = 0.0f;
+          for (int k = m->first[s]; k < m->first[s + 1]; k++)
+            v += m->gch[(size_t)k * RMF_C * RMF_C + i * RMF_C + j];
+          g[i * RMF_C + j] = v * inv;
+        }
+      }
+#pragma omp for schedule(static)
+      for (int row = 0; row < RMF_LEVELS * RMF_C; row++) {
+        int s = row / RMF_C, i = row % RMF_C;
+        float *g = gram + d->layer_off[s];
+        for (int j = 0; j < i; j++) g[i * RMF_C + j] = g[j * RMF_C + i];
+      }
+    }
   }
   if (dgram)
     for (int s = RMF_LEVELS - 1; s > 0; s--)
@@ -196,9 +341,10 @@ wv_status wv_descriptor_create_default(wv_descriptor **out, wv_error *err) {
   wv_rng rng;
   wv_rng_seed(&rng, RMF_SEED);
   for (int s = 0; s < RMF_LEVELS; s++) {
-    int kk = 3 * rmf_k[s] * rmf_k[s], c = rmf_c[s];
+    int kk = RMF_TAPS, c = RMF_C;
     m->w[s] = malloc(sizeof(float) * c * kk);
-    if (!m->w[s]) {
+    m->wt[s] = malloc(sizeof(float) * c * kk);
+    if (!m->w[s] || !m->wt[s]) {
       rmf_destroy(m);
       return wv_fail(err, WV_ERR_NOMEM, "out of memory for the default descriptor");
     }
@@ -209,7 +355,7 @@ wv_status wv_descriptor_create_default(wv_descriptor **out, wv_error *err) {
      * colour) to RMF_DC of its random value: the filters become mostly band-pass, so
      * the Gram matrices follow the weave's structure rather than just its mean colour,
      * which still enters through the remaining DC part (docs/descriptor.md). */
-    int k2 = rmf_k[s] * rmf_k[s];
+    int k2 = RMF_K * RMF_K;
     for (int o = 0; o < c; o++)
       for (int ci = 0; ci < 3; ci++) {
         float *f = m->w[s] + (size_t)o * kk + ci * k2, mu = 0.0f;
@@ -217,7 +363,10 @@ wv_status wv_descriptor_create_default(wv_descriptor **out, wv_error *err) {
         mu /= (float)k2;
         for (int i = 0; i < k2; i++) f[i] -= (1.0f - RMF_DC) * mu;
       }
+    for (int o = 0; o < c; o++)
+      for (int r = 0; r < kk; r++) m->wt[s][r * c + o] = m->w[s][o * kk + r];
   }
+  m->isa = pick_isa(WV_DESC_KERNEL_AVX512);
   wv_descriptor *d;
   wv_status rc = wv_descriptor_alloc(&d, "default", RMF_LEVELS, rmf_c, err);
   if (rc) {
@@ -228,7 +377,7 @@ wv_status wv_descriptor_create_default(wv_descriptor **out, wv_error *err) {
   d->destroy = rmf_destroy;
   d->run = rmf_run;
   /* The coarsest level must still hold one filter. */
-  d->min_side = rmf_k[RMF_LEVELS - 1] << (RMF_LEVELS - 1);
+  d->min_side = RMF_K << (RMF_LEVELS - 1);
   *out = d;
   return WV_OK;
 }
@@ -237,6 +386,17 @@ int wv_descriptor_default_filters(const wv_descriptor *d, int level, int *k, int
                                   const float **w) {
   if (d->run != rmf_run || level < 0 || level >= RMF_LEVELS) return -1;
   const rmf_net *m = d->impl;
-  *k = rmf_k[level], *c = rmf_c[level], *w = m->w[level];
+  *k = RMF_K, *c = rmf_c[level], *w = m->w[level];
   return RMF_LEVELS;
+}
+
+int wv_descriptor_default_kernel(wv_descriptor *d, int limit) {
+  if (d->run != rmf_run) return -1;
+  rmf_net *m = d->impl;
+  if (limit >= 0) {
+    const rmf_isa *isa = pick_isa(limit);
+    if (isa != m->isa) free_buffers(m); /* the padding follows the vector width */
+    m->isa = isa;
+  }
+  return m->isa->id;
 }
