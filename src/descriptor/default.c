@@ -80,6 +80,7 @@ typedef struct {
 #define KB_J 4
 #define KC_O 8
 #define KC_P 3
+#define KD_R 2
 #include "descriptor/default_kernel.inc"
 #pragma GCC pop_options
 #pragma GCC push_options
@@ -94,6 +95,7 @@ typedef struct {
 #define KB_J 4
 #define KC_O 4
 #define KC_P 3
+#define KD_R 1
 #include "descriptor/default_kernel.inc"
 #pragma GCC pop_options
 #endif
@@ -106,6 +108,7 @@ typedef struct {
 #define KB_J 4
 #define KC_O 4
 #define KC_P 2
+#define KD_R 1
 #include "descriptor/default_kernel.inc"
 
 /* The widest kernel the CPU runs, at most `limit` (WV_DESC_KERNEL_*). */
