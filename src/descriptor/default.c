@@ -22,6 +22,8 @@
  * descriptor is created. */
 #include <math.h>
 #include <omp.h>
+#include <sched.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,10 +42,12 @@ static const int rmf_c[RMF_LEVELS] = {RMF_C, RMF_C, RMF_C, RMF_C, RMF_C};
 
 /* One pyramid level as the kernel sees it (default_kernel.inc). */
 typedef struct {
-  const float *x; /* 3 padded planes: rows of xs floats, zeros past the image */
-  float *dx;      /* the gradient, same layout */
-  int xs, ow, npv, fs; /* row stride, outputs per row, vectors per row, F's row stride */
-  size_t plane;        /* plane stride (floats) */
+  const float *x; /* 3 padded planes of input rows from xy0 on: rows of xs floats, zeros
+                   * past the image */
+  float *dx;      /* the gradient, all rows, rows of xs floats */
+  int xy0, xs, ow, npv, fs; /* x's first row, row stride, outputs per row, vectors per
+                             * row, F's row stride */
+  size_t plane, dplane;     /* plane strides of x and dx (floats) */
   const float *w, *wt; /* filters (64 x 27) and their transpose (27 x 64) */
   const float *S;      /* (dG + dG^T) / (H W), or NULL for no gradient */
 } rmf_level;
@@ -51,6 +55,7 @@ typedef struct {
 /* One thread's working set. */
 typedef struct {
   float *f, *df, *gv, *carry;
+  float *strip; /* the chunk's input rows, padded (rmf_level.x) */
 } rmf_scratch;
 
 typedef struct {
@@ -137,23 +142,27 @@ typedef struct {
   float *wt[RMF_LEVELS]; /* transposed (3 k k, c) */
   const rmf_isa *isa;
   int w_img, h_img, nthreads;
-  float *lev[RMF_LEVELS], *dlev[RMF_LEVELS]; /* unpadded; lev[0], dlev[0] are the caller's */
-  float *pad[RMF_LEVELS], *dpad[RMF_LEVELS]; /* padded copies (rmf_level) */
-  int lw[RMF_LEVELS], lh[RMF_LEVELS], xs[RMF_LEVELS], npv[RMF_LEVELS];
+  float *lev[RMF_LEVELS], *dlev[RMF_LEVELS]; /* lev[0], dlev[0] are the caller's */
+  float *dpad[RMF_LEVELS];                   /* the gradient in the padded layout */
+  int lw[RMF_LEVELS], lh[RMF_LEVELS], xs[RMF_LEVELS], npv[RMF_LEVELS], rows[RMF_LEVELS];
   rmf_chunk_t *chunks;
   int nchunks, first[RMF_LEVELS + 1]; /* chunks of level s: first[s] .. first[s + 1] */
   float *gch;                         /* per chunk: 64 x 64 Gram sums (upper triangle) */
   float *halo;                        /* per chunk: 3 planes x 2 rows x halo_stride */
   size_t halo_stride;
   float *scratch;
-  size_t per_thread, f_floats, df_floats, gv_floats;
+  size_t per_thread, f_floats, df_floats, gv_floats, strip_floats;
 } rmf_net;
+
+/* Rows of level 0 per band of the gradient's final pass: a band of every level
+ * pools into the same band of the level below. */
+#define RMF_BAND (1 << (RMF_LEVELS - 1))
 
 static void free_buffers(rmf_net *m) {
   for (int s = 0; s < RMF_LEVELS; s++) {
     if (s) free(m->lev[s]), free(m->dlev[s]);
-    free(m->pad[s]), free(m->dpad[s]);
-    m->lev[s] = m->dlev[s] = m->pad[s] = m->dpad[s] = NULL;
+    free(m->dpad[s]);
+    m->lev[s] = m->dlev[s] = m->dpad[s] = NULL;
   }
   free(m->chunks), free(m->gch), free(m->halo), free(m->scratch);
   m->chunks = NULL, m->gch = m->halo = m->scratch = NULL;
@@ -178,7 +187,7 @@ static wv_status ensure_buffers(rmf_net *m, int w, int h, wv_error *err) {
   if (m->w_img == w && m->h_img == h && m->nthreads == nt) return WV_OK;
   free_buffers(m);
   m->nthreads = nt;
-  int kv = m->isa->kv, nch = 0, rows[RMF_LEVELS];
+  int kv = m->isa->kv, nch = 0, maxrows = 0;
   for (int s = 0; s < RMF_LEVELS; s++) {
     m->lw[s] = s ? m->lw[s - 1] / 2 : w;
     m->lh[s] = s ? m->lh[s - 1] / 2 : h;
@@ -188,13 +197,12 @@ static wv_status ensure_buffers(rmf_net *m, int w, int h, wv_error *err) {
     /* At least 16 chunks for balance, 2 to 8 rows each (a halo is 2 rows). The split
      * does not depend on the thread count, nor then do the results. */
     int r = (oh + 15) / 16;
-    rows[s] = r < 2 ? 2 : r > 8 ? 8 : r;
-    nch += (oh + rows[s] - 1) / rows[s];
-    size_t n = (size_t)3 * m->xs[s] * m->lh[s];
-    if (!(m->pad[s] = falloc(n)) || !(m->dpad[s] = falloc(n))) goto oom;
-    memset(m->pad[s], 0, sizeof(float) * n);
+    m->rows[s] = r < 2 ? 2 : r > 8 ? 8 : r;
+    if (m->rows[s] > maxrows) maxrows = m->rows[s];
+    nch += (oh + m->rows[s] - 1) / m->rows[s];
+    if (!(m->dpad[s] = falloc((size_t)3 * m->xs[s] * m->lh[s]))) goto oom;
     if (s) {
-      n = (size_t)3 * m->lw[s] * m->lh[s];
+      size_t n = (size_t)3 * m->lw[s] * m->lh[s];
       if (!(m->lev[s] = malloc(sizeof(float) * n)) || !(m->dlev[s] = malloc(sizeof(float) * n)))
         goto oom;
     }
@@ -207,18 +215,20 @@ static wv_status ensure_buffers(rmf_net *m, int w, int h, wv_error *err) {
   for (int s = 0; s < RMF_LEVELS; s++) {
     int oh = m->lh[s] - RMF_K + 1;
     m->first[s] = m->nchunks;
-    for (int y = 0; y < oh; y += rows[s]) {
+    for (int y = 0; y < oh; y += m->rows[s]) {
       rmf_chunk_t *c = &m->chunks[m->nchunks++];
-      c->level = s, c->y0 = y, c->y1 = y + rows[s] < oh ? y + rows[s] : oh;
+      c->level = s, c->y0 = y, c->y1 = y + m->rows[s] < oh ? y + m->rows[s] : oh;
       c->last = c->y1 == oh;
     }
   }
   m->first[RMF_LEVELS] = m->nchunks;
-  /* Per thread: F for a row, dF for a sub-block, the Gram lane sums, the carries. */
+  /* Per thread: F for a row, dF for a sub-block, the Gram lane sums, the carries, the
+   * chunk's input rows. */
   m->f_floats = (size_t)RMF_C * m->npv[0] * kv;
   m->df_floats = (size_t)RMF_C * m->isa->sub * kv;
   m->gv_floats = (size_t)RMF_C * RMF_C * kv;
-  m->per_thread = m->f_floats + m->df_floats + m->gv_floats + (size_t)18 * kv;
+  m->strip_floats = (size_t)3 * (maxrows + RMF_K - 1) * m->xs[0];
+  m->per_thread = m->f_floats + m->df_floats + m->gv_floats + (size_t)18 * kv + m->strip_floats;
   if (!(m->scratch = falloc(m->per_thread * nt))) goto oom;
   m->w_img = w, m->h_img = h;
   return WV_OK;
@@ -228,6 +238,34 @@ oom:
                  w, h);
 }
 
+/* The input gradient of band b of every level, coarsest first: a level's rows from the
+ * padded layout and the halos, plus the adjoint of the 2x2 pooling of the finished
+ * level above. A band is RMF_BAND rows of level 0 and the rows they pool to. */
+static void gradient_band(const rmf_net *m, int b, int nb) {
+  int a_up = 0, e_up = 0;
+  for (int s = RMF_LEVELS - 1; s >= 0; s--) {
+    int lw = m->lw[s], lh = m->lh[s], xs = m->xs[s];
+    int a = (b * RMF_BAND) >> s, e = b == nb - 1 ? lh : ((b + 1) * RMF_BAND) >> s;
+    for (int c = 0; c < 3; c++) {
+      for (int r = a; r < e; r++) {
+        float *dst = m->dlev[s] + ((size_t)c * lh + r) * lw;
+        memcpy(dst, m->dpad[s] + ((size_t)c * lh + r) * xs, sizeof(float) * lw);
+        /* Rows y1 and y1 + 1 of a chunk that is not its level's last are in its halo. */
+        int k = m->first[s] + r / m->rows[s] - 1, rr = r % m->rows[s];
+        if (k >= m->first[s] && k < m->first[s + 1] && rr < RMF_K - 1 && !m->chunks[k].last) {
+          const float *hp = m->halo + m->halo_stride * k + (size_t)(c * 2 + rr) * xs;
+          for (int i = 0; i < lw; i++) dst[i] += hp[i];
+        }
+      }
+      if (s < RMF_LEVELS - 1 && e_up > a_up) /* a plane's band of rows is itself a plane */
+        wv_nn_avgpool2_backward(m->dlev[s] + ((size_t)c * lh + 2 * a_up) * lw,
+                                m->dlev[s + 1] + ((size_t)c * m->lh[s + 1] + a_up) * m->lw[s + 1],
+                                1, 2 * (e_up - a_up), lw);
+    }
+    a_up = a, e_up = e;
+  }
+}
+
 static wv_status rmf_run(wv_descriptor *d, const float *x, int w, int h, const float *dgram,
                          float *gram, float *dx, wv_error *err) {
   rmf_net *m = d->impl;
@@ -235,14 +273,13 @@ static wv_status rmf_run(wv_descriptor *d, const float *x, int w, int h, const f
   if (rc) return rc;
   m->lev[0] = (float *)x; /* read only */
   m->dlev[0] = dx;
-  for (int s = 1; s < RMF_LEVELS; s++)
-    wv_nn_avgpool2_forward(m->lev[s], m->lev[s - 1], 3, m->lh[s - 1], m->lw[s - 1]);
   float S[RMF_LEVELS][RMF_C * RMF_C];
   rmf_level L[RMF_LEVELS];
   for (int s = 0; s < RMF_LEVELS; s++) {
     int oh = m->lh[s] - RMF_K + 1, ow = m->lw[s] - RMF_K + 1;
-    L[s] = (rmf_level){m->pad[s], m->dpad[s], m->xs[s], ow, m->npv[s], m->npv[s] * m->isa->kv,
-                       (size_t)m->xs[s] * m->lh[s], m->w[s], m->wt[s], NULL};
+    L[s] = (rmf_level){.dx = m->dpad[s], .xs = m->xs[s], .ow = ow, .npv = m->npv[s],
+                       .fs = m->npv[s] * m->isa->kv, .dplane = (size_t)m->xs[s] * m->lh[s],
+                       .w = m->w[s], .wt = m->wt[s]};
     if (dgram) {
       const float *dg = dgram + d->layer_off[s];
       float inv = 1.0f / (float)(oh * ow);
@@ -253,65 +290,65 @@ static wv_status rmf_run(wv_descriptor *d, const float *x, int w, int h, const f
     }
   }
   int nt = m->nthreads, nch = m->nchunks;
+  atomic_int pyramid_done = 0;
+  /* One parallel region with one barrier (after the chunks), so that on a busy machine
+   * a thread that lost its core holds the others up once. */
 #pragma omp parallel num_threads(nt)
   {
-    /* The padded copies of the pyramid. */
-    for (int s = 0; s < RMF_LEVELS; s++) {
-      int lw = m->lw[s], lh = m->lh[s];
-#pragma omp for schedule(static) nowait
-      for (int r = 0; r < 3 * lh; r++)
-        memcpy(m->pad[s] + (size_t)r * m->xs[s], m->lev[s] + (size_t)r * lw, sizeof(float) * lw);
+    int tid = omp_get_thread_num();
+    if (tid == 0) {
+      /* The pyramid, while the other threads start on level 0 (calls from inside the
+       * region run on this thread alone). */
+      for (int s = 1; s < RMF_LEVELS; s++)
+        wv_nn_avgpool2_forward(m->lev[s], m->lev[s - 1], 3, m->lh[s - 1], m->lw[s - 1]);
+      atomic_store_explicit(&pyramid_done, 1, memory_order_release);
     }
-#pragma omp barrier
     rmf_scratch sc;
-    sc.f = m->scratch + (size_t)omp_get_thread_num() * m->per_thread;
+    sc.f = m->scratch + (size_t)tid * m->per_thread;
     sc.df = sc.f + m->f_floats, sc.gv = sc.df + m->df_floats, sc.carry = sc.gv + m->gv_floats;
-    /* Larger levels first: their chunks cost most. */
+    sc.strip = sc.carry + (size_t)18 * m->isa->kv;
+    /* Largest level first: its chunks cost most. */
 #pragma omp for schedule(dynamic, 1)
     for (int k = 0; k < nch; k++) {
       const rmf_chunk_t *c = &m->chunks[k];
-      const rmf_level *lv = &L[c->level];
+      int s = c->level;
+      if (s)
+        while (!atomic_load_explicit(&pyramid_done, memory_order_acquire)) sched_yield();
+      /* The chunk's input rows, padded with zeros. */
+      rmf_level lv = L[s];
+      int nr = c->y1 - c->y0 + RMF_K - 1, lw = m->lw[s];
+      lv.x = sc.strip, lv.xy0 = c->y0, lv.plane = (size_t)nr * lv.xs;
+      for (int ch = 0; ch < 3; ch++)
+        for (int r = 0; r < nr; r++) {
+          float *dst = sc.strip + ch * lv.plane + (size_t)r * lv.xs;
+          memcpy(dst, m->lev[s] + ((size_t)ch * m->lh[s] + c->y0 + r) * lw, sizeof(float) * lw);
+          memset(dst + lw, 0, sizeof(float) * (lv.xs - lw));
+        }
       float *halo = NULL;
       if (dgram) {
         /* Zero the rows this chunk owns: its own, or up to the plane's end. */
-        int ye = c->last ? m->lh[c->level] : c->y1;
+        int ye = c->last ? m->lh[s] : c->y1;
         for (int ch = 0; ch < 3; ch++)
-          memset(lv->dx + ch * lv->plane + (size_t)c->y0 * lv->xs, 0,
-                 sizeof(float) * lv->xs * (ye - c->y0));
+          memset(lv.dx + ch * lv.dplane + (size_t)c->y0 * lv.xs, 0,
+                 sizeof(float) * lv.xs * (ye - c->y0));
         if (!c->last) {
           halo = m->halo + m->halo_stride * k;
-          memset(halo, 0, sizeof(float) * 6 * lv->xs);
+          memset(halo, 0, sizeof(float) * 6 * lv.xs);
         }
       }
-      m->isa->chunk(lv, &sc, c->y0, c->y1, gram ? m->gch + (size_t)k * RMF_C * RMF_C : NULL, halo);
+      m->isa->chunk(&lv, &sc, c->y0, c->y1, gram ? m->gch + (size_t)k * RMF_C * RMF_C : NULL,
+                    halo);
     }
     if (dgram) {
-      /* Halos into the rows below their chunk (those chunks are done: the loop's barrier). */
-#pragma omp for schedule(static)
-      for (int k = 0; k < nch; k++) {
-        const rmf_chunk_t *c = &m->chunks[k];
-        if (c->last) continue;
-        const rmf_level *lv = &L[c->level];
-        const float *hp = m->halo + m->halo_stride * k;
-        for (int ch = 0; ch < 3; ch++)
-          for (int r = 0; r < 2; r++) {
-            float *dst = lv->dx + ch * lv->plane + (size_t)(c->y1 + r) * lv->xs;
-            const float *src = hp + (size_t)(ch * 2 + r) * lv->xs;
-            for (int i = 0; i < lv->xs; i++) dst[i] += src[i];
-          }
-      }
-      /* The padded gradients into the unpadded ones. */
-      for (int s = 0; s < RMF_LEVELS; s++) {
-        int lw = m->lw[s], lh = m->lh[s];
-#pragma omp for schedule(static) nowait
-        for (int r = 0; r < 3 * lh; r++)
-          memcpy(m->dlev[s] + (size_t)r * lw, m->dpad[s] + (size_t)r * m->xs[s],
-                 sizeof(float) * lw);
-      }
+      /* Bands of RMF_BAND rows of level 0 and the rows they pool to, coarsest level
+       * first, so that each level adds the finished gradient of the one above. */
+      int nb = (h + RMF_BAND - 1) / RMF_BAND;
+#pragma omp for schedule(dynamic, 1) nowait
+      for (int b = 0; b < nb; b++) gradient_band(m, b, nb);
     }
     if (gram) {
-      /* Sum the chunks' Gram sums in chunk order, mirror, normalise. */
-#pragma omp for schedule(static)
+      /* Sum the chunks' Gram sums in chunk order, normalise, mirror. */
+#pragma omp for schedule(static) nowait
       for (int row = 0; row < RMF_LEVELS * RMF_C; row++) {
         int s = row / RMF_C, i = row % RMF_C;
         float *g = gram + d->layer_off[s];
@@ -320,20 +357,11 @@ static wv_status rmf_run(wv_descriptor *d, const float *x, int w, int h, const f
           float v = 0.0f;
           for (int k = m->first[s]; k < m->first[s + 1]; k++)
             v += m->gch[(size_t)k * RMF_C * RMF_C + i * RMF_C + j];
-          g[i * RMF_C + j] = v * inv;
+          g[i * RMF_C + j] = g[j * RMF_C + i] = v * inv;
         }
-      }
-#pragma omp for schedule(static)
-      for (int row = 0; row < RMF_LEVELS * RMF_C; row++) {
-        int s = row / RMF_C, i = row % RMF_C;
-        float *g = gram + d->layer_off[s];
-        for (int j = 0; j < i; j++) g[i * RMF_C + j] = g[j * RMF_C + i];
       }
     }
   }
-  if (dgram)
-    for (int s = RMF_LEVELS - 1; s > 0; s--)
-      wv_nn_avgpool2_backward(m->dlev[s - 1], m->dlev[s], 3, m->lh[s - 1], m->lw[s - 1]);
   return WV_OK;
 }
 
