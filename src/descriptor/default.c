@@ -10,16 +10,18 @@
  * no border artefacts), ReLU, Gram / (H W). 5 levels x 64 filters: 20,480 floats.
  *
  * Speed: all levels' output rows are cut into chunks of a few rows, shared out to
- * the OpenMP threads; a chunk runs the fused kernel of default_kernel.inc (conv,
- * ReLU, Gram sums and, for the gradient, dF = (dG + dG^T) F / HW, the ReLU mask,
- * W^T dF and col2im) with its data in the thread's cache, so the feature maps are
- * never stored whole. Forward and backward take one pass, since dF needs dG and F
- * but not G; without a Gram output the backward skips the Gram sums. Each chunk
- * keeps its own Gram sums and writes the input gradient of the two rows it shares
- * with the next chunk to a halo; both are added in chunk order at the end, so the
- * result does not depend on the thread count or on which thread ran what. The
- * kernel is compiled for AVX-512, AVX2 and the baseline and chosen when the
- * descriptor is created. */
+ * the OpenMP threads; a chunk pads its input rows and runs the fused kernel of
+ * default_kernel.inc (conv, ReLU, Gram sums and, for the gradient,
+ * dF = (dG + dG^T) F / HW, the ReLU mask, W^T dF and col2im) with its data in the
+ * thread's cache, so the feature maps are never stored whole. Forward and backward
+ * take one pass, since dF needs dG and F but not G; without a Gram output the
+ * backward skips the Gram sums. Each chunk keeps its own Gram sums and writes the
+ * input gradient of the two rows it shares with the next chunk to a halo; both are
+ * added in chunk order at the end, so the result does not depend on the thread count
+ * or on which thread ran what. A call is one parallel region with one barrier (after
+ * the chunks): on a busy machine a thread that loses its core holds the others up
+ * once, not at every level. The kernel is compiled for AVX-512, AVX2 and the
+ * baseline and chosen when the descriptor is created. */
 #include <math.h>
 #include <omp.h>
 #include <sched.h>
