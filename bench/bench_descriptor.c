@@ -1,6 +1,8 @@
-/* Descriptor speed: forward and forward + backward for the default descriptor and
- * VGG-19 (random weights), VGG-19's convolutions alone, and a plain OpenBLAS sgemm
- * in the same run. Prints one JSON object on its last line (medians). */
+/* Descriptor speed: the default descriptor against its former im2col + OpenBLAS path
+ * (descriptor_ref.h) in the same run, with how far their results differ; forward and
+ * forward + backward for VGG-19 (random weights), VGG-19's convolutions alone, and a
+ * plain OpenBLAS sgemm. Prints one JSON object on its last line (medians).
+ * --quick: fewer repetitions; --default-only: skip VGG-19 and the sgemm. */
 #include <cblas.h>
 #include <math.h>
 #include <omp.h>
@@ -9,6 +11,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "descriptor_ref.h"
 #include "woven/descriptor.h"
 #include "woven/nn.h"
 
@@ -98,6 +101,129 @@ static void time_desc(wv_descriptor *d, int w, int h, int reps, double *fwd, dou
           w, h, *fwd, *fb);
   free(g), free(dg);
   wv_image_free(&img), wv_image_free(&dimg);
+}
+
+/* ---- The default descriptor against the former path ---- */
+
+static double cpu_ms(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+/* max |a - b| / max |b|, and the largest elementwise |a - b| / |b| over the elements
+ * with |b| above 1e-3 max |b| (smaller ones are sums that cancel). */
+static void rel_diff(const float *a, const float *b, size_t n, double *normwise, double *elemwise) {
+  double bmax = 0, dmax = 0, emax = 0;
+  for (size_t i = 0; i < n; i++) bmax = fmax(bmax, fabs(b[i]));
+  for (size_t i = 0; i < n; i++) {
+    double d = fabs((double)a[i] - b[i]);
+    dmax = fmax(dmax, d);
+    if (fabs(b[i]) > 1e-3 * bmax) emax = fmax(emax, d / fabs(b[i]));
+  }
+  *normwise = bmax > 0 ? dmax / bmax : dmax;
+  *elemwise = emax;
+}
+
+typedef struct {
+  double old_fwd, new_fwd, old_fb, new_fb, old_fit, new_fit; /* median ms */
+  double fwd_x, fb_x, fit_x;                                /* median of per-run ratios */
+  double cpu_fb_x;                                          /* the same in CPU time */
+  double gram_nw, gram_ew, grad_nw, grad_ew;                /* worst over the images */
+} cmp_result;
+
+/* A planar input as the descriptor sees it (ImageNet-normalised values): uniform
+ * noise for odd seeds, the stripes of make_image for even ones. */
+static void planar_input(float *x, int w, int h, uint64_t seed) {
+  wv_rng r;
+  wv_rng_seed(&r, seed);
+  size_t n = (size_t)w * h;
+  for (int c = 0; c < 3; c++)
+    for (size_t i = 0; i < n; i++) {
+      int px = (int)(i % w), py = (int)(i / w);
+      float v = seed % 2 ? wv_rng_uniform(&r)
+                         : 0.3f + 0.2f * (((px / 2 + py / 2) & 1) ? 1.0f : 0.0f) +
+                               0.1f * wv_rng_uniform(&r);
+      x[c * n + i] = (v - 0.45f) / 0.225f;
+    }
+}
+
+/* Old and new paths on the same w x h input, alternating within each repetition:
+ * forward, forward + backward (Gram and gradient), and the fit's step (forward, then
+ * backward for the gradient alone; the former path had no such call and ran both in
+ * full). Then both paths on nimg random inputs for the differences. */
+static void compare_default(wv_descriptor *d, int w, int h, int reps, int nimg, cmp_result *o) {
+  wv_error e;
+  size_t n = wv_descriptor_size(d), nx = (size_t)3 * w * h;
+  float *x = malloc(sizeof(float) * nx), *dx0 = malloc(sizeof(float) * nx),
+        *dx1 = malloc(sizeof(float) * nx), *g0 = malloc(sizeof(float) * n),
+        *g1 = malloc(sizeof(float) * n), *dg = malloc(sizeof(float) * n);
+  ref_net R;
+  if (ref_init(&R, d, w, h)) {
+    fprintf(stderr, "bench_descriptor: not the default descriptor\n");
+    exit(1);
+  }
+  memset(o, 0, sizeof *o);
+  for (int k = 0; k < nimg; k++) {
+    planar_input(x, w, h, 100 + k);
+    wv_rng r;
+    wv_rng_seed(&r, 200 + k);
+    wv_rng_fill_uniform(&r, dg, n, -1, 1);
+    ref_run(&R, x, dg, g0, dx0);
+    if (d->run(d, x, w, h, dg, g1, dx1, &e)) die(&e);
+    double nw, ew;
+    rel_diff(g1, g0, n, &nw, &ew);
+    o->gram_nw = fmax(o->gram_nw, nw), o->gram_ew = fmax(o->gram_ew, ew);
+    rel_diff(dx1, dx0, nx, &nw, &ew);
+    o->grad_nw = fmax(o->grad_nw, nw), o->grad_ew = fmax(o->grad_ew, ew);
+  }
+  planar_input(x, w, h, 100);
+  double t[6][64], ratio[4][64];
+  for (int i = 0; i <= reps; i++) {
+    double a = now_ms();
+    ref_run(&R, x, NULL, g0, NULL);
+    double b = now_ms();
+    if (d->run(d, x, w, h, NULL, g1, NULL, &e)) die(&e);
+    double c = now_ms(), cc = cpu_ms();
+    ref_run(&R, x, dg, g0, dx0);
+    double dd = now_ms(), cd = cpu_ms();
+    if (d->run(d, x, w, h, dg, g1, dx1, &e)) die(&e);
+    double ee = now_ms(), ce = cpu_ms();
+    ref_run(&R, x, NULL, g0, NULL);
+    ref_run(&R, x, dg, g0, dx0);
+    double f = now_ms();
+    if (d->run(d, x, w, h, NULL, g1, NULL, &e) || d->run(d, x, w, h, dg, NULL, dx1, &e)) die(&e);
+    double gg = now_ms();
+    if (!i) continue; /* warm-up */
+    double v[6] = {b - a, c - b, dd - c, ee - dd, f - ee, gg - f};
+    for (int j = 0; j < 6; j++) t[j][i - 1] = v[j];
+    ratio[0][i - 1] = v[0] / v[1], ratio[1][i - 1] = v[2] / v[3], ratio[2][i - 1] = v[4] / v[5];
+    ratio[3][i - 1] = (cd - cc) / (ce - cd);
+  }
+  o->old_fwd = median(t[0], reps), o->new_fwd = median(t[1], reps);
+  o->old_fb = median(t[2], reps), o->new_fb = median(t[3], reps);
+  o->old_fit = median(t[4], reps), o->new_fit = median(t[5], reps);
+  o->fwd_x = median(ratio[0], reps), o->fb_x = median(ratio[1], reps);
+  o->fit_x = median(ratio[2], reps), o->cpu_fb_x = median(ratio[3], reps);
+  fprintf(stderr,
+          "default %dx%d: forward %.1f -> %.1f ms (%.2fx), forward+backward %.1f -> %.1f ms "
+          "(%.2fx, CPU time %.2fx), fit step %.1f -> %.1f ms (%.2fx); new vs old: Gram %.1e, "
+          "gradient %.1e (max |diff| / max |old|), elementwise %.1e, %.1e\n",
+          w, h, o->old_fwd, o->new_fwd, o->fwd_x, o->old_fb, o->new_fb, o->fb_x, o->cpu_fb_x,
+          o->old_fit, o->new_fit, o->fit_x, o->gram_nw, o->grad_nw, o->gram_ew, o->grad_ew);
+  ref_free(&R);
+  free(x), free(dx0), free(dx1), free(g0), free(g1), free(dg);
+}
+
+static void print_cmp(const char *key, const cmp_result *o) {
+  printf("\"%s\": {\"old_fwd_ms\": %.2f, \"new_fwd_ms\": %.2f, \"fwd_speedup\": %.2f, "
+         "\"old_fwd_bwd_ms\": %.2f, \"new_fwd_bwd_ms\": %.2f, \"fwd_bwd_speedup\": %.2f, "
+         "\"fwd_bwd_speedup_cpu_time\": %.2f, "
+         "\"old_fit_step_ms\": %.2f, \"new_fit_step_ms\": %.2f, \"fit_step_speedup\": %.2f, "
+         "\"gram_max_rel_diff\": %.2e, \"grad_max_rel_diff\": %.2e, "
+         "\"gram_max_elementwise_rel_diff\": %.2e, \"grad_max_elementwise_rel_diff\": %.2e}",
+         key, o->old_fwd, o->new_fwd, o->fwd_x, o->old_fb, o->new_fb, o->fb_x, o->cpu_fb_x,
+         o->old_fit, o->new_fit, o->fit_x, o->gram_nw, o->grad_nw, o->gram_ew, o->grad_ew);
 }
 
 static const int vgg_cfg[] = {64,  64,  0,   128, 128, 0,   256, 256, 256, 256, 0,
@@ -198,9 +324,58 @@ static double vgg_conv_gflops(int w, int h, int reps, double *fwd_gf, double *bw
 }
 
 int main(int argc, char **argv) {
-  int quick = argc > 1 && !strcmp(argv[1], "--quick"); /* fewer repetitions */
-  int reps = quick ? 3 : 7, vreps = quick ? 1 : 3;
+  int quick = 0, default_only = 0;
+  for (int i = 1; i < argc; i++) {
+    if (!strcmp(argv[i], "--quick")) quick = 1; /* fewer repetitions */
+    else if (!strcmp(argv[i], "--default-only")) default_only = 1;
+    else {
+      fprintf(stderr, "usage: bench_descriptor [--quick] [--default-only]\n");
+      return 2;
+    }
+  }
+  int reps = quick ? 3 : 7, vreps = quick ? 1 : 3, creps = quick ? 5 : 11;
   wv_error e;
+  double load = -1; /* what else runs on the machine: the 1-minute load average */
+  FILE *lf = fopen("/proc/loadavg", "r");
+  if (lf) {
+    if (fscanf(lf, "%lf", &load) != 1) load = -1;
+    fclose(lf);
+  }
+
+  /* The default descriptor against the former path, in the same process. */
+  wv_descriptor *d;
+  if (wv_descriptor_create_default(&d, &e)) die(&e);
+  static const char *kname[] = {"baseline", "avx2", "avx512"};
+  int kernel = wv_descriptor_default_kernel(d, -1);
+  cmp_result c800, c512, c800_1;
+  compare_default(d, 800, 300, creps, 3, &c800);
+  compare_default(d, 512, 512, creps, 3, &c512);
+  int nt = omp_get_max_threads();
+  omp_set_num_threads(1);
+  compare_default(d, 800, 300, creps, 1, &c800_1);
+  omp_set_num_threads(nt);
+  double dflo, dbls, dfhi, dbhi;
+  time_desc(d, 400, 150, reps, &dflo, &dbls);
+  time_desc(d, 800, 300, reps, &dfhi, &dbhi);
+  size_t dsize = wv_descriptor_size(d);
+  wv_descriptor_free(d);
+
+  printf("{\"threads\": %d, \"load_average_1min\": %.2f, \"default_kernel\": \"%s\", "
+         "\"default_size\": %zu, ",
+         nt, load, kname[kernel], dsize);
+  print_cmp("default_vs_former_800x300", &c800);
+  printf(", ");
+  print_cmp("default_vs_former_512x512", &c512);
+  printf(", ");
+  print_cmp("default_vs_former_800x300_1_thread", &c800_1);
+  printf(", \"default_fwd_ms_400x150\": %.2f, \"default_fwd_bwd_ms_400x150\": %.2f, "
+         "\"default_fwd_ms_800x300\": %.2f, \"default_fwd_bwd_ms_800x300\": %.2f",
+         dflo, dbls, dfhi, dbhi);
+  if (default_only) {
+    printf("}\n");
+    return 0;
+  }
+
   sg_a = malloc(sizeof(float) * SG_N * SG_N), sg_b = malloc(sizeof(float) * SG_N * SG_N);
   sg_c = malloc(sizeof(float) * SG_N * SG_N);
   wv_rng r;
@@ -212,14 +387,6 @@ int main(int argc, char **argv) {
   for (int i = 0; i < 5; i++) t1[i] = sgemm_once(), t2[i] = nn_sgemm_once();
   double sg = median(t1, 5), nsg = median(t2, 5);
   fprintf(stderr, "sgemm 2048^3: OpenBLAS threads %.1f GFLOP/s, wv_nn_sgemm %.1f GFLOP/s\n", sg, nsg);
-
-  wv_descriptor *d;
-  if (wv_descriptor_create_default(&d, &e)) die(&e);
-  double dflo, dbls, dfhi, dbhi;
-  time_desc(d, 400, 150, reps, &dflo, &dbls);
-  time_desc(d, 800, 300, reps, &dfhi, &dbhi);
-  size_t dsize = wv_descriptor_size(d);
-  wv_descriptor_free(d);
 
   const char *path = "bench_vgg19_random.safetensors";
   write_vgg19(path);
@@ -234,16 +401,12 @@ int main(int argc, char **argv) {
           "sgemm measured alongside %.1f GFLOP/s (%.0f%%)\n", cf, cb, cg, sg2, 100 * cg / sg2);
   sg = sg2;
 
-  printf("{\"threads\": %d, \"default_size\": %zu, "
-         "\"default_fwd_ms_400x150\": %.2f, \"default_fwd_bwd_ms_400x150\": %.2f, "
-         "\"default_fwd_ms_800x300\": %.2f, \"default_fwd_bwd_ms_800x300\": %.2f, "
-         "\"vgg19_fwd_ms_400x150\": %.1f, \"vgg19_fwd_bwd_ms_400x150\": %.1f, "
+  printf(", \"vgg19_fwd_ms_400x150\": %.1f, \"vgg19_fwd_bwd_ms_400x150\": %.1f, "
          "\"vgg19_fwd_ms_800x300\": %.1f, \"vgg19_fwd_bwd_ms_800x300\": %.1f, "
          "\"vgg19_conv_fwd_gflops\": %.1f, \"vgg19_conv_bwd_gflops\": %.1f, "
          "\"vgg19_conv_gflops\": %.1f, \"sgemm_gflops\": %.1f, \"nn_sgemm_gflops\": %.1f, "
          "\"vgg19_conv_fraction_of_sgemm\": %.3f}\n",
-         omp_get_max_threads(), dsize, dflo, dbls, dfhi, dbhi, vflo, vblo, vfhi, vbhi, cf, cb, cg, sg,
-         nsg, cg / sg);
+         vflo, vblo, vfhi, vbhi, cf, cb, cg, sg, nsg, cg / sg);
   free(sg_a), free(sg_b), free(sg_c);
   return 0;
 }

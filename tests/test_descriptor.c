@@ -1,8 +1,10 @@
 /* Descriptors: safetensors loading (a tiny VGG-style network written here, checked
  * against a direct computation; every malformed file rejected with a message naming
  * the file and the problem), the VGG-19 pipeline on random weights, gradients
- * against finite differences, determinism, and texture separation. */
+ * against finite differences, the default descriptor's kernels against each other,
+ * determinism, and texture separation. */
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -533,6 +535,57 @@ static void test_default_gradient(void **state) {
   wv_descriptor_free(d);
 }
 
+/* Every kernel the CPU runs (AVX-512, AVX2, baseline) gives the widest one's Gram and
+ * gradient up to float rounding (the widest one passes the finite-difference checks
+ * above). The gradient without a Gram output, and everything on one thread, are bit
+ * for bit the same. */
+static double max_rel(const float *a, const float *b, size_t n) { /* max |a - b| / max |b| */
+  double d = 0, m = 0;
+  for (size_t i = 0; i < n; i++) d = fmax(d, fabs((double)a[i] - b[i])), m = fmax(m, fabs(b[i]));
+  return d / m;
+}
+
+static void test_default_kernels(void **state) {
+  (void)state;
+  wv_descriptor *d;
+  wv_error err;
+  assert_int_equal(wv_descriptor_create_default(&d, &err), WV_OK);
+  int widest = wv_descriptor_default_kernel(d, -1);
+  assert_true(widest >= WV_DESC_KERNEL_BASE && widest <= WV_DESC_KERNEL_AVX512);
+  /* 211 x 90: every level's last vector is partial at every vector width. */
+  int w = 211, h = 90;
+  wv_image img, dimg, dimg2;
+  random_image(&img, w, h, 31);
+  assert_int_equal(wv_image_alloc(&dimg, w, h, 3, &err), WV_OK);
+  assert_int_equal(wv_image_alloc(&dimg2, w, h, 3, &err), WV_OK);
+  size_t n = wv_descriptor_size(d), np = (size_t)w * h * 3;
+  float *dg = malloc(sizeof(float) * n), *g0 = malloc(sizeof(float) * n),
+        *g = malloc(sizeof(float) * n);
+  wv_rng r;
+  wv_rng_seed(&r, 32);
+  wv_rng_fill_uniform(&r, dg, n, -1, 1);
+  assert_int_equal(wv_descriptor_backward(d, &img, dg, g0, &dimg, &err), WV_OK);
+  assert_int_equal(wv_descriptor_backward(d, &img, dg, NULL, &dimg2, &err), WV_OK);
+  assert_memory_equal(dimg.data, dimg2.data, sizeof(float) * np);
+  int nt = omp_get_max_threads();
+  omp_set_num_threads(1);
+  assert_int_equal(wv_descriptor_backward(d, &img, dg, g, &dimg2, &err), WV_OK);
+  omp_set_num_threads(nt);
+  assert_memory_equal(g0, g, sizeof(float) * n);
+  assert_memory_equal(dimg.data, dimg2.data, sizeof(float) * np);
+  for (int k = widest - 1; k >= WV_DESC_KERNEL_BASE; k--) {
+    assert_int_equal(wv_descriptor_default_kernel(d, k), k);
+    assert_int_equal(wv_descriptor_backward(d, &img, dg, g, &dimg2, &err), WV_OK);
+    double eg = max_rel(g, g0, n), ed = max_rel(dimg2.data, dimg.data, np);
+    fprintf(stderr, "default kernel %d vs %d at %dx%d: Gram %.1e, gradient %.1e (max |diff| / max)\n", k,
+            widest, w, h, eg, ed);
+    assert_true(eg < 1e-5 && ed < 1e-5);
+  }
+  free(dg), free(g0), free(g);
+  wv_image_free(&img), wv_image_free(&dimg), wv_image_free(&dimg2);
+  wv_descriptor_free(d);
+}
+
 /* ---- VGG-19 on random weights ---- */
 static const int vgg_cfg[] = {64,  64,  0,   128, 128, 0,   256, 256, 256, 256, 0,
                               512, 512, 512, 512, 0,   512, 512, 512, 512, 0};
@@ -773,7 +826,7 @@ int main(void) {
       cmocka_unit_test(test_tiny_network),       cmocka_unit_test(test_malformed),
       cmocka_unit_test(test_tiny_gradient),      cmocka_unit_test(test_default_gradient),
       cmocka_unit_test(test_default_determinism), cmocka_unit_test(test_default_separation),
-      cmocka_unit_test(test_vgg19_random),
+      cmocka_unit_test(test_default_kernels),    cmocka_unit_test(test_vgg19_random),
   };
   int rc = cmocka_run_group_tests(tests, NULL, NULL);
   for (int i = 0; i < TINY_N; i++) free(tiny_vals[i]);

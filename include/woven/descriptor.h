@@ -52,8 +52,9 @@ int wv_descriptor_min_side(const wv_descriptor *d);
 
 /* gram_out: wv_descriptor_size() floats. */
 wv_status wv_descriptor_forward(wv_descriptor *d, const wv_image *img, float *gram_out, wv_error *err);
-/* Forward and backward in one call: fills gram_out (may be NULL) and dimg (same
- * shape as img, allocated by the caller) with d(sum dgram*gram)/d img. */
+/* Forward and backward in one call: fills gram_out and dimg (same shape as img,
+ * allocated by the caller) with d(sum dgram*gram)/d img. gram_out may be NULL: the
+ * Gram matrices are then not computed, which saves time when the caller has them. */
 wv_status wv_descriptor_backward(wv_descriptor *d, const wv_image *img, const float *dgram,
                                  float *gram_out, wv_image *dimg, wv_error *err);
 

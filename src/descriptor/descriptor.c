@@ -38,7 +38,6 @@ void wv_descriptor_free(wv_descriptor *d) {
   free(d->x);
   free(d->dx);
   free(d->dgram);
-  free(d->gram);
   free(d);
 }
 
@@ -153,12 +152,11 @@ wv_status wv_descriptor_backward(wv_descriptor *d, const wv_image *img, const fl
   if ((rc = prepare(d, img, 1, err))) return rc;
   if (!d->dgram && !(d->dgram = malloc(sizeof(float) * d->size)))
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for descriptor %s", d->name);
-  if (!gram_out && !d->gram && !(d->gram = malloc(sizeof(float) * d->size)))
-    return wv_fail(err, WV_ERR_NOMEM, "out of memory for descriptor %s", d->name);
-  float *g = gram_out ? gram_out : d->gram;
   apply_layer_weights(d, d->dgram, dgram); /* d(w G)/dG = w */
-  if ((rc = d->run(d, d->x, img->w, img->h, d->dgram, g, d->dx, err))) return rc;
-  apply_layer_weights(d, g, g);
+  /* Without gram_out the Gram matrices are not computed: the gradient needs dG and the
+   * features, not G. */
+  if ((rc = d->run(d, d->x, img->w, img->h, d->dgram, gram_out, d->dx, err))) return rc;
+  if (gram_out) apply_layer_weights(d, gram_out, gram_out);
   /* Back through the normalisation, to the interleaved layout. */
   size_t n = (size_t)img->w * img->h;
   for (int c = 0; c < 3; c++) {

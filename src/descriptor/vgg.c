@@ -82,7 +82,8 @@ static wv_status vgg_run(wv_descriptor *d, const float *x, int w, int h, const f
     } else {
       int hw = m->ah[i + 1] * m->aw[i + 1];
       wv_nn_avgpool2_forward(m->act[i + 1], m->act[i], m->ac[i], m->ah[i], m->aw[i]);
-      wv_nn_gram_forward(gram + d->layer_off[layer], m->act[i + 1], 1, m->ac[i + 1], hw);
+      if (gram)
+        wv_nn_gram_forward(gram + d->layer_off[layer], m->act[i + 1], 1, m->ac[i + 1], hw);
       layer++;
     }
   }
