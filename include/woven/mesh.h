@@ -58,7 +58,7 @@ wv_status wv_mesh_transform(wv_mesh *m, const double A[9], const double b[3], wv
 /* Built-in shapes. UVs are lengths on the surface in the shape's units, so a
  * material's mm-per-UV scale is its mm per scene unit.
  * quad: centre c, edge directions eu (along +u) and ev (along +v), size su x sv;
- *   uv = (coordinate along eu, coordinate along ev) from the centre.
+ *   uv = (distance along eu, distance along ev) from the corner c - su/2 eu - sv/2 ev.
  * sphere: centre, radius, rings x segments; u = radius * longitude (rad), v = radius * (latitude (rad)).
  * cylinder: around the x axis through c, radius, length, segments around;
  *   u = -radius * atan2(y, z) (arc length, growing downward on the side facing +z),

@@ -132,10 +132,10 @@ float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float
   float theta = PI_F * (y + fy) / e->h, phi = 2 * PI_F * (x + fx) / e->w - PI_F;
   float st = sinf(theta), mx = st * sinf(phi), my = cosf(theta), mz = -st * cosf(phi);
   d[0] = e->rot_c * mx + e->rot_s * mz, d[1] = my, d[2] = -e->rot_s * mx + e->rot_c * mz;
-  const float *c = e->rgb + ((size_t)y * e->w + x) * 3;
-  rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
-  if (st <= 0.0f) return 0.0f;
-  return pixel_prob(e, x, y) * (float)e->w * (float)e->h / (2.0f * PI_F * PI_F * st);
+  /* radiance and pdf where d looks up (not the drawn pixel): rounding at a pixel's
+   * edge can move d to its neighbour, and the estimator must use the values of d */
+  wv_envmap_eval(e, d, rgb);
+  return wv_envmap_pdf(e, d);
 }
 
 /* ---- built-in environments ---- */
@@ -161,11 +161,12 @@ static double softbox(const double d[3], double az, double el, double hw, double
 }
 
 static void studio(const double d[3], float out[3]) {
-  /* walls: a soft vertical gradient, darker floor */
-  double g = d[1] > 0 ? 0.10 + 0.08 * d[1] : 0.06 + 0.04 * (1 + d[1]);
-  double key = softbox(d, -40, 35, 22, 16, 6), fill = softbox(d, 55, 20, 16, 12, 5);
-  double rim = softbox(d, 170, 30, 12, 20, 4), top = softbox(d, 0, 80, 30, 30, 10);
-  const double kc[3] = {9.0, 8.4, 7.6}, fc[3] = {2.6, 2.8, 3.1}, rc[3] = {5.0, 5.0, 5.0}, tc[3] = {1.2, 1.2, 1.2};
+  /* a dim room (a soft vertical gradient, darker floor) lit by a large warm key box
+   * in front-left, a cool fill in front-right, a rim box behind and a faint top light */
+  double g = d[1] > 0 ? 0.04 + 0.05 * d[1] : 0.03 + 0.02 * (1 + d[1]);
+  double key = softbox(d, -135, 30, 24, 18, 6), fill = softbox(d, 120, 15, 18, 12, 5);
+  double rim = softbox(d, 15, 35, 12, 22, 4), top = softbox(d, 180, 75, 30, 30, 10);
+  const double kc[3] = {7.0, 6.5, 5.8}, fc[3] = {1.2, 1.35, 1.6}, rc[3] = {4.0, 4.0, 4.0}, tc[3] = {0.6, 0.6, 0.6};
   for (int i = 0; i < 3; i++) out[i] = (float)(g + key * kc[i] + fill * fc[i] + rim * rc[i] + top * tc[i]);
 }
 

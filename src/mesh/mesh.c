@@ -192,7 +192,7 @@ wv_status wv_mesh_load(const char *path, size_t limit, int need_uv, wv_mesh *m, 
                    (long long)(sb.st_size >> 20), limit >> 20);
   if (sb.st_size == 0) return wv_fail(err, WV_ERR_FORMAT, "%s: empty file, not a mesh", path);
   unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
-                   aiProcess_PreTransformVertices | aiProcess_SortByPType;
+                   aiProcess_PreTransformVertices | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
   const struct aiScene *sc = aiImportFile(path, flags);
   if (!sc) return wv_fail(err, WV_ERR_FORMAT, "%s: not a readable mesh: %s", path, aiGetErrorString());
   long long nv = 0, nt = 0;
@@ -281,8 +281,8 @@ wv_status wv_mesh_quad(const double c[3], const double eu[3], const double ev[3]
   if (st) return st;
   for (int j = 0; j <= n; j++)
     for (int i = 0; i <= n; i++) {
-      double u = (i / (double)n - 0.5) * su, v = (j / (double)n - 0.5) * sv, p[3];
-      for (int k = 0; k < 3; k++) p[k] = c[k] + u * a[k] + v * b[k];
+      double u = i / (double)n * su, v = j / (double)n * sv, p[3];
+      for (int k = 0; k < 3; k++) p[k] = c[k] + (u - 0.5 * su) * a[k] + (v - 0.5 * sv) * b[k];
       set_vertex(m, j * (n + 1) + i, p, nn, u, v);
     }
   return WV_OK;

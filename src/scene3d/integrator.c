@@ -139,17 +139,21 @@ static void camera_dir(const wv_camera_rig *r, float x, float y, float d[3]) {
   normalize(d);
 }
 
-/* UV of point q on the plane of triangle (p0, p1, p2) (extrapolated outside it). */
-static void plane_uv(const wv_mesh *m, const uint32_t *ix, const float q[3], float *u, float *v) {
+/* UV change per unit move within the plane of triangle ix: rows du/dP and dv/dP
+ * (the dual basis of the edges, in double: cylinders and drapes have triangles
+ * thousands of times longer than wide, where a float solve loses the short side). */
+static void uv_gradient(const wv_mesh *m, const uint32_t *ix, float gu[3], float gv[3]) {
   const float *p0 = m->pos + 3 * ix[0], *p1 = m->pos + 3 * ix[1], *p2 = m->pos + 3 * ix[2];
-  float e1[3], e2[3], r[3];
-  for (int i = 0; i < 3; i++) e1[i] = p1[i] - p0[i], e2[i] = p2[i] - p0[i], r[i] = q[i] - p0[i];
-  float d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2), d20 = dot(r, e1), d21 = dot(r, e2);
-  float den = d00 * d11 - d01 * d01;
-  float b1 = (d11 * d20 - d01 * d21) / den, b2 = (d00 * d21 - d01 * d20) / den, b0 = 1 - b1 - b2;
+  double e1[3], e2[3];
+  for (int i = 0; i < 3; i++) e1[i] = (double)p1[i] - p0[i], e2[i] = (double)p2[i] - p0[i];
+  double d00 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2], d11 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
+  double d01 = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2], den = d00 * d11 - d01 * d01;
   const float *t0 = m->uv + 2 * ix[0], *t1 = m->uv + 2 * ix[1], *t2 = m->uv + 2 * ix[2];
-  *u = b0 * t0[0] + b1 * t1[0] + b2 * t2[0];
-  *v = b0 * t0[1] + b1 * t1[1] + b2 * t2[1];
+  double du1 = (double)t1[0] - t0[0], du2 = (double)t2[0] - t0[0], dv1 = (double)t1[1] - t0[1], dv2 = (double)t2[1] - t0[1];
+  for (int i = 0; i < 3; i++) { /* b1 = g1 . r, b2 = g2 . r for r in the plane */
+    double g1 = (d11 * e1[i] - d01 * e2[i]) / den, g2 = (d00 * e2[i] - d01 * e1[i]) / den;
+    gu[i] = (float)(g1 * du1 + g2 * du2), gv[i] = (float)(g1 * dv1 + g2 * dv2);
+  }
 }
 
 /* Fills the surface at a hit; wo points back along the ray. */
@@ -209,7 +213,10 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   /* Sub-pixel yarns: K positions spread over the pixel (a stratified set of spp x K
    * per pixel, K of them for this ray), where their camera rays meet this triangle's plane. */
   const wv_camera_rig *r = &c->cam;
-  float pn = dot(sf->p, sf->ng) - dot(r->cpos, sf->ng);
+  float gu[3], gv[3], rel[3];
+  uv_gradient(m, ix, gu, gv);
+  for (int i = 0; i < 3; i++) rel[i] = sf->p[i] - r->cpos[i];
+  float pn = dot(rel, sf->ng); /* camera to the plane, along its normal */
   int px = (int)(ts->pixel % (uint64_t)r->width), py = (int)(ts->pixel / (uint64_t)r->width);
   for (int k = 0; k < c->K; k++) {
     float sx, sy, dd[3], u = sf->u, v = sf->v;
@@ -217,9 +224,9 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
     camera_dir(r, (float)px + sx, (float)py + sy, dd);
     float den = dot(dd, sf->ng);
     if (fabsf(den) > 1e-6f && pn / den > 0) {
-      float q[3];
-      for (int i = 0; i < 3; i++) q[i] = r->cpos[i] + pn / den * dd[i];
-      plane_uv(m, ix, q, &u, &v);
+      float q[3]; /* from the hit to where this sample's ray meets the plane */
+      for (int i = 0; i < 3; i++) q[i] = pn / den * dd[i] - rel[i];
+      u += dot(gu, q), v += dot(gv, q);
     }
     sf->fpos[k][0] = u * mt->uv_mm[0] + mt->uv_off[0], sf->fpos[k][1] = v * mt->uv_mm[1] + mt->uv_off[1];
   }
