@@ -81,7 +81,7 @@ static void eval_edits(const wv_world_material *m, float u, float v, fabric_edit
     for (int y = 0; y < 2; y++) {
       switch (em->op) {
         case WV_EDIT_DIFFUSE_MULTIPLY:
-          for (int c = 0; c < 3; c++) e->kd[y][c] *= 1.0f + a * (fminf(val[c], 1e3f) - 1.0f);
+          for (int c = 0; c < 3; c++) e->kd[y][c] *= 1.0f + a * (val[c] - 1.0f);
           break;
         case WV_EDIT_DIFFUSE_REPLACE:
           for (int c = 0; c < 3; c++) e->kd[y][c] += a * (fminf(val[c], 1.0f) - e->kd[y][c]);
@@ -90,6 +90,10 @@ static void eval_edits(const wv_world_material *m, float u, float v, fabric_edit
         case WV_EDIT_ROUGHNESS: e->alpha[y] += a * (fminf(fmaxf(val[0], 0.01f), 1.0f) - e->alpha[y]); break;
       }
     }
+  }
+  for (int y = 0; y < 2; y++) { /* the parameters' ranges (SPEC section 5) */
+    for (int c = 0; c < 3; c++) e->kd[y][c] = fminf(fmaxf(e->kd[y][c], 0.0f), 1.0f);
+    e->beta[y] = fmaxf(e->beta[y], 0.0f);
   }
 }
 
