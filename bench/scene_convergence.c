@@ -3,7 +3,7 @@
  * of the capture image) on a scene file, by default the bundled draped cloth under
  * the studio environment at its full 1024 x 768. Renders the ladder 4, 8, ..., 128
  * spp (the scene's yarn samples per ray unchanged) and prints MAD(spp, 2 spp) over
- * the whole image and over the pixels where the first render is not background.
+ * the whole image.
  * Usage: scene_convergence [scene.json] [threads]. Prints one JSON object last. */
 #include <stdio.h>
 #include <stdlib.h>
