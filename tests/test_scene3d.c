@@ -386,9 +386,9 @@ static void test_deterministic(void **state) {
   char *text;
   wv_error err = {0};
   assert_int_equal(wv_read_file(WOVEN_SOURCE_DIR "/scenes/drape-studio.json", &text, NULL, &err), WV_OK);
-  char *at = strstr(text, "\"width\": 1024, \"height\": 768, \"spp\": 16");
+  char *at = strstr(text, "\"width\": 1024, \"height\": 768, \"spp\": 64");
   assert_non_null(at);
-  memcpy(at, "\"width\":   48, \"height\":  36, \"spp\":  2", strlen("\"width\": 1024, \"height\": 768, \"spp\": 16"));
+  memcpy(at, "\"width\":   48, \"height\":  36, \"spp\":  2", strlen("\"width\": 1024, \"height\": 768, \"spp\": 64"));
   wv_image a, b, ra, rb;
   render_text(text, 1, &a, &ra);
   render_text(text, 2, &b, &rb);

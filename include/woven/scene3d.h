@@ -104,7 +104,7 @@ typedef struct {
 
 /* Limits: what one scene may hold. */
 #define WV_SCENE3D_MAX_ITEMS 256 /* lights, materials, objects, edits: each */
-#define WV_SCENE3D_DEFAULT_SPP 16
+#define WV_SCENE3D_DEFAULT_SPP 64
 #define WV_SCENE3D_DEFAULT_YARN_SAMPLES 4
 
 /* Parses a scene text. source names it in messages; relative paths in it are
