@@ -10,7 +10,7 @@
 
 static const char *SCENE_HELP =
     "usage: woven scene SCENE.json -o OUT.png|OUT.exr [--params P.json] [--spp N] [--threads N]\n"
-    "                   [--seed N] [--mesh-limit-mb N] [--quiet] [--json]\n"
+    "                   [--size WxH] [--seed N] [--mesh-limit-mb N] [--quiet] [--json]\n"
     "\n"
     "Renders a scene of meshes (the fabric on a draped cloth, under an environment and lights)\n"
     "with a path tracer; the scene format is in docs/scene.md.\n"
@@ -19,6 +19,7 @@ static const char *SCENE_HELP =
     "  --params P.json    replaces the parameters of every fabric material in the scene\n"
     "  --spp N            camera rays per pixel (default: the scene's image.spp)\n"
     "  --threads N        worker threads (default: all cores)\n"
+    "  --size WxH         image size instead of the scene's (same camera and field of view: a preview)\n"
     "  --seed N           overrides the scene's render.seed\n"
     "  --mesh-limit-mb N  memory limit for the meshes and the ray tracer (default: the scene's, else 2048)\n"
     "  --json             print a JSON summary on stdout\n";
@@ -34,6 +35,7 @@ int cmd_scene(int argc, char **argv) {
   cli_args_init(&a, argc, argv, c.cmd);
   const char *scene_path = NULL, *out = NULL, *params_path = NULL;
   long spp = 0, threads = 0, seed = -1, limit_mb = 0;
+  int width = 0, height = 0;
   for (const char *s; (s = cli_next(&a));) {
     if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
       fputs(SCENE_HELP, stdout);
@@ -46,6 +48,13 @@ int cmd_scene(int argc, char **argv) {
       if (!cli_int(&a, "--spp", 1, WV_SCENE_MAX_SPP, &spp)) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--threads")) {
       if (!cli_int(&a, "--threads", 1, 1024, &threads)) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "--size")) {
+      const char *v = cli_value(&a, "--size");
+      char x = 0, end = 0;
+      if (!v) return EXIT_USAGE;
+      if (sscanf(v, "%d%c%d%c", &width, &x, &height, &end) != 3 || (x != 'x' && x != 'X') || width < 1 ||
+          height < 1 || width > WV_SCENE_MAX_SIDE || height > WV_SCENE_MAX_SIDE)
+        return cli_usage_error(c.cmd, "--size: '%s' is not WIDTHxHEIGHT with sides in 1..%d", v, WV_SCENE_MAX_SIDE);
     } else if (cli_is(&a, s, "--seed")) {
       if (!cli_int(&a, "--seed", 0, 2147483647L, &seed)) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--mesh-limit-mb")) {
@@ -73,6 +82,7 @@ int cmd_scene(int argc, char **argv) {
   if (wv_scene3d_read(scene_path, &sc, &err)) return cli_fail(&c, &err);
   if (seed >= 0) sc.seed = (uint64_t)seed;
   if (limit_mb) sc.mesh_limit_bytes = (size_t)limit_mb << 20;
+  if (width) sc.width = sc.response.width = width, sc.height = sc.response.height = height;
   double t0 = cli_now();
   wv_world *w = NULL;
   if (wv_world_load(&sc, params_path ? &p : NULL, (int)threads, &w, &err)) {

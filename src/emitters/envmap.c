@@ -206,16 +206,12 @@ wv_status wv_env_builtin(const char *name, int width, wv_image *out, wv_error *e
         px[0] = px[1] = px[2] = 1.0f;
         continue;
       }
-      /* the average of 2 x 2 directions inside the pixel (soft edges stay smooth) */
-      float acc[3] = {0, 0, 0};
-      for (int k = 0; k < 4; k++) {
-        double th = PI * (y + 0.25 + 0.5 * (k >> 1)) / h, ph = 2 * PI * (x + 0.25 + 0.5 * (k & 1)) / width - PI;
-        double d[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)};
-        float c[3];
-        if (name[1] == 't') studio(d, c);
-        else sky(d, c);
-        for (int i = 0; i < 3; i++) acc[i] += 0.25f * c[i];
-      }
+      /* at the pixel's centre: the soft edges span several pixels */
+      double th = PI * (y + 0.5) / h, ph = 2 * PI * (x + 0.5) / width - PI;
+      double d[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)};
+      float acc[3];
+      if (name[1] == 't') studio(d, acc);
+      else sky(d, acc);
       px[0] = acc[0], px[1] = acc[1], px[2] = acc[2];
     }
   return WV_OK;
