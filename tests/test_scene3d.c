@@ -187,29 +187,35 @@ static void render_text(const char *json, int threads, wv_image *cap, wv_image *
 }
 
 /* A Lambertian sphere in a uniform white environment reflects its albedo (one
- * bounce of a convex object; the light comes only from the environment). */
+ * bounce of a convex object; the light comes only from the environment), with
+ * bounces (environment samples and bounce rays weighted by MIS) and without
+ * (direct light only: the environment samples alone). */
 static void test_white_furnace(void **state) {
   (void)state;
-  const char *json =
+  const char *fmt =
       "{\"image\": {\"width\": 24, \"height\": 24, \"spp\": 64},"
       "\"camera\": {\"position_mm\": [0, 0, 10], \"look_at_mm\": [0, 0, 0], \"vfov_deg\": 20},"
       "\"environment\": {\"uniform\": 1},"
       "\"materials\": {\"m\": {\"lambert\": [0.5, 0.25, 0.8]}},"
       "\"objects\": [{\"sphere\": {\"centre_mm\": [0, 0, 0], \"radius_mm\": 1.2}, \"material\": \"m\"}],"
-      "\"response\": {\"encoding\": \"linear\", \"clip\": 0}}";
-  wv_image cap, rad;
-  render_text(json, 2, &cap, &rad);
-  double sum[3] = {0}, n = 0;
-  for (int y = 8; y < 16; y++) /* the sphere's inner pixels */
-    for (int x = 8; x < 16; x++, n++)
-      for (int c = 0; c < 3; c++) sum[c] += wv_image_px(&rad, x, y)[c];
-  const double albedo[3] = {0.5, 0.25, 0.8};
-  for (int c = 0; c < 3; c++) {
-    print_message("channel %d: %.5f (albedo %.2f)\n", c, sum[c] / n, albedo[c]);
-    assert_true(fabs(sum[c] / n - albedo[c]) < 0.01 * albedo[c]);
+      "\"render\": {\"max_bounces\": %d}, \"response\": {\"encoding\": \"linear\", \"clip\": 0}}";
+  for (int bounces = 0; bounces <= 3; bounces += 3) {
+    char json[1024];
+    snprintf(json, sizeof json, fmt, bounces);
+    wv_image cap, rad;
+    render_text(json, 2, &cap, &rad);
+    double sum[3] = {0}, n = 0;
+    for (int y = 8; y < 16; y++) /* the sphere's inner pixels */
+      for (int x = 8; x < 16; x++, n++)
+        for (int c = 0; c < 3; c++) sum[c] += wv_image_px(&rad, x, y)[c];
+    const double albedo[3] = {0.5, 0.25, 0.8};
+    for (int c = 0; c < 3; c++) {
+      print_message("%d bounces, channel %d: %.5f (albedo %.2f)\n", bounces, c, sum[c] / n, albedo[c]);
+      assert_true(fabs(sum[c] / n - albedo[c]) < 0.01 * albedo[c]);
+    }
+    assert_true(fabsf(wv_image_px(&rad, 0, 0)[0] - 1.0f) < 1e-6f); /* background: the environment */
+    wv_image_free(&cap), wv_image_free(&rad);
   }
-  assert_true(fabsf(wv_image_px(&rad, 0, 0)[0] - 1.0f) < 1e-6f); /* background: the environment */
-  wv_image_free(&cap), wv_image_free(&rad);
 }
 
 /* The flat quad through the mesh path matches the capture renderer's flat45 scene

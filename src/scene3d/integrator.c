@@ -306,6 +306,7 @@ static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3],
     surface sf;
     make_surface(c, ts, &hit, o, d, depth == 0, &sf);
     float wo[3] = {-d[0], -d[1], -d[2]}, org[3];
+    int last = depth >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
     for (int i = 0; i < 3; i++) org[i] = sf.p[i] + c->eps * sf.ng[i];
     /* next-event estimation */
     for (int i = 0; i < s->nlights; i++) {
@@ -328,7 +329,7 @@ static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3],
           float cosl = -dot(wi, n);
           if (cosl <= 0) continue;
           float pl = dist * dist / ((float)(l->size[0] * l->size[1]) * cosl);
-          wgt = power_heuristic(pl, cos_pdf(&sf, wi));
+          wgt = last ? 1.0f : power_heuristic(pl, cos_pdf(&sf, wi));
           g = 1.0f / pl;
         } else {
           for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
@@ -364,13 +365,13 @@ static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3],
         if (maxc(f) > 0) {
           ts->rays++;
           if (!wv_tracer_occluded(w->tracer, org, wi, 0.0f, INFINITY)) {
-            float wgt = power_heuristic(pl, cos_pdf(&sf, wi));
+            float wgt = last ? 1.0f : power_heuristic(pl, cos_pdf(&sf, wi));
             for (int k = 0; k < 3; k++) L[k] += thr[k] * f[k] * le[k] * wgt / pl;
           }
         }
       }
     }
-    if (depth >= s->max_bounces) return;
+    if (last) return;
     /* bounce: cosine-weighted about the shading normal */
     float u1, u2;
     rand2(c, ts, depth, 2, &u1, &u2);
