@@ -3,6 +3,7 @@
 #include "cli.h"
 
 #include <math.h>
+#include <libgen.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -173,4 +174,13 @@ void cli_clean_temps_beside(const char *path) {
   else
     snprintf(dir, sizeof dir, "%.*s", slash == path ? 1 : (int)(slash - path), path);
   wv_remove_stale_temps(dir, slash ? slash + 1 : path);
+/* Refuse early, before minutes of work, when the output cannot be written. */
+int cli_check_writable(const char *cmd, const char *path) {
+  char *copy = strdup(path);
+  if (!copy) return 0;
+  const char *dir = dirname(copy);
+  int ok = access(dir, W_OK) == 0;
+  if (!ok) fprintf(stderr, "woven %s: error: %s: directory '%s' is not writable or does not exist\n", cmd, path, dir);
+  free(copy);
+  return ok;
 }

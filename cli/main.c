@@ -18,6 +18,8 @@ static const struct {
     {"train", cmd_train, "train FabricNet on a dataset"},
     {"predict", cmd_predict, "FabricNet's estimate of the parameters of a photo"},
     {"capture", cmd_capture, "photo -> parameters: network estimate, then the fit, all outputs"},
+    {"scene", cmd_scene, "render the fabric on meshes (a draped cloth) under new light, with edits"},
+    {"cloth", cmd_cloth, "drape a UV-mapped square with the cloth simulation and write it as OBJ"},
 };
 
 static void usage(FILE *f) {

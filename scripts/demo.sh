@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs dependencies, builds, and runs the main job on the bundled example:
 # captures the bundled photo examples/photo_twill_cylinder.png (FabricNet's estimate, then
-# the fit), renders examples/twill.json in both capture scenes and writes its texture maps.
+# the fit), shows the captured fabric on the bundled draped cloth under the studio
+# environment, renders examples/twill.json in both capture scenes and writes its texture maps.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
@@ -10,6 +11,8 @@ mkdir -p out
 # The whole product in one command. 60 fit iterations instead of 200 keep the demo at a
 # few minutes on 2 cores; drop --iters for the full fit.
 ./build/woven capture examples/photo_twill_cylinder.png --scene cylinder --pattern twill -o out/capture --iters 60 --force
+# The capture on a draped cloth under new light (a 512 x 384 preview of scenes/drape-studio.json).
+./build/woven scene scenes/drape-studio.json --params out/capture/params.json --size 512x384 -o out/capture/drape.png
 ./build/woven render --params examples/twill.json --scene scenes/cylinder.json -o out/twill_cylinder.png
 ./build/woven render --params examples/twill.json --scene scenes/flat45.json -o out/twill_flat45.png
 ./build/woven maps --params examples/twill.json --size 512 -o out/twill_maps

@@ -1,0 +1,197 @@
+/* Loads what a scene file names: meshes (files or built-in shapes, transformed,
+ * with tangent frames where a fabric needs them), the ray tracer over them,
+ * fabric parameter files (prepared for shading), edit maps and masks (checked
+ * for format, type and size) and the environment. Owns wv_world. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene3d/world_internal.h"
+#include "woven/io.h"
+
+void wv_world_free(wv_world *w) {
+  if (!w) return;
+  for (int i = 0; i < w->nobjects; i++) wv_mesh_free(&w->meshes[i]);
+  for (int i = 0; i < w->nmats; i++) {
+    free(w->mats[i].fab);
+    for (int e = 0; e < w->mats[i].nedits; e++) wv_image_free(&w->mats[i].edits[e].map), wv_image_free(&w->mats[i].edits[e].mask);
+    free(w->mats[i].edits);
+  }
+  wv_tracer_free(w->tracer);
+  wv_envmap_free(&w->env);
+  free(w->meshes), free(w->material), free(w->mats);
+  free(w);
+}
+
+void wv_world_size(const wv_world *w, long long *tris, long long *verts) {
+  *tris = *verts = 0;
+  for (int i = 0; i < w->nobjects; i++) *tris += w->meshes[i].nt, *verts += w->meshes[i].nv;
+}
+
+void wv_edit_lookup(const wv_image *img, float u, float v, float out[3]) {
+  float x = u * (float)img->w - 0.5f, y = (1.0f - v) * (float)img->h - 0.5f;
+  float fx = floorf(x), fy = floorf(y), ax = x - fx, ay = y - fy;
+  long long x0 = (long long)fx, y0 = (long long)fy;
+  out[0] = out[1] = out[2] = 0;
+  for (int k = 0; k < 4; k++) {
+    long long xi = (x0 + (k & 1)) % img->w, yi = (y0 + (k >> 1)) % img->h;
+    if (xi < 0) xi += img->w;
+    if (yi < 0) yi += img->h;
+    float wgt = ((k & 1) ? ax : 1 - ax) * ((k >> 1) ? ay : 1 - ay);
+    const float *p = wv_image_px(img, (int)xi, (int)yi);
+    for (int c = 0; c < 3; c++) out[c] += wgt * p[c];
+  }
+}
+
+static float srgb_decode(float y) { return y <= 0.04045f ? y / 12.92f : powf((y + 0.055f) / 1.055f, 2.4f); }
+
+/* PNG or EXR only (JPEG is lossy and has no linear form): checked by the magic bytes. */
+static wv_status read_map(const char *path, int grey, int colour, wv_image *img, wv_error *err) {
+  unsigned char magic[4] = {0};
+  FILE *f = fopen(path, "rb");
+  if (!f) return wv_fail(err, WV_ERR_IO, "%s: cannot open edit map", path);
+  size_t n = fread(magic, 1, 4, f);
+  fclose(f);
+  int png = n == 4 && magic[0] == 0x89 && magic[1] == 'P', exr = n == 4 && magic[0] == 0x76 && magic[1] == 0x2f;
+  if (!png && !exr) return wv_fail(err, WV_ERR_FORMAT, "%s: an edit map must be a PNG or EXR image", path);
+  wv_image_info info;
+  wv_status st = wv_image_read(path, img, &info, err);
+  if (st) return st;
+  if (grey && info.channels_in_file > 2) {
+    for (size_t i = 0; i < (size_t)img->w * img->h; i++) {
+      const float *p = img->data + 3 * i;
+      if (p[0] != p[1] || p[1] != p[2]) {
+        wv_image_free(img);
+        return wv_fail(err, WV_ERR_FORMAT, "%s: must be a grey image (this edit and masks take one value a pixel)",
+                       path);
+      }
+    }
+  }
+  for (size_t i = 0; i < (size_t)img->w * img->h * 3; i++) {
+    float v = img->data[i];
+    if (!isfinite(v) || v < 0) {
+      wv_image_free(img);
+      return wv_fail(err, WV_ERR_FORMAT, "%s: has a negative, NaN or infinite value", path);
+    }
+    if (colour && png) img->data[i] = srgb_decode(v); /* 8/16-bit colour maps are sRGB */
+  }
+  return WV_OK;
+}
+
+static wv_status load_edit(const wv_edit3d *e, wv_edit_map *m, wv_error *err) {
+  m->op = e->op;
+  m->gain = (float)e->gain;
+  int colour = e->op == WV_EDIT_DIFFUSE_MULTIPLY || e->op == WV_EDIT_DIFFUSE_REPLACE;
+  wv_status st = read_map(e->map, !colour, colour, &m->map, err);
+  if (st || !e->mask) return st;
+  if ((st = read_map(e->mask, 1, 0, &m->mask, err))) return st;
+  if (m->mask.w != m->map.w || m->mask.h != m->map.h)
+    return wv_fail(err, WV_ERR_FORMAT, "%s: the mask is %d x %d but its map %s is %d x %d", e->mask, m->mask.w,
+                   m->mask.h, e->map, m->map.w, m->map.h);
+  return WV_OK;
+}
+
+static wv_status load_material(const wv_material3d *src, const wv_params *override, wv_world_material *m,
+                               wv_error *err) {
+  m->kind = src->kind;
+  for (int c = 0; c < 3; c++) m->albedo[c] = (float)src->albedo[c];
+  if (src->kind != WV_MAT_FABRIC) return WV_OK;
+  for (int i = 0; i < 2; i++) m->uv_mm[i] = (float)src->uv_mm[i], m->uv_off[i] = (float)src->uv_offset_mm[i];
+  wv_params p;
+  wv_status st;
+  if (override) p = *override;
+  else if ((st = wv_params_read(src->params_path, &p, err))) return st;
+  if (!(m->fab = malloc(sizeof *m->fab))) return wv_fail(err, WV_ERR_NOMEM, "out of memory for a fabric");
+  if ((st = wv_fabric_prepare(&p, m->fab, err)))
+    wv_error_prefix(err, "%s", override ? "--params" : src->params_path);
+  return st;
+}
+
+static wv_status make_mesh(const wv_scene3d *s, const wv_object3d *o, size_t limit, wv_mesh *m, wv_error *err) {
+  int fabric = s->materials[o->material].kind == WV_MAT_FABRIC;
+  wv_status st;
+  switch (o->kind) {
+    case WV_OBJ_MESH: st = wv_mesh_load(o->path, limit, fabric, m, err); break;
+    case WV_OBJ_QUAD: st = wv_mesh_quad(o->centre, o->eu, o->ev, o->size[0], o->size[1], o->resolution, m, err); break;
+    case WV_OBJ_SPHERE: st = wv_mesh_sphere(o->centre, o->radius, o->resolution / 2, o->resolution, m, err); break;
+    default: st = wv_mesh_cylinder(o->centre, o->radius, o->length, o->resolution, m, err); break;
+  }
+  if (st) return st;
+  const double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, z[3] = {0, 0, 0};
+  if ((memcmp(o->A, I, sizeof I) || memcmp(o->b, z, sizeof z)) && (st = wv_mesh_transform(m, o->A, o->b, err)))
+    return st;
+  const char *name = o->path ? o->path : "built-in shape";
+  if (!fabric) return wv_mesh_validate(m, name, 0, err);
+  if ((st = wv_mesh_validate(m, name, 1, err))) return st;
+  return wv_mesh_tangents(m, name, err);
+}
+
+wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int threads, wv_world **out,
+                        wv_error *err) {
+  *out = NULL;
+  wv_world *w = calloc(1, sizeof *w);
+  wv_status st = WV_OK;
+  if (!w) return wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  w->meshes = calloc((size_t)s->nobjects, sizeof *w->meshes);
+  w->material = calloc((size_t)s->nobjects, sizeof *w->material);
+  w->mats = calloc((size_t)s->nmaterials, sizeof *w->mats);
+  if (!w->meshes || !w->material || !w->mats) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  for (int i = 0; i < s->nmaterials && !st; i++, w->nmats++)
+    st = load_material(&s->materials[i], override, &w->mats[i], err);
+  for (int i = 0; i < s->nmaterials && !st; i++) { /* edits, grouped by material */
+    wv_world_material *m = &w->mats[i];
+    for (int e = 0; e < s->nedits; e++) m->nedits += s->edits[e].material == i;
+    if (m->nedits && !(m->edits = calloc((size_t)m->nedits, sizeof *m->edits))) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+    for (int e = 0, k = 0; e < s->nedits && !st; e++)
+      if (s->edits[e].material == i) st = load_edit(&s->edits[e], &m->edits[k++], err);
+  }
+  size_t used = 0, limit = s->mesh_limit_bytes ? s->mesh_limit_bytes : (size_t)WV_MESH_DEFAULT_LIMIT_MB << 20;
+  for (int i = 0; i < s->nobjects && !st; i++, w->nobjects++) {
+    w->material[i] = s->objects[i].material;
+    st = make_mesh(s, &s->objects[i], limit - used, &w->meshes[i], err);
+    if (!st) used += wv_mesh_bytes(w->meshes[i].nv, w->meshes[i].nt);
+    if (!st && used > limit)
+      st = wv_fail(err, WV_ERR_NOMEM, "the scene's meshes need %zu MB, above the memory limit of %zu MB", used >> 20,
+                   limit >> 20);
+  }
+  if (!st) {
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    const wv_mesh **list = malloc(sizeof *list * (size_t)s->nobjects);
+    if (!list) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < s->nobjects && list; i++) {
+      list[i] = &w->meshes[i];
+      for (int v = 0; v < w->meshes[i].nv; v++)
+        for (int k = 0; k < 3; k++) {
+          float p = w->meshes[i].pos[3 * v + k];
+          lo[k] = p < lo[k] ? p : lo[k], hi[k] = p > hi[k] ? p : hi[k];
+        }
+    }
+    w->scene_radius = 0.5f * sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                   (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    if (list) st = wv_tracer_create(list, s->nobjects, threads, limit - used, &w->tracer, err);
+    free(list);
+  }
+  if (!st && s->env != WV_ENV_NONE) {
+    wv_image img = {0};
+    const char *name = s->env == WV_ENV_FILE ? s->env_path : s->env_name;
+    wv_image_info info = {0};
+    if (s->env == WV_ENV_FILE) {
+      if (!(st = wv_image_read(s->env_path, &img, &info, err)) && !info.is_float)
+        st = wv_fail(err, WV_ERR_FORMAT, "%s: an environment map must be an EXR file (linear radiance)", s->env_path);
+    } else if (s->env == WV_ENV_BUILTIN) {
+      st = wv_env_builtin(s->env_name, s->env_width, &img, err);
+    } else if (!(st = wv_image_alloc(&img, 4, 2, 3, err))) {
+      for (int i = 0; i < 24; i++) img.data[i] = (float)s->env_color[i % 3];
+    }
+    if (!st) st = wv_envmap_init(&w->env, &img, s->env_strength, s->env_rotation_deg, name, err);
+    w->has_env = !st;
+    wv_image_free(&img);
+  }
+  if (st) {
+    wv_world_free(w);
+    return st;
+  }
+  *out = w;
+  return WV_OK;
+}

@@ -1,0 +1,44 @@
+/* A loaded scene (wv_world): meshes, their ray tracer, prepared materials,
+ * edit maps and lights, shared by the loader (world.c) and the path tracer
+ * (integrator.c). Internal to the library. */
+#ifndef WOVEN_WORLD_INTERNAL_H
+#define WOVEN_WORLD_INTERNAL_H
+
+#include "render/render_internal.h"
+#include "tracer/tracer.h"
+#include "woven/emitters.h"
+#include "woven/mesh.h"
+#include "woven/scene3d.h"
+
+typedef struct {
+  wv_edit_op op;
+  wv_image map;  /* linear values (sRGB PNG colour maps decoded) */
+  wv_image mask; /* empty when the edit applies everywhere */
+  float gain;
+} wv_edit_map;
+
+typedef struct {
+  wv_material_kind kind;
+  wv_fabric *fab;       /* fabric: prepared by the capture renderer's wv_fabric_prepare */
+  float uv_mm[2], uv_off[2];
+  float albedo[3];      /* lambert */
+  wv_edit_map *edits;
+  int nedits;
+} wv_world_material;
+
+struct wv_world {
+  wv_mesh *meshes; /* one per object */
+  int *material;   /* per object */
+  int nobjects;
+  wv_world_material *mats;
+  int nmats;
+  wv_tracer *tracer;
+  int has_env;
+  wv_envmap env;
+  float scene_radius; /* of the meshes' bounding sphere, for ray offsets */
+};
+
+/* Bilinear lookup of an edit map (or mask) at UV (repeats; v up, the image's top row at v = 1). */
+void wv_edit_lookup(const wv_image *img, float u, float v, float out[3]);
+
+#endif

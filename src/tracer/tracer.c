@@ -1,0 +1,121 @@
+/* Embree 3 scene of triangle meshes: building it under a memory limit, and the
+ * two queries the integrator needs (closest hit, occlusion). */
+#include "tracer/tracer.h"
+
+#include <embree3/rtcore.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct wv_tracer {
+  RTCDevice dev;
+  RTCScene scene;
+  _Atomic long long bytes; /* Embree's live allocations */
+  long long limit;
+  char msg[256]; /* Embree's first error message */
+};
+
+static void on_error(void *user, enum RTCError code, const char *str) {
+  struct wv_tracer *t = user;
+  if (!t->msg[0]) snprintf(t->msg, sizeof t->msg, "Embree error %d: %s", (int)code, str ? str : "");
+}
+
+/* Refuses an allocation that would take Embree above the limit. */
+static bool on_memory(void *user, ssize_t bytes, bool post) {
+  struct wv_tracer *t = user;
+  long long now = atomic_fetch_add(&t->bytes, (long long)bytes) + bytes;
+  if (bytes > 0 && !post && t->limit > 0 && now > t->limit) {
+    atomic_fetch_sub(&t->bytes, (long long)bytes);
+    return false;
+  }
+  return true;
+}
+
+void wv_tracer_free(wv_tracer *t) {
+  if (!t) return;
+  if (t->scene) rtcReleaseScene(t->scene);
+  if (t->dev) rtcReleaseDevice(t->dev);
+  free(t);
+}
+
+wv_status wv_tracer_create(const wv_mesh *const *meshes, int n, int threads, size_t limit, wv_tracer **out,
+                           wv_error *err) {
+  *out = NULL;
+  struct wv_tracer *t = calloc(1, sizeof *t);
+  if (!t) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the ray tracer");
+  t->limit = (long long)limit;
+  char cfg[64];
+  snprintf(cfg, sizeof cfg, "threads=%d,set_affinity=0,verbose=0", threads > 0 ? threads : 0);
+  t->dev = rtcNewDevice(cfg);
+  if (!t->dev) {
+    free(t);
+    return wv_fail(err, WV_ERR_INTERNAL, "cannot start Embree (error %d)", (int)rtcGetDeviceError(NULL));
+  }
+  rtcSetDeviceErrorFunction(t->dev, on_error, t);
+  rtcSetDeviceMemoryMonitorFunction(t->dev, on_memory, t);
+  t->scene = rtcNewScene(t->dev);
+  if (t->scene) rtcSetSceneFlags(t->scene, RTC_SCENE_FLAG_ROBUST);
+  for (int g = 0; g < n && t->scene && !t->msg[0]; g++) {
+    const wv_mesh *m = meshes[g];
+    RTCGeometry geo = rtcNewGeometry(t->dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+    if (!geo) break;
+    float *vb = rtcSetNewGeometryBuffer(geo, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                        (size_t)m->nv);
+    unsigned *ib = rtcSetNewGeometryBuffer(geo, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                           (size_t)m->nt);
+    if (vb && ib) {
+      memcpy(vb, m->pos, (size_t)m->nv * 3 * sizeof(float));
+      memcpy(ib, m->idx, (size_t)m->nt * 3 * sizeof(unsigned));
+      rtcCommitGeometry(geo);
+      rtcAttachGeometryByID(t->scene, geo, (unsigned)g);
+    }
+    rtcReleaseGeometry(geo);
+  }
+  if (t->scene && !t->msg[0]) rtcCommitScene(t->scene);
+  enum RTCError code = rtcGetDeviceError(t->dev);
+  if (!t->scene || code != RTC_ERROR_NONE || t->msg[0]) {
+    wv_status st = code == RTC_ERROR_OUT_OF_MEMORY
+                       ? wv_fail(err, WV_ERR_NOMEM, "the scene's meshes need more than the memory limit of %zu MB",
+                                 limit >> 20)
+                       : wv_fail(err, WV_ERR_INTERNAL, "building the ray tracer failed: %s",
+                                 t->msg[0] ? t->msg : "unknown Embree error");
+    wv_tracer_free(t);
+    return st;
+  }
+  *out = t;
+  return WV_OK;
+}
+
+static void set_ray(struct RTCRay *r, const float o[3], const float d[3], float tmin, float tmax) {
+  r->org_x = o[0], r->org_y = o[1], r->org_z = o[2];
+  r->dir_x = d[0], r->dir_y = d[1], r->dir_z = d[2];
+  r->tnear = tmin, r->tfar = tmax;
+  r->time = 0, r->mask = 0xffffffffu, r->id = 0, r->flags = 0;
+}
+
+int wv_tracer_intersect(const wv_tracer *t, const float o[3], const float d[3], float tmin, float tmax,
+                        wv_trace_hit *hit) {
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  struct RTCRayHit rh;
+  set_ray(&rh.ray, o, d, tmin, tmax);
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(t->scene, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
+  hit->t = rh.ray.tfar;
+  hit->b1 = rh.hit.u, hit->b2 = rh.hit.v;
+  hit->geom = (int)rh.hit.geomID, hit->prim = (int)rh.hit.primID;
+  hit->ng[0] = rh.hit.Ng_x, hit->ng[1] = rh.hit.Ng_y, hit->ng[2] = rh.hit.Ng_z;
+  return 1;
+}
+
+int wv_tracer_occluded(const wv_tracer *t, const float o[3], const float d[3], float tmin, float tmax) {
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  struct RTCRay r;
+  set_ray(&r, o, d, tmin, tmax);
+  rtcOccluded1(t->scene, &ctx, &r);
+  return r.tfar < 0.0f;
+}

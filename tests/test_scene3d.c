@@ -1,0 +1,436 @@
+/* The mesh renderer: mesh loading (OBJ, PLY, glTF) and its errors, tangent
+ * frames, environment sampling, the white furnace, the flat quad against the
+ * capture renderer, edits, the cloth simulation, scene parsing errors and
+ * determinism across thread counts. Small images and few samples. */
+#include <math.h>
+
+#define M_PI 3.14159265358979323846
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "testutil.h"
+#include "util/hash.h"
+#include "woven/cloth.h"
+#include "woven/emitters.h"
+#include "woven/io.h"
+#include "woven/mesh.h"
+#include "woven/metrics.h"
+#include "woven/render.h"
+#include "woven/scene3d.h"
+
+static char dir[512];
+
+static const char *file(const char *name, const char *text) {
+  static char path[4][1024];
+  static int k;
+  char *p = path[k++ % 4];
+  snprintf(p, 1024, "%s/%s", dir, name);
+  if (text) {
+    wv_error err = {0};
+    if (wv_write_file_atomic(p, text, strlen(text), &err)) fail_msg("%s", err.msg);
+  }
+  return p;
+}
+
+/* A 2 x 1 quad in the xy plane, u along x, v along y, as text in each format. */
+static const char *QUAD_OBJ = "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                              "vn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n";
+static const char *QUAD_PLY = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                              "property float z\nproperty float s\nproperty float t\nelement face 2\n"
+                              "property list uchar int vertex_indices\nend_header\n0 0 0 0 0\n2 0 0 1 0\n"
+                              "2 1 0 1 1\n0 1 0 0 1\n3 0 1 2\n3 0 2 3\n";
+
+static void base64(const unsigned char *in, size_t n, char *out) {
+  static const char *A = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  size_t o = 0;
+  for (size_t i = 0; i < n; i += 3) {
+    unsigned v = (unsigned)in[i] << 16 | (i + 1 < n ? (unsigned)in[i + 1] << 8 : 0) | (i + 2 < n ? in[i + 2] : 0);
+    out[o++] = A[v >> 18 & 63], out[o++] = A[v >> 12 & 63];
+    out[o++] = i + 1 < n ? A[v >> 6 & 63] : '=', out[o++] = i + 2 < n ? A[v & 63] : '=';
+  }
+  out[o] = 0;
+}
+
+/* The same quad as glTF 2.0 with an embedded buffer (positions, UVs, indices). */
+static const char *quad_gltf(void) {
+  static char text[4096];
+  unsigned char buf[4 * 12 + 4 * 8 + 6 * 2];
+  float pos[12] = {0, 0, 0, 2, 0, 0, 2, 1, 0, 0, 1, 0}, uv[8] = {0, 1, 1, 1, 1, 0, 0, 0}; /* glTF: v down */
+  unsigned short ix[6] = {0, 1, 2, 0, 2, 3};
+  memcpy(buf, pos, 48), memcpy(buf + 48, uv, 32), memcpy(buf + 80, ix, 12);
+  char b64[200];
+  base64(buf, sizeof buf, b64);
+  snprintf(text, sizeof text,
+           "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+           "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"indices\":2}]}],"
+           "\"buffers\":[{\"byteLength\":92,\"uri\":\"data:application/octet-stream;base64,%s\"}],"
+           "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,\"byteLength\":48},{\"buffer\":0,\"byteOffset\":48,"
+           "\"byteLength\":32},{\"buffer\":0,\"byteOffset\":80,\"byteLength\":12}],"
+           "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\",\"min\":[0,0,0],"
+           "\"max\":[2,1,0]},{\"bufferView\":1,\"componentType\":5126,\"count\":4,\"type\":\"VEC2\"},"
+           "{\"bufferView\":2,\"componentType\":5123,\"count\":6,\"type\":\"SCALAR\"}]}",
+           b64);
+  return text;
+}
+
+static void check_quad(const char *path) {
+  wv_mesh m;
+  wv_error err = {0};
+  if (wv_mesh_load(path, 0, 1, &m, &err)) fail_msg("%s: %s", path, err.msg);
+  assert_int_equal(m.nt, 2);
+  assert_int_equal(m.nv, 4);
+  assert_non_null(m.uv);
+  assert_int_equal(wv_mesh_tangents(&m, path, &err), WV_OK);
+  for (int v = 0; v < m.nv; v++) {
+    /* warp follows v: the tangent (weft, u) is +x, normal x tangent (warp) +y, normal +z */
+    assert_true(fabsf(m.tan[4 * v] - 1) < 1e-5f && fabsf(m.tan[4 * v + 1]) < 1e-5f);
+    assert_true(fabsf(fabsf(m.nrm[3 * v + 2]) - 1) < 1e-5f);
+    assert_true(m.tan[4 * v + 3] * m.nrm[3 * v + 2] > 0); /* +y = (n x t) * w */
+    /* u runs with x: the UV at x = 2 is 1 */
+    if (m.pos[3 * v] > 1) assert_true(fabsf(m.uv[2 * v] - 1) < 1e-6f);
+    if (m.pos[3 * v + 1] > 0.5f) assert_true(fabsf(m.uv[2 * v + 1] - 1) < 1e-6f);
+  }
+  wv_mesh_free(&m);
+}
+
+static void test_mesh_formats(void **state) {
+  (void)state;
+  check_quad(file("quad.obj", QUAD_OBJ));
+  check_quad(file("quad.ply", QUAD_PLY));
+  check_quad(file("quad.gltf", quad_gltf()));
+}
+
+static void expect_mesh_error(const char *name, const char *text, size_t limit, wv_status code, const char *needle) {
+  wv_mesh m;
+  wv_error err = {0};
+  const char *p = file(name, text);
+  wv_status st = wv_mesh_load(p, limit, 1, &m, &err);
+  if (st != code || !strstr(err.msg, needle) || !strstr(err.msg, name))
+    fail_msg("%s: status %d, message '%s' (wanted %d and '%s')", name, st, err.msg, code, needle);
+}
+
+static void test_mesh_errors(void **state) {
+  (void)state;
+  expect_mesh_error("nouv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", 0, WV_ERR_FORMAT, "no UV");
+  expect_mesh_error("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                    "f 1/1 2/2 3/3\nf 1/1 2/2 4/4\n", 0, WV_ERR_FORMAT, "degenerate");
+  expect_mesh_error("flatuv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 2 0\nf 1/1 2/2 3/3\n", 0,
+                    WV_ERR_FORMAT, "degenerate UVs");
+  expect_mesh_error("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n", 0,
+                    WV_ERR_FORMAT, "");
+  expect_mesh_error("notamesh.obj", "this is not a mesh at all\n", 0, WV_ERR_FORMAT, "");
+  expect_mesh_error("truncated.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 100\nproperty float x\n"
+                    "property float y\nproperty float z\nelement face 50\nproperty list uchar int vertex_indices\n"
+                    "end_header\nabc", 0, WV_ERR_FORMAT, "");
+  expect_mesh_error("empty.obj", "", 0, WV_ERR_FORMAT, "empty");
+  expect_mesh_error("big.obj", QUAD_OBJ, 64, WV_ERR_NOMEM, "memory limit");
+  wv_mesh m;
+  wv_error err = {0};
+  assert_int_equal(wv_mesh_load(file("missing.obj", NULL), 0, 1, &m, &err), WV_ERR_IO);
+  assert_non_null(strstr(err.msg, "missing.obj"));
+}
+
+/* Importance sampling of an environment: the returned pdf is the pdf's value
+ * there, the pdf integrates to 1, and E[L / pdf] is the integral of L. */
+static void test_env_sampling(void **state) {
+  (void)state;
+  wv_image img;
+  wv_error err = {0};
+  assert_int_equal(wv_env_builtin("sky", 64, &img, &err), WV_OK);
+  for (size_t i = 0; i < (size_t)img.w * img.h * 3; i++) img.data[i] *= 0.5f + wv_u01(wv_mix64(i)); /* texture */
+  wv_envmap e;
+  assert_int_equal(wv_envmap_init(&e, &img, 1.0, 30.0, "test", &err), WV_OK);
+  /* quadrature over the sphere: the pdf's integral and the radiance's */
+  double pdf_int = 0, l_int = 0;
+  int N = 1024;
+  for (int i = 0; i < N; i++)
+    for (int j = 0; j < 2 * N; j++) {
+      double th = M_PI * (i + 0.5) / N, ph = 2 * M_PI * (j + 0.5) / (2 * N);
+      float d[3] = {(float)(sin(th) * cos(ph)), (float)cos(th), (float)(sin(th) * sin(ph))}, c[3];
+      double dw = sin(th) * (M_PI / N) * (M_PI / N);
+      pdf_int += wv_envmap_pdf(&e, d) * dw;
+      wv_envmap_eval(&e, d, c);
+      l_int += c[1] * dw;
+    }
+  print_message("pdf integral %.5f, radiance integral %.5f\n", pdf_int, l_int);
+  assert_true(fabs(pdf_int - 1) < 2e-3);
+  double est = 0;
+  int M = 200000;
+  for (int k = 0; k < M; k++) {
+    float d[3], c[3];
+    uint64_t h = wv_hash2((uint64_t)k, 1, 2);
+    float pdf = wv_envmap_sample(&e, wv_u01(h), (float)((h >> 16) & 0xffffff) / 16777216.0f, d, c);
+    assert_true(pdf > 0);
+    assert_true(fabsf(pdf - wv_envmap_pdf(&e, d)) <= 1e-3f * pdf);
+    assert_true(fabsf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - 1) < 1e-4f);
+    est += c[1] / pdf;
+  }
+  est /= M;
+  print_message("importance-sampled estimate %.5f\n", est);
+  assert_true(fabs(est - l_int) < 0.01 * l_int);
+  wv_envmap_free(&e);
+  wv_image_free(&img);
+}
+
+static void render_text(const char *json, int threads, wv_image *cap, wv_image *rad) {
+  wv_scene3d s;
+  wv_world *w;
+  wv_error err = {0};
+  if (wv_scene3d_parse(json, "test scene", WOVEN_SOURCE_DIR "/scenes", &s, &err)) fail_msg("%s", err.msg);
+  if (wv_world_load(&s, NULL, threads, &w, &err)) fail_msg("%s", err.msg);
+  wv_scene3d_opts o = {0, threads, NULL, NULL};
+  if (wv_scene3d_render(&s, w, &o, cap, rad, NULL, &err)) fail_msg("%s", err.msg);
+  wv_world_free(w);
+  wv_scene3d_free(&s);
+}
+
+/* A Lambertian sphere in a uniform white environment reflects its albedo (one
+ * bounce of a convex object; the light comes only from the environment), with
+ * bounces (environment samples and bounce rays weighted by MIS) and without
+ * (direct light only: the environment samples alone). */
+static void test_white_furnace(void **state) {
+  (void)state;
+  const char *fmt =
+      "{\"image\": {\"width\": 24, \"height\": 24, \"spp\": 64},"
+      "\"camera\": {\"position_mm\": [0, 0, 10], \"look_at_mm\": [0, 0, 0], \"vfov_deg\": 20},"
+      "\"environment\": {\"uniform\": 1},"
+      "\"materials\": {\"m\": {\"lambert\": [0.5, 0.25, 0.8]}},"
+      "\"objects\": [{\"sphere\": {\"centre_mm\": [0, 0, 0], \"radius_mm\": 1.2}, \"material\": \"m\"}],"
+      "\"render\": {\"max_bounces\": %d}, \"response\": {\"encoding\": \"linear\", \"clip\": 0}}";
+  for (int bounces = 0; bounces <= 3; bounces += 3) {
+    char json[1024];
+    snprintf(json, sizeof json, fmt, bounces);
+    wv_image cap, rad;
+    render_text(json, 2, &cap, &rad);
+    double sum[3] = {0}, n = 0;
+    for (int y = 8; y < 16; y++) /* the sphere's inner pixels */
+      for (int x = 8; x < 16; x++, n++)
+        for (int c = 0; c < 3; c++) sum[c] += wv_image_px(&rad, x, y)[c];
+    const double albedo[3] = {0.5, 0.25, 0.8};
+    for (int c = 0; c < 3; c++) {
+      print_message("%d bounces, channel %d: %.5f (albedo %.2f)\n", bounces, c, sum[c] / n, albedo[c]);
+      assert_true(fabs(sum[c] / n - albedo[c]) < 0.01 * albedo[c]);
+    }
+    assert_true(fabsf(wv_image_px(&rad, 0, 0)[0] - 1.0f) < 1e-6f); /* background: the environment */
+    wv_image_free(&cap), wv_image_free(&rad);
+  }
+}
+
+/* The flat quad through the mesh path matches the capture renderer's flat45 scene
+ * (a 96 x 96 centre window) within sampling noise. */
+static void test_quad_matches_flat45(void **state) {
+  (void)state;
+  char *text;
+  wv_error err = {0};
+  assert_int_equal(wv_read_file(WOVEN_SOURCE_DIR "/scenes/quad-flat45.json", &text, NULL, &err), WV_OK);
+  wv_scene3d s;
+  assert_int_equal(wv_scene3d_parse(text, "quad-flat45.json", WOVEN_SOURCE_DIR "/scenes", &s, &err), WV_OK);
+  free(text);
+  wv_scene ref;
+  tu_centre_window(&ref, "flat45", 96, 96, 64);
+  s.width = s.height = 96, s.vfov_deg = ref.vfov_deg;
+  s.response.width = s.response.height = 96, s.response.falloff = 0, ref.falloff = 0;
+  wv_world *w;
+  assert_int_equal(wv_world_load(&s, NULL, 2, &w, &err), WV_OK);
+  wv_scene3d_opts o = {0, 2, NULL, NULL};
+  wv_image a, b;
+  assert_int_equal(wv_scene3d_render(&s, w, &o, &a, NULL, NULL, &err), WV_OK);
+  wv_params p;
+  assert_int_equal(wv_params_read(WOVEN_SOURCE_DIR "/examples/twill.json", &p, &err), WV_OK);
+  wv_render_opts ro = {256, 2, NULL, NULL, NULL};
+  assert_int_equal(wv_render(&ref, &p, &ro, &b, NULL, &err), WV_OK);
+  double ssim, mae;
+  assert_int_equal(wv_ssim(&a, &b, WV_SSIM_LUMA, &ssim, &err), WV_OK);
+  assert_int_equal(wv_mae(&a, &b, &mae, &err), WV_OK);
+  print_message("quad vs flat45: SSIM %.4f, MAE %.4f\n", ssim, mae);
+  assert_true(ssim > 0.98);
+  assert_true(mae < 0.01);
+  wv_image_free(&a), wv_image_free(&b);
+  wv_world_free(w);
+  wv_scene3d_free(&s);
+}
+
+/* A diffuse edit with a mask: where the mask is 1 the fabric turns darker; edit
+ * maps of the wrong type or size are refused with the file's name. */
+static void test_edits(void **state) {
+  (void)state;
+  wv_image map, mask;
+  wv_error err = {0};
+  assert_int_equal(wv_image_alloc(&map, 4, 4, 3, &err), WV_OK);
+  assert_int_equal(wv_image_alloc(&mask, 4, 4, 3, &err), WV_OK);
+  for (int y = 0; y < 4; y++)
+    for (int x = 0; x < 4; x++)
+      for (int c = 0; c < 3; c++) wv_image_px(&map, x, y)[c] = 0.1f, wv_image_px(&mask, x, y)[c] = x < 2;
+  assert_int_equal(wv_image_write_exr(file("dark.exr", NULL), &map, &err), WV_OK);
+  assert_int_equal(wv_image_write_png(file("left.png", NULL), &mask, 8, &err), WV_OK);
+  wv_image_px(&map, 0, 0)[0] = 0.5f; /* not grey */
+  assert_int_equal(wv_image_write_exr(file("colour.exr", NULL), &map, &err), WV_OK);
+  wv_image_free(&mask);
+  assert_int_equal(wv_image_alloc(&mask, 3, 4, 3, &err), WV_OK);
+  assert_int_equal(wv_image_write_png(file("small.png", NULL), &mask, 8, &err), WV_OK);
+  file("fake.png", "not an image");
+  char json[4096];
+  const char *fmt =
+      "{\"image\": {\"width\": 32, \"height\": 32, \"spp\": 4},"
+      "\"camera\": {\"position_mm\": [0, 0, 8], \"look_at_mm\": [0, 0, 0], \"vfov_deg\": 6},"
+      "\"lights\": [{\"type\": \"directional\", \"direction\": [0.5, 0.3, 1], \"irradiance\": 3}],"
+      "\"materials\": {\"f\": {\"fabric\": \"../examples/twill.json\", \"uv_mm\": [20, 20]}},"
+      "\"objects\": [{\"quad\": {\"centre_mm\": [0, 0, 0], \"size_mm\": [1, 1]}, \"material\": \"f\"}],"
+      "\"edits\": [{\"material\": \"f\", \"apply\": \"%s\", \"map\": \"%s/%s\", \"mask\": \"%s/%s\"}],"
+      "\"render\": {\"max_bounces\": 0}}";
+  char cwd[512];
+  assert_non_null(getcwd(cwd, sizeof cwd));
+  snprintf(json, sizeof json, fmt, "diffuse_replace", cwd, file("dark.exr", NULL), cwd, file("left.png", NULL));
+  wv_image cap, rad;
+  render_text(json, 2, &cap, &rad);
+  double left = 0, right = 0;
+  for (int y = 4; y < 28; y++) /* the mask's left half (u < 0.5) is the image's left half */
+    for (int x = 2; x < 14; x++) left += wv_image_px(&rad, x, y)[1], right += wv_image_px(&rad, x + 16, y)[1];
+  print_message("edited half %.4f, untouched half %.4f\n", left, right);
+  assert_true(left < 0.7 * right);
+  wv_image_free(&cap), wv_image_free(&rad);
+  struct {
+    const char *op, *map, *mask, *needle;
+  } bad[] = {{"heightfield", "colour.exr", "left.png", "grey"},
+             {"diffuse_multiply", "dark.exr", "small.png", "mask is 3 x 4"},
+             {"diffuse_multiply", "fake.png", "left.png", "PNG or EXR"},
+             {"roughness", "none.png", "left.png", "none.png"}};
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    snprintf(json, sizeof json, fmt, bad[i].op, cwd, file(bad[i].map, NULL), cwd, file(bad[i].mask, NULL));
+    wv_scene3d s;
+    wv_world *w = NULL;
+    assert_int_equal(wv_scene3d_parse(json, "edit scene", WOVEN_SOURCE_DIR "/scenes", &s, &err), WV_OK);
+    wv_status st = wv_world_load(&s, NULL, 1, &w, &err);
+    if (!st || !strstr(err.msg, bad[i].needle)) fail_msg("%s: status %d, '%s'", bad[i].map, st, err.msg);
+    assert_null(w);
+    wv_scene3d_free(&s);
+  }
+  wv_image_free(&map), wv_image_free(&mask);
+}
+
+/* The cloth lands on the sphere and the floor without passing through them, the
+ * same way every time. */
+static void test_cloth(void **state) {
+  (void)state;
+  wv_cloth_opts o;
+  wv_cloth_defaults(&o);
+  o.res = 12, o.seconds = 0.8, o.steps_per_second = 300;
+  wv_mesh a, b;
+  wv_error err = {0};
+  assert_int_equal(wv_cloth_drape(&o, &a, &err), WV_OK);
+  assert_int_equal(wv_cloth_drape(&o, &b, &err), WV_OK);
+  assert_int_equal(a.nv, 13 * 13);
+  assert_int_equal(a.nt, 2 * 12 * 12);
+  assert_memory_equal(a.pos, b.pos, sizeof(float) * 3 * (size_t)a.nv);
+  float top = -1e9f;
+  for (int v = 0; v < a.nv; v++) {
+    const float *p = a.pos + 3 * v;
+    float d = sqrtf(p[0] * p[0] + (p[1] - 80) * (p[1] - 80) + p[2] * p[2]);
+    assert_true(d >= 80.0f - 0.5f); /* outside the sphere */
+    assert_true(p[1] >= -1e-3f);    /* above the floor */
+    top = p[1] > top ? p[1] : top;
+  }
+  assert_true(top > 150 && top < 175); /* it rests on the sphere's top (160 mm) */
+  assert_int_equal(wv_mesh_validate(&a, "cloth", 1, &err), WV_OK);
+  /* the OBJ it writes reads back */
+  const char *p = file("cloth.obj", NULL);
+  assert_int_equal(wv_mesh_write_obj(p, &a, "test", &err), WV_OK);
+  wv_mesh c;
+  assert_int_equal(wv_mesh_load(p, 0, 1, &c, &err), WV_OK);
+  assert_int_equal(c.nt, a.nt);
+  wv_mesh_free(&a), wv_mesh_free(&b), wv_mesh_free(&c);
+}
+
+static void expect_parse_error(const char *json, const char *needle) {
+  wv_scene3d s;
+  wv_error err = {0};
+  wv_status st = wv_scene3d_parse(json, "bad.json", NULL, &s, &err);
+  if (!st || !strstr(err.msg, needle) || !strstr(err.msg, "bad.json"))
+    fail_msg("status %d, '%s' (wanted '%s')", st, err.msg, needle);
+}
+
+static void test_parse_errors(void **state) {
+  (void)state;
+  const char *head = "{\"image\": {\"width\": 8, \"height\": 8}, \"camera\": {\"position_mm\": [0, 0, 8], "
+                     "\"look_at_mm\": [0, 0, 0], \"vfov_deg\": 40}, ";
+  char buf[2048];
+#define BAD(tail, needle) (snprintf(buf, sizeof buf, "%s%s", head, tail), expect_parse_error(buf, needle))
+  expect_parse_error("{\"image\": ", "malformed JSON");
+  expect_parse_error("[1, 2]", "top level");
+  BAD("\"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": []}", "at least one object");
+  BAD("\"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": [{\"sphere\": {\"centre_mm\": [0,0,0], "
+      "\"radius_mm\": 1}, \"material\": \"x\"}]}", "no material named 'x'");
+  BAD("\"materials\": {\"m\": {\"lambert\": 2}}, \"objects\": []}", "materials.m.lambert");
+  BAD("\"materials\": {\"m\": {\"lambert\": 0.5, \"shiny\": 1}}, \"objects\": []}", "materials.m.shiny");
+  BAD("\"lights\": [{\"type\": \"laser\"}], \"materials\": {}}", "laser");
+  BAD("\"environment\": {\"builtin\": \"beach\"}, \"materials\": {}}", "beach");
+  BAD("\"environment\": {\"builtin\": \"sky\", \"uniform\": 1}, \"materials\": {}}", "exactly one");
+  BAD("\"render\": {\"max_bounces\": -1}, \"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": [{\"mesh\": "
+      "\"a.obj\", \"material\": \"m\"}]}", "render.max_bounces");
+  BAD("\"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": [{\"mesh\": \"a.obj\", \"quad\": {}, "
+      "\"material\": \"m\"}]}", "exactly one");
+  /* a scene that names a missing file parses (no file is read), then fails to load naming the file */
+  wv_scene3d s;
+  wv_world *w = NULL;
+  wv_error err = {0};
+  snprintf(buf, sizeof buf, "%s%s", head,
+           "\"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": [{\"mesh\": \"no/such.obj\", \"material\": \"m\"}]}");
+  assert_int_equal(wv_scene3d_parse(buf, "ok.json", "/nonexistent", &s, &err), WV_OK);
+  assert_int_equal(wv_world_load(&s, NULL, 1, &w, &err), WV_ERR_IO);
+  assert_non_null(strstr(err.msg, "/nonexistent/no/such.obj"));
+  assert_null(w);
+  wv_scene3d_free(&s);
+#undef BAD
+}
+
+/* The bundled scene (tiny, few samples): the same image on 1 and 2 threads, and
+ * all three kinds of light plus an environment together stay finite. */
+static void test_deterministic(void **state) {
+  (void)state;
+  char *text;
+  wv_error err = {0};
+  assert_int_equal(wv_read_file(WOVEN_SOURCE_DIR "/scenes/drape-studio.json", &text, NULL, &err), WV_OK);
+  char *at = strstr(text, "\"width\": 1024, \"height\": 768, \"spp\": 64");
+  assert_non_null(at);
+  memcpy(at, "\"width\":   48, \"height\":  36, \"spp\":  2", strlen("\"width\": 1024, \"height\": 768, \"spp\": 64"));
+  wv_image a, b, ra, rb;
+  render_text(text, 1, &a, &ra);
+  render_text(text, 2, &b, &rb);
+  assert_memory_equal(ra.data, rb.data, sizeof(float) * 3 * 48 * 36);
+  double mean = wv_image_mean(&a);
+  assert_true(mean > 0.05 && mean < 0.95);
+  free(text);
+  wv_image_free(&a), wv_image_free(&b), wv_image_free(&ra), wv_image_free(&rb);
+  const char *lights =
+      "{\"image\": {\"width\": 16, \"height\": 16, \"spp\": 4},"
+      "\"camera\": {\"position_mm\": [0, 40, 60], \"look_at_mm\": [0, 0, 0], \"vfov_deg\": 60},"
+      "\"environment\": {\"builtin\": \"sky\", \"width\": 64},"
+      "\"lights\": [{\"type\": \"point\", \"position_mm\": [0, 50, 0], \"intensity\": 2000},"
+      " {\"type\": \"spot\", \"position_mm\": [30, 50, 0], \"look_at_mm\": [0, 0, 0], \"intensity\": [3000, 2000, 1000]},"
+      " {\"type\": \"directional\", \"direction\": [1, 1, 0], \"irradiance\": 1},"
+      " {\"type\": \"area\", \"position_mm\": [0, 30, 30], \"look_at_mm\": [0, 0, 0], \"size_mm\": [10, 10], \"radiance\": 20}],"
+      "\"materials\": {\"f\": {\"fabric\": \"../examples/satin.json\", \"uv_mm\": [1, 1]}, \"g\": {\"lambert\": 0.4}},"
+      "\"objects\": [{\"sphere\": {\"centre_mm\": [0, 10, 0], \"radius_mm\": 10, \"segments\": 24}, \"material\": \"f\"},"
+      " {\"quad\": {\"centre_mm\": [0, 0, 0], \"u_axis\": [1, 0, 0], \"v_axis\": [0, 0, -1], \"size_mm\": [200, 200]},"
+      " \"material\": \"g\"}]}";
+  render_text(lights, 2, &a, &ra);
+  for (size_t i = 0; i < 16 * 16 * 3; i++) assert_true(isfinite(ra.data[i]) && ra.data[i] >= 0);
+  assert_true(wv_image_mean(&ra) > 0.01);
+  wv_image_free(&a), wv_image_free(&ra);
+}
+
+int main(void) {
+  const char *d = tu_tmpdir("scene3d");
+  if (!d) return 1;
+  snprintf(dir, sizeof dir, "%s", d);
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_mesh_formats),  cmocka_unit_test(test_mesh_errors),
+      cmocka_unit_test(test_env_sampling),  cmocka_unit_test(test_white_furnace),
+      cmocka_unit_test(test_quad_matches_flat45), cmocka_unit_test(test_edits),
+      cmocka_unit_test(test_cloth),         cmocka_unit_test(test_parse_errors),
+      cmocka_unit_test(test_deterministic),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
