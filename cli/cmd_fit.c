@@ -48,7 +48,7 @@ int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_giv
   long v;
   *handled = 1;
   if (cli_is(a, s, "--iters")) {
-    if (!cli_int(a, "--iters", 0, 100000, &v)) return EXIT_USAGE;
+    if (!cli_int(a, "--iters", 0, WV_FIT_MAX_ITERS, &v)) return EXIT_USAGE;
     o->iters = (int)v, *iters_given = 1;
   } else if (cli_is(a, s, "--iter-spp")) {
     if (!cli_int(a, "--iter-spp", 1, 4096, &v)) return EXIT_USAGE;

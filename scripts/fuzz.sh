@@ -63,7 +63,9 @@ for h in "${harnesses[@]}"; do
       continue
     fi
   fi
-  opts=(-max_total_time="$secs" -print_final_stats=1 -timeout=10 -rss_limit_mb=2048
+  # -timeout: an input taking over 60 s is a finding (an execution takes milliseconds;
+  # a starved process on a busy shared machine can still stall for several seconds).
+  opts=(-max_total_time="$secs" -print_final_stats=1 -timeout=60 -rss_limit_mb=2048
         -artifact_prefix="$findings/")
   case $h in params | scene | safetensors | dataset | fit_checkpoint) opts+=(-dict=fuzz/json.dict) ;; esac
   set +e

@@ -37,6 +37,10 @@ typedef struct {
 
 void wv_fit_opts_default(wv_fit_opts *o);
 
+/* The most iterations a fit takes (its log is allocated up front, so a checkpoint
+ * cannot ask for more). */
+#define WV_FIT_MAX_ITERS 100000
+
 /* The smallest scene image a fit accepts (SSIM needs 11 x 11 windows; the
  * descriptor and the 16 x 8 pixel loss need a little more). */
 #define WV_FIT_MIN_SIDE 32

@@ -39,6 +39,8 @@ void wv_fit_beta_prior(const char *pattern, double *mu, double *sigma) {
 
 wv_status wv_fit_state_init(wv_fit_state *st, const wv_params *start, const wv_fit_opts *o, wv_error *err) {
   memset(st, 0, sizeof *st);
+  if (o->iters < 0 || o->iters > WV_FIT_MAX_ITERS)
+    return wv_fail(err, WV_ERR_INVALID, "'iters' = %d is outside 0..%d", o->iters, WV_FIT_MAX_ITERS);
   wv_status s = wv_params_validate(start, err);
   if (s) return s;
   st->start = st->params = *start;
@@ -463,7 +465,10 @@ wv_status wv_fit_checkpoint_read(const char *path, wv_fit_state *st, wv_fit_opts
   o->register_radius = json_is_integer(rr) ? (int)json_integer_value(rr) : 0;
   wv_params start;
   if ((rc = read_params_obj(root, path, "start", &start, err))) goto done;
-  if ((rc = wv_fit_state_init(st, &start, o, err))) goto done;
+  if ((rc = wv_fit_state_init(st, &start, o, err))) {
+    wv_error_prefix(err, "%s", path);
+    goto done;
+  }
   if ((rc = read_params_obj(root, path, "params", &st->params, err))) goto done;
   if ((rc = read_darray(root, path, "adam_m", st->adam_m, WV_P_COUNT, err))) goto done;
   if ((rc = read_darray(root, path, "adam_v", st->adam_v, WV_P_COUNT, err))) goto done;
