@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Installs woven's build and test dependencies from Debian's archive.
+# Installs woven's build and test dependencies from Debian's archive, and the extra
+# packages named as arguments (scripts/install-fuzz-deps.sh).
 set -euo pipefail
 PKGS=(build-essential cmake pkg-config python3
       libpng-dev libjpeg62-turbo-dev libopenexr-dev libjansson-dev libopenblas-dev libcmocka-dev libfftw3-dev
-      libassimp-dev libembree-dev)
+      libassimp-dev libembree-dev "$@")
 missing=()
 for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
 if ((${#missing[@]})); then
