@@ -1,6 +1,8 @@
 #include "cli.h"
 
+#include <libgen.h>
 #include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -109,4 +111,15 @@ void cli_progress_update(void *vp, double f) {
 
 void cli_progress_end(cli_progress *p) {
   if (p->enabled) fprintf(stderr, "\r\033[K");
+}
+
+/* Refuse early, before minutes of work, when the output cannot be written. */
+int cli_check_writable_dir(const char *cmd, const char *path) {
+  char *copy = strdup(path);
+  if (!copy) return 0;
+  const char *dir = dirname(copy);
+  int ok = access(dir, W_OK) == 0;
+  if (!ok) fprintf(stderr, "woven %s: error: %s: directory '%s' is not writable or does not exist\n", cmd, path, dir);
+  free(copy);
+  return ok;
 }

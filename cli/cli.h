@@ -49,6 +49,9 @@ void cli_progress_start(cli_progress *p, const cli_ctx *c, const char *label);
 void cli_progress_update(void *p, double fraction);
 void cli_progress_end(cli_progress *p);
 double cli_now(void);
+/* Refuses early, before minutes of work, an output whose directory is not writable
+ * (prints the message; returns 0). */
+int cli_check_writable_dir(const char *cmd, const char *path);
 
 /* A fit to run (woven fit and woven capture). */
 #include "woven/descriptor.h"
@@ -87,5 +90,7 @@ int cmd_dataset(int argc, char **argv);
 int cmd_train(int argc, char **argv);
 int cmd_predict(int argc, char **argv);
 int cmd_capture(int argc, char **argv);
+int cmd_export(int argc, char **argv);
+int cmd_view(int argc, char **argv);
 
 #endif

@@ -1,4 +1,3 @@
-#include <libgen.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -29,17 +28,6 @@ static const char *MAPS_HELP =
     "specular, roughness (.png and/or .exr) and maps.json (tile size in mm, encodings).\n"
     "  --size N     pixels per side (default 1024)\n"
     "  --format F   png (default), exr or both\n";
-
-/* Refuse early, before minutes of work, when the output cannot be written. */
-static int check_writable_dir(const char *cmd, const char *path) {
-  char *copy = strdup(path);
-  if (!copy) return 0;
-  const char *dir = dirname(copy);
-  int ok = access(dir, W_OK) == 0;
-  if (!ok) fprintf(stderr, "woven %s: error: %s: directory '%s' is not writable or does not exist\n", cmd, path, dir);
-  free(copy);
-  return ok;
-}
 
 static int has_ext(const char *path, const char *ext) {
   size_t n = strlen(path), e = strlen(ext);
@@ -80,7 +68,7 @@ int cmd_render(int argc, char **argv) {
   if (!out) return cli_usage_error(c.cmd, "-o OUT.png or OUT.exr is required");
   int exr = has_ext(out, ".exr");
   if (!exr && !has_ext(out, ".png")) return cli_usage_error(c.cmd, "output '%s' must end in .png or .exr", out);
-  if (!check_writable_dir(c.cmd, out)) return WV_ERR_IO;
+  if (!cli_check_writable_dir(c.cmd, out)) return WV_ERR_IO;
 
   wv_error err = {0};
   wv_params p;

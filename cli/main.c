@@ -18,6 +18,8 @@ static const struct {
     {"train", cmd_train, "train FabricNet on a dataset"},
     {"predict", cmd_predict, "FabricNet's estimate of the parameters of a photo"},
     {"capture", cmd_capture, "photo -> parameters: network estimate, then the fit, all outputs"},
+    {"export", cmd_export, "write a glTF 2.0 binary with the fabric baked into PBR textures"},
+    {"view", cmd_view, "write a self-contained HTML viewer of the true model (WebGL)"},
 };
 
 static void usage(FILE *f) {
