@@ -15,6 +15,7 @@
 #include "woven/photo.h"
 #include "woven/render.h"
 #include "woven/report.h"
+#include "woven/view.h"
 
 static const char *HELP =
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
@@ -42,7 +43,7 @@ static const char *HELP =
     "  --force           replace the results of an earlier fit in DIR\n"
     "  --resume DIR      continue a fit that was stopped (checkpoints every 10 iterations)\n"
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), loss.svg,\n"
-    "report.html, maps/, and fit.json + checkpoint.json (for --resume).\n";
+    "report.html, viewer.html (woven view), maps/, and fit.json + checkpoint.json (for --resume).\n";
 
 int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled) {
   long v;
@@ -192,7 +193,11 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   if (!rc) rc = wv_write_file_atomic(path, svg, strlen(svg), &err);
   wv_report rep = {job->title,  pphoto,      pstart,     pfit,      job->start_label,      ssim_start, ssim_fit,
                    &st.start,   &st.params,  svg,        &st.timing, st.iter,              wv_descriptor_name(job->desc),
-                   job->pattern_choice};
+                   job->pattern_choice, "viewer.html"};
+  /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
+  wv_view_opts vo = {&st.params, &fit_scene, pphoto, job->title};
+  snprintf(path, sizeof path, "%s/viewer.html", job->dir);
+  if (!rc) rc = wv_view_write(path, &vo, &err);
   snprintf(path, sizeof path, "%s/report.html", job->dir);
   if (!rc) rc = wv_report_write_html(path, &rep, &err);
   free(svg);

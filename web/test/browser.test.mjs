@@ -1,0 +1,120 @@
+// woven's browser test (run by ctest): in Debian's headless Chromium (software
+// GL), per weave pattern on the flat45 capture scene,
+//   1. the viewer (`woven view`) renders the capture view; its screenshot is
+//      compared with `woven render` of the same scene: SSIM of 4-px Gaussian
+//      blurs of both (`woven compare --blur 4`) must reach 0.9;
+//   2. the glTF export (`woven export`) passes the Khronos validator with no
+//      error, and three.js's own loader and physical material render it in the
+//      same scene: its SSIM against woven's render is reported;
+// and the viewer refuses out-of-range parameters visibly. Nothing is fetched:
+// the viewer is a file, the glTF page is served from web/ by request
+// interception, and any other request fails the test.
+// Usage: node browser.test.mjs WOVEN SOURCE_DIR [--patterns a,b,..] [--keep DIR] [--spp N]
+import { execFileSync } from 'node:child_process';
+import { mkdtempSync, readFileSync, rmSync, writeFileSync, mkdirSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, resolve, extname } from 'node:path';
+import { chromium } from 'playwright-core';
+import { validateBytes } from 'gltf-validator';
+
+const args = process.argv.slice(2);
+const opt = (name, dflt) => { const i = args.indexOf(name); return i >= 0 ? args[i + 1] : dflt; };
+const [WOVEN, SRC] = args.map((a) => resolve(a));
+const patterns = opt('--patterns', 'plain,twill,satin').split(',');
+const spp = Number(opt('--spp', '16'));
+const keep = opt('--keep', null);
+const work = keep ? resolve(keep) : mkdtempSync(join(tmpdir(), 'woven-browser-'));
+mkdirSync(work, { recursive: true });
+const profile = mkdtempSync(join(tmpdir(), 'woven-chromium-profile-'));
+let failures = 0;
+const fail = (msg) => { console.log(`FAIL ${msg}`); failures++; };
+const woven = (...a) => execFileSync(WOVEN, a, { encoding: 'utf8' });
+const png = (dataUrl, file) => writeFileSync(file, Buffer.from(dataUrl.split(',')[1], 'base64'));
+const compare = (a, b) => JSON.parse(woven('compare', a, b, '--blur', '4', '--json'));
+
+const t0 = Date.now();
+const browser = await chromium.launchPersistentContext(profile, {
+  executablePath: '/usr/bin/chromium',
+  headless: true,
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+         '--disable-background-networking', '--disable-component-update', '--disable-sync',
+         '--enable-unsafe-swiftshader'],
+  viewport: { width: 1200, height: 800 },
+  deviceScaleFactor: 1,
+});
+const MIME = { '.js': 'text/javascript', '.html': 'text/html', '.frag': 'text/plain', '.vert': 'text/plain',
+               '.glb': 'model/gltf-binary' };
+// The glTF page's origin: files from web/ and the work directory, nothing else.
+await browser.route('**/*', (route) => {
+  const u = new URL(route.request().url());
+  if (u.protocol === 'file:' || u.protocol === 'blob:' || u.protocol === 'data:') return route.continue();
+  if (u.host !== 'woven.test') {
+    fail(`request to ${u.href}`);
+    return route.abort();
+  }
+  const p = u.pathname;
+  const file = p.startsWith('/three/') ? join(SRC, 'web/node_modules', p)
+             : p.startsWith('/work/') ? join(work, p.slice(6)) : join(SRC, 'web', p);
+  if (!existsSync(file)) return route.fulfill({ status: 404, body: 'not found' });
+  return route.fulfill({ status: 200, contentType: MIME[extname(file)] || 'application/octet-stream', body: readFileSync(file) });
+});
+
+const rows = [];
+const flat45 = JSON.parse(readFileSync(join(SRC, 'scenes/flat45.json'), 'utf8'));
+const gpage = await browser.newPage();
+gpage.on('pageerror', (e) => fail(`glTF page: ${e.message}`));
+await gpage.goto('http://woven.test/test/gltf_page.html');
+await gpage.waitForFunction(() => window.ready === true, null, { timeout: 60000 });
+let rendererName = '';
+for (const pat of patterns) {
+  const params = join(SRC, 'examples', `${pat}.json`);
+  const c = join(work, `${pat}_c.png`), html = join(work, `${pat}.html`), glb = join(work, `${pat}.glb`);
+  woven('render', '--params', params, '--scene', 'flat45', '-o', c, '-q');
+  woven('view', params, '-o', html, '-q');
+  const exp = JSON.parse(woven('export', params, '--gltf', glb, '--texture', '48', '--json'));
+  const report = await validateBytes(new Uint8Array(readFileSync(glb)), { uri: glb });
+  if (report.issues.numErrors) fail(`${pat}: the glTF validator reports ${report.issues.numErrors} errors`);
+
+  const page = await browser.newPage();
+  page.on('pageerror', (e) => fail(`${pat} viewer: ${e.message}`));
+  await page.goto(`file://${html}?frames=1&spp=${spp}`);
+  await page.waitForFunction(() => window.woven !== undefined, null, { timeout: 60000 });
+  const t1 = Date.now();
+  const r = await page.evaluate((s) => window.woven.render({ frames: 1, spp: s }), spp);
+  const ms = Date.now() - t1;
+  if (!r.valid) fail(`${pat}: the viewer refused the example's parameters`);
+  const v = join(work, `${pat}_viewer.png`);
+  png(await page.evaluate(() => window.woven.snapshot()), v);
+  if (!rendererName)
+    rendererName = await page.evaluate(() => {
+      const gl = document.querySelector('canvas').getContext('webgl2');
+      const d = gl.getExtension('WEBGL_debug_renderer_info');
+      return gl.getParameter(d ? d.UNMASKED_RENDERER_WEBGL : gl.RENDERER);
+    });
+  if (pat === patterns[0]) { // out-of-range parameters: refused, and shown
+    const bad = await page.evaluate(() => window.woven.setParam('density.warp', 400));
+    const shown = await page.evaluate(() => getComputedStyle(document.getElementById('error')).display !== 'none' &&
+                                            document.getElementById('error').textContent);
+    if (!bad.length || !shown || !shown.includes('density.warp')) fail('out-of-range density was not refused visibly');
+  }
+  await page.close();
+
+  const t = join(work, `${pat}_gltf.png`);
+  png(await gpage.evaluate(([u, sc]) => window.renderGltf(u, sc), [`http://woven.test/work/${pat}.glb`, flat45]), t);
+  const sv = compare(c, v), sg = compare(c, t);
+  rows.push({ pattern: pat, viewer_ssim_blur4: sv.ssim, viewer_mae_blur4: sv.mae, viewer_ms: ms,
+              gltf_ssim_blur4: sg.ssim, gltf_mae_blur4: sg.mae, bake_relative_residual: exp.fit.relative,
+              validator_errors: report.issues.numErrors, validator_warnings: report.issues.numWarnings });
+  if (!(sv.ssim >= 0.9)) fail(`${pat}: viewer vs woven render SSIM ${sv.ssim.toFixed(4)} < 0.9`);
+}
+await browser.close();
+rmSync(profile, { recursive: true, force: true });
+if (!keep) rmSync(work, { recursive: true, force: true });
+
+console.log('pattern   viewer SSIM  glTF SSIM  (4-px blur, flat45, vs woven render)  bake residual  viewer ms');
+for (const r of rows)
+  console.log(`${r.pattern.padEnd(9)} ${r.viewer_ssim_blur4.toFixed(4).padStart(11)} ${r.gltf_ssim_blur4.toFixed(4).padStart(10)}` +
+              `${''.padStart(40)}${(100 * r.bake_relative_residual).toFixed(1).padStart(6)} %  ${String(r.viewer_ms).padStart(8)}`);
+console.log(JSON.stringify({ renderer: rendererName, spp, seconds: (Date.now() - t0) / 1000, results: rows }));
+console.log(failures ? `${failures} failed` : 'all passed');
+process.exit(failures ? 1 : 0);
