@@ -121,6 +121,7 @@ wv_status wv_gltf_write(const char *path, const wv_tri_mesh *mesh, const wv_bake
       "KHR_materials_anisotropy", "anisotropyStrength", 1.0, "anisotropyRotation", 0.0, "anisotropyTexture",
       tex_info(3, sx, sy), "KHR_materials_sheen", "sheenColorFactor", 1.0, 1.0, 1.0, "sheenColorTexture",
       tex_info(4, sx, sy), "sheenRoughnessFactor", 1.0, "sheenRoughnessTexture", tex_info(4, sx, sy));
+  json_object_set_new(material, "doubleSided", json_true()); /* cloth is seen from both sides */
   char *pj = wv_params_to_json(p);
   json_t *params = pj ? json_loads(pj, 0, NULL) : NULL;
   free(pj);

@@ -106,8 +106,12 @@ float expWv(float x) {
 // ---- yarn geometry (src/yarn/yarn_eval.h) ----
 int wrapI(int v, int n) { int r = v % n; return r < 0 ? r + n : r; }
 
+// The last segment's noisy heightfield scaling: a pixel's samples mostly fall on
+// a few segments, and the segment hash is the costliest part of a sample.
+struct SegCache { ivec3 key; float beta; };
+
 // Returns the yarn type (0 warp, 1 weft, -1 gap) and n, t in fabric tangent space.
-int yarnEval(float x, float y, out vec3 n, out vec3 t) {
+int yarnEval(float x, float y, inout SegCache cache, out vec3 n, out vec3 t) {
   float r = -y * uInvSpacing.y, c = x * uInvSpacing.x;
   float rf = floor(r), cf = floor(c);
   int I = int(rf), J = int(cf);
@@ -116,19 +120,17 @@ int yarnEval(float x, float y, out vec3 n, out vec3 t) {
   int type = int(cell & 0xffu), len = int((cell >> 8) & 0xffu), idx = int(cell >> 16);
   float L = float(len), k = float(idx);
   float a, l, dAcross;
-  uvec2 seg;
+  ivec3 key; // the segment: type, its column (warp) or row (weft), its first cell
   if (type == 0) {
     a = (fc - 0.5) * uSpacing.x;
     l = -((k + fr) - 0.5 * L) * uSpacing.y;
     dAcross = uSpacing.x;
-    uvec2 j2 = i64(J);
-    seg = hash2(uvec2((j2.x << 1) | (j2.y >> 31), j2.y << 1), i64(I - idx), uSeed);
+    key = ivec3(0, J, I - idx);
   } else {
     a = (fr - 0.5) * uSpacing.y;
     l = ((k + fc) - 0.5 * L) * uSpacing.x;
     dAcross = uSpacing.y;
-    uvec2 i2 = i64(I);
-    seg = hash2(uvec2((i2.x << 1) | (i2.y >> 31), (i2.y << 1) | 1u), i64(J - idx), uSeed);
+    key = ivec3(1, I, J - idx);
   }
   if (abs(a) > 0.5 * dAcross * uYarnWidth) { // gap between yarns
     n = vec3(0.0, 0.0, 1.0);
@@ -139,9 +141,14 @@ int yarnEval(float x, float y, out vec3 n, out vec3 t) {
   float v = a * (type == 0 ? uVScale.x : uVScale.y);
   float beta = type == 0 ? uBeta.x : uBeta.y;
   if (uNoise > 0) {
-    float xi = u01(mix64(seg ^ uvec2(0x5851f42du, 0x4c957f2du)));
-    beta = beta * (1.0 + 0.1 * float(uNoise) * (2.0 * xi - 1.0));
-    beta = beta > 0.0 ? beta : 0.0;
+    if (key != cache.key) {
+      uvec2 k2 = i64(key.y);
+      uvec2 seg = hash2(uvec2((k2.x << 1) | (k2.y >> 31), (k2.y << 1) | uint(key.x)), i64(key.z), uSeed);
+      float xi = u01(mix64(seg ^ uvec2(0x5851f42du, 0x4c957f2du)));
+      cache.key = key;
+      cache.beta = max(beta * (1.0 + 0.1 * float(uNoise) * (2.0 * xi - 1.0)), 0.0);
+    }
+    beta = cache.beta;
   }
   float su = sinHp(u), cu = cosHp(u), sv = sinHp(v), cv = cosHp(v);
   n = vec3(sv, su * cv, cu * cv);
@@ -245,12 +252,13 @@ void main() {
   uint ph = pcg(pix.x * 73856093u ^ pcg(pix.y * 19349663u));
   vec2 rot = vec2(float(ph >> 8) * (1.0 / 16777216.0), float(pcg(ph) >> 8) * (1.0 / 16777216.0));
   vec3 sum = vec3(0.0);
+  SegCache cache = SegCache(ivec3(-1, 0x7fffffff, 0), 0.0);
   for (int s = 0; s < uSpp; s++) {
     float g = float(uFrame * uSpp + s);
     vec2 xi = fract(rot + g * vec2(0.7548776662466927, 0.5698402909980532));
     vec2 fs = f + fdx * (xi.x - 0.5) + fdy * (xi.y - 0.5);
     vec3 yn, yt;
-    int ty = yarnEval(fs.x, fs.y, yn, yt);
+    int ty = yarnEval(fs.x, fs.y, cache, yn, yt);
     if (ty < 0) continue; // gap: nothing reflects
     float us = glint(fs.x, fs.y);
     sum += shadeLight(ty, yn, yt, us, wi, wo, light);

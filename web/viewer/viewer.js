@@ -256,12 +256,13 @@ function setMode(mode) {
       { c: [c.x + 2.6 * R, c.y + 0.8 * R, c.z + 0.8 * R], u: [0, 0.8 * R, 0], v: [-0.3 * R, 0, 0.9 * R], L: 0.35 },
       { c: [c.x + 0.5 * R, c.y + 1.5 * R, c.z - 2.6 * R], u: [1.0 * R, 0, 0], v: [0, 0.6 * R, 0.3 * R], L: 0.6 },
     ];
-    u.uBoxes.value = 3;
+    const pointOnly = url.get('lights') === 'point'; // the key light alone (for comparisons)
+    u.uBoxes.value = pointOnly ? 0 : 3;
     boxes.forEach((b, i) => {
       u.uBoxC.value[i].set(...b.c), u.uBoxU.value[i].set(...b.u), u.uBoxV.value[i].set(...b.v);
       u.uBoxL.value[i] = b.L;
     });
-    u.uAmbient.value = 0.08;
+    u.uAmbient.value = pointOnly ? 0 : 0.08;
     renderer.setPixelRatio(url.get('w') ? 1 : Math.min(2, window.devicePixelRatio || 1));
     state.controls = new OrbitControls(camera, renderer.domElement);
     state.controls.target.copy(c);
@@ -511,6 +512,13 @@ window.woven = {
     return { fps: (n * 1000) / (performance.now() - t0), frames: n, spp: state.spp, size: state.size,
              renderer: gl.getParameter(dbg ? dbg.UNMASKED_RENDERER_WEBGL : gl.RENDERER) };
   },
+  // The current camera, light and display, to reproduce the view elsewhere.
+  view: () => ({
+    camera: { position: camera.position.toArray(), target: state.controls ? state.controls.target.toArray() : null,
+              up: camera.up.toArray(), fov: camera.fov, aspect: camera.aspect },
+    light: { position: fabricUniforms.uLightPos.value.toArray(), intensity: fabricUniforms.uLightI.value },
+    exposure: display.uniforms.uExposure.value, size: state.size, mode: state.mode,
+  }),
   setParam(key, value) { setP(params, key, value); applyParams(); return problems(params); },
   setMode,
   problems: () => problems(params),
