@@ -52,6 +52,9 @@ double cli_now(void);
 /* Refuses early, before minutes of work, an output whose directory is not writable
  * (prints the message; returns 0). */
 int cli_check_writable_dir(const char *cmd, const char *path);
+/* An output file: its name must end in ext and its directory be writable; returns 0,
+ * or the exit code after printing why not. */
+int cli_check_output(const char *cmd, const char *path, const char *ext);
 
 /* A fit to run (woven fit and woven capture). */
 #include "woven/descriptor.h"

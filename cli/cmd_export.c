@@ -1,7 +1,6 @@
 /* woven export: a fabric as a glTF 2.0 binary with baked standard PBR textures. */
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 
 #include "cli.h"
 #include "woven/export.h"
@@ -18,7 +17,7 @@ static const char *HELP =
     "  DIR            a finished fit's directory (its params.json), or P.json a parameter file\n"
     "  --mesh M       quad (default): a flat square; drape: a sheet draped over a sphere\n"
     "  --size-mm N    the quad's side or the sheet's side (default 100 quad, 600 drape)\n"
-    "  --texture N    texels per tile side, 8..1024 (default 128)\n"
+    "  --texture N    texels per tile side, 8..1024 (default 64)\n"
     "  --samples N    woven samples per texel side, 1..8 (default 3)\n"
     "  --directions N light/view direction pairs of the fit, 8..256 (default 48)\n"
     "  --threads N    worker threads (default: all cores)\n";
@@ -67,9 +66,8 @@ int cmd_export(int argc, char **argv) {
   }
   if (!in) return cli_usage_error(c.cmd, "a fit directory or a parameter file is required");
   if (!out) return cli_usage_error(c.cmd, "--gltf OUT.glb is required");
-  size_t n = strlen(out);
-  if (n < 5 || strcasecmp(out + n - 4, ".glb")) return cli_usage_error(c.cmd, "output '%s' must end in .glb", out);
-  if (!cli_check_writable_dir(c.cmd, out)) return WV_ERR_IO;
+  int rc = cli_check_output(c.cmd, out, ".glb");
+  if (rc) return rc;
 
   wv_error err = {0};
   wv_source src;

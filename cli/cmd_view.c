@@ -1,7 +1,6 @@
 /* woven view: a self-contained HTML viewer of the true woven model. */
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 
 #include "cli.h"
 #include "woven/export.h"
@@ -48,9 +47,8 @@ int cmd_view(int argc, char **argv) {
   }
   if (!in) return cli_usage_error(c.cmd, "a fit directory or a parameter file is required");
   if (!out) return cli_usage_error(c.cmd, "-o VIEWER.html is required");
-  size_t n = strlen(out);
-  if (n < 6 || strcasecmp(out + n - 5, ".html")) return cli_usage_error(c.cmd, "output '%s' must end in .html", out);
-  if (!cli_check_writable_dir(c.cmd, out)) return WV_ERR_IO;
+  int rc = cli_check_output(c.cmd, out, ".html");
+  if (rc) return rc;
   wv_error err = {0};
   wv_source src;
   if (wv_source_load(in, &src, &err)) return cli_fail(&c, &err);

@@ -61,7 +61,7 @@ wv_status wv_mesh_validate(const wv_tri_mesh *m, wv_error *err);
 void wv_tri_mesh_free(wv_tri_mesh *m);
 
 typedef struct {
-  int texture_size; /* texels per tile side, 8..1024 (default 128) */
+  int texture_size; /* texels per tile side, 8..1024 (default 64) */
   int samples;      /* woven samples per texel side (default 3: 9 positions) */
   int directions;   /* light/view direction pairs of the fit (default 48) */
   int threads;      /* 0: all cores */

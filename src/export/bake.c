@@ -16,7 +16,7 @@
 #define PI_D 3.14159265358979323846
 
 void wv_bake_opts_default(wv_bake_opts *o) {
-  o->texture_size = 128;
+  o->texture_size = 64;
   o->samples = 3;
   o->directions = 48;
   o->threads = 0;

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "util/buf.h"
 #include "woven/export.h"
 #include "woven/io.h"
 
@@ -18,27 +19,11 @@
 #define GL_LINEAR_MIPMAP_LINEAR 9987
 #define GL_REPEAT 10497
 
-typedef struct {
-  unsigned char *data;
-  size_t len, cap;
-  int failed;
-} bytes;
-
-static void put(bytes *b, const void *src, size_t n) {
-  if (b->failed) return;
-  size_t need = b->len + n + 4; /* room for the alignment padding too */
-  if (need > b->cap) {
-    size_t cap = need * 2;
-    unsigned char *d = realloc(b->data, cap);
-    if (!d) {
-      b->failed = 1;
-      return;
-    }
-    b->data = d, b->cap = cap;
-  }
-  memcpy(b->data + b->len, src, n);
-  b->len += n;
-  while (b->len % 4) b->data[b->len++] = 0; /* every view starts 4-byte aligned */
+/* Appends n bytes, then zeros up to a multiple of 4: every view starts aligned. */
+static void put(wv_buf *b, const void *src, size_t n) {
+  static const unsigned char zeros[4] = {0};
+  wv_buf_put(b, src, n);
+  wv_buf_put(b, zeros, (4 - b->len % 4) % 4);
 }
 
 /* glTF is little-endian; the vertex arrays are copied as the (x86, ARM) host stores them. */
@@ -47,7 +32,7 @@ static void put_le32(unsigned char *d, uint32_t v) {
 }
 
 /* Appends data as a new bufferView; returns its index. */
-static int add_view(json_t *views, bytes *bin, const void *data, size_t n, int target) {
+static int add_view(json_t *views, wv_buf *bin, const void *data, size_t n, int target) {
   size_t off = bin->len;
   put(bin, data, n);
   json_t *v = json_pack("{s:i,s:I,s:I}", "buffer", 0, "byteOffset", (json_int_t)off, "byteLength", (json_int_t)n);
@@ -78,7 +63,7 @@ wv_status wv_gltf_write(const char *path, const wv_tri_mesh *mesh, const wv_bake
     own_tangents = m.tangents;
   }
   json_t *root = json_object(), *views = json_array(), *accessors = json_array();
-  bytes bin = {0};
+  wv_buf bin = {0};
   int nv = m.vertex_count;
   /* Vertex data. */
   int a_pos = add_accessor(accessors, add_view(views, &bin, m.positions, sizeof(float) * 3 * nv, GL_ARRAY_BUFFER),

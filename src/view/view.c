@@ -9,6 +9,7 @@
 #include <strings.h>
 
 #include "util/base64.h"
+#include "util/buf.h"
 #include "woven/export.h"
 #include "woven/io.h"
 #include "woven/photo.h"
@@ -25,29 +26,6 @@ ASSET(wv_asset_fabric_frag)
 ASSET(wv_asset_screen_vert)
 ASSET(wv_asset_accumulate_frag)
 ASSET(wv_asset_display_frag)
-
-typedef struct {
-  char *s;
-  size_t len, cap;
-  int failed;
-} text;
-
-static void put(text *t, const void *s, size_t n) {
-  if (t->failed) return;
-  if (t->len + n + 1 > t->cap) {
-    size_t cap = (t->len + n + 1) * 2;
-    char *p = realloc(t->s, cap);
-    if (!p) {
-      t->failed = 1;
-      return;
-    }
-    t->s = p, t->cap = cap;
-  }
-  memcpy(t->s + t->len, s, n);
-  t->len += n;
-  t->s[t->len] = '\0';
-}
-static void puts_(text *t, const char *s) { put(t, s, strlen(s)); }
 
 /* Base64 of a number array (the viewer reads it as a typed array). */
 static json_t *b64_array(const void *data, size_t bytes) {
@@ -163,23 +141,23 @@ static int script_safe(const unsigned char *s, size_t n) {
   return 1;
 }
 
-static void script(text *t, const char *id, const char *type, const unsigned char *data, size_t n, int gz,
+static void script(wv_buf *t, const char *id, const char *type, const unsigned char *data, size_t n, int gz,
                    int *unsafe) {
-  puts_(t, "<script id=\"");
-  puts_(t, id);
-  puts_(t, "\" type=\"");
-  puts_(t, type);
-  puts_(t, "\">");
+  wv_buf_puts(t, "<script id=\"");
+  wv_buf_puts(t, id);
+  wv_buf_puts(t, "\" type=\"");
+  wv_buf_puts(t, type);
+  wv_buf_puts(t, "\">");
   if (gz) { /* base64 text of the gzip stream: safe by construction */
     char *b = wv_base64(data, n);
-    if (b) puts_(t, b);
+    if (b) wv_buf_puts(t, b);
     else t->failed = 1;
     free(b);
   } else {
     if (!script_safe(data, n)) *unsafe = 1;
-    put(t, data, n);
+    wv_buf_put(t, data, n);
   }
-  puts_(t, "</script>\n");
+  wv_buf_puts(t, "</script>\n");
 }
 
 wv_status wv_view_write(const char *path, const wv_view_opts *o, wv_error *err) {
@@ -191,12 +169,12 @@ wv_status wv_view_write(const char *path, const wv_view_opts *o, wv_error *err) 
     free(data);
     return wv_fail(err, WV_ERR_INTERNAL, "the viewer template has no inline marker");
   }
-  text t = {0};
+  wv_buf t = {0};
   int unsafe = 0;
-  put(&t, html, (size_t)(mark - html));
-  puts_(&t, "<script id=\"woven-data\" type=\"application/json\">");
-  puts_(&t, data);
-  puts_(&t, "</script>\n");
+  wv_buf_put(&t, html, (size_t)(mark - html));
+  wv_buf_puts(&t, "<script id=\"woven-data\" type=\"application/json\">");
+  wv_buf_puts(&t, data);
+  wv_buf_puts(&t, "</script>\n");
   free(data);
   script(&t, "woven-three-core", "text/plain", wv_asset_three_core, wv_asset_three_core_len, 1, &unsafe);
   script(&t, "woven-three-module", "text/plain", wv_asset_three_module, wv_asset_three_module_len, 1, &unsafe);
@@ -208,10 +186,10 @@ wv_status wv_view_write(const char *path, const wv_view_opts *o, wv_error *err) 
          &unsafe);
   script(&t, "woven-display-frag", "x-shader/x-fragment", wv_asset_display_frag, wv_asset_display_frag_len, 0, &unsafe);
   script(&t, "woven-viewer", "module", wv_asset_viewer_js, wv_asset_viewer_js_len, 0, &unsafe);
-  puts_(&t, mark + strlen("<!-- woven:inline -->"));
+  wv_buf_puts(&t, mark + strlen("<!-- woven:inline -->"));
   if (unsafe) st = wv_fail(err, WV_ERR_INTERNAL, "a viewer script contains </script>");
   else if (t.failed) st = wv_fail(err, WV_ERR_NOMEM, "%s: out of memory writing the viewer", path);
-  else st = wv_write_file_atomic(path, t.s, t.len, err);
-  free(t.s);
+  else st = wv_write_file_atomic(path, t.data, t.len, err);
+  free(t.data);
   return st;
 }

@@ -30,7 +30,7 @@ let failures = 0;
 const fail = (msg) => { console.log(`FAIL ${msg}`); failures++; };
 const woven = (...a) => execFileSync(WOVEN, a, { encoding: 'utf8' });
 const png = (dataUrl, file) => writeFileSync(file, Buffer.from(dataUrl.split(',')[1], 'base64'));
-const compare = (a, b) => JSON.parse(woven('compare', a, b, '--blur', '4', '--json'));
+const compare = (a, b, blur = 4) => JSON.parse(woven('compare', a, b, '--blur', String(blur), '--json'));
 
 const t0 = Date.now();
 const browser = await chromium.launchPersistentContext(profile, {
@@ -101,9 +101,9 @@ for (const pat of patterns) {
 
   const t = join(work, `${pat}_gltf.png`);
   png(await gpage.evaluate(([u, sc]) => window.renderGltf(u, sc), [`http://woven.test/work/${pat}.glb`, flat45]), t);
-  const sv = compare(c, v), sg = compare(c, t);
-  rows.push({ pattern: pat, viewer_ssim_blur4: sv.ssim, viewer_mae_blur4: sv.mae, viewer_ms: ms,
-              gltf_ssim_blur4: sg.ssim, gltf_mae_blur4: sg.mae, bake_relative_residual: exp.fit.relative,
+  const sv = compare(c, v), sg = compare(c, t), rv = compare(c, v, 0), rg = compare(c, t, 0);
+  rows.push({ pattern: pat, viewer_ssim_blur4: sv.ssim, viewer_mae_blur4: sv.mae, viewer_ssim: rv.ssim, viewer_ms: ms,
+              gltf_ssim_blur4: sg.ssim, gltf_mae_blur4: sg.mae, gltf_ssim: rg.ssim, bake_relative_residual: exp.fit.relative,
               validator_errors: report.issues.numErrors, validator_warnings: report.issues.numWarnings });
   if (!(sv.ssim >= 0.9)) fail(`${pat}: viewer vs woven render SSIM ${sv.ssim.toFixed(4)} < 0.9`);
 }
@@ -128,15 +128,19 @@ const drape = {};
   png(await gpage.evaluate(([u, vw]) => window.renderGltfView(u, vw), [`http://woven.test/work/${pat}_drape.glb`, view]), t);
   const s = compare(v, t);
   Object.assign(drape, { pattern: pat, gltf_vs_viewer_ssim_blur4: s.ssim, gltf_vs_viewer_mae_blur4: s.mae });
+  writeFileSync(join(work, 'drape_pattern.txt'), pat);
 }
 await browser.close();
 rmSync(profile, { recursive: true, force: true });
 if (!keep) rmSync(work, { recursive: true, force: true });
 
-console.log('pattern   viewer SSIM  glTF SSIM  (4-px blur, flat45, vs woven render)  bake residual  viewer ms');
+console.log('flat45 against woven render: SSIM and MAE of 4-px blurs, SSIM unblurred');
+console.log('pattern   viewer: SSIM    MAE   SSIM raw | glTF: SSIM    MAE   SSIM raw | bake residual | viewer ms');
+const f = (x, n = 4) => x.toFixed(n).padStart(8);
 for (const r of rows)
-  console.log(`${r.pattern.padEnd(9)} ${r.viewer_ssim_blur4.toFixed(4).padStart(11)} ${r.gltf_ssim_blur4.toFixed(4).padStart(10)}` +
-              `${''.padStart(40)}${(100 * r.bake_relative_residual).toFixed(1).padStart(6)} %  ${String(r.viewer_ms).padStart(8)}`);
+  console.log(`${r.pattern.padEnd(9)} ${f(r.viewer_ssim_blur4)} ${f(r.viewer_mae_blur4)} ${f(r.viewer_ssim)}   ` +
+              `${f(r.gltf_ssim_blur4)} ${f(r.gltf_mae_blur4)} ${f(r.gltf_ssim)}   ${(100 * r.bake_relative_residual).toFixed(1).padStart(9)} %` +
+              `   ${String(r.viewer_ms).padStart(8)}`);
 console.log(`draped sheet (${drape.pattern}): glTF in three.js vs the viewer, SSIM ${drape.gltf_vs_viewer_ssim_blur4.toFixed(4)} (4-px blur)`);
 console.log(JSON.stringify({ renderer: rendererName, spp, seconds: (Date.now() - t0) / 1000, results: rows, drape }));
 console.log(failures ? `${failures} failed` : 'all passed');

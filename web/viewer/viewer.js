@@ -493,6 +493,7 @@ window.woven = {
     restart();
     while (state.frame < state.frames) renderFrame();
     gl.finish();
+    status(`${state.frame} / ${state.frames} frames, ${state.frame * state.spp} samples per pixel`);
     return { frames: state.frame, spp: state.spp, valid: state.valid };
   },
   snapshot: () => renderer.domElement.toDataURL('image/png'),
