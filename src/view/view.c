@@ -118,6 +118,8 @@ static wv_status build_data(const wv_view_opts *o, char **out, wv_error *err) {
         memcpy(url + 22, b, bl + 1);
         json_decref(photo);
         photo = json_string(url);
+      } else {
+        st = wv_fail(err, WV_ERR_NOMEM, "out of memory for the photo");
       }
       free(url);
     }

@@ -28,8 +28,8 @@ async function panel(file, imgs, labels, [x, y, w, h], k) {
   const page = await browser.newPage();
   await page.setViewportSize({ width: imgs.length * (w * k + 8) - 8, height: h * k + 20 });
   const srcs = imgs.map((f) => 'data:image/png;base64,' + readFileSync(f).toString('base64'));
-  await page.setContent(`<body style="margin:0;background:#fff;font:13px sans-serif">${srcs.map((_, i) =>
-    `<div style="display:inline-block;margin-right:8px"><canvas id=c${i} width=${w * k} height=${h * k}></canvas>` +
+  await page.setContent(`<body style="margin:0;background:#fff;font:13px sans-serif;display:flex;gap:8px">${srcs.map((_, i) =>
+    `<div><canvas id=c${i} width=${w * k} height=${h * k} style="display:block"></canvas>` +
     `<div style="height:18px">${labels[i]}</div></div>`).join('')}</body>`);
   await page.evaluate(async ([s, r, kk]) => {
     for (let i = 0; i < s.length; i++) {
@@ -54,12 +54,17 @@ await panel(join(out, `drape_${dp}.png`), [join(KEEP, `${dp}_drape_viewer.png`),
             ['viewer: the true model', 'glTF in three.js: the baked approximation'], [0, 0, 384, 288], 1);
 
 const html = join(work, 'satin.html');
+if (process.env.WOVEN_FIGURES_NO_UI) { // the panels only
+  await browser.close();
+  rmSync(work, { recursive: true, force: true });
+  process.exit(0);
+}
 execFileSync(WOVEN, ['view', join(SRC, 'examples/satin.json'), '-o', html, '-q']);
 const page = await browser.newPage();
 await page.goto(`file://${html}?mode=drape&frames=1`);
 await page.waitForFunction(() => window.woven !== undefined, null, { timeout: 120000 });
 await page.evaluate(() => window.woven.render({ frames: 16, spp: 4 }));
-await page.screenshot({ path: join(out, 'viewer_ui.png') });
+await page.screenshot({ path: join(out, 'viewer_ui.png'), timeout: 300000 });
 await browser.close();
 rmSync(work, { recursive: true, force: true });
 console.log(`wrote ${out}`);

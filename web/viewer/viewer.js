@@ -266,6 +266,7 @@ function setMode(mode) {
     renderer.setPixelRatio(url.get('w') ? 1 : Math.min(2, window.devicePixelRatio || 1));
     state.controls = new OrbitControls(camera, renderer.domElement);
     state.controls.target.copy(c);
+    state.controls.update(); // settle on the target before listening: only the user's moves restart
     state.controls.addEventListener('change', restart);
   }
   camera.updateProjectionMatrix();
