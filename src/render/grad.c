@@ -19,36 +19,19 @@
 
 #define DEG (3.14159265358979323846 / 180.0)
 
-/* The float values the forward renderer uses, widened exactly. */
-static void model_from_fabric(const wv_fabric *f, wv_grad_model *g) {
-  memset(g, 0, sizeof *g);
-  for (int y = 0; y < 2; y++) {
-    g->beta[y] = f->ym.beta[y], g->alpha[y] = f->alpha[y];
-    for (int c = 0; c < 3; c++) g->kd[y][c] = f->kd[y][c], g->ks[y][c] = f->ks[y][c];
-    g->umax_over_spacing[y] = f->ym.umax_over_spacing[y];
-    g->inv_spacing[y] = f->ym.inv_spacing[y];
-    g->v_scale[y] = f->ym.v_scale[y];
-  }
-  g->blend = f->blend, g->thickness = f->thickness;
-  g->sin_psi = f->ym.sin_psi, g->cos_psi = f->ym.cos_psi;
-  for (int i = 1; i <= WV_WEAVE_MAX; i++) g->inv_len[i] = 1.0f / (float)i;
-}
+/* The albedos the adjoint pass weighs the per-type sums with. */
+typedef struct {
+  double kd[2][3], ks[2][3];
+} wv_grad_model;
 
-/* The parameters in double (geometry lookups stay in float; they do not depend
- * on any continuous parameter). */
-static void model_from_params(const wv_params *p, wv_grad_model *g) {
-  memset(g, 0, sizeof *g);
-  for (int y = 0; y < 2; y++) {
-    double spacing = 25.4 / p->density[y];
-    g->beta[y] = p->heightfield[y], g->alpha[y] = p->roughness[y];
-    for (int c = 0; c < 3; c++) g->kd[y][c] = p->diffuse[y][c], g->ks[y][c] = p->specular[y][c];
-    g->umax_over_spacing[y] = p->inclination_deg * DEG / spacing;
-    g->inv_spacing[y] = 1.0 / spacing;
-    g->v_scale[y] = 3.14159265358979323846 / (spacing * p->yarn_width);
-  }
-  g->blend = p->diffuse_blend, g->thickness = p->thickness;
-  g->sin_psi = sin(p->twist_deg * DEG), g->cos_psi = cos(p->twist_deg * DEG);
-  for (int i = 1; i <= WV_WEAVE_MAX; i++) g->inv_len[i] = 1.0 / i;
+/* In float mode the floats the forward renderer uses, widened exactly. */
+static void albedos_from_fabric(const wv_fabric *f, wv_grad_model *g) {
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) g->kd[y][c] = f->P.kd[y][c], g->ks[y][c] = f->P.ks[y][c];
+}
+static void albedos_from_double(const wv_shade_params_d *P, wv_grad_model *g) {
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) g->kd[y][c] = P->kd[y][c], g->ks[y][c] = P->ks[y][c];
 }
 
 /* Gradient slots per type, for the linear parameters. */
@@ -159,10 +142,13 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
                    dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
 
   wv_grad_model gm;
-  if (dbl) model_from_params(p, &gm);
-  else model_from_fabric(&fab, &gm);
-  void (*kernel)(const wv_camera_rig *, const wv_fabric *, const wv_grad_model *, int, int, int, wv_grad_pixel *) =
-      dbl ? wv_grad_pixel_d : wv_grad_pixel_f;
+  wv_shade_params_d Pd; /* double mode: the parameters in double */
+  if (dbl) {
+    wv_shade_params_double(p, &Pd);
+    albedos_from_double(&Pd, &gm);
+  } else {
+    albedos_from_fabric(&fab, &gm);
+  }
 
   double *rows = NULL;
   wv_grad_record *rec = NULL;
@@ -194,7 +180,8 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
     }
     for (int i = 0; i < W; i++) {
       wv_grad_pixel pix;
-      kernel(&rig, &fab, &gm, x0 + i, y0 + r, spp, &pix);
+      if (dbl) wv_grad_pixel_d(&rig, &fab, &Pd, x0 + i, y0 + r, spp, &pix);
+      else wv_grad_pixel_f(&rig, &fab, &fab.P, x0 + i, y0 + r, spp, &pix);
       pixel_rec local, *pr = rec ? &rec->px[(size_t)r * W + i] : &local;
       float cap[3];
       respond(s, dbl, x0 + i, y0 + r, &pix, cap, pr);

@@ -6,37 +6,6 @@
 
 #include "render/render_internal.h"
 
-wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
-  memset(f, 0, sizeof *f);
-  wv_status st = wv_params_validate(p, err);
-  if (st) return st;
-  if ((st = wv_params_yarn_model(p, &f->ym, err))) return st;
-  for (int y = 0; y < 2; y++) {
-    for (int c = 0; c < 3; c++) {
-      f->kd[y][c] = (float)p->diffuse[y][c];
-      f->ks[y][c] = (float)p->specular[y][c];
-    }
-    f->alpha[y] = (float)p->roughness[y];
-  }
-  f->blend = (float)p->diffuse_blend;
-  f->thickness = (float)p->thickness;
-  f->glints = p->specular_noise;
-  f->glint_cell[0] = f->ym.spacing[WV_WARP] / 8.0f;
-  f->glint_cell[1] = f->ym.spacing[WV_WEFT] / 8.0f;
-  for (int i = 0; i < 2; i++) f->inv_glint_cell[i] = 1.0f / f->glint_cell[i];
-  for (int i = 0; i < 4096; i++) {
-    float u = (float)-log(1.0 - (i + 0.5) / 4096.0);
-    f->glint_table[i] = u < 10.0f ? u : 10.0f;
-  }
-  for (int r = 0; r < WV_WEAVE_MAX; r++)
-    for (int c = 0; c < WV_WEAVE_MAX; c++) {
-      const wv_weave_cell *ce = &f->ym.weave.cell[r][c];
-      f->cellpack[r * WV_WEAVE_MAX + c] = ce->type | ce->len << 8 | ce->index << 16;
-    }
-  f->seed = (uint64_t)p->seed;
-  return WV_OK;
-}
-
 wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, int w, int h,
                           wv_fabric *fab, int *spp, wv_error *err) {
   wv_status st = wv_scene_validate(s, err);

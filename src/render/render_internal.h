@@ -6,14 +6,12 @@
 #include <math.h>
 #include <stdint.h>
 
-#include "util/fastmath.h"
+#include "kernel/kernel.h"
 #include "util/hash.h"
-#include "woven/brdf.h"
 #include "woven/params.h"
 #include "woven/render.h"
 #include "woven/scene.h"
 #include "woven/yarn.h"
-#include "yarn/yarn_eval.h"
 
 typedef struct {
   int width, height;
@@ -25,22 +23,6 @@ typedef struct {
   const struct wv_footprint_s *cache; /* per-pixel footprints made once (wv_footprints) or NULL */
 } wv_camera_rig;
 
-/* Fabric parameters in the renderer's float form. */
-typedef struct {
-  wv_yarn_model ym;
-  float kd[2][3], ks[2][3], alpha[2], blend, thickness;
-  int glints;
-  float glint_cell[2]; /* 1/8 of the yarn spacing along x and y */
-  float inv_glint_cell[2];
-  /* -ln(1 - xi) at the midpoints of 4096 equal bins of xi: U_s without a log per
-   * sample (mean 0.9998 instead of 1; the largest value 9.0 instead of 10). */
-  float glint_table[4096];
-  /* ym.weave.cell[r][c] as type | len << 8 | index << 16 at r * WV_WEAVE_MAX + c:
-   * one 32-bit load per sample for the 8-wide path */
-  int32_t cellpack[WV_WEAVE_MAX * WV_WEAVE_MAX];
-  uint64_t seed;
-} wv_fabric;
-
 /* One camera sample hitting the fabric: geometry in fabric tangent space. */
 typedef struct {
   float fx, fy;     /* fabric coordinates, mm */
@@ -51,7 +33,6 @@ typedef struct {
 void wv_rig_prepare(const wv_scene *s, wv_camera_rig *rig);
 /* wv_rig_prepare plus opt's footprint cache, refused if made for another geometry. */
 wv_status wv_rig_prepare_opts(const wv_scene *s, const wv_render_opts *opt, wv_camera_rig *rig, wv_error *err);
-wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err);
 /* What every render starts with: the scene validated, the fabric prepared, the
  * spp resolved (opt's, else the scene's) and the w x h x spp sample limit checked. */
 wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, int w, int h,
@@ -121,22 +102,9 @@ static inline void wv_pixel_sampler_at(const wv_pixel_sampler *ps, int s, float 
 /* Directions shared by all samples of a pixel. A pixel spans ~1e-3 rad seen from
  * the light and the camera, so light and view directions are taken at the pixel
  * centre while the fabric position (what changes across yarns) is per sample. */
-typedef struct {
-  float wi[3], wo[3], h[3]; /* fabric tangent space */
-  float mi, mo, light;
-} wv_dirs;
+typedef wv_dirs_f wv_dirs;
 
-static inline void wv_dirs_from_hit(const wv_hit *hit, wv_dirs *d) {
-  float h[3], l2 = 0;
-  for (int i = 0; i < 3; i++) {
-    d->wi[i] = hit->wi[i], d->wo[i] = hit->wo[i];
-    h[i] = hit->wi[i] + hit->wo[i];
-    l2 += h[i] * h[i];
-  }
-  float il = l2 > 0.0f ? 1.0f / sqrtf(l2) : 0.0f;
-  for (int i = 0; i < 3; i++) d->h[i] = h[i] * il;
-  d->mi = hit->wi[2], d->mo = hit->wo[2], d->light = hit->light;
-}
+static inline void wv_dirs_from_hit(const wv_hit *hit, wv_dirs *d) { wv_dirs_make_f(hit->wi, hit->wo, hit->light, d); }
 
 /* A pixel's footprint on the fabric: bilinear in the four corners when all four
  * and the centre hit the sample (exact for the plane up to perspective, and
@@ -160,33 +128,12 @@ static inline void wv_footprint_at(const wv_footprint *fp, float sx, float sy, f
   *fy = w00 * fp->fy[0] + w10 * fp->fy[1] + w01 * fp->fy[2] + w11 * fp->fy[3];
 }
 
-/* Specular glint multiplier U_s = min(-ln xi, 10), xi hashed on a fine grid. */
-static inline float wv_glint(const wv_fabric *f, float fx, float fy) {
-  if (!f->glints) return 1.0f;
-  int64_t gx = wv_floor_ll(fx * f->inv_glint_cell[0]), gy = wv_floor_ll(fy * f->inv_glint_cell[1]);
-  return f->glint_table[wv_hash2((uint64_t)gx, (uint64_t)gy, f->seed ^ 0x676c696eULL) >> 52];
-}
-
-/* Radiance of one sample at fabric point (fx, fy), added to acc. The 8-wide
- * path (render_simd.c) and the gradient kernel repeat this arithmetic. */
+/* Radiance of one sample at fabric point (fx, fy) (the shading kernel in
+ * scalar float), added to acc. */
 static inline void wv_shade(const wv_fabric *f, const wv_dirs *d, float fx, float fy, float acc[3]) {
-  wv_yarn_point yp;
-  wv_yarn_eval_inline(&f->ym, fx, fy, &yp);
-  if (yp.type < 0) return; /* gap: nothing reflects */
-  int ty = yp.type;
-  float a = f->alpha[ty], k = 1.0f - a * a;
-  float ti = wv_dot3(yp.t, d->wi), to = wv_dot3(yp.t, d->wo), th = wv_dot3(yp.t, d->h);
-  float si2 = 1.0f - k * ti * ti, so2 = 1.0f - k * to * to;
-  float si = sqrtf(si2 > 0.0f ? si2 : 0.0f), so = sqrtf(so2 > 0.0f ? so2 : 0.0f);
-  float A = si / d->mi + so / d->mo;
-  float q = 1.0f + (1.0f / (a * a) - 1.0f) * th * th;
-  float D = 1.0f / (3.14159265358979f * a * q * q);
-  /* f_s mu_i = D (1 - exp(-T A)) / (4 mu_o A), times the glint factor */
-  float spec = A > 0.0f ? D * (1.0f - wv_expf(-f->thickness * A)) / (4.0f * d->mo * A) : 0.0f;
-  spec *= wv_glint(f, fx, fy);
-  float ni = wv_dot3(d->wi, yp.n);
-  float diff = (f->blend * (ni > 0.0f ? ni : 0.0f) + (1.0f - f->blend) * d->mi) * (1.0f / 3.14159265358979f);
-  for (int c = 0; c < 3; c++) acc[c] += d->light * (f->ks[ty][c] * spec + f->kd[ty][c] * diff);
+  float rad[3];
+  wv_shade_f(f, &f->P, d, fx, fy, rad, NULL);
+  for (int c = 0; c < 3; c++) acc[c] += rad[c];
 }
 
 /* A pixel's running sums: sample s is added to row s mod 8 (in sample order) and

@@ -20,18 +20,6 @@
 
 #include "render/render_internal.h"
 
-/* Helpers take and return vectors by value; they are always inlined, so the
- * note that such an ABI differs between targets does not apply. */
-#pragma GCC diagnostic ignored "-Wpsabi"
-
-/* Defining WV_SIMD_CLONES (e.g. empty: the baseline only) builds other versions. */
-#ifndef WV_SIMD_CLONES
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11
-#define WV_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#else
-#define WV_SIMD_CLONES
-#endif
-#endif
 
 #define W 8
 _Static_assert(W == WV_ACC_ROWS, "a vector lane holds one row of the pixel's sums");
@@ -184,7 +172,7 @@ INL int shade8(const wv_fabric *f, const wv_footprint *fp, const pixel_consts *C
   /* a gather of one packed word per lane, built as one vector (writing lanes one
    * by one through memory stalls the read of the whole vector that follows) */
   v8i ci = wr * WV_WEAVE_MAX + wc;
-  const int32_t *cpk = f->cellpack;
+  const int32_t *cpk = m->cellpack;
   v8i pk = {cpk[ci[0]], cpk[ci[1]], cpk[ci[2]], cpk[ci[3]], cpk[ci[4]], cpk[ci[5]], cpk[ci[6]], cpk[ci[7]]};
   v8i ty = pk & 0xff, len = (pk >> 8) & 0xff, idx = pk >> 16;
   v8i warp = ty == WV_WARP;
@@ -237,7 +225,7 @@ INL int shade8(const wv_fabric *f, const wv_footprint *fp, const pixel_consts *C
   v8f A = si / d->mi + so / d->mo;
   v8f q = 1.0f + sel(warp, (v8f){0} + C->ia2m1[0], (v8f){0} + C->ia2m1[1]) * th * th;
   v8f D = 1.0f / (sel(warp, (v8f){0} + C->pia[0], (v8f){0} + C->pia[1]) * q * q);
-  v8f spec = D * (1.0f - vexpf(-f->thickness * A)) / (C->four_mo * A);
+  v8f spec = D * (1.0f - vexpf(-f->P.thickness * A)) / (C->four_mo * A);
   spec = sel(A > 0.0f, spec, (v8f){0});
   if (f->glints) {
     v8u g = vhash2(tou64(vfloor(gxf)), tou64(vfloor(gyf)), f->seed ^ 0x676c696eULL) >> 52;
@@ -245,10 +233,10 @@ INL int shade8(const wv_fabric *f, const wv_footprint *fp, const pixel_consts *C
     spec *= (v8f){gt[g[0]], gt[g[1]], gt[g[2]], gt[g[3]], gt[g[4]], gt[g[5]], gt[g[6]], gt[g[7]]};
   }
   v8f ni = d->wi[0] * n0 + d->wi[1] * n1 + d->wi[2] * nz;
-  v8f diff = (f->blend * sel(ni > 0.0f, ni, (v8f){0}) + C->bm) * C->inv_pi;
+  v8f diff = (f->P.blend * sel(ni > 0.0f, ni, (v8f){0}) + C->bm) * C->inv_pi;
   for (int ch = 0; ch < 3; ch++) {
-    v8f ks = sel(warp, (v8f){0} + f->ks[0][ch], (v8f){0} + f->ks[1][ch]);
-    v8f kd = sel(warp, (v8f){0} + f->kd[0][ch], (v8f){0} + f->kd[1][ch]);
+    v8f ks = sel(warp, (v8f){0} + f->P.ks[0][ch], (v8f){0} + f->P.ks[1][ch]);
+    v8f kd = sel(warp, (v8f){0} + f->P.kd[0][ch], (v8f){0} + f->P.kd[1][ch]);
     out[ch] = sel(lit, d->light * (ks * spec + kd * diff), (v8f){0});
   }
   return 1;
@@ -264,14 +252,14 @@ void wv_render_fast_pixel(const wv_fabric *f, const wv_footprint *fp, int px, in
     pixel_consts C;
     strata_init(&C.strata, px, py, spp, width, f->seed);
     for (int t = 0; t < 2; t++) {
-      float a = f->alpha[t];
+      float a = f->P.alpha[t];
       C.half_w[t] = 0.5f * m->spacing[t] * m->width;
       C.uos[t] = m->umax_over_spacing[t], C.vsc[t] = m->v_scale[t], C.beta[t] = m->beta[t];
       C.k[t] = 1.0f - a * a, C.ia2m1[t] = 1.0f / (a * a) - 1.0f;
       C.pia[t] = 3.14159265358979f * a;
     }
     C.noise = 0.1f * (float)m->noise_level;
-    C.bm = (1.0f - f->blend) * fp->dirs.mi;
+    C.bm = (1.0f - f->P.blend) * fp->dirs.mi;
     C.four_mo = 4.0f * fp->dirs.mo;
     C.inv_pi = 1.0f / 3.14159265358979f;
     v8f sum[3]; /* lane i: row i of acc */

@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "render/render_internal.h"
-#include "util/fastmath.h"
+#include "kernel/fastmath.h"
 
 static void normalize3(float v[3]) {
   float l = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
@@ -65,7 +65,7 @@ int wv_rig_trace(const wv_camera_rig *r, float x, float y, wv_hit *hit) {
     float inv = 1.0f / r->radius;
     float sn = p[1] * inv, cs = p[2] * inv;
     N[0] = 0, N[1] = sn, N[2] = cs;
-    float theta = wv_atan2(p[1], p[2]);
+    float theta = wv_atan2_f(p[1], p[2]);
     if (r->warp_along_axis) { /* fabric y along +x, fabric x runs down the front */
       T[0] = 0, T[1] = -cs, T[2] = sn;
       B[0] = 1, B[1] = 0, B[2] = 0;
