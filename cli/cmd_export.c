@@ -74,8 +74,8 @@ int cmd_export(int argc, char **argv) {
   if (wv_source_load(in, &src, &err)) return cli_fail(&c, &err);
   int drape = !strcmp(mesh_name, "drape");
   wv_tri_mesh mesh;
-  wv_status st = drape ? wv_mesh_drape(size_mm ? (double)size_mm : 600.0, 150.0, 96, &mesh, &err)
-                       : wv_mesh_quad(size_mm ? (double)size_mm : 100.0, &mesh, &err);
+  wv_status st = drape ? wv_tri_mesh_drape(size_mm ? (double)size_mm : 600.0, 150.0, 96, &mesh, &err)
+                       : wv_tri_mesh_quad(size_mm ? (double)size_mm : 100.0, &mesh, &err);
   if (st) return cli_fail(&c, &err);
   cli_info(&c, "baking %s at %d x %d texels, %d direction pairs\n", src.params.pattern, bo.texture_size,
            bo.texture_size, bo.directions);

@@ -165,7 +165,7 @@ static void test_glb_structure(void **state) {
   wv_tri_mesh m;
   wv_error err = {0};
   assert_int_equal(wv_bake_fabric(&p, &o, &b, &err), WV_OK);
-  assert_int_equal(wv_mesh_quad(50.0, &m, &err), WV_OK);
+  assert_int_equal(wv_tri_mesh_quad(50.0, &m, &err), WV_OK);
   const char *dir = tu_tmpdir("export_glb");
   char path[512];
   snprintf(path, sizeof path, "%s/quad.glb", dir);
@@ -238,10 +238,10 @@ static void test_meshes(void **state) {
   (void)state;
   wv_tri_mesh q, dr;
   wv_error err = {0};
-  assert_int_equal(wv_mesh_quad(10.0, &q, &err), WV_OK);
-  assert_int_equal(wv_mesh_drape(600.0, 150.0, 40, &dr, &err), WV_OK);
-  assert_int_equal(wv_mesh_validate(&q, &err), WV_OK);
-  assert_int_equal(wv_mesh_validate(&dr, &err), WV_OK);
+  assert_int_equal(wv_tri_mesh_quad(10.0, &q, &err), WV_OK);
+  assert_int_equal(wv_tri_mesh_drape(600.0, 150.0, 40, &dr, &err), WV_OK);
+  assert_int_equal(wv_tri_mesh_validate(&q, &err), WV_OK);
+  assert_int_equal(wv_tri_mesh_validate(&dr, &err), WV_OK);
   for (int v = 0; v < dr.vertex_count; v++) {
     const float *n = dr.normals + 3 * v, *t = dr.tangents + 4 * v;
     assert_float_equal(n[0] * t[0] + n[1] * t[1] + n[2] * t[2], 0.0f, 1e-4f);
@@ -254,14 +254,14 @@ static void test_meshes(void **state) {
   }
   float *own = q.tangents;
   q.tangents = NULL;
-  assert_int_equal(wv_mesh_tangents(&q, &err), WV_OK);
+  assert_int_equal(wv_tri_mesh_tangents(&q, &err), WV_OK);
   for (int v = 0; v < 4; v++) assert_memory_equal(q.tangents + 4 * v, own + 4 * v, sizeof(float) * 4);
   free(own);
   q.indices[0] = 99; /* out of range */
-  assert_int_equal(wv_mesh_validate(&q, &err), WV_ERR_INVALID);
+  assert_int_equal(wv_tri_mesh_validate(&q, &err), WV_ERR_INVALID);
   assert_non_null(strstr(err.msg, "index"));
   wv_tri_mesh_free(&q), wv_tri_mesh_free(&dr);
-  assert_int_equal(wv_mesh_drape(600, -1, 10, &dr, &err), WV_ERR_INVALID);
+  assert_int_equal(wv_tri_mesh_drape(600, -1, 10, &dr, &err), WV_ERR_INVALID);
 }
 
 static int exists(const char *p) {
@@ -291,7 +291,7 @@ static void test_bad_input(void **state) {
   params_of("plain", &p);
   assert_int_equal(wv_bake_fabric(&p, &o, &b, &err), WV_OK);
   wv_tri_mesh m;
-  assert_int_equal(wv_mesh_quad(10, &m, &err), WV_OK);
+  assert_int_equal(wv_tri_mesh_quad(10, &m, &err), WV_OK);
   char path[512];
   snprintf(path, sizeof path, "%s/missing/x.glb", dir);
   assert_int_equal(wv_gltf_write(path, &m, &b, &p, &err), WV_ERR_IO);

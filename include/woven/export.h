@@ -46,18 +46,18 @@ typedef struct {
 } wv_tri_mesh;
 
 /* A flat square of side_mm in the x-z plane facing +y, UVs 0..1 (uv_mm = side_mm). */
-wv_status wv_mesh_quad(double side_mm, wv_tri_mesh *m, wv_error *err);
+wv_status wv_tri_mesh_quad(double side_mm, wv_tri_mesh *m, wv_error *err);
 /* A square sheet of side_mm laid over a sphere of radius_mm (centre at the
  * origin, the sheet's centre on its top): procedural, not simulated. On the cap
  * the sheet keeps the arc length along every radial line; past the contact
  * circle it falls away on a curve that turns to vertical, and radial folds take
  * up the circumference it no longer needs. n x n quads; UVs are the flat
  * sheet's coordinates (0..1), so the fabric keeps its scale along the radii. */
-wv_status wv_mesh_drape(double side_mm, double radius_mm, int n, wv_tri_mesh *m, wv_error *err);
+wv_status wv_tri_mesh_drape(double side_mm, double radius_mm, int n, wv_tri_mesh *m, wv_error *err);
 /* Tangents from UVs and normals (per triangle, accumulated, Gram-Schmidt). */
-wv_status wv_mesh_tangents(wv_tri_mesh *m, wv_error *err);
+wv_status wv_tri_mesh_tangents(wv_tri_mesh *m, wv_error *err);
 /* Rejects meshes the exporter cannot write (NaN, indices out of range, ...). */
-wv_status wv_mesh_validate(const wv_tri_mesh *m, wv_error *err);
+wv_status wv_tri_mesh_validate(const wv_tri_mesh *m, wv_error *err);
 void wv_tri_mesh_free(wv_tri_mesh *m);
 
 typedef struct {

@@ -54,12 +54,12 @@ static json_t *tex_info(int index, double sx, double sy) {
 
 wv_status wv_gltf_write(const char *path, const wv_tri_mesh *mesh, const wv_bake *b, const wv_params *p,
                         wv_error *err) {
-  wv_status st = wv_mesh_validate(mesh, err);
+  wv_status st = wv_tri_mesh_validate(mesh, err);
   if (st) return st;
   wv_tri_mesh m = *mesh;
   float *own_tangents = NULL;
   if (!m.tangents) { /* derived here; the caller's mesh is left as it was */
-    if ((st = wv_mesh_tangents(&m, err))) return st;
+    if ((st = wv_tri_mesh_tangents(&m, err))) return st;
     own_tangents = m.tangents;
   }
   json_t *root = json_object(), *views = json_array(), *accessors = json_array();

@@ -44,7 +44,7 @@ static void grid_indices(int n, uint32_t *idx) {
     }
 }
 
-wv_status wv_mesh_quad(double side_mm, wv_tri_mesh *m, wv_error *err) {
+wv_status wv_tri_mesh_quad(double side_mm, wv_tri_mesh *m, wv_error *err) {
   memset(m, 0, sizeof *m);
   if (!size_ok(side_mm)) return wv_fail(err, WV_ERR_INVALID, "quad side %g mm is outside 0.1..100000", side_mm);
   wv_status st = mesh_alloc(m, 4, 6, err);
@@ -77,7 +77,7 @@ static void hang(double R, double theta0, double s, double *q, double *y) {
   *q = qq, *y = yy;
 }
 
-wv_status wv_mesh_drape(double side_mm, double radius_mm, int n, wv_tri_mesh *m, wv_error *err) {
+wv_status wv_tri_mesh_drape(double side_mm, double radius_mm, int n, wv_tri_mesh *m, wv_error *err) {
   memset(m, 0, sizeof *m);
   if (!size_ok(side_mm)) return wv_fail(err, WV_ERR_INVALID, "sheet side %g mm is outside 0.1..100000", side_mm);
   if (!size_ok(radius_mm)) return wv_fail(err, WV_ERR_INVALID, "sphere radius %g mm is outside 0.1..100000", radius_mm);
@@ -129,7 +129,7 @@ wv_status wv_mesh_drape(double side_mm, double radius_mm, int n, wv_tri_mesh *m,
   return WV_OK;
 }
 
-wv_status wv_mesh_tangents(wv_tri_mesh *m, wv_error *err) {
+wv_status wv_tri_mesh_tangents(wv_tri_mesh *m, wv_error *err) {
   size_t nv = (size_t)m->vertex_count;
   double *acc = calloc(nv * 6, sizeof(double)); /* dP/du and dP/dv per vertex */
   float *t = m->tangents ? m->tangents : malloc(sizeof(float) * 4 * nv);
@@ -173,7 +173,7 @@ wv_status wv_mesh_tangents(wv_tri_mesh *m, wv_error *err) {
   return WV_OK;
 }
 
-wv_status wv_mesh_validate(const wv_tri_mesh *m, wv_error *err) {
+wv_status wv_tri_mesh_validate(const wv_tri_mesh *m, wv_error *err) {
   if (m->vertex_count < 3 || m->index_count < 3 || m->index_count % 3)
     return wv_fail(err, WV_ERR_INVALID, "mesh: %d vertices and %d indices do not make triangles", m->vertex_count,
                    m->index_count);

@@ -19,6 +19,14 @@ void wv_shade_params_from_yarn(const wv_yarn_model *m, wv_shade_params_f *P) {
   P->noise = 0.1f * (float)m->noise_level;
 }
 
+void wv_shade_params_set_roughness(wv_shade_params_f *P, int t, float a) {
+  P->alpha[t] = a;
+  P->k[t] = 1.0f - a * a;
+  P->ia2m1[t] = 1.0f / (a * a) - 1.0f;
+  P->pia[t] = 3.14159265358979f * a;
+  P->ia[t] = 1.0f / a;
+}
+
 wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
   memset(f, 0, sizeof *f);
   wv_status st = wv_params_validate(p, err);
@@ -31,12 +39,7 @@ wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
       P->kd[t][c] = (float)p->diffuse[t][c];
       P->ks[t][c] = (float)p->specular[t][c];
     }
-    float a = (float)p->roughness[t];
-    P->alpha[t] = a;
-    P->k[t] = 1.0f - a * a;
-    P->ia2m1[t] = 1.0f / (a * a) - 1.0f;
-    P->pia[t] = 3.14159265358979f * a;
-    P->ia[t] = 1.0f / a;
+    wv_shade_params_set_roughness(P, t, (float)p->roughness[t]);
   }
   P->blend = (float)p->diffuse_blend;
   P->thickness = (float)p->thickness;

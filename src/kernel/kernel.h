@@ -88,6 +88,9 @@ typedef struct {
 wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err);
 /* The geometry fields of P (beta .. noise) from a yarn model. */
 void wv_shade_params_from_yarn(const wv_yarn_model *m, wv_shade_params_f *P);
+/* Roughness alpha of yarn type t and the terms derived from it (a renderer that
+ * edits alpha per point sets it through this). */
+void wv_shade_params_set_roughness(wv_shade_params_f *P, int t, float a);
 /* All of P in double, straight from the parameters (for gradient checks). */
 void wv_shade_params_double(const wv_params *p, wv_shade_params_d *P);
 

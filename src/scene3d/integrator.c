@@ -35,9 +35,9 @@ static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric
   const wv_fabric *f = base;
   if (e->active && scratch) {
     for (int y = 0; y < 2; y++) {
-      for (int c = 0; c < 3; c++) scratch->kd[y][c] = e->kd[y][c];
-      scratch->ym.beta[y] = e->beta[y];
-      scratch->alpha[y] = e->alpha[y];
+      for (int c = 0; c < 3; c++) scratch->P.kd[y][c] = e->kd[y][c];
+      scratch->ym.beta[y] = scratch->P.beta[y] = e->beta[y];
+      wv_shade_params_set_roughness(&scratch->P, y, e->alpha[y]);
     }
     f = scratch;
   }
@@ -68,8 +68,8 @@ static void eval_edits(const wv_world_material *m, float u, float v, fabric_edit
   if (!e->active) return;
   const wv_fabric *f = m->fab;
   for (int y = 0; y < 2; y++) {
-    for (int c = 0; c < 3; c++) e->kd[y][c] = f->kd[y][c];
-    e->beta[y] = f->ym.beta[y], e->alpha[y] = f->alpha[y];
+    for (int c = 0; c < 3; c++) e->kd[y][c] = f->P.kd[y][c];
+    e->beta[y] = f->ym.beta[y], e->alpha[y] = f->P.alpha[y];
   }
   for (int i = 0; i < m->nedits; i++) {
     const wv_edit_map *em = &m->edits[i];

@@ -94,8 +94,8 @@ static wv_status build_data(const wv_view_opts *o, char **out, wv_error *err) {
   }
   json_object_set_new(root, "weaves", weaves);
   wv_tri_mesh quad = {0}, drape = {0};
-  if (!st) st = wv_mesh_quad(20.0, &quad, err); /* small enough that the weave shows */
-  if (!st) st = wv_mesh_drape(600.0, 150.0, 96, &drape, err);
+  if (!st) st = wv_tri_mesh_quad(20.0, &quad, err); /* small enough that the weave shows */
+  if (!st) st = wv_tri_mesh_drape(600.0, 150.0, 96, &drape, err);
   if (!st) json_object_set_new(root, "meshes", json_pack("{s:o,s:o}", "swatch", mesh_json(&quad), "drape", mesh_json(&drape)));
   wv_tri_mesh_free(&quad), wv_tri_mesh_free(&drape);
   json_t *photo = json_null();
