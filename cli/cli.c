@@ -174,6 +174,8 @@ void cli_clean_temps_beside(const char *path) {
   else
     snprintf(dir, sizeof dir, "%.*s", slash == path ? 1 : (int)(slash - path), path);
   wv_remove_stale_temps(dir, slash ? slash + 1 : path);
+}
+
 /* Refuse early, before minutes of work, when the output cannot be written. */
 int cli_check_writable(const char *cmd, const char *path) {
   char *copy = strdup(path);
