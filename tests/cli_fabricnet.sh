@@ -34,7 +34,7 @@ check "dataset other scene" 2 "scene" -- "$WOVEN" dataset --scene flat45 --per-p
 check "dataset other spp" 2 "spp" -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 5 -o "$DS" --seed 3 --spp 3
 cp -r "$DS" "$T/ds_r1"
 grep -q '"renderer": 2' "$T/ds_r1/dataset.json" || fail "dataset.json does not record the renderer version"
-sed -i '/"renderer": 2,/d' "$T/ds_r1/dataset.json" # as written by sessions 1-2: renderer 1
+sed -i '/"renderer": 2,/d' "$T/ds_r1/dataset.json" # as written by renderer version 1
 check "dataset extends only with the same renderer" 2 "renderer version" -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 6 -o "$T/ds_r1" --seed 3
 check "train reads an older renderer's dataset" 0 '"epochs": 1' -- "$WOVEN" train "$T/ds_r1" -o "$T/m_r1.bin" --epochs 1 --batch 4 --json
 cp -r "$DS" "$T/ds_v2"

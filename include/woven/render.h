@@ -13,7 +13,7 @@
 
 /* Bumped when the same parameters, scene and seed render to another image (a new
  * sampler, say): data made by an older renderer is not extended with newer images.
- * 1: jittered samples (sessions 1-2); 2: correlated multi-jittered samples. */
+ * 1: jittered samples (renderer version 1); 2: correlated multi-jittered samples. */
 #define WV_RENDER_VERSION 2
 
 /* Per-pixel camera geometry of one scene (where each pixel's corners land on the
