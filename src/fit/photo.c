@@ -2,6 +2,7 @@
 
 #include <string.h>
 
+#include "sensor/sensor.h"
 #include "woven/imgops.h"
 #include "woven/io.h"
 
@@ -42,14 +43,8 @@ wv_status wv_photo_load(const char *path, const wv_scene *s, const wv_crop *crop
   for (int y = 0; y < ch; y++)
     memcpy(wv_image_px(&cropped, 0, y), wv_image_px(&raw, x0, y0 + y), sizeof(float) * 3 * (size_t)cw);
   wv_image_free(&raw);
-  if (ii.is_float) { /* linear photo: apply the camera response the scene describes (no mask) */
-    float ex = (float)s->exposure, clip = (float)s->clip;
-    for (size_t i = 0; i < (size_t)cw * ch * 3; i++) {
-      float v = cropped.data[i] * ex;
-      if (clip > 0 && v > clip) v = clip;
-      cropped.data[i] = wv_encode(s, v);
-    }
-  }
+  if (ii.is_float) /* linear photo: apply the camera response the scene describes (no mask) */
+    for (size_t i = 0; i < (size_t)cw * ch * 3; i++) cropped.data[i] = wv_respond_f(s, 1.0, cropped.data[i], NULL);
   if (cw == s->width && ch == s->height) {
     *out = cropped;
   } else {

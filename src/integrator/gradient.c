@@ -1,6 +1,8 @@
-/* The differentiable renderer: capture and dL/dtheta in one pass.
+/* The gradient integrator, the differentiable renderer: capture and dL/dtheta
+ * in one pass (woven/grad.h).
  *
- * Per pixel, the kernel (grad_kernel.inc) returns the radiance and, per yarn
+ * Per pixel, the 8-wide row loop (integrator/rows.c; gradient_double.c in
+ * double) returns the radiance and, per yarn
  * type, the sums radiance is linear in (specular and diffuse factors) with
  * their derivatives with respect to the non-linear parameters. The sensor
  * response is per pixel, so its adjoint dL/dradiance is known as soon as the
@@ -14,8 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render/grad_internal.h"
-#include "woven/imgops.h"
+#include "integrator/integrator.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 
@@ -76,21 +77,14 @@ struct wv_grad_record {
  * wv_scene_response's arithmetic, so the capture is wv_render's. */
 static void respond(const wv_scene *s, int dbl, int px, int py, const wv_grad_pixel *pix, float cap[3],
                     pixel_rec *rec) {
-  double m = wv_falloff_mask(s, px, py);
+  double m = wv_response_mask(s, px, py);
   for (int c = 0; c < 3; c++) {
     if (dbl) {
-      double v = pix->rad[c] * s->exposure;
-      int clipped = s->clip > 0 && v > s->clip;
-      rec->cap[c] = m * wv_encode_d(s, clipped ? s->clip : v);
-      rec->slope[c] = clipped ? 0.0 : m * wv_encode_slope(s, v) * s->exposure;
+      rec->cap[c] = wv_respond_d(s, m, pix->rad[c], &rec->slope[c]);
       cap[c] = (float)rec->cap[c];
     } else {
-      float clipf = (float)s->clip, vf = (float)pix->rad[c] * (float)s->exposure;
-      int clipped = clipf > 0.0f && vf > clipf;
-      if (clipped) vf = clipf;
-      cap[c] = (float)m * wv_encode(s, vf);
+      cap[c] = wv_respond_f(s, m, (float)pix->rad[c], &rec->slope[c]);
       rec->cap[c] = cap[c];
-      rec->slope[c] = clipped ? 0.0 : m * wv_encode_slope(s, vf) * s->exposure;
     }
   }
   memcpy(rec->J, pix->J, sizeof rec->J);
@@ -178,13 +172,13 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
       d = rows_done;
       opt->progress(opt->progress_user, (double)d / H);
     }
+    wv_grad_pixel pix[8];
     for (int i = 0; i < W; i++) {
-      wv_grad_pixel pix;
-      if (dbl) wv_grad_pixel_d(&rig, &fab, &Pd, x0 + i, y0 + r, spp, &pix);
-      else wv_grad_pixel_f(&rig, &fab, &fab.P, x0 + i, y0 + r, spp, &pix);
+      if (i % 8 == 0 && !dbl) wv_render_row(&rig, &fab, y0 + r, x0 + i, W - i < 8 ? W - i : 8, spp, NULL, pix);
+      if (dbl) wv_grad_pixel_d(&rig, &fab, &Pd, x0 + i, y0 + r, spp, &pix[i % 8]);
       pixel_rec local, *pr = rec ? &rec->px[(size_t)r * W + i] : &local;
       float cap[3];
-      respond(s, dbl, x0 + i, y0 + r, &pix, cap, pr);
+      respond(s, dbl, x0 + i, y0 + r, &pix[i % 8], cap, pr);
       if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);
       if (rows) backward_pixel(&gm, pr, wv_image_px(dcap, i, r), rows + (size_t)r * NG);
     }
