@@ -40,5 +40,5 @@ void wv_grad_pixel_d(const wv_camera_rig *rig, const wv_fabric *fab, const wv_sh
   }
   for (int c = 0; c < 3; c++) out->rad[c] = WV_ACC_TREE(acc, c) / spp;
   for (int y = 0; y < 2; y++)
-    for (int j = 0; j < WV_J_COUNT; j++) out->J[y][j] = J[y][j] / spp;
+    for (int j = 0; j < WV_J_COUNT; j++) out->J[y][j] = J[y][j];
 }

@@ -26,11 +26,12 @@ wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render
   ((((acc)[0][c] + (acc)[1][c]) + ((acc)[2][c] + (acc)[3][c])) +                              \
    (((acc)[4][c] + (acc)[5][c]) + ((acc)[6][c] + (acc)[7][c])))
 
-/* Per yarn type, the per-pixel sums (times the light, divided by spp) of what
- * radiance is linear in and of their derivatives (WV_J_*, kernel/kernel.h). */
+/* A pixel's radiance and, per yarn type, its sums over the samples (times the
+ * light, not yet divided by spp) of what radiance is linear in and of their
+ * derivatives (WV_J_*, kernel/kernel.h). */
 typedef struct {
-  double rad[3]; /* radiance; in float mode exactly the forward renderer's float value */
-  double J[2][WV_J_COUNT];
+  double rad[3];           /* radiance; in float mode exactly the forward renderer's float value */
+  double J[2][WV_J_COUNT]; /* in float mode float sums, exactly */
 } wv_grad_pixel;
 
 /* Pixels x0 .. x0+n-1 of image row py, spp samples each, eight samples at a

@@ -144,10 +144,12 @@ WV_INLINE void render_chunk(const wv_camera_rig *rig, const wv_fabric *fab, chun
   for (int i = 0; i < n; i++)
     for (int s0 = 0; s0 < full; s0 += WV_LANES)
       shade_block(rig, fab, C, px0, py, nx, ny, wv_splati8(i), s0 + WV_IOTA8, all, 1, grad);
-  /* the rest: t samples per pixel, pixel after pixel */
+  /* the rest: t samples per pixel, laid end to end pixel after pixel, 8 at a time */
   int t = spp - full;
-  for (int i = 0; i < n && t; i++)
-    shade_block(rig, fab, C, px0, py, nx, ny, wv_splati8(i), full + WV_IOTA8, WV_IOTA8 < t, 0, grad);
+  for (int g0 = 0; g0 < n * t; g0 += WV_LANES) {
+    wv_i8 g = g0 + WV_IOTA8, slot = wv_divn(g, t); /* lane: sample g - slot t of the rest of pixel slot */
+    shade_block(rig, fab, C, px0, py, nx, ny, slot, full + (g - slot * t), g < n * t, 0, grad);
+  }
   for (int i = 0; i < n; i++) {
     float tot[3];
     for (int c = 0; c < 3; c++) tot[c] = tree8(C->acc[i][c]) / (float)spp;
@@ -156,7 +158,7 @@ WV_INLINE void render_chunk(const wv_camera_rig *rig, const wv_fabric *fab, chun
     if (gp) {
       for (int c = 0; c < 3; c++) gp[i].rad[c] = tot[c];
       for (int y = 0; y < 2; y++)
-        for (int j = 0; j < WV_J_COUNT; j++) gp[i].J[y][j] = grad ? (double)tree8(C->J[i][y][j]) / (double)spp : 0.0;
+        for (int j = 0; j < WV_J_COUNT; j++) gp[i].J[y][j] = grad ? tree8(C->J[i][y][j]) : 0.0f;
     }
   }
 }

@@ -353,16 +353,12 @@ WV_INLINE void WV_FN(wv_shade)(const wv_fabric *fab, const K_PARAMS *P, const WV
     const WV_L *dn = df.dn[p];
     dd[p] = diff_ni * (wi[0] * dn[0] + wi[1] * dn[1] + wi[2] * dn[2]); /* d(diff) through d(ni = n.wi) */
   }
-  const WV_L lw = wv_sel(c.lit, d->light, WV_B(0));
-  G->J[WV_J_S] = lw * spec;
-  G->J[WV_J_DF] = lw * diff;
-  G->J[WV_J_S_BETA] = lw * ds[WV_T_BETA];
-  G->J[WV_J_S_ALPHA] = lw * S.alpha;
-  G->J[WV_J_S_UMAX] = lw * ds[WV_T_UMAX];
-  G->J[WV_J_S_PSI] = lw * ds[WV_T_PSI];
-  G->J[WV_J_DF_BETA] = lw * dd[WV_T_BETA];
-  G->J[WV_J_DF_UMAX] = lw * dd[WV_T_UMAX];
-  G->J[WV_J_DF_BLEND] = lw * diff_w;
+  WV_L J[WV_J_COUNT];
+  J[WV_J_S] = spec, J[WV_J_DF] = diff;
+  J[WV_J_S_BETA] = ds[WV_T_BETA], J[WV_J_S_ALPHA] = S.alpha, J[WV_J_S_UMAX] = ds[WV_T_UMAX];
+  J[WV_J_S_PSI] = ds[WV_T_PSI], J[WV_J_DF_BETA] = dd[WV_T_BETA], J[WV_J_DF_UMAX] = dd[WV_T_UMAX];
+  J[WV_J_DF_BLEND] = diff_w;
+  for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(c.lit, d->light * J[j], WV_B(0));
 }
 
 #if WV_LANE == WV_LANE_8
