@@ -1,3 +1,6 @@
+/* Loading a photo for comparison with a capture-scene render (woven/photo.h):
+ * read, crop, a linear photo through the scene's sensor response, area-average
+ * to the scene's size. */
 #include "woven/photo.h"
 
 #include <string.h>
