@@ -91,7 +91,7 @@ typedef struct {
   WV_L dt[3][3]; /* d t / d beta, d t / d u_max, d t / d psi */
 } WV_FN(wv_yarn_dframe);
 
-/* d(v / |v|) for a change dv of v: (dv - w (w . dv)) / |v|, w = v / |v|, il = 1 / |v|. */
+/* d(w = v / |v|) for a change dv of v: (dv - w (w . dv)) / |v|; il = 1 / |v|. */
 WV_INLINE void WV_FN(wv_dnormalize)(const WV_L w[3], WV_L il, const WV_L dv[3], WV_L out[3]) {
   WV_L wd = w[0] * dv[0] + w[1] * dv[1] + w[2] * dv[2];
   for (int i = 0; i < 3; i++) out[i] = (dv[i] - w[i] * wd) * il;
@@ -121,6 +121,11 @@ WV_INLINE void WV_FN(wv_yarn_bend)(WV_L u, WV_L du, WV_L v, WV_L bs, WV_L dbs, W
   ln2 = wv_sel(flat, WV_B(1), ln2);
   WV_L il = 1.0f / wv_sqrt(ln2);
   f->n[0] = nx * il, f->n[1] = ny * il, f->n[2] = nz * il;
+  if (df) /* d(n = m / |m|), 0 where the normal was replaced */
+    for (int p = 0; p < 2; p++) {
+      WV_FN(wv_dnormalize)(f->n, il, dmn[p], df->dn[p]);
+      for (int i = 0; i < 3; i++) df->dn[p][i] = wv_sel(flat, WV_B(0), df->dn[p][i]);
+    }
   WV_L tx = t0, ty = t1, tz = bs * t2;
   WV_L dmt[3][3] = {{WV_B(0), WV_B(0), dbs * t2},        /* d(tx = t0, ty = t1, tz = bs t2) / d beta */
                     {WV_B(0), dt1_u, bs * dt2_u},        /*                                / d u_max */
@@ -131,20 +136,14 @@ WV_INLINE void WV_FN(wv_yarn_bend)(WV_L u, WV_L du, WV_L v, WV_L bs, WV_L dbs, W
   lt2 = wv_sel(up, WV_B(1), lt2);
   WV_L it = 1.0f / wv_sqrt(lt2);
   f->t[0] = tx * it, f->t[1] = ty * it, f->t[2] = tz * it;
-  if (df) {
-    /* d(n = m / |m|), d(t = m_t / |m_t|); 0 where the frame was replaced */
-    for (int p = 0; p < 2; p++) {
-      WV_FN(wv_dnormalize)(f->n, il, dmn[p], df->dn[p]);
-      for (int i = 0; i < 3; i++) df->dn[p][i] = wv_sel(flat, WV_B(0), df->dn[p][i]);
-    }
+  if (df) /* d(t = m_t / |m_t|), 0 where the tangent was replaced */
     for (int p = 0; p < 3; p++) {
       WV_FN(wv_dnormalize)(f->t, it, dmt[p], df->dt[p]);
       for (int i = 0; i < 3; i++) df->dt[p][i] = wv_sel(up, WV_B(0), df->dt[p][i]);
     }
-  }
 }
 
-
+/* The frame of the yarn in cell c: the segment's noise, the angles u and v, the bent cylinder. */
 WV_INLINE void WV_FN(wv_yarn_shape)(const wv_yarn_model *m, const K_PARAMS *P, const WV_FN(wv_yarn_cell) * c,
                                     WV_FN(wv_yarn_frame) * f, WV_FN(wv_yarn_dframe) * df) {
   const WV_M warp = c->warp;
@@ -210,37 +209,42 @@ typedef struct {
  * ia = 1/alpha (for the derivative). Partials in S when non-NULL. */
 WV_INLINE WV_L WV_FN(wv_spongecake)(WV_L ti, WV_L to, WV_L th, WV_L mi, WV_L mo, WV_L alpha, WV_L k, WV_L ia2m1,
                                     WV_L pia, WV_L ia, WV_R thickness, WV_L g, WV_FN(wv_spec_partials) * S) {
+  /* (Partials nobody asks for are dropped by the compiler after inlining.) */
   WV_L si = WV_FN(wv_sggx_sigma)(k, ti), so = WV_FN(wv_sggx_sigma)(k, to);
+  /* d(si = sqrt(1 - k ti^2)) = (-k ti dti + alpha ti^2 dalpha) / si, as k = 1 - alpha^2; 0 where si = 0 */
+  WV_L isi = wv_sel(si > 0.0f, 1.0f / si, WV_B(0)), iso = wv_sel(so > 0.0f, 1.0f / so, WV_B(0));
+  WV_L si_ti = -k * ti * isi, si_al = alpha * ti * ti * isi, so_to = -k * to * iso, so_al = alpha * to * to * iso;
   WV_L A = si / mi + so / mo;
+  /* d(A = si / mi + so / mo) */
+  WV_L A_ti = si_ti / mi, A_to = so_to / mo, A_al = si_al / mi + so_al / mo;
   WV_L q = WV_FN(wv_sggx_q)(ia2m1, th);
+  /* d(q = 1 + (1/alpha^2 - 1) th^2) = 2 (1/alpha^2 - 1) th dth - 2 th^2 / alpha^3 dalpha */
+  WV_L q_th = 2.0f * ia2m1 * th, q_al = -2.0f * th * th * ia * ia * ia;
   WV_L D = WV_FN(wv_sggx_D)(pia, q);
+  /* d(D = 1 / (pi alpha q^2)) / D = -2 dq / q - dalpha / alpha */
+  WV_L lD_q = -2.0f / q, lD_al = -ia;
   WV_L E = wv_exp(-thickness * A);
+  /* d(E = exp(-T A)) / (1 - E) = -T E / (1 - E) dA; 0 where E = 1 (A = 0) */
+  WV_L lE_A = wv_sel(E < 1.0f, -thickness * E / (1.0f - E), WV_B(0));
   WV_L spec = wv_sel(A > 0.0f, D * (1.0f - E) / (4.0f * mo * A), WV_B(0)) * g;
+  /* d(spec = g D (1 - E) / (4 mo A)) = spec (dD / D - dE / (1 - E) - dA / A) */
+  WV_L s_A = wv_sel(A > 0.0f, spec * (-lE_A - 1.0f / A), WV_B(0)), s_q = spec * lD_q;
   if (S) {
-    WV_L isi = wv_sel(si > 0.0f, 1.0f / si, WV_B(0)), iso = wv_sel(so > 0.0f, 1.0f / so, WV_B(0));
-    /* d(si = sqrt(1 - k ti^2)) = (-k ti dti + alpha ti^2 dalpha) / si   (dk = -2 alpha dalpha) */
-    WV_L A_ti = -k * ti * isi / mi, A_to = -k * to * iso / mo;
-    WV_L A_al = alpha * (ti * ti * isi / mi + to * to * iso / mo); /* d(A = si / mi + so / mo) */
-    /* d(q = 1 + (1/alpha^2 - 1) th^2) = 2 (1/alpha^2 - 1) th dth - 2 th^2 / alpha^3 dalpha */
-    WV_L q_th = 2.0f * ia2m1 * th, q_al = -2.0f * th * th * ia * ia * ia;
-    /* d(spec = g D (1 - E) / (4 mo A)), D = 1 / (pi alpha q^2), E = e^{-T A}:
-     * d spec / dA = spec (T E / (1 - E) - 1 / A), d spec / dq = -2 spec / q, d spec / dalpha |D = -spec / alpha */
-    WV_L sA = wv_sel((A > 0.0f) & (E < 1.0f), spec * (thickness * E / (1.0f - E) - 1.0f / A), WV_B(0));
-    WV_L sq = -2.0f * spec / q;
-    S->ti = sA * A_ti, S->to = sA * A_to, S->th = sq * q_th;
-    S->alpha = sA * A_al + sq * q_al - spec * ia;
+    S->ti = s_A * A_ti, S->to = s_A * A_to, S->th = s_q * q_th;
+    S->alpha = s_A * A_al + s_q * q_al + spec * lD_al;
   }
   return spec;
 }
 
 /* Blended Lambert times mu_i, without k_d: (w max(0, ni) + (1 - w) mu_i) / pi,
- * ni = n.wi. Partials: d / d ni = w / pi where ni > 0, d / d w = (max(0, ni) - mu_i) / pi. */
+ * ni = n.wi; with its partials d / d ni and d / d w when asked. */
 WV_INLINE WV_L WV_FN(wv_diffuse)(WV_L ni, WV_L mi, WV_R blend, WV_L *d_ni, WV_L *d_blend) {
   const WV_R inv_pi = (WV_R)1 / (WV_R)3.14159265358979323846;
   WV_L nip = wv_sel(ni > 0.0f, ni, WV_B(0));
   WV_L diff = (blend * nip + (1.0f - blend) * mi) * inv_pi;
-  if (d_ni) *d_ni = wv_sel(ni > 0.0f, WV_B(blend * inv_pi), WV_B(0)); /* d(diff) / d ni */
-  if (d_blend) *d_blend = (nip - mi) * inv_pi;                          /* d(diff) / d w */
+  /* d(diff = (w nip + (1 - w) mi) / pi), nip = max(0, ni): w / pi d ni where ni > 0, (nip - mi) / pi d w */
+  if (d_ni) *d_ni = wv_sel(ni > 0.0f, WV_B(blend * inv_pi), WV_B(0));
+  if (d_blend) *d_blend = (nip - mi) * inv_pi;
   return diff;
 }
 
@@ -353,16 +357,12 @@ WV_INLINE void WV_FN(wv_shade)(const wv_fabric *fab, const K_PARAMS *P, const WV
     const WV_L *dn = df.dn[p];
     dd[p] = diff_ni * (wi[0] * dn[0] + wi[1] * dn[1] + wi[2] * dn[2]); /* d(diff) through d(ni = n.wi) */
   }
-  const WV_L lw = wv_sel(c.lit, d->light, WV_B(0));
-  G->J[WV_J_S] = lw * spec;
-  G->J[WV_J_DF] = lw * diff;
-  G->J[WV_J_S_BETA] = lw * ds[WV_T_BETA];
-  G->J[WV_J_S_ALPHA] = lw * S.alpha;
-  G->J[WV_J_S_UMAX] = lw * ds[WV_T_UMAX];
-  G->J[WV_J_S_PSI] = lw * ds[WV_T_PSI];
-  G->J[WV_J_DF_BETA] = lw * dd[WV_T_BETA];
-  G->J[WV_J_DF_UMAX] = lw * dd[WV_T_UMAX];
-  G->J[WV_J_DF_BLEND] = lw * diff_w;
+  WV_L J[WV_J_COUNT];
+  J[WV_J_S] = spec, J[WV_J_DF] = diff;
+  J[WV_J_S_BETA] = ds[WV_T_BETA], J[WV_J_S_ALPHA] = S.alpha, J[WV_J_S_UMAX] = ds[WV_T_UMAX];
+  J[WV_J_S_PSI] = ds[WV_T_PSI], J[WV_J_DF_BETA] = dd[WV_T_BETA], J[WV_J_DF_UMAX] = dd[WV_T_UMAX];
+  J[WV_J_DF_BLEND] = diff_w;
+  for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(c.lit, d->light * J[j], WV_B(0));
 }
 
 #if WV_LANE == WV_LANE_8

@@ -18,6 +18,7 @@
 #define WV_B(x) ((float)(x))
 #define WV_PB(x) ((float)(x))
 #define WV_FN(name) name##_f
+#define WV_TRUE 1
 #elif WV_LANE == WV_LANE_8
 #define WV_L wv_f8
 #define WV_P wv_f8
@@ -29,6 +30,7 @@
 #define WV_B(x) wv_splat8((float)(x))
 #define WV_PB(x) wv_splat8((float)(x))
 #define WV_FN(name) name##_8
+#define WV_TRUE wv_splati8(-1)
 #elif WV_LANE == WV_LANE_D
 #define WV_L double
 #define WV_P float
@@ -40,6 +42,7 @@
 #define WV_B(x) ((double)(x))
 #define WV_PB(x) ((float)(x))
 #define WV_FN(name) name##_d
+#define WV_TRUE 1
 #else
 #error "WV_LANE must be WV_LANE_F, WV_LANE_8 or WV_LANE_D"
 #endif

@@ -9,5 +9,6 @@
 #undef WV_B
 #undef WV_PB
 #undef WV_FN
+#undef WV_TRUE
 #undef WV_LP
 #undef WV_LANE

@@ -1,10 +1,11 @@
+/* The forward integrator: wv_render (woven/render.h), rows in parallel
+ * through the 8-wide row loop (integrator/rows.c), then the sensor response;
+ * and wv_render_setup, which every render starts with. */
 #include "woven/render.h"
 
-#include <math.h>
 #include <omp.h>
-#include <string.h>
 
-#include "render/render_internal.h"
+#include "integrator/integrator.h"
 
 wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, int w, int h,
                           wv_fabric *fab, int *spp, wv_error *err) {
@@ -18,17 +19,6 @@ wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render
     return wv_fail(err, WV_ERR_NOMEM, "%d x %d pixels x %d spp is too many samples (limit %lld)", w, h, *spp,
                    (long long)WV_SCENE_MAX_SAMPLES);
   return WV_OK;
-}
-
-/* Average radiance of pixel (px, py). */
-static void render_pixel(const wv_camera_rig *rig, const wv_fabric *fab, int px, int py, int spp, float out[3]) {
-  wv_footprint fp;
-  wv_footprint_prepare(rig, px, py, &fp);
-  float acc[WV_ACC_ROWS][3] = {{0}};
-  if (fp.fast) wv_render_fast_pixel(fab, &fp, px, py, spp, rig->width, acc);
-  else wv_render_traced_pixel(rig, fab, px, py, spp, acc); /* silhouette pixel */
-  wv_acc_total(acc, out);
-  for (int c = 0; c < 3; c++) out[c] /= (float)spp;
 }
 
 wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, wv_image *capture,
@@ -55,9 +45,7 @@ wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts 
       d = rows_done;
       opt->progress(opt->progress_user, (double)d / s->height);
     }
-    for (int px = 0; px < s->width; px++) {
-      render_pixel(&rig, &fab, px, py, spp, wv_image_px(&rad, px, py));
-    }
+    wv_render_row(&rig, &fab, py, 0, s->width, spp, (float(*)[3])wv_image_px(&rad, 0, py), NULL);
 #pragma omp atomic update
     rows_done++;
   }

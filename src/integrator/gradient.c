@@ -1,6 +1,8 @@
-/* The differentiable renderer: capture and dL/dtheta in one pass.
+/* The gradient integrator, the differentiable renderer: capture and dL/dtheta
+ * in one pass (woven/grad.h).
  *
- * Per pixel, the kernel (grad_kernel.inc) returns the radiance and, per yarn
+ * Per pixel, the 8-wide row loop (integrator/rows.c; gradient_double.c in
+ * double) returns the radiance and, per yarn
  * type, the sums radiance is linear in (specular and diffuse factors) with
  * their derivatives with respect to the non-linear parameters. The sensor
  * response is per pixel, so its adjoint dL/dradiance is known as soon as the
@@ -14,8 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render/grad_internal.h"
-#include "woven/imgops.h"
+#include "integrator/integrator.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 
@@ -63,37 +64,54 @@ static void accumulate(const wv_grad_model *gm, const double JJ[2][WV_J_COUNT], 
 typedef struct {
   double cap[3];   /* the capture (in double mode the unrounded double value) */
   double slope[3]; /* d capture / d radiance, 0 where clipped */
-  double J[2][WV_J_COUNT];
+  double J[2][WV_J_COUNT]; /* the pixel's sums / spp */
 } pixel_rec;
 
+/* The same, kept by a float-mode record: the capture and the sums are floats
+ * there, so they are stored as floats (about half the memory: under glibc's
+ * 32 MB limit for an 800 x 300 image, so the allocator reuses the block from
+ * one fit iteration to the next instead of mapping fresh pages). */
+typedef struct {
+  double slope[3];
+  float cap[3];
+  float J[2][WV_J_COUNT]; /* the sums, before the division by spp */
+} pixel_rec_f;
+
 struct wv_grad_record {
-  int w, h;
+  int w, h, dbl, spp;
   wv_grad_model gm;
-  pixel_rec *px; /* w * h, row-major */
+  pixel_rec *px;    /* double mode: w * h, row-major */
+  pixel_rec_f *pxf; /* float mode */
 };
 
 /* Sensor response of one pixel and its slope; in float mode exactly
  * wv_scene_response's arithmetic, so the capture is wv_render's. */
-static void respond(const wv_scene *s, int dbl, int px, int py, const wv_grad_pixel *pix, float cap[3],
+static void respond(const wv_scene *s, int dbl, int spp, int px, int py, const wv_grad_pixel *pix, float cap[3],
                     pixel_rec *rec) {
-  double m = wv_falloff_mask(s, px, py);
+  double m = wv_response_mask(s, px, py);
   for (int c = 0; c < 3; c++) {
     if (dbl) {
-      double v = pix->rad[c] * s->exposure;
-      int clipped = s->clip > 0 && v > s->clip;
-      rec->cap[c] = m * wv_encode_d(s, clipped ? s->clip : v);
-      rec->slope[c] = clipped ? 0.0 : m * wv_encode_slope(s, v) * s->exposure;
+      rec->cap[c] = wv_respond_d(s, m, pix->rad[c], &rec->slope[c]);
       cap[c] = (float)rec->cap[c];
     } else {
-      float clipf = (float)s->clip, vf = (float)pix->rad[c] * (float)s->exposure;
-      int clipped = clipf > 0.0f && vf > clipf;
-      if (clipped) vf = clipf;
-      cap[c] = (float)m * wv_encode(s, vf);
+      cap[c] = wv_respond_f(s, m, (float)pix->rad[c], &rec->slope[c]);
       rec->cap[c] = cap[c];
-      rec->slope[c] = clipped ? 0.0 : m * wv_encode_slope(s, vf) * s->exposure;
     }
   }
-  memcpy(rec->J, pix->J, sizeof rec->J);
+  for (int y = 0; y < 2; y++)
+    for (int j = 0; j < WV_J_COUNT; j++) rec->J[y][j] = pix->J[y][j] / (double)spp;
+}
+
+/* A float-mode pixel stored, and read back exactly. */
+static void rec_store(pixel_rec_f *o, const pixel_rec *r, const wv_grad_pixel *pix) {
+  for (int c = 0; c < 3; c++) o->slope[c] = r->slope[c], o->cap[c] = (float)r->cap[c];
+  for (int y = 0; y < 2; y++)
+    for (int j = 0; j < WV_J_COUNT; j++) o->J[y][j] = (float)pix->J[y][j];
+}
+static void rec_load(const pixel_rec_f *o, int spp, pixel_rec *r) {
+  for (int c = 0; c < 3; c++) r->slope[c] = o->slope[c], r->cap[c] = o->cap[c];
+  for (int y = 0; y < 2; y++)
+    for (int j = 0; j < WV_J_COUNT; j++) r->J[y][j] = (double)o->J[y][j] / (double)spp;
 }
 
 /* Add a pixel's contribution (and its dot term, in g[WV_P_COUNT]). */
@@ -154,12 +172,13 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
   wv_grad_record *rec = NULL;
   if (rec_out) {
     rec = calloc(1, sizeof *rec);
-    if (rec) rec->px = malloc((size_t)W * H * sizeof *rec->px);
-    if (!rec || !rec->px) {
+    if (rec && dbl) rec->px = malloc((size_t)W * H * sizeof *rec->px);
+    if (rec && !dbl) rec->pxf = malloc((size_t)W * H * sizeof *rec->pxf);
+    if (!rec || (!rec->px && !rec->pxf)) {
       wv_record_free(rec);
       return wv_fail(err, WV_ERR_NOMEM, "out of memory for the derivatives of %d x %d pixels", W, H);
     }
-    rec->w = W, rec->h = H, rec->gm = gm;
+    rec->w = W, rec->h = H, rec->dbl = dbl, rec->spp = spp, rec->gm = gm;
   } else if (!(rows = calloc((size_t)H * NG, sizeof *rows))) {
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for %d gradient rows", H);
   }
@@ -178,13 +197,14 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
       d = rows_done;
       opt->progress(opt->progress_user, (double)d / H);
     }
+    wv_grad_pixel pix[8];
     for (int i = 0; i < W; i++) {
-      wv_grad_pixel pix;
-      if (dbl) wv_grad_pixel_d(&rig, &fab, &Pd, x0 + i, y0 + r, spp, &pix);
-      else wv_grad_pixel_f(&rig, &fab, &fab.P, x0 + i, y0 + r, spp, &pix);
-      pixel_rec local, *pr = rec ? &rec->px[(size_t)r * W + i] : &local;
+      if (i % 8 == 0 && !dbl) wv_render_row(&rig, &fab, y0 + r, x0 + i, W - i < 8 ? W - i : 8, spp, NULL, pix);
+      if (dbl) wv_grad_pixel_d(&rig, &fab, &Pd, x0 + i, y0 + r, spp, &pix[i % 8]);
+      pixel_rec local, *pr = rec && dbl ? &rec->px[(size_t)r * W + i] : &local;
       float cap[3];
-      respond(s, dbl, x0 + i, y0 + r, &pix, cap, pr);
+      respond(s, dbl, spp, x0 + i, y0 + r, &pix[i % 8], cap, pr);
+      if (rec && !dbl) rec_store(&rec->pxf[(size_t)r * W + i], pr, &pix[i % 8]);
       if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);
       if (rows) backward_pixel(&gm, pr, wv_image_px(dcap, i, r), rows + (size_t)r * NG);
     }
@@ -228,8 +248,12 @@ wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcap, double
   for (int r = 0; r < rec->h; r++) {
     /* The same per-row partials as the fused pass: bitwise the same result. */
     memset(row, 0, sizeof row);
-    for (int i = 0; i < rec->w; i++)
-      backward_pixel(&rec->gm, &rec->px[(size_t)r * rec->w + i], wv_image_px(dcap, i, r), row);
+    for (int i = 0; i < rec->w; i++) {
+      size_t k = (size_t)r * rec->w + i;
+      pixel_rec pr;
+      if (!rec->dbl) rec_load(&rec->pxf[k], rec->spp, &pr);
+      backward_pixel(&rec->gm, rec->dbl ? &rec->px[k] : &pr, wv_image_px(dcap, i, r), row);
+    }
     for (int k = 0; k < NG; k++) total[k] += row[k];
   }
   output(total, grad, dot);
@@ -239,6 +263,7 @@ wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcap, double
 void wv_record_free(wv_grad_record *rec) {
   if (!rec) return;
   free(rec->px);
+  free(rec->pxf);
   free(rec);
 }
 
