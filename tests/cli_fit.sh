@@ -15,7 +15,7 @@ grep -q "data:image/png;base64," "$T/fit/report.html" || { echo "FAIL report.htm
 grep -q '<iframe src="viewer.html"' "$T/fit/report.html" || { echo "FAIL report.html does not embed the viewer"; fails=$((fails + 1)); }
 # the fit's scene.json (the registered offset) re-renders render.png exactly
 check "render the fit" 0 "" -- "$WOVEN" render --params "$T/fit/params.json" --scene "$T/fit/scene.json" -o "$T/refit.png" -q
-check "re-render equals render.png" 0 '"mae": 0.0}' -- "$WOVEN" compare "$T/refit.png" "$T/fit/render.png" --json
+check "re-render equals render.png" 0 '"mae": 0.0,' -- "$WOVEN" compare "$T/refit.png" "$T/fit/render.png" --json
 check "compare" 0 '"ssim"' -- "$WOVEN" compare "$T/photo.png" "$T/fit/render.png" --json
 check "resume further" 0 '"iterations": 9' -- "$WOVEN" fit --resume "$T/fit" --iters 9 --json
 check "resume finished" 0 '"iterations": 9' -- "$WOVEN" fit --resume "$T/fit" --json

@@ -51,7 +51,7 @@ static void test_checkpoint_iters(void **state) {
   assert_int_equal(wv_write_file_atomic(path, edited, strlen(edited), &err), WV_OK);
   assert_int_equal(wv_fit_checkpoint_read(path, &st, &o, name, sizeof name, &err), WV_ERR_INVALID);
   assert_non_null(strstr(err.msg, path));
-  assert_non_null(strstr(err.msg, "'iters' = 99999999"));
+  assert_non_null(strstr(err.msg, "iters' = 99999999"));
   free(text), free(edited);
 }
 

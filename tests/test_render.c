@@ -212,7 +212,7 @@ static void test_golden(void **state) {
   (void)state;
   static const struct {
     const char *scene, *pattern, *file;
-    int spp, variant; /* 0: the preset's centre; 1: wide view, noise, gaps; 2: far offset */
+    int spp, variant; /* 0: the preset's centre; 1: wide view, noise, gaps; 2: far offset (the fabric coordinates at the limit) */
   } cases[] = {{"cylinder", "twill", "cylinder_twill", 16, 0},
                {"cylinder", "satin", "cylinder_satin", 16, 0},
                {"flat45", "plain", "flat45_plain", 16, 0},
@@ -234,7 +234,7 @@ static void test_golden(void **state) {
       s.vfov_deg *= 3;
       p.noise_level = 4, p.yarn_width = 0.85, p.specular_noise = 1;
     } else if (cases[i].variant == 2) {
-      s.fabric_offset[0] = 1e7, s.fabric_offset[1] = -1e7;
+      s.fabric_offset[0] = 1e4, s.fabric_offset[1] = -1e4; /* the scenes' limit, WV_SCENE_MAX_OFFSET_MM */
     }
     wv_render_opts o = {cases[i].spp, 0, NULL, NULL, NULL};
     wv_image img, ref;

@@ -1,10 +1,10 @@
 /* The adapter between the baker and the production shading: the export module
  * evaluates the woven BRDF only through these functions, which call the
- * renderer's code (render/render_internal.h: wv_fabric_prepare, wv_shade). */
+ * shading kernel (kernel/kernel.h: wv_fabric_prepare, wv_kernel_shade). */
 #include <stdlib.h>
 
 #include "export/export_internal.h"
-#include "render/render_internal.h"
+#include "kernel/kernel.h"
 
 struct wv_export_fabric {
   wv_fabric fab;
@@ -32,10 +32,5 @@ const wv_yarn_model *wv_export_fabric_yarns(const wv_export_fabric *f) { return 
 
 void wv_export_woven_eval(const wv_export_fabric *f, float fx, float fy, const float wi[3], const float wo[3],
                           float out[3]) {
-  out[0] = out[1] = out[2] = 0.0f;
-  if (wi[2] <= 0.0f || wo[2] <= 0.0f) return; /* below the macro surface */
-  wv_hit hit = {fx, fy, {wi[0], wi[1], wi[2]}, {wo[0], wo[1], wo[2]}, 1.0f};
-  wv_dirs d;
-  wv_dirs_from_hit(&hit, &d);
-  wv_shade(&f->fab, &d, fx, fy, out);
+  wv_kernel_shade(&f->fab, fx, fy, wi, wo, out); /* zero below either horizon */
 }
