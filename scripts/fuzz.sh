@@ -24,8 +24,13 @@ cmake --build "$B" -j2 --target fuzzers >/dev/null
 rm -rf "$B/seeds"
 "$B/fuzz/fuzz_make_seeds" "$B/seeds"
 mkdir -p "$B/seeds/params" "$B/seeds/scene" "$B/seeds/exr"
+mkdir -p "$B/seeds/scene3d" "$B/seeds/mesh"
 cp examples/*.json "$B/seeds/params/"
 cp scenes/*.json "$B/seeds/scene/"
+cp scenes/*.json "$B/seeds/scene3d/"
+# mesh: the first byte's low 2 bits pick the reader (0 OBJ, 1 PLY, 2 glTF, 3 GLB: 'l', 'm')
+printf 'lv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nf 1/1 2/2 4/4\nf 1/1 4/4 3/3\n' >"$B/seeds/mesh/quad.obj"
+printf 'mply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float s\nproperty float t\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n' >"$B/seeds/mesh/tri.ply"
 cp tests/golden/*.exr "$B/seeds/exr/"
 
 if (($#)); then
@@ -67,7 +72,7 @@ for h in "${harnesses[@]}"; do
   # a starved process on a busy shared machine can still stall for several seconds).
   opts=(-max_total_time="$secs" -print_final_stats=1 -timeout=60 -rss_limit_mb=2048
         -artifact_prefix="$findings/")
-  case $h in params | scene | safetensors | dataset | fit_checkpoint) opts+=(-dict=fuzz/json.dict) ;; esac
+  case $h in params | scene | scene3d | safetensors | dataset | fit_checkpoint) opts+=(-dict=fuzz/json.dict) ;; esac
   set +e
   "$exe" "${opts[@]}" "${dirs[@]}" >"$log" 2>&1
   rc=$?

@@ -32,20 +32,30 @@ typedef struct {
 /* The lanes' values of a per-pixel array: pixel slot[k] for lane k. The slots of
  * a vector lie within 8 consecutive pixels from slot[0]: one load and one
  * permutation. */
+#if defined(__clang__) /* no variable permutation builtin: lane by lane */
+#define LANES(name, V, T)                               \
+  WV_INLINE V name(const T *a, wv_i8 slot) {            \
+    V v;                                                \
+    for (int k = 0; k < 8; k++) v[k] = a[slot[k]];      \
+    return v;                                           \
+  }
+LANES(lanes_q, wv_q8, uint64_t)
+#else
 #define LANES(name, V, T)                               \
   WV_INLINE V name(const T *a, wv_i8 slot) {            \
     V v;                                                \
     memcpy(&v, a + slot[0], sizeof v);                  \
     return __builtin_shuffle(v, slot - slot[0]);        \
   }
-LANES(lanes_f, wv_f8, float)
-LANES(lanes_i, wv_i8, int32_t)
-LANES(lanes_w, wv_w8, uint32_t)
 WV_INLINE wv_q8 lanes_q(const uint64_t *a, wv_i8 slot) {
   wv_q8 v;
   memcpy(&v, a + slot[0], sizeof v);
   return __builtin_shuffle(v, __builtin_convertvector(slot - slot[0], wv_l8));
 }
+#endif
+LANES(lanes_f, wv_f8, float)
+LANES(lanes_i, wv_i8, int32_t)
+LANES(lanes_w, wv_w8, uint32_t)
 
 /* ((v0 + v1) + (v2 + v3)) + ((v4 + v5) + (v6 + v7)): WV_ACC_TREE over the lanes. */
 WV_INLINE float tree8(wv_f8 v) { return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7])); }

@@ -193,7 +193,28 @@ wv_status wv_mesh_load(const char *path, size_t limit, int need_uv, wv_mesh *m, 
   if (sb.st_size == 0) return wv_fail(err, WV_ERR_FORMAT, "%s: empty file, not a mesh", path);
   unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
                    aiProcess_PreTransformVertices | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
-  const struct aiScene *sc = aiImportFile(path, flags);
+  /* The faces are checked on a first reading without post-processing: assimp's
+   * post-processing steps trust the readers' vertex indices and abort on some out of
+   * range (and a failed aiApplyPostProcessing frees its scene twice, so the file is
+   * simply read again with the steps). */
+  const struct aiScene *sc = aiImportFile(path, 0);
+  if (!sc) return wv_fail(err, WV_ERR_FORMAT, "%s: not a readable mesh: %s", path, aiGetErrorString());
+  for (unsigned i = 0; i < sc->mNumMeshes; i++) {
+    const struct aiMesh *am = sc->mMeshes[i];
+    for (unsigned f = 0; f < am->mNumFaces; f++) {
+      const struct aiFace *fa = &am->mFaces[f];
+      int bad = fa->mNumIndices == 0 || !fa->mIndices;
+      for (unsigned k = 0; !bad && k < fa->mNumIndices; k++) bad = fa->mIndices[k] >= am->mNumVertices;
+      if (bad) {
+        unsigned nv0 = am->mNumVertices;
+        aiReleaseImport(sc);
+        return wv_fail(err, WV_ERR_FORMAT, "%s: face %u of mesh %u refers to a vertex it does not have (%u vertices)",
+                       path, f, i, nv0);
+      }
+    }
+  }
+  aiReleaseImport(sc);
+  sc = aiImportFile(path, flags);
   if (!sc) return wv_fail(err, WV_ERR_FORMAT, "%s: not a readable mesh: %s", path, aiGetErrorString());
   long long nv = 0, nt = 0;
   int with_uv = 1;

@@ -441,8 +441,9 @@ static wv_status parse_root(json_t *r, const ctx *c, wv_scene3d *s) {
   const char *key;
   json_t *val;
   json_object_foreach(o, key, val) {
-    if ((st = parse_material(val, key, c, &s->materials[s->nmaterials]))) return st;
-    s->nmaterials++;
+    st = parse_material(val, key, c, &s->materials[s->nmaterials]);
+    s->nmaterials++; /* counted even when refused: wv_scene3d_free frees what it holds */
+    if (st) return st;
   }
   a = json_object_get(r, "objects");
   if ((st = array_of(a, "objects", sizeof *s->objects, (void **)&s->objects, &s->nobjects, err))) return st;
