@@ -147,6 +147,21 @@ static int read_lock(const char *path, char *text, size_t cap, char *host, size_
   return 1;
 }
 
+/* Is process pid running on this host? A zombie (exited, not yet reaped: its parent
+ * may be gone and init may not reap) counts as gone. */
+static int process_alive(long pid) {
+  if (kill((pid_t)pid, 0) != 0 && errno == ESRCH) return 0;
+  char path[64], buf[512];
+  snprintf(path, sizeof path, "/proc/%ld/stat", pid);
+  FILE *f = fopen(path, "r");
+  if (!f) return 1; /* no /proc: trust kill */
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  fclose(f);
+  buf[n] = 0;
+  const char *close = strrchr(buf, ')'); /* the state follows the command name */
+  return !(close && close[1] == ' ' && (close[2] == 'Z' || close[2] == 'X'));
+}
+
 wv_status wv_dir_lock_acquire(const char *dir, wv_dir_lock *lk, char *note, size_t note_cap, wv_error *err) {
   lk->held = 0;
   if (note_cap) note[0] = 0;
@@ -182,7 +197,7 @@ wv_status wv_dir_lock_acquire(const char *dir, wv_dir_lock *lk, char *note, size
                      "remove the lock file", dir, lk->path);
     }
     int same_host = !strcmp(ohost, host);
-    if (!same_host || kill((pid_t)opid, 0) == 0 || errno != ESRCH) {
+    if (!same_host || process_alive(opid)) {
       if (same_host)
         return wv_fail(err, WV_ERR_IO, "%s is in use by another woven job (process %ld on this host, %s); wait for "
                        "it to finish or use another directory", dir, opid, lk->path);
