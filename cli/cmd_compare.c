@@ -7,12 +7,14 @@
 #include "woven/metrics.h"
 
 static const char *HELP =
-    "usage: woven compare A B [--channels luma|rgb] [--json]\n"
+    "usage: woven compare A B [--channels luma|rgb] [--blur SIGMA] [--json]\n"
     "\n"
     "Compares two images of the same size: SSIM (Wang et al. 2004, 11x11 Gaussian window,\n"
     "sigma 1.5, data range 1, mean over the valid region) on luminance (default) or per\n"
     "channel (mean of R, G, B), and the mean absolute difference. Values are compared as\n"
-    "stored (8/16-bit scaled to [0,1], EXR as is).\n";
+    "stored (8/16-bit scaled to [0,1], EXR as is).\n"
+    "  --blur SIGMA  compare Gaussian blurs of both (sigma in pixels): the shading without\n"
+    "                the pixel-scale weave and its noise\n";
 
 int cmd_compare(int argc, char **argv) {
   cli_ctx c = {0, 0, "compare"};
@@ -21,6 +23,7 @@ int cmd_compare(int argc, char **argv) {
   const char *files[2] = {NULL, NULL};
   int nfiles = 0;
   wv_ssim_mode mode = WV_SSIM_LUMA;
+  double blur = 0;
   for (const char *s; (s = cli_next(&a));) {
     if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
       fputs(HELP, stdout);
@@ -31,6 +34,13 @@ int cmd_compare(int argc, char **argv) {
       if (!strcmp(v, "luma")) mode = WV_SSIM_LUMA;
       else if (!strcmp(v, "rgb")) mode = WV_SSIM_RGB;
       else return cli_usage_error(c.cmd, "--channels must be luma or rgb");
+    } else if (cli_is(&a, s, "--blur")) {
+      const char *v = cli_value(&a, "--blur");
+      if (!v) return EXIT_USAGE;
+      char *end;
+      blur = strtod(v, &end);
+      if (*v == '\0' || *end != '\0' || !(blur >= 0 && blur <= 100))
+        return cli_usage_error(c.cmd, "--blur: '%s' is not a number in 0..100", v);
     } else if (cli_common_flag(&c, s)) {
       /* --quiet, -q, --json */
     } else if (s[0] == '-' && s[1]) {
@@ -50,7 +60,15 @@ int cmd_compare(int argc, char **argv) {
       return cli_fail(&c, &err);
     }
   double ssim = 0, mae = 0;
-  wv_status st = wv_ssim(&im[0], &im[1], mode, &ssim, &err);
+  wv_status st = WV_OK;
+  for (int i = 0; i < 2 && blur > 0 && !st; i++) {
+    wv_image b;
+    if (!(st = wv_image_blur(&im[i], blur, &b, &err))) {
+      wv_image_free(&im[i]);
+      im[i] = b;
+    }
+  }
+  if (!st) st = wv_ssim(&im[0], &im[1], mode, &ssim, &err);
   if (!st) st = wv_mae(&im[0], &im[1], &mae, &err);
   wv_image_free(&im[0]);
   wv_image_free(&im[1]);
@@ -59,8 +77,8 @@ int cmd_compare(int argc, char **argv) {
     return cli_fail(&c, &err);
   }
   if (c.json)
-    cli_print_json(json_pack("{s:o,s:o,s:o,s:s,s:o}", "a", cli_str(files[0]), "b", cli_str(files[1]), "ssim", cli_real(ssim, 6),
-                             "ssim_channels", mode == WV_SSIM_LUMA ? "luma" : "rgb", "mae", cli_real(mae, 6)));
+    cli_print_json(json_pack("{s:o,s:o,s:o,s:s,s:o,s:o}", "a", cli_str(files[0]), "b", cli_str(files[1]), "ssim", cli_real(ssim, 6),
+                             "ssim_channels", mode == WV_SSIM_LUMA ? "luma" : "rgb", "mae", cli_real(mae, 6), "blur", cli_real(blur, 6)));
   else if (!c.quiet)
     printf("SSIM (%s) %.4f  MAE %.5f\n", mode == WV_SSIM_LUMA ? "luma" : "rgb", ssim, mae);
   return 0;

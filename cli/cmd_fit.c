@@ -17,6 +17,7 @@
 #include "woven/photo.h"
 #include "woven/render.h"
 #include "woven/report.h"
+#include "woven/view.h"
 
 static const char *HELP =
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
@@ -45,8 +46,8 @@ static const char *HELP =
     "  --resume DIR      continue a fit that was stopped (checkpoints at the start and every 10\n"
     "                    iterations), or add iterations to a finished one\n"
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), loss.svg,\n"
-    "report.html, maps/, and fit.json + checkpoint.json (for --resume). DIR is replaced whole at\n"
-    "the end; it may not hold other files, nor any input.\n";
+    "report.html, viewer.html (woven view), maps/, and fit.json + checkpoint.json (for --resume).\n"
+    "DIR is replaced whole at the end; it may not hold other files, nor any input.\n";
 
 int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled) {
   long v;
@@ -131,7 +132,7 @@ static int on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
 /* What a fit directory may hold (woven capture adds network.json). */
 static const char *const FIT_FILES[] = {"fit.json",    "checkpoint.json", "params.json", "render.png",
                                         "start.png",   "photo.png",       "compare.png", "loss.svg",
-                                        "report.html", "maps",            "scene.json",  "network.json",
+                                        "report.html", "viewer.html", "maps",            "scene.json",  "network.json",
                                         NULL};
 
 typedef enum { FIT_DIR_NONE, FIT_DIR_UNFINISHED, FIT_DIR_FINISHED } fit_dir_state;
@@ -236,7 +237,11 @@ static wv_status write_results(const fit_job *job, const char *dir, const wv_fit
   if (!rc) rc = write_text(dir, "loss.svg", svg, err);
   wv_report rep = {job->title,  pphoto,      pstart,     pfit,       job->start_label, *ssim_start, *ssim_fit,
                    &st->start,  &st->params, svg,        &st->timing, st->iter,        wv_descriptor_name(job->desc),
-                   job->pattern_choice};
+                   job->pattern_choice, "viewer.html"};
+  /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
+  wv_view_opts vo = {&st->params, fit_scene, pphoto, job->title};
+  snprintf(path, sizeof path, "%s/viewer.html", dir);
+  if (!rc) rc = wv_view_write(path, &vo, err);
   snprintf(path, sizeof path, "%s/report.html", dir);
   if (!rc) rc = wv_report_write_html(path, &rep, err);
   free(svg);

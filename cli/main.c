@@ -21,6 +21,8 @@ static const struct {
     {"capture-batch", cmd_capture_batch, "woven capture over a list of photos (runs under mpirun too)"},
     {"scene", cmd_scene, "render the fabric on meshes (a draped cloth) under new light, with edits"},
     {"cloth", cmd_cloth, "drape a UV-mapped square with the cloth simulation and write it as OBJ"},
+    {"export", cmd_export, "write a glTF 2.0 binary with the fabric baked into PBR textures"},
+    {"view", cmd_view, "write a self-contained HTML viewer of the true model (WebGL)"},
 };
 
 static void usage(FILE *f) {

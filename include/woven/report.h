@@ -26,6 +26,7 @@ typedef struct {
   int iters;
   const char *descriptor;
   const wv_pattern_choice *pattern_choice;     /* the pattern was chosen automatically (NULL: given) */
+  const char *viewer_html;                     /* the interactive viewer beside the report (NULL: none) */
 } wv_report;
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err);

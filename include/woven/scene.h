@@ -49,11 +49,9 @@ wv_status wv_scene_preset(const char *name, wv_scene *s, wv_error *err);
 wv_status wv_scene_load(const char *name_or_path, wv_scene *s, wv_error *err);
 char *wv_scene_to_json(const wv_scene *s);
 
-/* Sensor response: capture = mask * encode(clip(exposure * radiance)). In place allowed. */
+/* Sensor response: capture = mask * encode(clip(exposure * radiance)). In place allowed.
+ * (Its adjoint is applied inside the gradient renderer, woven/grad.h.) */
 void wv_scene_response(const wv_scene *s, const wv_image *radiance, wv_image *capture);
-/* Adjoint of the response: given dL/dcapture, dL/dradiance (uses the radiance). */
-void wv_scene_response_backward(const wv_scene *s, const wv_image *radiance, const wv_image *dcapture,
-                                wv_image *dradiance);
 /* Encoding of one value and its inverse (used to decode photos). */
 float wv_encode(const wv_scene *s, float linear);
 float wv_decode(const wv_scene *s, float encoded);

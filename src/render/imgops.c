@@ -1,4 +1,5 @@
-/* Image operations with adjoints, for losses on processed renders. */
+/* Image operations with adjoints, for losses on processed renders: area
+ * downsampling and its transpose, the L1 difference. */
 #include "woven/imgops.h"
 
 #include <math.h>
@@ -88,73 +89,7 @@ wv_status wv_image_downsample_backward(int in_w, int in_h, const wv_image *dout,
   return WV_OK;
 }
 
-/* ---- sensor response pieces ---- */
-
-double wv_encode_d(const wv_scene *s, double x) {
-  if (x <= 0.0) return 0.0;
-  switch (s->encoding) {
-    case WV_ENC_SRGB: return x <= 0.0031308 ? 12.92 * x : 1.055 * pow(x, 1.0 / 2.4) - 0.055;
-    case WV_ENC_GAMMA: return pow(x, 1.0 / s->gamma);
-    default: return x;
-  }
-}
-
-double wv_encode_slope(const wv_scene *s, double x) {
-  if (x <= 0.0) return 0.0;
-  switch (s->encoding) {
-    case WV_ENC_SRGB: return x <= 0.0031308 ? 12.92 : 1.055 / 2.4 * pow(x, 1.0 / 2.4 - 1.0);
-    case WV_ENC_GAMMA: return pow(x, 1.0 / s->gamma - 1.0) / s->gamma;
-    default: return 1.0;
-  }
-}
-
-/* The same expression as response.c, so the float mask is bitwise the same. */
-double wv_falloff_mask(const wv_scene *s, int x, int y) {
-  if (!s->falloff) return 1.0;
-  double dx = x + 0.5 - 0.5 * s->width, dy = y + 0.5 - 0.5 * s->height;
-  return exp(-(dx * dx + dy * dy) / (s->falloff_sigma * s->falloff_sigma));
-}
-
 static size_t count(const wv_image *im) { return (size_t)im->w * im->h * im->c; }
-
-void wv_image_encode(const wv_scene *s, const wv_image *in, wv_image *out) {
-  for (size_t i = 0, n = count(in); i < n; i++) out->data[i] = wv_encode(s, in->data[i]);
-}
-
-void wv_image_encode_backward(const wv_scene *s, const wv_image *in, const wv_image *dout, wv_image *din) {
-  for (size_t i = 0, n = count(in); i < n; i++)
-    din->data[i] = (float)(dout->data[i] * wv_encode_slope(s, in->data[i]));
-}
-
-void wv_image_clip(const wv_image *in, float clip, wv_image *out) {
-  for (size_t i = 0, n = count(in); i < n; i++) {
-    float v = in->data[i];
-    out->data[i] = clip > 0.0f && v > clip ? clip : v;
-  }
-}
-
-void wv_image_clip_backward(const wv_image *in, float clip, const wv_image *dout, wv_image *din) {
-  for (size_t i = 0, n = count(in); i < n; i++)
-    din->data[i] = clip > 0.0f && in->data[i] > clip ? 0.0f : dout->data[i];
-}
-
-void wv_image_mask(const wv_scene *s, const wv_image *in, wv_image *out) {
-  for (int y = 0; y < in->h; y++)
-    for (int x = 0; x < in->w; x++) {
-      float m = (float)wv_falloff_mask(s, x, y);
-      const float *p = wv_image_px(in, x, y);
-      float *o = wv_image_px(out, x, y);
-      for (int c = 0; c < in->c; c++) o[c] = m * p[c];
-    }
-}
-
-void wv_image_mask_backward(const wv_scene *s, const wv_image *dout, wv_image *din) {
-  wv_image_mask(s, dout, din); /* the mask is a diagonal linear map: its own adjoint */
-}
-
-void wv_image_scale(const wv_image *in, float k, wv_image *out) {
-  for (size_t i = 0, n = count(in); i < n; i++) out->data[i] = k * in->data[i];
-}
 
 double wv_image_l1(const wv_image *a, const wv_image *b, wv_image *da) {
   if (a->w != b->w || a->h != b->h || a->c != b->c) return -1.0;
