@@ -10,35 +10,44 @@ export OMPI_MCA_btl_vader_single_copy_mechanism=none
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 load() { cut -d' ' -f1 /proc/loadavg; }
-# One timed run: wall seconds of the whole command (process start and MPI start-up included).
+# One timed run: "wall cpu" seconds of the whole command (process start and MPI start-up
+# included; cpu = user + system time of every process, the ranks included). The CPU
+# time per sample does not depend on what else runs on the machine, the wall time does.
 # run DIR JOBS [LAUNCHER...]
 run() {
   local dir=$1 jobs=$2
   shift 2
   rm -rf "$dir"
-  local t0 t1
-  t0=$(date +%s.%N)
-  "$@" "$WOVEN" dataset --scene "$SCENE" --per-pattern "$PER" --seed 11 --jobs "$jobs" -o "$dir" -q
-  t1=$(date +%s.%N)
-  echo "$t1 - $t0" | bc -l
+  /usr/bin/time -f "%e %U %S" -o "$T/time" "$@" "$WOVEN" dataset --scene "$SCENE" --per-pattern "$PER" --seed 11 \
+    --jobs "$jobs" -o "$dir" -q
+  awk '{print $1, $2 + $3}' "$T/time"
 }
 median() { printf '%s\n' "$@" | sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
 load_before=$(load)
-one=() omp=() two=()
+one=() omp=() two=() c1=() c2=() co=()
 for _ in $(seq "$RUNS"); do
-  one+=("$(run "$T/one" 1)")
-  two+=("$(run "$T/two" 1 mpirun -n 2 --bind-to core)")
-  omp+=("$(run "$T/omp" 2)")
+  read -r w c <<<"$(run "$T/one" 1)"
+  one+=("$w") c1+=("$c")
+  read -r w c <<<"$(run "$T/two" 1 mpirun -n 2 --bind-to core)"
+  two+=("$w") c2+=("$c")
+  read -r w c <<<"$(run "$T/omp" 2)"
+  omp+=("$w") co+=("$c")
 done
 load_after=$(load)
+for d in one two omp; do
+  [[ -s $T/$d/dataset.json ]] || { echo '{"error": "woven dataset failed"}'; exit 1; }
+done
 n=$((5 * PER))
 m1=$(median "${one[@]}") m2=$(median "${two[@]}") mo=$(median "${omp[@]}")
+k1=$(median "${c1[@]}") k2=$(median "${c2[@]}") ko=$(median "${co[@]}")
 same=false
 diff -r "$T/one" "$T/two" >/dev/null && diff -r "$T/one" "$T/omp" >/dev/null && same=true
-awk -v n="$n" -v m1="$m1" -v m2="$m2" -v mo="$mo" -v same="$same" -v la="$load_before" -v lb="$load_after" \
+awk -v n="$n" -v m1="$m1" -v m2="$m2" -v mo="$mo" -v k1="$k1" -v k2="$k2" -v ko="$ko" -v same="$same" -v la="$load_before" -v lb="$load_after" \
   -v scene="$SCENE" -v runs="$RUNS" -v cores="$(nproc)" 'BEGIN {
   r1 = n / m1; r2 = n / m2; ro = n / mo
   printf "{\"scene\": \"%s\", \"samples\": %d, \"runs\": %d, \"cores\": %d, \"median_seconds\": {\"one_process\": %.3f, \"mpirun_n2\": %.3f, \"one_process_2_threads\": %.3f},\n", scene, n, runs, cores, m1, m2, mo
   printf " \"samples_per_s\": {\"one_process\": %.3f, \"mpirun_n2\": %.3f, \"one_process_2_threads\": %.3f},\n", r1, r2, ro
-  printf " \"mpi_speedup\": %.3f, \"mpi_parallel_efficiency\": %.3f, \"identical_output\": %s, \"load_before\": %s, \"load_after\": %s}\n", r2 / r1, r2 / (2 * r1), same, la, lb
+  printf " \"median_cpu_seconds\": {\"one_process\": %.3f, \"mpirun_n2\": %.3f, \"one_process_2_threads\": %.3f},\n", k1, k2, ko
+  printf " \"samples_per_cpu_s\": {\"one_process\": %.3f, \"mpirun_n2\": %.3f, \"one_process_2_threads\": %.3f},\n", n / k1, n / k2, n / ko
+  printf " \"mpi_speedup\": %.3f, \"mpi_parallel_efficiency\": %.3f, \"mpi_cpu_efficiency\": %.3f, \"identical_output\": %s, \"load_before\": %s, \"load_after\": %s}\n", r2 / r1, r2 / (2 * r1), k1 / k2, same, la, lb
 }'
