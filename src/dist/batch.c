@@ -313,14 +313,14 @@ wv_status wv_batch_run(const wv_dist *d, const wv_batch_opts *o, wv_batch_summar
     double secs = now_s() - t1;
     if (!r.status && access(final, F_OK) == 0) {
       r.status = WV_ERR_IO;
-      snprintf(r.error, sizeof r.error, "%s exists and holds no finished capture (no params.json); remove it", final);
+      snprintf(r.error, sizeof r.error, "%.900s exists and holds no finished capture (no params.json); remove it", final);
     }
     if (r.status && !r.error[0]) snprintf(r.error, sizeof r.error, "the capture failed (exit %d)", r.status);
     /* the record first: a capture in place always has one */
     st = write_record(o->dir, it, &r, secs, d->rank, err);
     if (!st && !r.status && rename(work, final) != 0) {
       r.status = WV_ERR_IO;
-      snprintf(r.error, sizeof r.error, "cannot move %s to %s: %s", work, final, strerror(errno));
+      snprintf(r.error, sizeof r.error, "cannot move %.450s to %.450s: %.80s", work, final, strerror(errno));
       st = write_record(o->dir, it, &r, secs, d->rank, err);
     }
     if (st) break;
