@@ -17,7 +17,7 @@ static const char *HELP =
     "files) or a text file of photo paths, one a line (# starts a comment; relative paths are\n"
     "relative to the list file). The capture options (--scene, --pattern, --model, --iters,\n"
     "--crop, --iter-spp, --iter-scale, --align-radius, --register-radius, --seed, --threads,\n"
-    "--descriptor, --vgg19-weights) mean what 'woven capture --help' says and apply to every photo.\n"
+    "--descriptor, --vgg19-weights, --drape) mean what 'woven capture --help' says and apply to every photo.\n"
     "Writes DIR/<name>/ per photo (name: the file name without its extension; the files of\n"
     "'woven capture'), each appearing whole when its capture is done, and DIR/summary.json and\n"
     "DIR/summary.html: every photo with its status, pattern, SSIM, WSC where reported, time.\n"
@@ -29,7 +29,7 @@ static const char *HELP =
 static const char *const VALUE_OPTS[] = {"--scene",     "--pattern",  "--model",        "--descriptor",
                                          "--vgg19-weights", "--crop", "--iters",        "--iter-spp",
                                          "--iter-scale", "--align-radius", "--register-radius", "--seed",
-                                         "--threads",   NULL};
+                                         "--threads",   "--drape",   NULL};
 
 typedef struct {
   cli_ctx *c;

@@ -15,7 +15,7 @@ echo "$scene" >"$T/tiny.json"
 "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 2 -o "$T/ds" --seed 3 -q || fail "dataset"
 "$WOVEN" train "$T/ds" -o "$T/m.bin" --epochs 1 --batch 4 -q || fail "train"
 OPTS=(--scene "$T/tiny.json" --model "$T/m.bin" --pattern twill --iters 1 --iter-scale 1 --iter-spp 1 --align-radius 0
-  --register-radius 0 --threads 1)
+  --register-radius 0 --threads 1 --drape none)
 mkdir "$T/photos"
 cp "$T/ds/samples/twill_0.png" "$T/photos/a.png"
 cp "$T/ds/samples/satin_0.png" "$T/photos/b.png"

@@ -27,6 +27,8 @@ typedef struct {
   const char *descriptor;
   const wv_pattern_choice *pattern_choice;     /* the pattern was chosen automatically (NULL: given) */
   const char *viewer_html;                     /* the interactive viewer beside the report (NULL: none) */
+  const char *drape_png;                       /* the fit on the draped cloth under new light (NULL: none) */
+  const char *drape_note;                      /* what the drape shows, or why it is missing */
 } wv_report;
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err);
