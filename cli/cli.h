@@ -96,7 +96,14 @@ typedef struct {
   const char *inputs[6];
   /* The mesh scene the report shows the fit on (NULL: the bundled draped cloth; "none": no drape). */
   const char *drape;
+  struct fit_result *result; /* filled when not NULL (woven capture-batch) */
 } fit_job;
+/* The figures of a finished fit, for a caller that runs it (woven capture-batch). */
+typedef struct fit_result {
+  double ssim_start, ssim_fit;
+  int iterations;
+  char pattern[32];
+} fit_result;
 /* The output directory check, before any slow step: refuses a file, a directory
  * holding files that are not a fit's, an input inside it, and (unless --force or
  * resuming) an earlier fit, finished or not. Returns the exit code (0: fine). */
@@ -122,6 +129,9 @@ int cmd_dataset(int argc, char **argv);
 int cmd_train(int argc, char **argv);
 int cmd_predict(int argc, char **argv);
 int cmd_capture(int argc, char **argv);
+/* woven capture with its arguments (argv[0] the command name); result as in fit_job. */
+int cli_capture(int argc, char **argv, fit_result *result);
+int cmd_capture_batch(int argc, char **argv);
 int cmd_scene(int argc, char **argv);
 int cmd_cloth(int argc, char **argv);
 int cmd_export(int argc, char **argv);

@@ -8,6 +8,7 @@
 
 #include "cli.h"
 #include "woven/descriptor.h"
+#include "woven/dist.h"
 #include "woven/fabricnet.h"
 #include "woven/io.h"
 #include "woven/render.h"
@@ -23,12 +24,24 @@ static const char *HELP =
     "  --jobs N      samples rendered at once, one thread each (default: all cores)\n"
     "Writes DIR/dataset.json and DIR/samples/<pattern>_<i>.{json,png,feat} (docs/fabricnet.md).\n"
     "Run the same command again to resume after an interruption: finished samples are kept,\n"
-    "a larger --per-pattern extends the set; a DIR made with other settings is refused.\n";
+    "a larger --per-pattern extends the set; a DIR made with other settings is refused.\n"
+    "Under 'mpirun -n N' the processes share the samples (docs/mpi.md); the directory is the same\n"
+    "as one process makes. One job at a time per DIR (DIR/woven.lock).\n";
 
 static int mkdir_p(const char *dir) {
   struct stat sb;
   if (stat(dir, &sb) == 0) return S_ISDIR(sb.st_mode) ? 0 : -1;
   return mkdir(dir, 0777);
+}
+
+/* A sample is done when its files are whole (wv_dataset_sample_done). */
+typedef struct {
+  const char *dir;
+  const wv_dataset_info *info;
+} sample_check;
+static int sample_done(void *user, int k) {
+  const sample_check *sc = user;
+  return wv_dataset_sample_done(sc->dir, sc->info, k);
 }
 
 int cmd_dataset(int argc, char **argv) {
@@ -98,12 +111,31 @@ int cmd_dataset(int argc, char **argv) {
     snprintf(want.descriptor, sizeof want.descriptor, "%s", wv_descriptor_name(desc[0]));
     want.n_feat = (int)wv_descriptor_size(desc[0]);
   }
+  /* Under mpirun every rank runs this command: rank 0 owns the lock and dataset.json,
+   * the others only render their share and stay quiet. */
+  wv_dist dist;
+  wv_dir_lock lock = {{0}, 0};
+  if (wv_dist_begin(&dist, &err)) rc = cli_fail(&c, &err);
+  if (dist.rank > 0) c.quiet = 1, c.json = 0;
+
+  /* One job per directory: a second one would render the same samples. */
+  if (!rc && dist.rank == 0) {
+    char note[4400];
+    if (mkdir_p(dir) != 0) {
+      fprintf(stderr, "woven dataset: error: %s: cannot create directory: %s\n", dir, strerror(errno));
+      rc = WV_ERR_IO;
+    } else if (wv_dir_lock_acquire(dir, &lock, note, sizeof note, &err)) {
+      rc = cli_fail(&c, &err);
+    } else if (note[0]) {
+      cli_info(&c, "%s\n", note);
+    }
+  }
 
   /* An existing dataset must have been made with the same settings. */
   struct stat sb;
   char path[4096];
   snprintf(path, sizeof path, "%s/dataset.json", dir);
-  int existing = !rc && stat(path, &sb) == 0;
+  int existing = !rc && dist.rank == 0 && stat(path, &sb) == 0;
   if (existing) {
     wv_dataset_info have;
     if (wv_dataset_info_read(dir, &have, &err)) {
@@ -130,34 +162,37 @@ int cmd_dataset(int argc, char **argv) {
         cli_info(&c, "%s records %d per pattern; completing all of them\n", dir, have.per_pattern);
       }
     }
-  } else if (!rc) {
+  } else if (!rc && dist.rank == 0) {
     if (mkdir_p(dir) != 0) {
       fprintf(stderr, "woven dataset: error: %s: cannot create directory: %s\n", dir, strerror(errno));
       rc = WV_ERR_IO;
     }
   }
   snprintf(path, sizeof path, "%s/samples", dir);
-  if (!rc && mkdir_p(path) != 0) {
+  if (!rc && dist.rank == 0 && mkdir_p(path) != 0) {
     fprintf(stderr, "woven dataset: error: %s: cannot create directory: %s\n", path, strerror(errno));
     rc = WV_ERR_IO;
   }
-  if (!rc) wv_remove_stale_temps(path, NULL);
-  if (!rc) cli_clean_temps_beside(own[0]);
+  if (!rc && dist.rank == 0) wv_remove_stale_temps(path, NULL);
+  if (!rc && dist.rank == 0) cli_clean_temps_beside(own[0]);
   /* dataset.json before any sample: a directory with samples always says what they are */
-  if (!rc && wv_dataset_info_write(dir, &want, &err)) rc = cli_fail(&c, &err);
+  if (!rc && dist.rank == 0 && wv_dataset_info_write(dir, &want, &err)) rc = cli_fail(&c, &err);
+  /* the other ranks start once rank 0 is ready, with its size (it may have grown) */
+  int shared[2] = {rc, want.per_pattern};
+  wv_dist_bcast_ints(&dist, shared, 2);
+  rc = wv_dist_max_int(&dist, rc ? rc : shared[0]);
+  want.per_pattern = shared[1];
 
-  int total = WV_NET_PATTERNS * want.per_pattern, ntodo = 0, nbefore = 0;
-  int *todo = rc ? NULL : malloc(sizeof(int) * (size_t)total);
-  if (!rc && !todo) rc = cli_usage_error(c.cmd, "out of memory");
+  int total = WV_NET_PATTERNS * want.per_pattern, ntodo = 0, nbefore = 0, nleft = 0;
+  int *todo = NULL;
+  if (!rc && wv_dist_share(&dist, total, sample_done, &(sample_check){dir, &want}, &todo, &ntodo, &nleft, &err))
+    rc = cli_fail(&c, &err);
   if (!rc) {
-    for (int k = 0; k < total; k++) {
-      if (wv_dataset_sample_done(dir, &want, k))
-        nbefore++;
-      else
-        todo[ntodo++] = k;
-    }
-    cli_info(&c, "%s: %d samples (%d per pattern), %d done, %d to render at %d x %d, %d spp, %ld job(s)\n", dir,
-             total, want.per_pattern, nbefore, ntodo, want.scene.width, want.scene.height, want.spp, jobs);
+    nbefore = total - nleft;
+    cli_info(&c, "%s: %d samples (%d per pattern), %d done, %d to render at %d x %d, %d spp, %ld job(s)%s\n", dir,
+             total, want.per_pattern, nbefore, nleft, want.scene.width, want.scene.height, want.spp, jobs,
+             dist.size > 1 ? " per process" : "");
+    if (dist.size > 1) cli_info(&c, "%d processes share them (MPI)\n", dist.size);
   }
   double t0 = cli_now();
   int done = 0, failed = 0, last_report = 0;
@@ -212,17 +247,22 @@ int cmd_dataset(int argc, char **argv) {
   cli_progress_end(&bar);
   double el = cli_now() - t0;
   if (!rc && failed) rc = cli_fail(&c, &first_err);
+  done = wv_dist_sum_int(&dist, done);
+  el = wv_dist_max_double(&dist, el);
+  rc = wv_dist_max_int(&dist, rc);
   if (!rc) {
     cli_info(&c, "%d samples rendered in %.1f s (%.3f samples/s); %s has %d of %d\n", done, el,
              el > 0 ? done / el : 0.0, dir, nbefore + done, total);
     if (c.json)
-      cli_print_json(json_pack("{s:o,s:i,s:i,s:i,s:o,s:o,s:i,s:i,s:i,s:I}", "dir", cli_str(dir), "samples", total,
+      cli_print_json(json_pack("{s:o,s:i,s:i,s:i,s:o,s:o,s:i,s:i,s:i,s:I,s:i}", "dir", cli_str(dir), "samples", total,
                                "done_before", nbefore, "rendered", done, "seconds", cli_real(el, 3), "samples_per_s",
                                cli_real(el > 0 ? done / el : 0.0, 4), "spp", want.spp, "width", want.scene.width,
-                               "height", want.scene.height, "jobs", (json_int_t)jobs));
+                               "height", want.scene.height, "jobs", (json_int_t)jobs, "processes", dist.size));
   }
   for (long j = 0; j < jobs; j++) wv_descriptor_free(desc[j]);
   free(desc);
   free(todo);
+  wv_dir_lock_release(&lock);
+  wv_dist_end(&dist);
   return rc;
 }

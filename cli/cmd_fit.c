@@ -429,6 +429,10 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
     }
     cli_print_json(o_json);
   }
+  if (job->result) {
+    job->result->ssim_start = ssim_start, job->result->ssim_fit = ssim_fit, job->result->iterations = st.iter;
+    snprintf(job->result->pattern, sizeof job->result->pattern, "%s", st.params.pattern);
+  }
   wv_fit_state_free(&st);
   return 0;
 }

@@ -220,7 +220,9 @@ int cmd_predict(int argc, char **argv) {
   return rc;
 }
 
-int cmd_capture(int argc, char **argv) {
+int cmd_capture(int argc, char **argv) { return cli_capture(argc, argv, NULL); }
+
+int cli_capture(int argc, char **argv, fit_result *result) {
   cli_ctx c = {0, 0, "capture"};
   cli_args a;
   cli_args_init(&a, argc, argv, c.cmd);
@@ -283,6 +285,7 @@ int cmd_capture(int argc, char **argv) {
     job.photo_path = pa.photo, job.iters_given = iters_given;
     job.start_label = "network";
     job.title = "woven capture";
+    job.result = result;
     rc = fit_pipeline(&c, &job);
   }
   free(network);

@@ -18,6 +18,7 @@ static const struct {
     {"train", cmd_train, "train FabricNet on a dataset"},
     {"predict", cmd_predict, "FabricNet's estimate of the parameters of a photo"},
     {"capture", cmd_capture, "photo -> parameters: network estimate, then the fit, all outputs"},
+    {"capture-batch", cmd_capture_batch, "woven capture over a list of photos (runs under mpirun too)"},
     {"scene", cmd_scene, "render the fabric on meshes (a draped cloth) under new light, with edits"},
     {"cloth", cmd_cloth, "drape a UV-mapped square with the cloth simulation and write it as OBJ"},
     {"export", cmd_export, "write a glTF 2.0 binary with the fabric baked into PBR textures"},
@@ -27,7 +28,7 @@ static const struct {
 static void usage(FILE *f) {
   fprintf(f, "usage: woven <command> [options]\n\ncommands:\n");
   for (size_t i = 0; i < sizeof COMMANDS / sizeof COMMANDS[0]; i++)
-    fprintf(f, "  %-10s %s\n", COMMANDS[i].name, COMMANDS[i].help);
+    fprintf(f, "  %-13s %s\n", COMMANDS[i].name, COMMANDS[i].help);
   fprintf(f, "\n'woven <command> --help' describes a command.\n"
              "Exit codes: 0 ok, 1 usage, 2 invalid value, 3 I/O error, 4 malformed file, 5 too large.\n");
 }

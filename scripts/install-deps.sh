@@ -9,7 +9,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 PKGS=(build-essential cmake pkg-config python3
       libpng-dev libjpeg62-turbo-dev libopenexr-dev libjansson-dev libopenblas-dev libcmocka-dev libfftw3-dev
-      libassimp-dev libembree-dev chromium "$@")
+      libassimp-dev libembree-dev libopenmpi-dev openmpi-bin chromium "$@")
 command -v node >/dev/null 2>&1 || PKGS+=(nodejs)
 command -v npm >/dev/null 2>&1 || PKGS+=(npm)
 missing=()
