@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 
 #include "cli.h"
+#include "woven/analysis.h"
 #include "woven/descriptor.h"
 #include "woven/fit.h"
 #include "woven/io.h"
@@ -41,8 +42,10 @@ static const char *HELP =
     "                    and SSIM use the scene's full resolution and spp\n"
     "  --force           replace the results of an earlier fit in DIR\n"
     "  --resume DIR      continue a fit that was stopped (checkpoints every 10 iterations)\n"
-    "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), loss.svg,\n"
-    "report.html, maps/, and fit.json + checkpoint.json (for --resume).\n";
+    "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), zoom.png (their\n"
+    "centre crop enlarged 4x), spectra.png (their weave spectra), loss.svg, report.html (with\n"
+    "SSIM and WSC, the weave-spectrum correlation, of start and fit), maps/, and fit.json +\n"
+    "checkpoint.json (for --resume).\n";
 
 int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled) {
   long v;
@@ -131,6 +134,57 @@ int fit_prepare_dir(const char *cmd, const char *dir, int force, int resume) {
   return 0;
 }
 
+/* What shows the weave to a person, next to SSIM: per-channel SSIM, WSC, the weave
+ * spectra of photo, start and fit (spectra.png) and the same centre crop of the three,
+ * enlarged (zoom.png). Images too small for a spectrum get neither (wsc -2). */
+#define WEAVE_ZOOM 4
+typedef struct {
+  double ssim_rgb[2], wsc[2];
+  char zoom_png[4096], spectra_png[4096];
+  int zoom_side;
+} weave_views;
+
+static wv_status weave_views_make(const char *dir, const wv_image *photo, const wv_image *start, const wv_image *fit,
+                                  weave_views *v, wv_error *err) {
+  const wv_image *img[3] = {photo, start, fit};
+  v->wsc[0] = v->wsc[1] = -2;
+  wv_status st = WV_OK;
+  for (int i = 0; i < 2 && !st; i++) st = wv_ssim(photo, img[i + 1], WV_SSIM_RGB, &v->ssim_rgb[i], err);
+  int n = photo->w < photo->h ? photo->w : photo->h;
+  n = n > WV_WSC_SIZE ? WV_WSC_SIZE : n - n % 2;
+  if (!st && n >= 32) {
+    float *sp = malloc(sizeof(float) * (size_t)n * n * 3);
+    if (!sp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the weave spectra");
+    const float *spec[3] = {sp, sp + (size_t)n * n, sp + (size_t)n * n * 2};
+    for (int i = 0; i < 3 && !st; i++)
+      st = wv_weave_spectrum(img[i], (photo->w - n) / 2, (photo->h - n) / 2, n, (float *)spec[i], err);
+    wv_image pic = {0};
+    if (!st) {
+      v->wsc[0] = wv_wsc_spectra(spec[0], spec[1], n), v->wsc[1] = wv_wsc_spectra(spec[0], spec[2], n);
+      st = wv_spectrum_picture(spec, 3, n, 1, &pic, err);
+    }
+    snprintf(v->spectra_png, sizeof v->spectra_png, "%s/spectra.png", dir);
+    if (!st) st = wv_image_write_png(v->spectra_png, &pic, 8, err);
+    wv_image_free(&pic);
+    free(sp);
+  }
+  /* the centre crop a person can see the yarns in: a quarter of the image, at most 96 pixels */
+  v->zoom_side = (photo->w < photo->h ? photo->w : photo->h) / 4;
+  if (v->zoom_side > 96) v->zoom_side = 96;
+  if (!st && v->zoom_side >= 8) {
+    wv_image z[3] = {{0}, {0}, {0}}, row = {0};
+    for (int i = 0; i < 3 && !st; i++) st = wv_image_centre_zoom(img[i], v->zoom_side, WEAVE_ZOOM, &z[i], err);
+    const wv_image *zs[3] = {&z[0], &z[1], &z[2]};
+    if (!st) st = wv_image_hconcat(zs, 3, 4, &row, err);
+    snprintf(v->zoom_png, sizeof v->zoom_png, "%s/zoom.png", dir);
+    if (!st) st = wv_image_write_png(v->zoom_png, &row, 8, err);
+    for (int i = 0; i < 3; i++) wv_image_free(&z[i]);
+    wv_image_free(&row);
+  }
+  if (st) v->zoom_png[0] = v->spectra_png[0] = 0;
+  return st;
+}
+
 int fit_pipeline(cli_ctx *c, const fit_job *job) {
   wv_error err = {0};
   char path[4096], ckpt[4096];
@@ -175,6 +229,8 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   if (!rc) rc = wv_render(&fit_scene, &st.params, &ro, &r_fit, NULL, &err);
   if (!rc) rc = wv_ssim(job->photo, &r_start, WV_SSIM_LUMA, &ssim_start, &err);
   if (!rc) rc = wv_ssim(job->photo, &r_fit, WV_SSIM_LUMA, &ssim_fit, &err);
+  weave_views wv = {0};
+  if (!rc) rc = weave_views_make(job->dir, job->photo, &r_start, &r_fit, &wv, &err);
   const wv_image *side[3] = {job->photo, &r_start, &r_fit};
   if (!rc) rc = wv_image_hconcat(side, 3, 4, &cmp, &err);
   char pphoto[4096], pstart[4096], pfit[4096];
@@ -190,9 +246,14 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   if (!rc && !svg) rc = wv_fail(&err, WV_ERR_NOMEM, "out of memory for the loss plot");
   snprintf(path, sizeof path, "%s/loss.svg", job->dir);
   if (!rc) rc = wv_write_file_atomic(path, svg, strlen(svg), &err);
-  wv_report rep = {job->title,  pphoto,      pstart,     pfit,      job->start_label,      ssim_start, ssim_fit,
-                   &st.start,   &st.params,  svg,        &st.timing, st.iter,              wv_descriptor_name(job->desc),
-                   job->pattern_choice};
+  wv_report rep = {.title = job->title, .photo_png = pphoto, .start_png = pstart, .fit_png = pfit,
+                   .start_label = job->start_label, .ssim_start = ssim_start, .ssim_fit = ssim_fit,
+                   .start = &st.start, .fit = &st.params, .loss_svg = svg, .timing = &st.timing, .iters = st.iter,
+                   .descriptor = wv_descriptor_name(job->desc), .pattern_choice = job->pattern_choice,
+                   .zoom_png = wv.zoom_png[0] ? wv.zoom_png : NULL, .zoom_side = wv.zoom_side,
+                   .zoom_factor = WEAVE_ZOOM, .spectra_png = wv.spectra_png[0] ? wv.spectra_png : NULL,
+                   .ssim_rgb_start = wv.ssim_rgb[0], .ssim_rgb_fit = wv.ssim_rgb[1], .wsc_start = wv.wsc[0],
+                   .wsc_fit = wv.wsc[1]};
   snprintf(path, sizeof path, "%s/report.html", job->dir);
   if (!rc) rc = wv_report_write_html(path, &rep, &err);
   free(svg);
@@ -216,17 +277,24 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
     return cli_fail(c, &err);
   }
   const wv_fit_record *last = st.iter ? &st.log[st.iter - 1] : NULL;
-  cli_info(c, "SSIM %s %.4f -> fit %.4f; %d iterations in %.1f s; results in %s/\n", job->start_label, ssim_start,
-           ssim_fit, st.iter, st.timing.total, job->dir);
+  cli_info(c, "SSIM %s %.4f -> fit %.4f, WSC %.3f -> %.3f; %d iterations in %.1f s; results in %s/\n",
+           job->start_label, ssim_start, ssim_fit, wv.wsc[0], wv.wsc[1], st.iter, st.timing.total, job->dir);
   if (c->json) {
     char *pj = wv_params_to_json(&st.params);
     char *pc = job->pattern_choice ? wv_pattern_choice_to_json(job->pattern_choice) : NULL;
-    printf("{\"dir\": \"%s\", \"iterations\": %d, \"ssim_start\": %.6f, \"ssim_fit\": %.6f, \"loss\": %.8f, "
+    char bounds[WV_P_COUNT + 3][96], blist[(WV_P_COUNT + 3) * 100] = "";
+    int nb = wv_params_at_bounds(&st.params, bounds, WV_P_COUNT + 3);
+    for (int i = 0, len = 0; i < nb && len >= 0 && (size_t)len < sizeof blist; i++)
+      len += snprintf(blist + len, sizeof blist - (size_t)len, "%s\"%s\"", i ? ", " : "", bounds[i]);
+    printf("{\"dir\": \"%s\", \"iterations\": %d, \"ssim_start\": %.6f, \"ssim_fit\": %.6f, "
+           "\"ssim_rgb_start\": %.6f, \"ssim_rgb_fit\": %.6f, \"wsc_start\": %.6f, \"wsc_fit\": %.6f, "
+           "\"at_bounds\": [%s], \"loss\": %.8f, "
            "\"time_s\": {\"total\": %.3f, \"render\": %.3f, \"gradient\": %.3f, \"descriptor\": %.3f, "
            "\"discrete\": %.3f, \"registration\": %.3f}, \"density_alignment_ssim\": [%.4f, %.4f], "
            "\"registration\": {\"offset_mm\": [%.6f, %.6f], \"ncc\": [%.4f, %.4f], \"window_ssim\": [%.4f, %.4f]}, "
            "\"pattern_choice\": %s, \"params\": %s}\n",
-           job->dir, st.iter, ssim_start, ssim_fit, last ? last->loss : 0.0, st.timing.total, st.timing.render,
+           job->dir, st.iter, ssim_start, ssim_fit, wv.ssim_rgb[0], wv.ssim_rgb[1], wv.wsc[0], wv.wsc[1], blist,
+           last ? last->loss : 0.0, st.timing.total, st.timing.render,
            st.timing.gradient, st.timing.descriptor, st.timing.discrete, st.timing.registration,
            st.align_ssim_before, st.align_ssim_after, st.offset_mm[0], st.offset_mm[1], st.reg_ncc_before,
            st.reg_ncc_after, st.reg_ssim_before, st.reg_ssim_after, pc ? pc : "null", pj ? pj : "null");

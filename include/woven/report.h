@@ -15,6 +15,15 @@ wv_status wv_image_hconcat(const wv_image *const *imgs, int n, int gap, wv_image
 /* An SVG line plot of the loss terms (total, Gram, w2*pixel, w1*prior), log scale. */
 char *wv_loss_svg(const wv_fit_record *log, int n, const wv_fit_opts *o);
 
+/* The centre side x side pixels of img enlarged factor times (nearest neighbour: the
+ * pixels stay visible); side is reduced to fit the image. */
+wv_status wv_image_centre_zoom(const wv_image *img, int side, int factor, wv_image *out, wv_error *err);
+
+/* The parameters of p that lie on a bound of their range (the fit keeps every parameter
+ * inside its range, so these are the ones it wanted to push further): up to cap entries
+ * of text such as "inclination_deg = 70 (upper bound)" into lines (each 96 chars). */
+int wv_params_at_bounds(const wv_params *p, char (*lines)[96], int cap);
+
 typedef struct {
   const char *title;
   const char *photo_png, *start_png, *fit_png; /* files embedded as data URIs */
@@ -26,6 +35,12 @@ typedef struct {
   int iters;
   const char *descriptor;
   const wv_pattern_choice *pattern_choice;     /* the pattern was chosen automatically (NULL: given) */
+  /* The weave, where a person can see it (NULL / negative when not made): */
+  const char *zoom_png;                        /* photo | start | fit, the same centre crop enlarged */
+  int zoom_side, zoom_factor;
+  const char *spectra_png;                     /* weave spectra: photo | start | fit */
+  double ssim_rgb_start, ssim_rgb_fit;         /* SSIM per RGB channel, averaged */
+  double wsc_start, wsc_fit;                   /* weave-spectrum correlation (-2: not measured) */
 } wv_report;
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err);

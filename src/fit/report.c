@@ -1,3 +1,5 @@
+/* What a capture hands back to a person: side-by-side and zoomed images, the loss plot,
+ * the parameters left on a bound, and the self-contained HTML report. */
 #include "woven/report.h"
 
 #include <math.h>
@@ -25,6 +27,40 @@ wv_status wv_image_hconcat(const wv_image *const *imgs, int n, int gap, wv_image
     x0 += imgs[i]->w + gap;
   }
   return WV_OK;
+}
+
+wv_status wv_image_centre_zoom(const wv_image *img, int side, int factor, wv_image *out, wv_error *err) {
+  if (side > img->w) side = img->w;
+  if (side > img->h) side = img->h;
+  if (side < 1 || factor < 1) return wv_fail(err, WV_ERR_INVALID, "zoom: empty crop");
+  wv_status st = wv_image_alloc(out, side * factor, side * factor, 3, err);
+  if (st) return st;
+  int x0 = (img->w - side) / 2, y0 = (img->h - side) / 2;
+  for (int y = 0; y < out->h; y++)
+    for (int x = 0; x < out->w; x++) {
+      const float *s = wv_image_px(img, x0 + x / factor, y0 + y / factor);
+      float *d = wv_image_px(out, x, y);
+      for (int c = 0; c < 3; c++) d[c] = s[img->c >= 3 ? c : 0];
+    }
+  return WV_OK;
+}
+
+int wv_params_at_bounds(const wv_params *p, char (*lines)[96], int cap) {
+  int n = 0;
+  for (int i = 0; i < WV_P_COUNT && n < cap; i++) {
+    double lo, hi, v = wv_param_get(p, i);
+    wv_param_range(i, &lo, &hi);
+    double tol = 1e-6 * (hi - lo);
+    if (v <= lo + tol || v >= hi - tol)
+      snprintf(lines[n++], 96, "%s = %g (%s bound)", wv_param_name(i), v, v <= lo + tol ? "lower" : "upper");
+  }
+  for (int y = 0; y < 2 && n < cap; y++)
+    if (p->density[y] <= WV_DENSITY_MIN || p->density[y] >= WV_DENSITY_MAX)
+      snprintf(lines[n++], 96, "density.%s = %g (%s bound)", y ? "weft" : "warp", p->density[y],
+               p->density[y] <= WV_DENSITY_MIN ? "lower" : "upper");
+  if (n < cap && (p->noise_level <= 0 || p->noise_level >= 10))
+    snprintf(lines[n++], 96, "noise_level = %d (%s bound)", p->noise_level, p->noise_level <= 0 ? "lower" : "upper");
+  return n;
 }
 
 /* A growing string. */
@@ -146,23 +182,81 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
       sb_printf(&b, "\"><figcaption>%s: SSIM %.4f</figcaption></figure>\n", labels[i],
                 i == 1 ? r->ssim_start : r->ssim_fit);
   }
-  sb_printf(&b, "<p>SSIM against the photo (luminance, Wang et al. 2004, 11x11 Gaussian window): "
-                "%s %.4f &rarr; fit %.4f. %d iterations, descriptor <code>%s</code>.</p>\n",
-            r->start_label, r->ssim_start, r->ssim_fit, r->iters, r->descriptor);
+  if (r->zoom_png && !st) {
+    sb_printf(&b, "<h2>The weave, close up</h2>\n<figure><img alt=\"zoom\" src=\"data:image/png;base64,");
+    sb_base64_file(&b, r->zoom_png, &st, err);
+    sb_printf(&b, "\"><figcaption>photo | %s | fit: the centre %d x %d pixels, %d times enlarged</figcaption>"
+                  "</figure>\n",
+              r->start_label, r->zoom_side, r->zoom_side, r->zoom_factor);
+  }
+  if (r->spectra_png && !st) {
+    sb_printf(&b, "<figure><img alt=\"spectra\" src=\"data:image/png;base64,");
+    sb_base64_file(&b, r->spectra_png, &st, err);
+    sb_printf(&b, "\"><figcaption>weave spectra (log power of the luminance detail, centre window, DC in the "
+                  "middle): photo | %s | fit. The same weave shows the same lattice of peaks, wherever its yarns "
+                  "lie.</figcaption></figure>\n",
+              r->start_label);
+  }
+  sb_printf(&b, "<table><tr><th>against the photo</th><th>%s</th><th>fit</th></tr>\n", r->start_label);
+  sb_printf(&b, "<tr><td>SSIM (luminance)</td><td>%.4f</td><td>%.4f</td></tr>\n", r->ssim_start, r->ssim_fit);
+  if (r->ssim_rgb_start > -2)
+    sb_printf(&b, "<tr><td>SSIM (per RGB channel)</td><td>%.4f</td><td>%.4f</td></tr>\n", r->ssim_rgb_start,
+              r->ssim_rgb_fit);
+  if (r->wsc_start > -2)
+    sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td><td>%.4f</td></tr>\n", r->wsc_start,
+              r->wsc_fit);
+  sb_printf(&b, "</table>\n<p>SSIM: Wang et al. 2004, 11x11 Gaussian window. WSC: Pearson correlation of the log "
+                "power spectra of the luminance detail of the centre 256 x 256 pixels, DC left out; 1 for the same "
+                "periodic structure, about 0 for none in common. %d iterations, descriptor <code>%s</code>.</p>\n",
+            r->iters, r->descriptor);
+  char bounds[WV_P_COUNT + 3][96];
+  int nbounds = wv_params_at_bounds(r->fit, bounds, WV_P_COUNT + 3);
+  if (nbounds) {
+    sb_printf(&b, "<p>Parameters of the fit on a bound of their range (the fit wanted to push them further):</p><ul>");
+    for (int i = 0; i < nbounds; i++) sb_printf(&b, "<li>%s</li>", bounds[i]);
+    sb_printf(&b, "</ul>\n");
+  } else {
+    sb_printf(&b, "<p>No parameter of the fit ended on a bound of its range.</p>\n");
+  }
   if (r->timing)
     sb_printf(&b, "<p>Time: %.1f s in all (render %.1f s, gradient %.1f s, descriptor %.1f s, discrete search %.1f s, registration %.1f s).</p>\n",
               r->timing->total, r->timing->render, r->timing->gradient, r->timing->descriptor, r->timing->discrete,
               r->timing->registration);
   const wv_pattern_choice *pc = r->pattern_choice;
   if (pc) {
-    sb_printf(&b, "<p>Pattern chosen automatically: <b>%s</b>, the smallest texture (Gram) loss against the photo "
-                  "when the network's estimate is rendered with each built-in pattern (%d spp):</p>\n<table><tr>",
-              wv_net_pattern(pc->best), pc->spp);
-    for (int i = 0; i < WV_NET_PATTERNS; i++) sb_printf(&b, "<th>%s</th>", wv_net_pattern(i));
-    sb_printf(&b, "</tr>\n<tr>");
-    for (int i = 0; i < WV_NET_PATTERNS; i++)
-      sb_printf(&b, i == pc->best ? "<td><b>%.6f</b></td>" : "<td>%.6f</td>", pc->loss[i]);
-    sb_printf(&b, "</tr></table>\n");
+    const wv_lattice *l = &pc->lattice;
+    const char *chosen = wv_weave_builtin_name(pc->best);
+    sb_printf(&b, "<h2>Weave analysis and pattern choice</h2>\n");
+    if (l->found) {
+      const wv_lattice_fit *f = &l->fit[l->best];
+      sb_printf(&b, "<p>The photo's weave spectrum shows %d peaks. The built-in lattice that explains them best is "
+                    "<b>%s</b>: %.1f warp x %.1f weft yarns/inch (%.2f x %.2f pixels apart), turned by %.1f&deg;, "
+                    "%.1f&deg; out of square, a repeat of %d yarns moving %+d per row (score %.3f).</p>\n",
+                l->n_peaks, wv_weave_builtin_name(l->best), f->density[0], f->density[1], l->spacing_px[0],
+                l->spacing_px[1], f->angle_deg, f->skew_deg, l->repeat, l->shear, f->score);
+      sb_printf(&b, "<p>Pattern chosen: <b>%s</b> (%s family, %s). Each built-in was rendered with the network's "
+                    "estimate and its own lattice densities; the match of its spectral peaks with the photo's "
+                    "ranks it%s:</p>\n<table><tr><th>pattern</th><th>lattice score</th><th>densities</th>"
+                    "<th>render match</th><th>render WSC</th><th>fit loss</th></tr>\n",
+                chosen, wv_weave_family(chosen), pc->method,
+                strcmp(pc->method, "lattice+loss") ? "" : "; near ties were decided by the fit's loss");
+      for (int k = 0; k < wv_weave_builtin_count(); k++) {
+        int i = pc->ranking.order[k];
+        const char *fmt = i == pc->best ? "<tr><td><b>%s</b></td>" : "<tr><td>%s</td>";
+        sb_printf(&b, fmt, wv_weave_builtin_name(i));
+        sb_printf(&b, "<td>%.3f</td><td>%.1f / %.1f</td><td>%.3f</td><td>%.3f</td>", l->fit[i].score,
+                  l->fit[i].density[0], l->fit[i].density[1], pc->ranking.match[i], pc->ranking.wsc[i]);
+        if (pc->evaluated[i]) sb_printf(&b, "<td>%.6f</td></tr>\n", pc->loss[i]);
+        else sb_printf(&b, "<td></td></tr>\n");
+      }
+      sb_printf(&b, "</table>\n");
+    } else {
+      sb_printf(&b, "<p>The weave analysis found no weave lattice (%s). The pattern was chosen as the network "
+                    "would: <b>%s</b> (%s family), %s.</p>\n",
+                l->reason, chosen, wv_weave_family(chosen),
+                !strcmp(pc->method, "network") ? "its most probable class"
+                                               : "the smallest fit loss of its estimate rendered with each built-in");
+    }
   }
   sb_printf(&b, "<h2>Parameters</h2>\n<table><tr><th>parameter</th><th>%s</th><th>fit</th></tr>\n", r->start_label);
   sb_printf(&b, "<tr><td>pattern</td><td>%s</td><td>%s</td></tr>\n", r->start->pattern, r->fit->pattern);
