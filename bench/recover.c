@@ -14,7 +14,11 @@
  *   recover --real DIR [--model M] [--iters N] ...
  *     Every DIR/<pattern><n>_*.png as a photo in the flat45 scene, captured as `woven
  *     capture` does: the chosen pattern, SSIM (RGB and luminance) and WSC of start and fit,
- *     and the baseline SSIM of the photo's own copy blurred with a Gaussian of sigma 4 px.
+ *     the baseline SSIM of the photo's own copy blurred with a Gaussian of sigma 4 px, the
+ *     WSC of the photo's four 256 x 256 quadrants against each other (the mean of the six
+ *     pairs: what the same weave scores), and SSIM and WSC of the fit's render blurred by a
+ *     Gaussian of sigma 0.8 px afterwards (what a camera's blur, which the renderer does not
+ *     model, would change).
  * SSIM and WSC are measured on full-quality renders at the scene's resolution and spp.
  * Prints one line per target, then one JSON object on the last line. */
 #include <math.h>
@@ -81,17 +85,44 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
   c->seconds = bench_now() - t0;
 }
 
-/* SSIM (RGB and luminance) and WSC of a full-quality render of p in s against ref. */
+/* SSIM (RGB and luminance) and WSC of a full-quality render of p in s against ref; with
+ * blur > 0 also both of the render blurred by that sigma (blurred[0] SSIM, [1] WSC). */
 static void measure(const wv_scene *s, const wv_params *p, const wv_image *ref, int threads, double *ssim_rgb,
-                    double *ssim_luma, double *wsc) {
+                    double *ssim_luma, double *wsc, double blur, double blurred[2]) {
   wv_render_opts ro = {0, threads, NULL, NULL, NULL};
-  wv_image img;
+  wv_image img, b;
   wv_error err = {0};
   if (wv_render(s, p, &ro, &img, NULL, &err)) die(&err);
   if (wv_ssim(ref, &img, WV_SSIM_RGB, ssim_rgb, &err) || (ssim_luma && wv_ssim(ref, &img, WV_SSIM_LUMA, ssim_luma, &err)) ||
       wv_wsc(ref, &img, wsc, &err))
     die(&err);
+  if (blur > 0) {
+    if (wv_image_gaussian(&img, blur, &b, &err) || wv_ssim(ref, &b, WV_SSIM_RGB, &blurred[0], &err) ||
+        wv_wsc(ref, &b, &blurred[1], &err))
+      die(&err);
+    wv_image_free(&b);
+  }
   wv_image_free(&img);
+}
+
+/* WSC of the four quadrants of img against each other: the mean of the six pairs. */
+static double wsc_quadrants(const wv_image *img) {
+  int h = img->w < img->h ? img->w / 2 : img->h / 2;
+  wv_image q[4];
+  wv_error err = {0};
+  for (int k = 0; k < 4; k++) {
+    if (wv_image_alloc(&q[k], h, h, 3, &err)) die(&err);
+    for (int y = 0; y < h; y++)
+      memcpy(wv_image_px(&q[k], 0, y), wv_image_px(img, (k & 1) * h, (k >> 1) * h + y), sizeof(float) * 3 * (size_t)h);
+  }
+  double sum = 0, v;
+  for (int a = 0; a < 4; a++)
+    for (int b = a + 1; b < 4; b++) {
+      if (wv_wsc(&q[a], &q[b], &v, &err)) die(&err);
+      sum += v;
+    }
+  for (int k = 0; k < 4; k++) wv_image_free(&q[k]);
+  return sum / 6;
 }
 
 static void quantise8(wv_image *img) {
@@ -139,12 +170,12 @@ static int synthetic(const study *st, int per, const char **pats, int np, uint64
       if (prior_start && wv_params_default(pats[k], &prior, &err)) die(&err);
       run_capture(st, &photo, prior_start ? &prior : NULL, &c);
       double s0, s1, sc, w0, w1, wc;
-      measure(s, &c.start, &photo, st->o.threads, &s0, NULL, &w0);
-      measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &s1, NULL, &w1);
+      measure(s, &c.start, &photo, st->o.threads, &s0, NULL, &w0, 0, NULL);
+      measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &s1, NULL, &w1, 0, NULL);
       /* the ceiling: the truth with the fit's noise seed */
       wv_params oracle = target;
       oracle.seed = c.fit.seed;
-      measure(s, &oracle, &photo, st->o.threads, &sc, NULL, &wc);
+      measure(s, &oracle, &photo, st->o.threads, &sc, NULL, &wc, 0, NULL);
       int fam_ok = !strcmp(family(c.chosen), family(pats[k]));
       fam_right += fam_ok, pat_fam[k] += fam_ok;
       sum_fit += s1, sum_start += s0, sum_ceil += sc, sum_ratio += s1 / sc, sum_wsc += w1, sum_wsc_ceil += wc;
@@ -199,23 +230,26 @@ static int real(const study *st, const char *dir) {
     wv_image_free(&blurred);
     capture c;
     run_capture(st, &photo, NULL, &c);
-    double s0, s1, l0, l1, w0, w1;
-    measure(st->s, &c.start, &photo, st->o.threads, &s0, &l0, &w0);
-    measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &s1, &l1, &w1);
+    double s0, s1, l0, l1, w0, w1, bl[2], quads = wsc_quadrants(&photo);
+    measure(st->s, &c.start, &photo, st->o.threads, &s0, &l0, &w0, 0, NULL);
+    measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &s1, &l1, &w1, 0.8, bl);
     int known = wv_weave_is_builtin(named), ok = known && !strcmp(family(named), family(c.chosen));
     fam_right += ok, counted += known;
     sum[0] += base, sum[1] += s0, sum[2] += s1, sum[3] += w0, sum[4] += w1;
-    printf("%-14s -> %-12s (%s, family %s)  blurred copy SSIM %.4f | SSIM start %.4f fit %.4f (luminance %.4f -> "
-           "%.4f) | WSC start %.3f fit %.3f | %.1f s\n",
-           names[i], c.chosen, c.method, !known ? "?" : ok ? "right" : "WRONG", base, s0, s1, l0, l1, w0, w1, c.seconds);
+    printf("%-14s -> %-12s (%s, family %s)  blurred copy SSIM %.4f, quadrants WSC %.3f | SSIM start %.4f fit %.4f "
+           "(luminance %.4f -> %.4f) | WSC start %.3f fit %.3f | fit blurred 0.8 px: SSIM %.4f WSC %.3f | %.1f s\n",
+           names[i], c.chosen, c.method, !known ? "?" : ok ? "right" : "WRONG", base, quads, s0, s1, l0, l1, w0, w1,
+           bl[0], bl[1], c.seconds);
     fflush(stdout);
     jl += (size_t)snprintf(json + jl, sizeof json - jl,
                            "%s{\"file\": \"%s\", \"chosen\": \"%s\", \"family_right\": %s, \"method\": \"%s\", "
-                           "\"blurred_copy_ssim\": %.4f, \"ssim_start\": %.4f, \"ssim_fit\": %.4f, "
+                           "\"blurred_copy_ssim\": %.4f, \"wsc_quadrants\": %.4f, \"ssim_start\": %.4f, "
+                           "\"ssim_fit\": %.4f, \"fit_blurred_0.8px\": {\"ssim\": %.4f, \"wsc\": %.4f}, "
                            "\"ssim_luma_start\": %.4f, \"ssim_luma_fit\": %.4f, \"wsc_start\": %.4f, \"wsc_fit\": %.4f, "
                            "\"density\": [%.1f, %.1f], \"capture_s\": %.1f, \"choice_s\": %.1f}",
-                           i ? ", " : "", names[i], c.chosen, !known ? "null" : ok ? "true" : "false", c.method, base, s0,
-                           s1, l0, l1, w0, w1, c.fit.density[0], c.fit.density[1], c.seconds, c.choice_seconds);
+                           i ? ", " : "", names[i], c.chosen, !known ? "null" : ok ? "true" : "false", c.method, base,
+                           quads, s0, s1, bl[0], bl[1], l0, l1, w0, w1, c.fit.density[0], c.fit.density[1], c.seconds,
+                           c.choice_seconds);
     if (jl >= sizeof json) jl = sizeof json - 1;
     wv_image_free(&photo);
   }
