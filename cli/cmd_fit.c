@@ -9,6 +9,7 @@
 
 #include "cli.h"
 #include "util/json.h"
+#include "woven/analysis.h"
 #include "woven/descriptor.h"
 #include "woven/fit.h"
 #include "woven/io.h"
@@ -44,9 +45,11 @@ static const char *HELP =
     "  --force           replace an earlier fit in DIR (it stays whole until the new one is done)\n"
     "  --resume DIR      continue a fit that was stopped (checkpoints at the start and every 10\n"
     "                    iterations), or add iterations to a finished one\n"
-    "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), loss.svg,\n"
-    "report.html, maps/, and fit.json + checkpoint.json (for --resume). DIR is replaced whole at\n"
-    "the end; it may not hold other files, nor any input.\n";
+    "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), zoom.png (their\n"
+    "centre crop enlarged 4x), spectra.png (their weave spectra), loss.svg, report.html (with\n"
+    "SSIM and WSC, the weave-spectrum correlation, of start and fit), maps/, and fit.json +\n"
+    "checkpoint.json (for --resume). DIR is replaced whole at the end; it may not hold other\n"
+    "files, nor any input.\n";
 
 int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled) {
   long v;
@@ -132,7 +135,7 @@ static int on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
 static const char *const FIT_FILES[] = {"fit.json",    "checkpoint.json", "params.json", "render.png",
                                         "start.png",   "photo.png",       "compare.png", "loss.svg",
                                         "report.html", "maps",            "scene.json",  "network.json",
-                                        NULL};
+                                        "zoom.png",    "spectra.png",     NULL};
 
 typedef enum { FIT_DIR_NONE, FIT_DIR_UNFINISHED, FIT_DIR_FINISHED } fit_dir_state;
 
@@ -213,7 +216,8 @@ static char *job_json(const fit_job *job) {
 
 /* The results of a finished fit, written into dir (a temporary directory). */
 static wv_status write_results(const fit_job *job, const char *dir, const wv_fit_state *st, const wv_fit_opts *o,
-                               const wv_scene *fit_scene, double *ssim_start, double *ssim_fit, wv_error *err) {
+                               const wv_scene *fit_scene, double *ssim_start, double *ssim_fit, wv_weave_views *wv,
+                               wv_error *err) {
   wv_render_opts ro = {0, o->threads, NULL, NULL, NULL};
   wv_image r_start = {0}, r_fit = {0}, cmp = {0};
   char path[4096], pphoto[4096], pstart[4096], pfit[4096];
@@ -221,6 +225,7 @@ static wv_status write_results(const fit_job *job, const char *dir, const wv_fit
   if (!rc) rc = wv_render(fit_scene, &st->params, &ro, &r_fit, NULL, err);
   if (!rc) rc = wv_ssim(job->photo, &r_start, WV_SSIM_LUMA, ssim_start, err);
   if (!rc) rc = wv_ssim(job->photo, &r_fit, WV_SSIM_LUMA, ssim_fit, err);
+  if (!rc) rc = wv_weave_views_write(dir, job->photo, &r_start, &r_fit, wv, err);
   const wv_image *side[3] = {job->photo, &r_start, &r_fit};
   if (!rc) rc = wv_image_hconcat(side, 3, 4, &cmp, err);
   snprintf(pphoto, sizeof pphoto, "%s/photo.png", dir);
@@ -234,9 +239,11 @@ static wv_status write_results(const fit_job *job, const char *dir, const wv_fit
   wv_image_free(&r_start), wv_image_free(&r_fit), wv_image_free(&cmp);
   char *svg = rc ? NULL : wv_loss_svg(st->log, st->iter, o);
   if (!rc) rc = write_text(dir, "loss.svg", svg, err);
-  wv_report rep = {job->title,  pphoto,      pstart,     pfit,       job->start_label, *ssim_start, *ssim_fit,
-                   &st->start,  &st->params, svg,        &st->timing, st->iter,        wv_descriptor_name(job->desc),
-                   job->pattern_choice};
+  wv_report rep = {.title = job->title, .photo_png = pphoto, .start_png = pstart, .fit_png = pfit,
+                   .start_label = job->start_label, .ssim_start = *ssim_start, .ssim_fit = *ssim_fit,
+                   .start = &st->start, .fit = &st->params, .loss_svg = svg, .timing = &st->timing,
+                   .iters = st->iter, .descriptor = wv_descriptor_name(job->desc),
+                   .pattern_choice = job->pattern_choice, .weave = wv};
   snprintf(path, sizeof path, "%s/report.html", dir);
   if (!rc) rc = wv_report_write_html(path, &rep, err);
   free(svg);
@@ -340,12 +347,13 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
       rc = copy_into(job->dir, "network.json", od.tmp, 1, &err);
   }
   double ssim_start = 0, ssim_fit = 0;
+  wv_weave_views wv = {.wsc = {-2, -2}};
   wv_scene fit_scene; /* with the registration's fabric offset */
   wv_fit_scene(&st, job->scene, &fit_scene);
   if (!rc)
     cli_info(c, "rendering start and fit at %d x %d, %d spp\n", job->scene->width, job->scene->height,
              job->scene->spp);
-  if (!rc) rc = write_results(job, od.tmp, &st, &o, &fit_scene, &ssim_start, &ssim_fit, &err);
+  if (!rc) rc = write_results(job, od.tmp, &st, &o, &fit_scene, &ssim_start, &ssim_fit, &wv, &err);
   if (!rc) rc = wv_outdir_commit(&od, &err);
   if (rc) {
     wv_outdir_abort(&od, &err);
@@ -353,8 +361,8 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
     return cli_fail(c, &err);
   }
   const wv_fit_record *last = st.iter ? &st.log[st.iter - 1] : NULL;
-  cli_info(c, "SSIM %s %.4f -> fit %.4f; %d iterations in %.1f s; results in %s/\n", job->start_label, ssim_start,
-           ssim_fit, st.iter, st.timing.total, job->dir);
+  cli_info(c, "SSIM %s %.4f -> fit %.4f, WSC %.3f -> %.3f; %d iterations in %.1f s; results in %s/\n",
+           job->start_label, ssim_start, ssim_fit, wv.wsc[0], wv.wsc[1], st.iter, st.timing.total, job->dir);
   if (c->json) {
     json_t *o_json = json_pack(
         "{s:o,s:i,s:o,s:o,s:o,s:{s:o,s:o,s:o,s:o,s:o,s:o},s:[o,o],s:{s:[o,o],s:[o,o],s:[o,o]}}", "dir",
@@ -371,6 +379,15 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
       json_object_set_new(o_json, "pattern_choice",
                           job->pattern_choice ? cli_json_text(wv_pattern_choice_to_json(job->pattern_choice))
                                               : json_null());
+      json_object_set_new(o_json, "ssim_rgb_start", cli_real(wv.ssim_rgb[0], 6));
+      json_object_set_new(o_json, "ssim_rgb_fit", cli_real(wv.ssim_rgb[1], 6));
+      json_object_set_new(o_json, "wsc_start", wv.wsc[0] > -2 ? cli_real(wv.wsc[0], 6) : json_null());
+      json_object_set_new(o_json, "wsc_fit", wv.wsc[1] > -2 ? cli_real(wv.wsc[1], 6) : json_null());
+      char bounds[WV_P_COUNT + 3][96];
+      int nb = wv_params_at_bounds(&st.params, bounds, WV_P_COUNT + 3);
+      json_t *ab = json_array();
+      for (int i = 0; i < nb && ab; i++) json_array_append_new(ab, cli_str(bounds[i]));
+      json_object_set_new(o_json, "at_bounds", ab ? ab : json_null());
       json_object_set_new(o_json, "params", cli_json_text(wv_params_to_json(&st.params)));
     }
     cli_print_json(o_json);
