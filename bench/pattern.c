@@ -179,7 +179,7 @@ int main(int argc, char **argv) {
       if (i != c.best && c.loss[i] < second) second = c.loss[i];
     margin_sum += second / c.loss[c.best] - 1;
     char name[64];
-    wv_dataset_sample_name(k, name, sizeof name);
+    wv_dataset_sample_name(&info, k, name, sizeof name);
     fprintf(stderr, "%-10s -> %-8s ", name, wv_net_pattern(c.best));
     print_losses(stderr, &c);
     if (oracle) {

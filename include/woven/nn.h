@@ -115,6 +115,13 @@ void wv_nn_sigmoid_backward(float *dx, const float *y, const float *dy, size_t n
 float wv_nn_l1_forward(const float *pred, const float *target, size_t n);
 void wv_nn_l1_backward(float *dpred, const float *pred, const float *target, float dloss, size_t n);
 
+/* ---- Softmax cross-entropy over k classes: logits (batch, k), labels (batch) in 0..k-1.
+ * forward returns the mean over the batch of -log softmax(logits)[label] and, when
+ * prob is not NULL, fills it with the softmax (batch, k); backward adds
+ * dloss (softmax - onehot) / batch to dlogits, from the probabilities. ---- */
+float wv_nn_softmax_xent_forward(float *prob, const float *logits, const int *labels, int batch, int k);
+void wv_nn_softmax_xent_backward(float *dlogits, const float *prob, const int *labels, float dloss, int batch, int k);
+
 /* ---- Adam (Kingma & Ba 2015) with bias correction; optional decoupled weight decay
  * (AdamW, Loshchilov & Hutter 2019). ---- */
 typedef struct {

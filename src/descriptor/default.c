@@ -112,9 +112,14 @@ static void level_pass(rmf_net *m, int s, const float *S, float *gram, float *dx
   int oh = h - k + 1, ow = w - k + 1, npos = oh * ow, bl = m->blk[s];
   int nb = (npos + bl - 1) / bl, nt = m->nthreads;
   size_t nx = (size_t)3 * w * h;
+  /* The team may be smaller than asked (a nested region gets one thread): only the
+   * threads that ran hold partial sums, so only theirs are added. */
+  int used = 1;
 #pragma omp parallel num_threads(nt)
   {
     int tid = omp_get_thread_num();
+#pragma omp single
+    used = omp_get_num_threads();
     float *col = m->scratch + (size_t)tid * m->per_thread;
     float *f = col + (size_t)kk * bl, *df = f + (size_t)c * bl;
     float *gp = m->gpart + (size_t)tid * c * c;
@@ -140,11 +145,11 @@ static void level_pass(rmf_net *m, int s, const float *S, float *gram, float *dx
         wv_nn_col2im(col, 3, h, w, k, 1, 0, ow, p0, p1, dxt);
       }
     }
-    if (S && nt > 1) {
+    if (S && used > 1) {
 #pragma omp for schedule(static)
       for (size_t i = 0; i < nx; i++) {
         float v = dx[i];
-        for (int t = 1; t < nt; t++) v += m->dxpart[(size_t)(t - 1) * nx + i];
+        for (int t = 1; t < used; t++) v += m->dxpart[(size_t)(t - 1) * nx + i];
         dx[i] = v;
       }
     }
@@ -154,7 +159,7 @@ static void level_pass(rmf_net *m, int s, const float *S, float *gram, float *dx
   for (int i = 0; i < c; i++)
     for (int j = i; j < c; j++) {
       float v = 0.0f;
-      for (int t = 0; t < nt; t++) v += m->gpart[(size_t)t * c * c + (size_t)i * c + j];
+      for (int t = 0; t < used; t++) v += m->gpart[(size_t)t * c * c + (size_t)i * c + j];
       gram[(size_t)i * c + j] = gram[(size_t)j * c + i] = v * inv;
     }
 }

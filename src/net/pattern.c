@@ -77,7 +77,7 @@ wv_status wv_fabricnet_predict_pattern(const wv_fabricnet *n, wv_descriptor *d, 
   if (!st) {
     /* the network preprocesses its input in place; the choice needs the raw Gram */
     memcpy(feat, gram, sizeof(float) * ng);
-    st = wv_fabricnet_predict_features(n, feat, y, err);
+    st = wv_fabricnet_predict_features(n, feat, y, NULL, err);
   }
   if (!st) st = wv_fabricnet_choose_pattern(n, d, s, photo, gram, y, o, out, err);
   free(gram);
