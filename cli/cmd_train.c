@@ -7,7 +7,8 @@
 
 static const char *HELP =
     "usage: woven train DIR -o MODEL [--epochs N] [--batch N] [--lr X] [--val-frac X] [--seed N]\n"
-    "                   [--ce-weight X] [--checkpoint-every N] [--resume | --force] [--partial]\n"
+    "                   [--ce-weight X] [--init MODEL] [--checkpoint-every N] [--resume | --force]\n"
+    "                   [--partial]\n"
     "                   [--quiet] [--json]\n"
     "\n"
     "Trains FabricNet (SPEC section 7: features -> 256 -> LeakyReLU -> 256 -> LeakyReLU -> 21 ->\n"
@@ -18,6 +19,8 @@ static const char *HELP =
     "  --lr X                Adam learning rate (default 1e-4)\n"
     "  --val-frac X          held-out validation fraction (default 0.1, chosen by a hash of the sample)\n"
     "  --ce-weight X         weight of the pattern cross-entropy beside the L1 (default 0.1)\n"
+    "  --init MODEL          fine-tune: start from MODEL's weights and feature statistics (a model\n"
+    "                        without a pattern head gets a fresh one)\n"
     "  --checkpoint-every N  epochs between checkpoints (default 1)\n"
     "  --resume              continue from MODEL.train/checkpoint.bin\n"
     "  --force               start again even if MODEL.train/ holds a checkpoint\n"
@@ -58,7 +61,7 @@ int cmd_train(int argc, char **argv) {
   cli_ctx c = {0, 0, "train"};
   cli_args a;
   cli_args_init(&a, argc, argv, c.cmd);
-  const char *dir = NULL, *model = NULL, *lr_s = NULL, *vf_s = NULL, *ce_s = NULL;
+  const char *dir = NULL, *model = NULL, *lr_s = NULL, *vf_s = NULL, *ce_s = NULL, *init = NULL;
   long epochs = 60, batch = 32, seed = 1, ck_every = 1;
   int resume = 0, force = 0, partial = 0;
   for (const char *s; (s = cli_next(&a));) {
@@ -77,6 +80,8 @@ int cmd_train(int argc, char **argv) {
       if (!cli_int(&a, "--checkpoint-every", 1, 100000, &ck_every)) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--lr")) {
       if (!(lr_s = cli_value(&a, "--lr"))) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "--init")) {
+      if (!(init = cli_value(&a, "--init"))) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--ce-weight")) {
       if (!(ce_s = cli_value(&a, "--ce-weight"))) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--val-frac")) {
@@ -111,7 +116,8 @@ int cmd_train(int argc, char **argv) {
   wv_train_opts o;
   wv_train_opts_default(&o);
   o.epochs = (int)epochs, o.batch = (int)batch, o.lr = lr, o.val_frac = vf, o.seed = (uint64_t)seed;
-  o.checkpoint_every = (int)ck_every, o.resume = resume, o.force = force, o.partial = partial;
+  o.checkpoint_every = (int)ck_every, o.resume = resume, o.force = force, o.partial = partial, o.init = init;
+  if (init && resume) return cli_usage_error(c.cmd, "--init and --resume exclude each other");
   if (ce_s && (o.ce_weight = strtod(ce_s, &end), *end || !(o.ce_weight >= 0 && o.ce_weight <= 100)))
     return cli_usage_error(c.cmd, "--ce-weight must be a number in [0, 100]");
   cli_progress bar;

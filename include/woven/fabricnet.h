@@ -212,6 +212,8 @@ typedef struct {
   int force;             /* start again even when MODEL.train/ holds a checkpoint */
   int partial;           /* train on the finished samples of an incomplete dataset */
   double ce_weight;      /* WV_NET_CE_WEIGHT */
+  const char *init;      /* optional: start from this model's weights and feature statistics
+                          * (fine-tuning; a version 1 model's missing pattern head starts fresh) */
   /* Optional callbacks: after loading (before the first epoch), during and after each epoch. */
   void (*on_start)(void *user, const wv_train_result *r);
   void (*on_progress)(void *user, double fraction);

@@ -131,9 +131,14 @@ typedef struct {
   float *m, *v;    /* moments, n floats each, owned */
 } wv_nn_adam;
 
-/* Defaults beta1 0.9, beta2 0.999, eps 1e-8, weight_decay 0; moments zero. */
+/* Defaults beta1 0.9, beta2 0.999, eps 1e-8, weight_decay 0; moments zero. A caller may
+ * also fill the struct itself with m, v pointing at its own storage (then it must not
+ * call wv_nn_adam_free). */
 wv_status wv_nn_adam_init(wv_nn_adam *a, size_t n, float lr, wv_error *err);
 void wv_nn_adam_step(wv_nn_adam *a, float *params, const float *grads);
+/* The same step, then every parameter clamped to [lo, hi] (projected Adam: the fit keeps
+ * each normalised parameter inside its range this way). */
+void wv_nn_adam_step_box(wv_nn_adam *a, float *params, const float *grads, float lo, float hi);
 void wv_nn_adam_free(wv_nn_adam *a);
 
 /* ---- safetensors (Hugging Face): 8-byte little-endian header length, a JSON

@@ -8,8 +8,8 @@
 
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
-#include "woven/fit.h"
 #include "woven/imgops.h"
+#include "woven/loss.h"
 #include "woven/render.h"
 
 void wv_pattern_opts_default(wv_pattern_opts *o) {
@@ -36,30 +36,24 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
   sc.spp = o->spp > 0 ? o->spp : WV_PATTERN_SPP;
   out->spp = sc.spp, out->w_pixel = o->w_pixel;
   wv_render_opts ro = {sc.spp, o->threads, NULL, NULL, NULL};
-  wv_fit_opts fo; /* the pixel loss's resolution */
-  wv_fit_opts_default(&fo);
-  float *gram = malloc(sizeof(float) * ng);
-  wv_image photo_down = {0};
-  wv_status st = gram ? wv_image_downsample(photo, fo.down_w, fo.down_h, &photo_down, err)
-                      : wv_fail(err, WV_ERR_NOMEM, "out of memory for a Gram vector");
+  /* the fit's image loss: Gram and pixel terms (the criterion keeps its own pixel weight) */
+  wv_loss_weights lw = {o->w_pixel, 0.0, WV_LOSS_DOWN_W, WV_LOSS_DOWN_H};
+  wv_image_loss *loss = NULL;
+  wv_status st = wv_image_loss_create(photo, d, gram_photo, &lw, &loss, err);
   for (int i = 0; i < WV_NET_PATTERNS && !st; i++) {
-    wv_image img = {0}, down = {0};
+    wv_image img = {0};
     if ((st = wv_fabricnet_params(n, y, wv_net_pattern(i), &out->params[i], err))) break;
     /* the same render seed for every candidate: the losses then differ by the pattern, not the noise draw */
     if ((st = wv_render(&sc, &out->params[i], &ro, &img, NULL, err))) break;
-    st = wv_descriptor_forward(d, &img, gram, err);
-    if (!st) st = wv_image_downsample(&img, fo.down_w, fo.down_h, &down, err);
-    if (!st) out->pixel[i] = wv_image_l1(&down, &photo_down, NULL);
-    wv_image_free(&img), wv_image_free(&down);
+    wv_loss_terms t;
+    st = wv_image_loss_eval(loss, &img, &t, NULL, err);
+    wv_image_free(&img);
     if (st) break;
-    double l = 0;
-    for (size_t k = 0; k < ng; k++) l += fabsf(gram[k] - gram_photo[k]);
-    out->gram[i] = l / (double)ng;
-    out->loss[i] = out->gram[i] + o->w_pixel * out->pixel[i];
+    out->gram[i] = t.gram, out->pixel[i] = t.pixel;
+    out->loss[i] = t.total;
     if (out->loss[i] < out->loss[out->best]) out->best = i;
   }
-  free(gram);
-  wv_image_free(&photo_down);
+  wv_image_loss_free(loss);
   out->seconds = omp_get_wtime() - t0;
   return st;
 }

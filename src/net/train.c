@@ -265,7 +265,24 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
       nhist = read_loss_csv(path, hist, upto);
       res->resumed_epoch = ts.epoch;
     }
-  } else if (!st && !(st = wv_fabricnet_init(&net, info.descriptor, info.n_feat, &info.scene, o->seed, err))) {
+  } else if (!st && o->init && !(st = wv_fabricnet_init(&net, info.descriptor, info.n_feat, &info.scene, o->seed, err))) {
+    /* Fine-tuning: the given model's layers and feature statistics; a pattern head it
+     * lacks (a version 1 model) keeps its fresh initialisation. */
+    wv_fabricnet from;
+    if (!(st = wv_fabricnet_load(o->init, &from, err)) &&
+        !(st = wv_fabricnet_check(&from, o->init, info.descriptor, (size_t)info.n_feat, &info.scene, err))) {
+      float *tf[WV_NET_TENSORS], *tn[WV_NET_TENSORS];
+      size_t lf[WV_NET_TENSORS], ln[WV_NET_TENSORS];
+      wv_fabricnet_tensors(&from, tf, lf);
+      wv_fabricnet_tensors(&net, tn, ln);
+      for (int i = 0; i < WV_NET_TENSORS; i++)
+        if (lf[i] == ln[i] && lf[i]) memcpy(tn[i], tf[i], sizeof(float) * ln[i]);
+      memcpy(net.mean, from.mean, sizeof(float) * (size_t)info.n_feat);
+      memcpy(net.std, from.std, sizeof(float) * (size_t)info.n_feat);
+      memcpy(net.range, from.range, sizeof net.range);
+      wv_fabricnet_free(&from);
+    }
+  } else if (!st && !o->init && !(st = wv_fabricnet_init(&net, info.descriptor, info.n_feat, &info.scene, o->seed, err))) {
     /* Feature statistics over the training split, after the signed log1p. */
     double *s1 = calloc((size_t)info.n_feat, sizeof(double)), *s2 = calloc((size_t)info.n_feat, sizeof(double));
     if (!s1 || !s2) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for feature statistics");
