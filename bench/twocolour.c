@@ -7,8 +7,8 @@
  *   little jitter. Rendered in the scene's centre S x S window (default 256; 0 = the
  *   whole image) with one noise seed and fitted from the pattern's prior mean with
  *   another, given the true densities (the colours are the question here, so the density
- *   alignment and the registration are off; --full turns them on and starts from the
- *   prior's densities). Prints per target: SSIM (RGB) of the fit and the ceiling (the true
+ *   alignment, the registration and the discrete steps are off; --full turns them on and
+ *   starts from the prior's densities). Prints per target: SSIM (RGB) of the fit and the ceiling (the true
  *   parameters rendered with the fit's noise seed), the fit's warp and weft diffuse
  *   colours against the truth, and the colour separation |kd_warp - kd_weft|.
  * Prints one line per fit, then one JSON object on the last line. */
@@ -68,7 +68,7 @@ int main(int argc, char **argv) {
     }
   }
   if (n < 1 || o.iters < 0) return 2;
-  if (!full) o.align_radius = 0, o.register_radius = 0;
+  if (!full) o.align_radius = 0, o.register_radius = 0, o.discrete_every = 0; /* densities stay exact */
   wv_error err = {0};
   wv_scene s;
   if (wv_scene_preset(scene, &s, &err)) die(&err);
