@@ -23,13 +23,14 @@ static const char *HELP =
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
-    "                 [--register-radius N]\n"
+    "                 [--register-radius N] [--w-struct X] [--no-colour-split]\n"
     "                 [--seed N] [--threads N]\n"
     "                 [--force] [--quiet] [--json]\n"
     "       woven fit --resume DIR [--iters N] [--quiet] [--json]\n"
     "\n"
     "Refines fabric parameters so that a render of the scene matches the photo (paper 4.3):\n"
-    "Gram-matrix loss + 16x8 pixel loss + heightfield prior, Adam (lr 0.01) on the continuous\n"
+    "Gram-matrix loss + 16x8 pixel loss + heightfield prior + the weave's spectrum (structure),\n"
+    "Adam (lr 0.01) on the continuous\n"
     "parameters, random steps of noise level and densities every 5 iterations.\n"
     "  --init P.json     start here; --pattern NAME starts from the pattern's prior mean\n"
     "  --iters N         iterations (default 200)\n"
@@ -40,6 +41,9 @@ static const char *HELP =
     "  --register-radius N  then register the weave to the photo: densities on a 2-D grid\n"
     "                    +-N yarns/inch refined to 0.1, and the weave's offset, by phase\n"
     "                    correlation; kept if the SSIM rises (default 6; 0 = off)\n"
+    "  --w-struct X      weight of the structure term, the weave's log power spectrum (default 0.002;\n"
+    "                    0 = off)\n"
+    "  --no-colour-split do not try starts that split the warp and weft diffuse colours\n"
     "  --iter-scale N    iterate on the image downscaled N times (default 1); the final render\n"
     "                    and SSIM use the scene's full resolution and spp\n"
     "  --force           replace an earlier fit in DIR (it stays whole until the new one is done)\n"
@@ -72,6 +76,15 @@ int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_giv
   } else if (cli_is(a, s, "--register-radius")) {
     if (!cli_int(a, "--register-radius", 0, WV_FIT_MAX_REGISTER_RADIUS, &v)) return EXIT_USAGE;
     o->register_radius = (int)v;
+  } else if (cli_is(a, s, "--w-struct")) {
+    const char *t = cli_value(a, "--w-struct");
+    char *end;
+    if (!t) return EXIT_USAGE;
+    double w = strtod(t, &end);
+    if (*end || !(w >= 0 && w <= 100)) return cli_usage_error(a->cmd, "--w-struct must be a number in [0, 100]");
+    o->w_struct = w;
+  } else if (!strcmp(s, "--no-colour-split")) {
+    o->colour_split = 0;
   } else if (cli_is(a, s, "--threads")) {
     if (!cli_int(a, "--threads", 1, 1024, &v)) return EXIT_USAGE;
     o->threads = (int)v;
@@ -118,8 +131,9 @@ static int on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
   const wv_fit_record *r = &st->log[st->iter - 1];
   if (u->bar.enabled) {
     double el = cli_now() - u->bar.start, f = (double)st->iter / o->iters;
-    fprintf(stderr, "\rfit %3d/%d  loss %.5f (Gram %.5f, pixel %.4f, prior %.3f)  %.0fs, %.0fs left ", st->iter,
-            o->iters, r->loss, r->gram, r->pixel, r->prior, el, f > 0 ? el * (1 - f) / f : 0.0);
+    fprintf(stderr, "\rfit %3d/%d  loss %.5f (Gram %.5f, pixel %.4f, prior %.3f, structure %.3f)  %.0fs, %.0fs left ",
+            st->iter, o->iters, r->loss, r->gram, r->pixel, r->prior, r->structure, el,
+            f > 0 ? el * (1 - f) / f : 0.0);
     fflush(stderr);
   }
   if (u->ckpt && o->checkpoint_every > 0 && (st->iter % o->checkpoint_every == 0 || st->iter == o->iters)) {

@@ -142,7 +142,7 @@ static int run_predict(cli_ctx *c, const predict_args *pa, wv_scene *scene, wv_i
   } else if (!rc) {
     float *feat = malloc(sizeof(float) * (size_t)net.n_in);
     if (!feat) rc = cli_usage_error(c->cmd, "out of memory");
-    else if (wv_fabricnet_predict(&net, *desc, img, feat, y, &err) ||
+    else if (wv_fabricnet_predict(&net, *desc, img, feat, y, NULL, &err) ||
              wv_fabricnet_params(&net, y, pa->pattern, &res->params, &err))
       rc = cli_fail(c, &err);
     free(feat);

@@ -1,9 +1,11 @@
 /* woven: refine fabric parameters from a photo by differentiable rendering
  * (paper section 4.3, SPEC section 7).
- *   L = L_g + w1 L_p + w2 L_c
+ *   L = L_g + w1 L_p + w2 L_c + w3 L_s
  *   L_g = mean |Gram(photo) - Gram(render)|        (the texture descriptor)
  *   L_p = sum over warp, weft of (beta - mu)^2 / (2 sigma^2)   (pattern prior)
  *   L_c = mean |down(photo) - down(render)|        (area average to 16 x 8)
+ *   L_s = the weave's log power spectrum in the yarn band (phase-invariant structure;
+ *         include/woven/loss.h)
  * Adam on the continuous parameters (normalised to [0,1] by their ranges, kept
  * inside them), the twist included (we have its gradient); every few iterations
  * a random step of a discrete parameter (noise level Q, warp or weft density) is
@@ -24,6 +26,8 @@ typedef struct {
   double lr;          /* Adam learning rate in normalised units: 0.01 */
   double w_prior;     /* w1 = 0.0005 */
   double w_pixel;     /* w2 = 0.2 */
+  double w_struct;    /* w3 = WV_FIT_W_STRUCT (0: no structure term) */
+  int colour_split;   /* 1: before the first iteration, try starts that split warp and weft colours (1) */
   int down_w, down_h; /* 16 x 8 */
   int discrete_every; /* 5 (0: no discrete search) */
   int iter_scale;     /* iterate on the image downscaled by this factor (1) */
@@ -36,6 +40,7 @@ typedef struct {
 } wv_fit_opts;
 
 void wv_fit_opts_default(wv_fit_opts *o);
+#define WV_FIT_W_STRUCT 0.002 /* the structure term's weight (docs/fit.md: how it was chosen) */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000
@@ -59,7 +64,7 @@ wv_status wv_fit_check_sizes(const wv_scene *s, const wv_descriptor *d, const wv
 /* One iteration's record. */
 typedef struct {
   int iter;
-  double loss, gram, prior, pixel;
+  double loss, gram, prior, pixel, structure;
   int discrete_tried, discrete_kept;
 } wv_fit_record;
 
@@ -73,12 +78,13 @@ typedef struct {
   wv_params start, params;
   int iter; /* iterations done */
   int aligned; /* the density alignment after the last iteration is done */
+  int colour_split; /* the start's colours: 0 as given, 1..4 split (darker on the warp: 1, 3; weft: 2, 4; 3, 4 twice as far) */
   double align_ssim_before, align_ssim_after; /* its criterion at the start and end */
   int registered; /* the registration after the alignment is done */
   double offset_mm[2]; /* fabric offset found by the registration (added to the scene's) */
   double reg_ncc_before, reg_ncc_after;   /* correlation with the photo at zero shift, whole image */
   double reg_ssim_before, reg_ssim_after; /* SSIM of the whole image at the iteration spp */
-  double adam_m[WV_P_COUNT], adam_v[WV_P_COUNT];
+  float adam_m[WV_P_COUNT], adam_v[WV_P_COUNT]; /* wv_nn_adam's moments */
   uint64_t rng;
   wv_fit_record *log; /* iter entries */
   int log_cap;

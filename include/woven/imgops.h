@@ -39,6 +39,12 @@ void wv_image_mask_backward(const wv_scene *s, const wv_image *dout, wv_image *d
 /* Multiply by a constant (the response's exposure); linear, so its backward is itself. */
 void wv_image_scale(const wv_image *in, float k, wv_image *out);
 
+/* Gaussian blur of standard deviation sigma pixels, separable, per channel, edges
+ * clamped, kernel radius ceil(3 sigma); sigma <= 0 copies. out is allocated here. */
+wv_status wv_image_blur(const wv_image *in, double sigma, wv_image *out, wv_error *err);
+/* Clamp to [0, 1] and round to 8 bits (what a PNG stores and a photo arrives as); in place. */
+void wv_image_quantise8(wv_image *img);
+
 /* mean |a - b| over all samples; da (optional, allocated by the caller, a's
  * shape) receives d/da = sign(a - b) / count (0 where a = b). -1 if shapes differ. */
 double wv_image_l1(const wv_image *a, const wv_image *b, wv_image *da);

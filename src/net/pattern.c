@@ -10,8 +10,8 @@
 
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
-#include "woven/fit.h"
 #include "woven/imgops.h"
+#include "woven/loss.h"
 #include "woven/render.h"
 
 void wv_pattern_opts_default(wv_pattern_opts *o) {
@@ -26,27 +26,28 @@ void wv_pattern_opts_default(wv_pattern_opts *o) {
   o->w_prob = 0.25;
 }
 
-/* The loss criterion of candidate i: its parameters rendered over the whole image at sc's spp. */
-static wv_status loss_of(wv_descriptor *d, const wv_scene *sc, const wv_image *photo_down, const float *gram_photo,
-                         float *gram, size_t ng, const wv_pattern_opts *o, int i, wv_pattern_choice *out,
-                         wv_error *err) {
-  wv_fit_opts fo; /* the pixel loss's resolution */
-  wv_fit_opts_default(&fo);
+/* The loss criterion of candidate i: its parameters rendered over the whole image at sc's
+ * spp, through the fit's image loss (Gram and pixel terms, the criterion's own pixel weight). */
+static wv_status loss_of(wv_image_loss *loss, const wv_scene *sc, const wv_pattern_opts *o, int i,
+                         wv_pattern_choice *out, wv_error *err) {
   wv_render_opts ro = {sc->spp, o->threads, NULL, NULL, NULL};
-  wv_image img = {0}, down = {0};
+  wv_image img = {0};
   /* the same render seed for every candidate: the losses then differ by the pattern, not the noise draw */
   wv_status st = wv_render(sc, &out->params[i], &ro, &img, NULL, err);
-  if (!st) st = wv_descriptor_forward(d, &img, gram, err);
-  if (!st) st = wv_image_downsample(&img, fo.down_w, fo.down_h, &down, err);
-  if (!st) out->pixel[i] = wv_image_l1(&down, photo_down, NULL);
-  wv_image_free(&img), wv_image_free(&down);
+  wv_loss_terms t;
+  if (!st) st = wv_image_loss_eval(loss, &img, &t, NULL, err);
+  wv_image_free(&img);
   if (st) return st;
-  double l = 0;
-  for (size_t k = 0; k < ng; k++) l += fabsf(gram[k] - gram_photo[k]);
-  out->gram[i] = l / (double)ng;
-  out->loss[i] = out->gram[i] + o->w_pixel * out->pixel[i];
+  out->gram[i] = t.gram, out->pixel[i] = t.pixel;
+  out->loss[i] = t.total;
   out->evaluated[i] = 1;
   return WV_OK;
+}
+
+static wv_status criterion_create(const wv_image *photo, wv_descriptor *d, const float *gram_photo,
+                                  const wv_pattern_opts *o, wv_image_loss **loss, wv_error *err) {
+  wv_loss_weights lw = {o->w_pixel, 0.0, WV_LOSS_DOWN_W, WV_LOSS_DOWN_H};
+  return wv_image_loss_create(photo, d, gram_photo, &lw, loss, err);
 }
 
 wv_status wv_pattern_loss(wv_descriptor *d, const wv_scene *s, const wv_image *photo, const float *gram_photo,
@@ -54,16 +55,10 @@ wv_status wv_pattern_loss(wv_descriptor *d, const wv_scene *s, const wv_image *p
   if (c->evaluated[i]) return WV_OK;
   wv_scene sc = *s;
   sc.spp = c->spp;
-  wv_fit_opts fo;
-  wv_fit_opts_default(&fo);
-  size_t ng = wv_descriptor_size(d);
-  float *gram = malloc(sizeof(float) * ng);
-  wv_image down = {0};
-  wv_status st = gram ? wv_image_downsample(photo, fo.down_w, fo.down_h, &down, err)
-                      : wv_fail(err, WV_ERR_NOMEM, "out of memory for a Gram vector");
-  if (!st) st = loss_of(d, &sc, &down, gram_photo, gram, ng, o, i, c, err);
-  free(gram);
-  wv_image_free(&down);
+  wv_image_loss *loss = NULL;
+  wv_status st = criterion_create(photo, d, gram_photo, o, &loss, err);
+  if (!st) st = loss_of(loss, &sc, o, i, c, err);
+  wv_image_loss_free(loss);
   return st;
 }
 
@@ -128,17 +123,17 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
   wv_scene sc = *s;
   sc.spp = o->spp > 0 ? o->spp : WV_PATTERN_SPP;
   out->spp = sc.spp, out->w_pixel = o->w_pixel;
+  if (o->prob) {
+    out->has_prob = 1;
+    for (int i = 0; i < nb; i++) out->prob[i] = o->prob[i];
+  }
   wv_status st = WV_OK;
   for (int i = 0; i < nb && !st; i++) st = wv_fabricnet_params(n, y, wv_weave_builtin_name(i), &out->params[i], err);
   out->lattice.best = -1;
   if (!st && o->lattice) st = wv_lattice_analyse(s, photo, &out->lattice, err);
-  wv_fit_opts fo;
-  wv_fit_opts_default(&fo);
-  float *gram = malloc(sizeof(float) * ng);
-  wv_image photo_down = {0};
-  if (!st) st = gram ? wv_image_downsample(photo, fo.down_w, fo.down_h, &photo_down, err)
-                     : wv_fail(err, WV_ERR_NOMEM, "out of memory for a Gram vector");
-#define LOSS(i) (out->evaluated[i] ? WV_OK : loss_of(d, &sc, &photo_down, gram_photo, gram, ng, o, (i), out, err))
+  wv_image_loss *loss = NULL;
+  if (!st) st = criterion_create(photo, d, gram_photo, o, &loss, err);
+#define LOSS(i) (out->evaluated[i] ? WV_OK : loss_of(loss, &sc, o, (i), out, err))
   if (!st && out->lattice.found) {
     const wv_lattice *l = &out->lattice;
     wv_rank_opts ro;
@@ -172,8 +167,7 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
     out->method = "loss";
   }
 #undef LOSS
-  free(gram);
-  wv_image_free(&photo_down);
+  wv_image_loss_free(loss);
   out->seconds = omp_get_wtime() - t0;
   return st;
 }
@@ -186,14 +180,20 @@ wv_status wv_fabricnet_predict_pattern(const wv_fabricnet *n, wv_descriptor *d, 
     return wv_fail(err, WV_ERR_INVALID, "descriptor gives %zu features, the model takes %d", ng, n->n_in);
   float *gram = malloc(sizeof(float) * ng * 2);
   if (!gram) return wv_fail(err, WV_ERR_NOMEM, "out of memory for Gram vectors");
-  float *feat = gram + ng;
+  float *feat = gram + ng, probs[WV_NET_CLASSES];
   wv_status st = wv_descriptor_forward(d, photo, gram, err);
   if (!st) {
     /* the network preprocesses its input in place; the choice needs the raw Gram */
     memcpy(feat, gram, sizeof(float) * ng);
-    st = wv_fabricnet_predict_features(n, feat, y, err);
+    st = wv_fabricnet_predict_features(n, feat, y, probs, err);
   }
-  if (!st) st = wv_fabricnet_choose_pattern(n, d, s, photo, gram, y, o, out, err);
+  /* the pattern head's probabilities join the choice unless the caller gave its own; a
+   * model without a head (format 1) gives none, and the loss decides in their place */
+  wv_pattern_opts oc;
+  if (o) oc = *o;
+  else wv_pattern_opts_default(&oc);
+  if (!oc.prob && n->n_cls == wv_weave_builtin_count()) oc.prob = probs;
+  if (!st) st = wv_fabricnet_choose_pattern(n, d, s, photo, gram, y, &oc, out, err);
   free(gram);
   return st;
 }
@@ -208,8 +208,9 @@ static json_t *per_candidate(const wv_pattern_choice *c, const double *v) {
 char *wv_pattern_choice_to_json(const wv_pattern_choice *c) {
   static const char *CRITERION =
       "the built-ins ranked by how well the spectral peaks of their render (the network's estimate with each "
-      "pattern's lattice densities) match the photo's; near ties and photos without a weave lattice decided by the "
-      "smallest gram + w_pixel * pixel loss";
+      "pattern's lattice densities) match the photo's, mixed with the network's pattern probabilities when it has "
+      "them; near ties decided by the smallest gram + w_pixel * pixel loss; a photo without a weave lattice by the "
+      "network's most probable pattern, or by that loss when the network gives no probabilities";
   char *lj = wv_lattice_to_json(&c->lattice, c->lattice.found ? &c->ranking : NULL);
   json_t *lat = lj ? json_loads(lj, 0, NULL) : NULL;
   free(lj);
@@ -220,6 +221,12 @@ char *wv_pattern_choice_to_json(const wv_pattern_choice *c) {
                               per_candidate(c, c->loss), "gram_loss", per_candidate(c, c->gram), "pixel_loss",
                               per_candidate(c, c->pixel))
                   : NULL;
+  if (o && c->has_prob) {
+    json_t *pr = json_object();
+    for (int i = 0; i < wv_weave_builtin_count(); i++)
+      json_object_set_new(pr, wv_weave_builtin_name(i), json_real(c->prob[i]));
+    json_object_set_new(o, "network_probability", pr);
+  }
   char *s = o ? json_dumps(o, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(6)) : NULL;
   json_decref(o);
   return s;

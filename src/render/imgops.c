@@ -167,3 +167,55 @@ double wv_image_l1(const wv_image *a, const wv_image *b, wv_image *da) {
   }
   return sum * inv;
 }
+
+/* ---- Gaussian blur and 8-bit quantisation ---- */
+
+wv_status wv_image_blur(const wv_image *in, double sigma, wv_image *out, wv_error *err) {
+  wv_status st = wv_image_alloc(out, in->w, in->h, in->c, err);
+  if (st) return st;
+  size_t n = (size_t)in->w * in->h * in->c;
+  int r = sigma > 0 ? (int)ceil(3 * sigma) : 0;
+  if (r == 0) {
+    for (size_t i = 0; i < n; i++) out->data[i] = in->data[i];
+    return WV_OK;
+  }
+  double *g = malloc(sizeof(double) * (size_t)(2 * r + 1)), gs = 0;
+  float *tmp = malloc(sizeof(float) * n);
+  if (!g || !tmp) {
+    free(g), free(tmp), wv_image_free(out);
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a blur");
+  }
+  for (int k = -r; k <= r; k++) gs += g[k + r] = exp(-0.5 * k * k / (sigma * sigma));
+  for (int k = 0; k <= 2 * r; k++) g[k] /= gs;
+  int w = in->w, h = in->h, c = in->c;
+  for (int y = 0; y < h; y++) /* along x into tmp */
+    for (int x = 0; x < w; x++)
+      for (int ch = 0; ch < c; ch++) {
+        double s = 0;
+        for (int k = -r; k <= r; k++) {
+          int xx = x + k < 0 ? 0 : x + k >= w ? w - 1 : x + k;
+          s += g[k + r] * in->data[((size_t)y * w + xx) * c + ch];
+        }
+        tmp[((size_t)y * w + x) * c + ch] = (float)s;
+      }
+  for (int y = 0; y < h; y++) /* along y into out */
+    for (int x = 0; x < w; x++)
+      for (int ch = 0; ch < c; ch++) {
+        double s = 0;
+        for (int k = -r; k <= r; k++) {
+          int yy = y + k < 0 ? 0 : y + k >= h ? h - 1 : y + k;
+          s += g[k + r] * tmp[((size_t)yy * w + x) * c + ch];
+        }
+        out->data[((size_t)y * w + x) * c + ch] = (float)s;
+      }
+  free(g), free(tmp);
+  return WV_OK;
+}
+
+void wv_image_quantise8(wv_image *img) {
+  size_t n = (size_t)img->w * img->h * img->c;
+  for (size_t i = 0; i < n; i++) {
+    float v = img->data[i] < 0 ? 0 : img->data[i] > 1 ? 1 : img->data[i];
+    img->data[i] = floorf(v * 255.0f + 0.5f) / 255.0f;
+  }
+}
