@@ -179,6 +179,7 @@ static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, 
   if (scale > 1) {
     c->scene.width = s->width / scale, c->scene.height = s->height / scale;
     c->scene.falloff_sigma = s->falloff_sigma / scale;
+    c->scene.psf_sigma = s->psf_sigma / scale; /* the blur in pixels of the smaller image */
   }
   if (spp > 0) c->scene.spp = spp;
   if (photo->w != s->width || photo->h != s->height)

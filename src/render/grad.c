@@ -79,30 +79,32 @@ static void accumulate(const wv_grad_model *gm, const double JJ[2][WV_J_COUNT], 
 /* What the adjoint pass needs of a pixel once it is rendered. */
 typedef struct {
   double cap[3];   /* the capture (in double mode the unrounded double value) */
-  double slope[3]; /* d capture / d radiance, 0 where clipped */
+  double slope[3]; /* d capture / d radiance reaching the sensor (after the blur), 0 where clipped */
+  double rad[3];   /* the radiance, before the camera blur */
   double J[2][WV_J_COUNT];
 } pixel_rec;
 
 struct wv_grad_record {
   int w, h;
   wv_grad_model gm;
-  pixel_rec *px; /* w * h, row-major */
+  double psf_sigma; /* the scene's camera blur (0: none) */
+  pixel_rec *px;    /* w * h, row-major */
 };
 
 /* Sensor response of one pixel and its slope; in float mode exactly
  * wv_scene_response's arithmetic, so the capture is wv_render's. */
-static void respond(const wv_scene *s, int dbl, int px, int py, const wv_grad_pixel *pix, float cap[3],
+static void respond(const wv_scene *s, int dbl, int px, int py, const double rad[3], float cap[3],
                     pixel_rec *rec) {
   double m = wv_falloff_mask(s, px, py);
   for (int c = 0; c < 3; c++) {
     if (dbl) {
-      double v = pix->rad[c] * s->exposure;
+      double v = rad[c] * s->exposure;
       int clipped = s->clip > 0 && v > s->clip;
       rec->cap[c] = m * wv_encode_d(s, clipped ? s->clip : v);
       rec->slope[c] = clipped ? 0.0 : m * wv_encode_slope(s, v) * s->exposure;
       cap[c] = (float)rec->cap[c];
     } else {
-      float clipf = (float)s->clip, vf = (float)pix->rad[c] * (float)s->exposure;
+      float clipf = (float)s->clip, vf = (float)rad[c] * (float)s->exposure;
       int clipped = clipf > 0.0f && vf > clipf;
       if (clipped) vf = clipf;
       cap[c] = (float)m * wv_encode(s, vf);
@@ -110,15 +112,39 @@ static void respond(const wv_scene *s, int dbl, int px, int py, const wv_grad_pi
       rec->slope[c] = clipped ? 0.0 : m * wv_encode_slope(s, vf) * s->exposure;
     }
   }
-  memcpy(rec->J, pix->J, sizeof rec->J);
 }
 
-/* Add a pixel's contribution (and its dot term, in g[WV_P_COUNT]). */
-static void backward_pixel(const wv_grad_model *gm, const pixel_rec *rec, const float dc[3], double *g) {
+/* With a camera blur the response acts on the blurred radiance, which needs every
+ * pixel's radiance first: the records' captures and slopes are made here, after the
+ * render (wv_scene_capture's arithmetic through wv_psf_apply). */
+static wv_status respond_blurred(const wv_scene *s, int dbl, int x0, int y0, wv_grad_record *rec,
+                                 wv_image *capture_out, wv_error *err) {
+  size_t n = (size_t)rec->w * rec->h * 3;
+  double *a = malloc(2 * n * sizeof *a);
+  if (!a) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur");
+  for (size_t i = 0; i < n; i++) a[i] = dbl ? rec->px[i / 3].rad[i % 3] : (double)(float)rec->px[i / 3].rad[i % 3];
+  wv_status st = wv_psf_apply(rec->psf_sigma, rec->w, rec->h, 3, a, a + n, 0, err);
+  for (int r = 0; r < rec->h && !st; r++)
+    for (int i = 0; i < rec->w; i++) {
+      pixel_rec *pr = &rec->px[(size_t)r * rec->w + i];
+      double b[3];
+      for (int c = 0; c < 3; c++) b[c] = dbl ? a[n + 3 * ((size_t)r * rec->w + i) + c] : (float)a[n + 3 * ((size_t)r * rec->w + i) + c];
+      float cap[3];
+      respond(s, dbl, x0 + i, y0 + r, b, cap, pr);
+      if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);
+    }
+  free(a);
+  return st;
+}
+
+/* Add a pixel's contribution (and its dot term, in g[WV_P_COUNT]); with gb != NULL (a
+ * camera blur) gb holds dL/dradiance already, made by the blur's adjoint. */
+static void backward_pixel(const wv_grad_model *gm, const pixel_rec *rec, const float dc[3], const double *gb,
+                           double *g) {
   double gr[3];
   for (int c = 0; c < 3; c++) {
     g[WV_P_COUNT] += (double)dc[c] * rec->cap[c];
-    gr[c] = (double)dc[c] * rec->slope[c];
+    gr[c] = gb ? gb[c] : (double)dc[c] * rec->slope[c];
   }
   accumulate(gm, (const double(*)[WV_J_COUNT])rec->J, gr, g);
 }
@@ -141,6 +167,15 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
   if (capture_out) memset(capture_out, 0, sizeof *capture_out);
   if (rec_out) *rec_out = NULL;
   if (!s || !p) return wv_fail(err, WV_ERR_INVALID, "render_grad: a scene and parameters are required");
+  if (s->psf_sigma > 0 && !rec_out) {
+    /* the blur couples pixels: record every pixel, then run the adjoint over the records */
+    wv_grad_record *r = NULL;
+    wv_status st = run(s, p, opt, go, NULL, NULL, NULL, capture_out, &r, err);
+    if (!st) st = wv_record_grad(r, dcap, grad, dot, err);
+    wv_record_free(r);
+    if (st && capture_out) wv_image_free(capture_out);
+    return st;
+  }
   int x0 = 0, y0 = 0, W = s->width, H = s->height, dbl = go && go->double_precision;
   if (go && (go->width || go->height)) {
     x0 = go->x0, y0 = go->y0, W = go->width, H = go->height;
@@ -173,7 +208,7 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
       wv_record_free(rec);
       return wv_fail(err, WV_ERR_NOMEM, "out of memory for the derivatives of %d x %d pixels", W, H);
     }
-    rec->w = W, rec->h = H, rec->gm = gm;
+    rec->w = W, rec->h = H, rec->gm = gm, rec->psf_sigma = s->psf_sigma;
   } else if (!(rows = calloc((size_t)H * NG, sizeof *rows))) {
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for %d gradient rows", H);
   }
@@ -197,14 +232,22 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
       kernel(&rig, &fab, &gm, x0 + i, y0 + r, spp, &pix);
       pixel_rec local, *pr = rec ? &rec->px[(size_t)r * W + i] : &local;
       float cap[3];
-      respond(s, dbl, x0 + i, y0 + r, &pix, cap, pr);
+      memcpy(pr->J, pix.J, sizeof pr->J);
+      memcpy(pr->rad, pix.rad, sizeof pr->rad);
+      if (s->psf_sigma > 0) continue; /* the response after the loop, on the blurred radiance */
+      respond(s, dbl, x0 + i, y0 + r, pix.rad, cap, pr);
       if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);
-      if (rows) backward_pixel(&gm, pr, wv_image_px(dcap, i, r), rows + (size_t)r * NG);
+      if (rows) backward_pixel(&gm, pr, wv_image_px(dcap, i, r), NULL, rows + (size_t)r * NG);
     }
 #pragma omp atomic update
     rows_done++;
   }
   if (opt && opt->progress) opt->progress(opt->progress_user, 1.0);
+  if (rec && s->psf_sigma > 0 && (st = respond_blurred(s, dbl, x0, y0, rec, capture_out, err))) {
+    wv_record_free(rec);
+    if (capture_out) wv_image_free(capture_out);
+    return st;
+  }
   if (rows) { /* reduce in row order: the sum does not depend on the thread schedule */
     double total[NG];
     memset(total, 0, sizeof total);
@@ -236,15 +279,30 @@ wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcap, double
   if (!dcap || !dcap->data || dcap->w != rec->w || dcap->h != rec->h || dcap->c != 3)
     return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", rec->w,
                    rec->h, dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
-  double row[NG], total[NG];
+  double row[NG], total[NG], *gb = NULL;
+  size_t n = (size_t)rec->w * rec->h * 3;
+  if (rec->psf_sigma > 0) {
+    /* dL/dradiance = K^T (slope .* dL/dcapture), K the camera blur */
+    gb = malloc(2 * n * sizeof *gb);
+    if (!gb) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur's adjoint");
+    for (size_t i = 0; i < n; i++) gb[i] = (double)dcap->data[i] * rec->px[i / 3].slope[i % 3];
+    wv_status st = wv_psf_apply(rec->psf_sigma, rec->w, rec->h, 3, gb, gb + n, 1, err);
+    if (st) {
+      free(gb);
+      return st;
+    }
+  }
   memset(total, 0, sizeof total);
   for (int r = 0; r < rec->h; r++) {
     /* The same per-row partials as the fused pass: bitwise the same result. */
     memset(row, 0, sizeof row);
-    for (int i = 0; i < rec->w; i++)
-      backward_pixel(&rec->gm, &rec->px[(size_t)r * rec->w + i], wv_image_px(dcap, i, r), row);
+    for (int i = 0; i < rec->w; i++) {
+      size_t k = (size_t)r * rec->w + i;
+      backward_pixel(&rec->gm, &rec->px[k], wv_image_px(dcap, i, r), gb ? gb + n + 3 * k : NULL, row);
+    }
     for (int k = 0; k < NG; k++) total[k] += row[k];
   }
+  free(gb);
   output(total, grad, dot);
   return WV_OK;
 }
