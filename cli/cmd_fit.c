@@ -23,7 +23,7 @@ static const char *HELP =
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
-    "                 [--register-radius N] [--w-struct X] [--no-colour-split]\n"
+    "                 [--register-radius N] [--w-struct X] [--no-colour-split] [--camera-blur auto|S]\n"
     "                 [--seed N] [--threads N]\n"
     "                 [--force] [--quiet] [--json]\n"
     "       woven fit --resume DIR [--iters N] [--quiet] [--json]\n"
@@ -44,6 +44,8 @@ static const char *HELP =
     "  --w-struct X      weight of the structure term, the weave's log power spectrum (default 0.002;\n"
     "                    0 = off)\n"
     "  --no-colour-split do not try starts that split the warp and weft diffuse colours\n"
+    "  --camera-blur auto|S  the camera's blur, a Gaussian of sigma S pixels on the radiance in every\n"
+    "                    render; auto (default): the scene's, else measured from the photo's spectrum\n"
     "  --iter-scale N    iterate on the image downscaled N times (default 1); the final render\n"
     "                    and SSIM use the scene's full resolution and spp\n"
     "  --force           replace an earlier fit in DIR (it stays whole until the new one is done)\n"
@@ -83,6 +85,14 @@ int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_giv
     double w = strtod(t, &end);
     if (*end || !(w >= 0 && w <= 100)) return cli_usage_error(a->cmd, "--w-struct must be a number in [0, 100]");
     o->w_struct = w;
+  } else if (cli_is(a, s, "--camera-blur")) {
+    const char *t = cli_value(a, "--camera-blur");
+    char *end;
+    if (!t) return EXIT_USAGE;
+    double b = strcmp(t, "auto") ? strtod(t, &end) : WV_FIT_PSF_AUTO;
+    if (strcmp(t, "auto") && (*end || !(b >= 0 && b <= WV_PSF_MAX_SIGMA)))
+      return cli_usage_error(a->cmd, "--camera-blur must be 'auto' or a sigma in pixels in [0, %g]", WV_PSF_MAX_SIGMA);
+    o->psf_sigma = b;
   } else if (!strcmp(s, "--no-colour-split")) {
     o->colour_split = 0;
   } else if (cli_is(a, s, "--threads")) {
@@ -235,7 +245,9 @@ static wv_status write_results(const fit_job *job, const char *dir, const wv_fit
   wv_render_opts ro = {0, o->threads, NULL, NULL, NULL};
   wv_image r_start = {0}, r_fit = {0}, cmp = {0};
   char path[4096], pphoto[4096], pstart[4096], pfit[4096];
-  wv_status rc = wv_render(job->scene, &st->start, &ro, &r_start, NULL, err);
+  wv_scene start_scene = *job->scene; /* the start seen through the same camera blur as the fit */
+  start_scene.psf_sigma = fit_scene->psf_sigma;
+  wv_status rc = wv_render(&start_scene, &st->start, &ro, &r_start, NULL, err);
   if (!rc) rc = wv_render(fit_scene, &st->params, &ro, &r_fit, NULL, err);
   if (!rc) rc = wv_ssim(job->photo, &r_start, WV_SSIM_LUMA, ssim_start, err);
   if (!rc) rc = wv_ssim(job->photo, &r_fit, WV_SSIM_LUMA, ssim_fit, err);
@@ -257,7 +269,7 @@ static wv_status write_results(const fit_job *job, const char *dir, const wv_fit
                    .start_label = job->start_label, .ssim_start = *ssim_start, .ssim_fit = *ssim_fit,
                    .start = &st->start, .fit = &st->params, .loss_svg = svg, .timing = &st->timing,
                    .iters = st->iter, .descriptor = wv_descriptor_name(job->desc),
-                   .pattern_choice = job->pattern_choice, .weave = wv};
+                   .pattern_choice = job->pattern_choice, .weave = wv, .camera_blur = fit_scene->psf_sigma};
   snprintf(path, sizeof path, "%s/report.html", dir);
   if (!rc) rc = wv_report_write_html(path, &rep, err);
   free(svg);
@@ -393,6 +405,7 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
       json_object_set_new(o_json, "pattern_choice",
                           job->pattern_choice ? cli_json_text(wv_pattern_choice_to_json(job->pattern_choice))
                                               : json_null());
+      json_object_set_new(o_json, "camera_blur_px", cli_real(fit_scene.psf_sigma, 3));
       json_object_set_new(o_json, "ssim_rgb_start", cli_real(wv.ssim_rgb[0], 6));
       json_object_set_new(o_json, "ssim_rgb_fit", cli_real(wv.ssim_rgb[1], 6));
       json_object_set_new(o_json, "wsc_start", wv.wsc[0] > -2 ? cli_real(wv.wsc[0], 6) : json_null());

@@ -38,6 +38,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->checkpoint_every = 10;
   o->align_radius = 230;
   o->register_radius = 6;
+  o->psf_sigma = WV_FIT_PSF_AUTO;
 }
 
 /* Every option's range, in one table: wv_fit_opts_validate and the checkpoint
@@ -67,6 +68,7 @@ static const opt_range OPT_RANGES[] = {
     OPT(register_radius, 'i', 0, WV_FIT_MAX_REGISTER_RADIUS, 2),
     OPT(w_struct, 'd', 0, 1e6, 2),
     OPT(colour_split, 'i', 0, 1, 2),
+    OPT(psf_sigma, 'd', WV_FIT_PSF_AUTO, WV_PSF_MAX_SIGMA, 2),
 };
 #undef OPT
 #define N_OPTS (sizeof OPT_RANGES / sizeof OPT_RANGES[0])
@@ -441,6 +443,22 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
   fit_ctx c;
   double t_start = omp_get_wtime();
   wv_status rc = ctx_init(&c, s, photo, d, o->iter_scale, o->iter_spp, o, &st->timing, err);
+  if (!rc && !st->psf_done) {
+    /* the camera blur: given by the options or the scene, else measured on the start */
+    double tp = omp_get_wtime();
+    st->psf_sigma = o->psf_sigma >= 0 ? o->psf_sigma : s->psf_sigma;
+    if (o->psf_sigma < 0 && !(s->psf_sigma > 0)) {
+      wv_scene se;
+      wv_fit_scene(st, s, &se);
+      rc = wv_psf_estimate(&se, photo, &st->params, o->threads, &st->psf_sigma, NULL, err);
+    }
+    st->psf_done = !rc;
+    st->timing.discrete += omp_get_wtime() - tp;
+  }
+  wv_scene sb; /* the scene with the fit's camera blur */
+  wv_fit_scene(st, s, &sb);
+  sb.fabric_offset[0] = s->fabric_offset[0], sb.fabric_offset[1] = s->fabric_offset[1];
+  c.scene.psf_sigma = sb.psf_sigma / (o->iter_scale > 1 ? o->iter_scale : 1);
   if (!rc && st->iter == 0 && o->colour_split && o->iters > 0) {
     double td = omp_get_wtime();
     wv_fit_timing saved = st->timing;
@@ -500,7 +518,7 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
   ctx_free(&c);
   if (!rc && st->iter >= o->iters && !st->aligned && o->align_radius > 0) {
     double ta = omp_get_wtime();
-    rc = align_densities(st, s, photo, o, err);
+    rc = align_densities(st, &sb, photo, o, err);
     st->timing.discrete += omp_get_wtime() - ta;
     st->timing.total += omp_get_wtime() - ta;
   }
@@ -563,6 +581,7 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_object_set_new(json_object_get(root, "opts"), "w_struct", json_real(o->w_struct));
   json_object_set_new(json_object_get(root, "opts"), "colour_split", json_integer(o->colour_split));
   json_object_set_new(root, "colour_split", json_integer(st->colour_split));
+  json_object_set_new(root, "camera_blur", json_pack("{s:b,s:f}", "done", st->psf_done, "sigma_px", st->psf_sigma));
   json_t *log = json_array();
   for (int i = 0; i < st->iter; i++) {
     const wv_fit_record *r = &st->log[i];
@@ -614,6 +633,7 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   wv_fit_opts_default(o);
   o->register_radius = 0; /* absent in checkpoints older than the registration */
   o->w_struct = 0, o->colour_split = 0; /* absent before the structure term: a resume stays without it */
+  o->psf_sigma = 0;                      /* absent before the camera blur: none */
   if ((rc = read_opts(json_object_get(root, "opts"), o, err))) return rc;
   wv_params start;
   if ((rc = read_params_obj(root, path, "start", &start, err))) return rc;
@@ -639,6 +659,14 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   json_t *al = json_object_get(root, "aligned");
   if (!json_is_boolean(al)) return wv_fail(err, WV_ERR_INVALID, "'aligned' must be true or false");
   st->aligned = json_is_true(al);
+  json_t *cb = json_object_get(root, "camera_blur"); /* absent before it existed: none, settled */
+  st->psf_done = 1, st->psf_sigma = 0;
+  if (cb) {
+    json_t *done = json_object_get(cb, "done");
+    if (!json_is_boolean(done)) return wv_fail(err, WV_ERR_INVALID, "'camera_blur.done' must be true or false");
+    st->psf_done = json_is_true(done);
+    if ((rc = wv_json_number(cb, "camera_blur", "sigma_px", 0, WV_PSF_MAX_SIGMA, 1, &st->psf_sigma, err))) return rc;
+  }
   long long cs = 0; /* the start's colour split (absent before it existed: none) */
   if ((rc = wv_json_integer(root, NULL, "colour_split", 0, 4, 0, &cs, err))) return rc;
   st->colour_split = (int)cs;

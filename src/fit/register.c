@@ -169,6 +169,7 @@ void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out) {
   *out = *s;
   out->fabric_offset[0] += st->offset_mm[0];
   out->fabric_offset[1] += st->offset_mm[1];
+  if (st->psf_done) out->psf_sigma = st->psf_sigma;
 }
 
 #define MAX_THREADS 16

@@ -250,7 +250,10 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
   if (r->weave && r->weave->wsc[0] > -2)
     sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td><td>%.4f</td></tr>\n",
               r->weave->wsc[0], r->weave->wsc[1]);
-  sb_printf(&b, "</table>\n<p>SSIM: Wang et al. 2004, 11x11 Gaussian window. WSC: Pearson correlation of the log "
+  sb_printf(&b, "</table>\n<p>Both renders pass through the camera blur: a Gaussian of sigma %.2f px on the "
+                "radiance (measured from the photo's spectrum unless given; docs/fit.md).</p>\n",
+            r->camera_blur);
+  sb_printf(&b, "<p>SSIM: Wang et al. 2004, 11x11 Gaussian window. WSC: Pearson correlation of the log "
                 "power spectra of the luminance detail of the centre 256 x 256 pixels, DC left out; 1 for the same "
                 "periodic structure, about 0 for none in common. %d iterations, descriptor <code>%s</code>.</p>\n",
             r->iters, r->descriptor);
