@@ -2,7 +2,8 @@
  * (descriptor_ref.h) in the same run, with how far their results differ; forward and
  * forward + backward for VGG-19 (random weights), VGG-19's convolutions alone, and a
  * plain OpenBLAS sgemm. Prints one JSON object on its last line (medians).
- * --quick: fewer repetitions; --default-only: skip VGG-19 and the sgemm. */
+ * --quick: fewer repetitions; --default-only: skip VGG-19 and the sgemm;
+ * --profile-former: only the former path's time per part (stderr). */
 #include <cblas.h>
 #include <math.h>
 #include <omp.h>
@@ -169,7 +170,7 @@ static void compare_default(wv_descriptor *d, int w, int h, int reps, int nimg, 
     wv_rng r;
     wv_rng_seed(&r, 200 + k);
     wv_rng_fill_uniform(&r, dg, n, -1, 1);
-    ref_run(&R, x, dg, g0, dx0);
+    ref_run(&R, x, dg, g0, dx0, NULL);
     if (d->run(d, x, w, h, dg, g1, dx1, &e)) die(&e);
     double nw, ew;
     rel_diff(g1, g0, n, &nw, &ew);
@@ -181,16 +182,16 @@ static void compare_default(wv_descriptor *d, int w, int h, int reps, int nimg, 
   double t[6][64], ratio[4][64];
   for (int i = 0; i <= reps; i++) {
     double a = now_ms();
-    ref_run(&R, x, NULL, g0, NULL);
+    ref_run(&R, x, NULL, g0, NULL, NULL);
     double b = now_ms();
     if (d->run(d, x, w, h, NULL, g1, NULL, &e)) die(&e);
     double c = now_ms(), cc = cpu_ms();
-    ref_run(&R, x, dg, g0, dx0);
+    ref_run(&R, x, dg, g0, dx0, NULL);
     double dd = now_ms(), cd = cpu_ms();
     if (d->run(d, x, w, h, dg, g1, dx1, &e)) die(&e);
     double ee = now_ms(), ce = cpu_ms();
-    ref_run(&R, x, NULL, g0, NULL);
-    ref_run(&R, x, dg, g0, dx0);
+    ref_run(&R, x, NULL, g0, NULL, NULL);
+    ref_run(&R, x, dg, g0, dx0, NULL);
     double f = now_ms();
     if (d->run(d, x, w, h, NULL, g1, NULL, &e) || d->run(d, x, w, h, dg, NULL, dx1, &e)) die(&e);
     double gg = now_ms();
@@ -213,6 +214,44 @@ static void compare_default(wv_descriptor *d, int w, int h, int reps, int nimg, 
           o->old_fit, o->new_fit, o->fit_x, o->gram_nw, o->grad_nw, o->gram_ew, o->grad_ew);
   ref_free(&R);
   free(x), free(dx0), free(dx1), free(g0), free(g1), free(dg);
+}
+
+/* Where the former path's time goes: level 0 of a w x h input, forward + backward, one
+ * thread, CPU time per part (medians over reps passes), printed as a table on stderr. */
+static void profile_former(wv_descriptor *d, int w, int h, int reps) {
+  size_t n = wv_descriptor_size(d), nx = (size_t)3 * w * h;
+  float *x = malloc(sizeof(float) * nx), *dx = malloc(sizeof(float) * nx),
+        *g = malloc(sizeof(float) * n), *dg = malloc(sizeof(float) * n);
+  planar_input(x, w, h, 100);
+  wv_rng r;
+  wv_rng_seed(&r, 200);
+  wv_rng_fill_uniform(&r, dg, n, -1, 1);
+  int nt = omp_get_max_threads();
+  omp_set_num_threads(1);
+  ref_net R;
+  if (ref_init(&R, d, w, h)) exit(1);
+  double part[REF_PARTS], runs[REF_PARTS][64], total[64];
+  for (int i = 0; i <= reps; i++) {
+    memset(part, 0, sizeof part);
+    ref_run(&R, x, dg, g, dx, part);
+    if (!i) continue; /* warm-up */
+    total[i - 1] = 0;
+    for (int j = 0; j < REF_PARTS; j++) runs[j][i - 1] = part[j], total[i - 1] += part[j];
+  }
+  /* Multiply-adds per output position of each part (the Gram's upper triangle). */
+  static const double flops[REF_PARTS] = {0, 2 * 64 * 27, 0, 64 * 65, 2 * 64 * 64, 2 * 27 * 64, 0};
+  double npos = (double)(w - 2) * (h - 2);
+  fprintf(stderr, "former path, level 0 of %dx%d, forward + backward, 1 thread, CPU time:\n", w, h);
+  for (int j = 0; j < REF_PARTS; j++) {
+    double ms = median(runs[j], reps);
+    fprintf(stderr, "  %-48s %7.2f ms", ref_part_name[j], ms);
+    if (flops[j] > 0) fprintf(stderr, "  %6.1f GFLOP/s", flops[j] * npos / ms * 1e-6);
+    fprintf(stderr, "\n");
+  }
+  fprintf(stderr, "  %-48s %7.2f ms\n", "total", median(total, reps));
+  omp_set_num_threads(nt);
+  ref_free(&R);
+  free(x), free(dx), free(g), free(dg);
 }
 
 static void print_cmp(const char *key, const cmp_result *o) {
@@ -324,12 +363,13 @@ static double vgg_conv_gflops(int w, int h, int reps, double *fwd_gf, double *bw
 }
 
 int main(int argc, char **argv) {
-  int quick = 0, default_only = 0;
+  int quick = 0, default_only = 0, profile = 0;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--quick")) quick = 1; /* fewer repetitions */
     else if (!strcmp(argv[i], "--default-only")) default_only = 1;
+    else if (!strcmp(argv[i], "--profile-former")) profile = 1;
     else {
-      fprintf(stderr, "usage: bench_descriptor [--quick] [--default-only]\n");
+      fprintf(stderr, "usage: bench_descriptor [--quick] [--default-only] [--profile-former]\n");
       return 2;
     }
   }
@@ -345,6 +385,11 @@ int main(int argc, char **argv) {
   /* The default descriptor against the former path, in the same process. */
   wv_descriptor *d;
   if (wv_descriptor_create_default(&d, &e)) die(&e);
+  if (profile) {
+    profile_former(d, 800, 300, quick ? 3 : 7);
+    wv_descriptor_free(d);
+    return 0;
+  }
   static const char *kname[] = {"baseline", "avx2", "avx512"};
   int kernel = wv_descriptor_default_kernel(d, -1);
   cmp_result c800, c512, c800_1;

@@ -10,6 +10,7 @@
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "descriptor/internal.h"
 #include "woven/nn.h"
@@ -63,7 +64,21 @@ static int ref_init(ref_net *m, const wv_descriptor *d, int w, int h) {
   return 0;
 }
 
-static void ref_level(ref_net *m, int s, const float *S, float *gram, float *dx) {
+static double ref_cpu_ms(void) { /* the calling thread's CPU time */
+  struct timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+/* REF_PARTS parts of a level pass, in the order ref_level runs them. */
+#define REF_PARTS 7
+static const char *const ref_part_name[REF_PARTS] = {
+    "im2col", "filters (sgemm 64 x n x 27)", "ReLU", "Gram (ssyrk 64 x 64, upper)",
+    "dF = S F (sgemm 64 x n x 64) and the ReLU mask", "W^T dF (sgemm 27 x n x 64)", "col2im"};
+
+/* part: NULL, or REF_PARTS sums of the first thread's CPU milliseconds per part (meant
+ * for one thread). */
+static void ref_level(ref_net *m, int s, const float *S, float *gram, float *dx, double *part) {
   const float *x = m->lev[s], *W = m->w[s];
   int w = m->lw[s], h = m->lh[s], k = m->k, c = m->c, kk = 3 * k * k;
   int oh = h - k + 1, ow = w - k + 1, npos = oh * ow, bl = m->blk[s];
@@ -81,21 +96,35 @@ static void ref_level(ref_net *m, int s, const float *S, float *gram, float *dx)
 #pragma omp for schedule(static)
     for (int b = 0; b < nb; b++) {
       int p0 = b * bl, p1 = p0 + bl < npos ? p0 + bl : npos, len = p1 - p0;
+      double t[REF_PARTS + 1];
+#define REF_MARK(i) \
+  if (part && !tid) t[i] = ref_cpu_ms()
+      REF_MARK(0);
       wv_nn_im2col(x, 3, h, w, k, 1, 0, ow, p0, p1, col);
+      REF_MARK(1);
       cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, c, len, kk, 1.0f, W, kk, col, len,
                   0.0f, f, len);
+      REF_MARK(2);
 #pragma omp simd
       for (size_t i = 0; i < (size_t)c * len; i++) f[i] = f[i] > 0.0f ? f[i] : 0.0f;
+      REF_MARK(3);
       cblas_ssyrk(CblasRowMajor, CblasUpper, CblasNoTrans, c, len, 1.0f, f, len, 1.0f, gp, c);
+      REF_MARK(4);
       if (S) {
         cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, c, len, c, 1.0f, S, c, f, len,
                     0.0f, df, len);
 #pragma omp simd
         for (size_t i = 0; i < (size_t)c * len; i++) df[i] = f[i] > 0.0f ? df[i] : 0.0f;
+        REF_MARK(5);
         cblas_sgemm(CblasRowMajor, CblasTrans, CblasNoTrans, kk, len, c, 1.0f, W, kk, df, len,
                     0.0f, col, len);
+        REF_MARK(6);
         wv_nn_col2im(col, 3, h, w, k, 1, 0, ow, p0, p1, dxt);
+        REF_MARK(7);
+        if (part && !tid)
+          for (int i = 0; i < REF_PARTS; i++) part[i] += t[i + 1] - t[i];
       }
+#undef REF_MARK
     }
     if (S && nt > 1) {
 #pragma omp for schedule(static)
@@ -116,8 +145,10 @@ static void ref_level(ref_net *m, int s, const float *S, float *gram, float *dx)
 }
 
 /* Gram blocks of the planar normalised image x (w x h, the size given to ref_init);
- * with dgram, also the gradient of sum(dgram .* gram) into dx (overwritten). */
-static void ref_run(ref_net *m, const float *x, const float *dgram, float *gram, float *dx) {
+ * with dgram, also the gradient of sum(dgram .* gram) into dx (overwritten). part:
+ * NULL, or the parts of level 0's pass (ref_level). */
+static void ref_run(ref_net *m, const float *x, const float *dgram, float *gram, float *dx,
+                    double *part) {
   wv_nn_blas_serial();
   int c = m->c;
   m->lev[0] = (float *)x;
@@ -135,7 +166,7 @@ static void ref_run(ref_net *m, const float *x, const float *dgram, float *gram,
       memset(m->dlev[s], 0, sizeof(float) * 3 * m->lw[s] * m->lh[s]);
       Sp = S;
     }
-    ref_level(m, s, Sp, gram + (size_t)s * c * c, m->dlev[s]);
+    ref_level(m, s, Sp, gram + (size_t)s * c * c, m->dlev[s], s ? NULL : part);
   }
   free(S);
   if (dgram)

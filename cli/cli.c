@@ -5,8 +5,10 @@
 #include <math.h>
 #include <libgen.h>
 #include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -185,4 +187,10 @@ int cli_check_writable(const char *cmd, const char *path) {
   if (!ok) fprintf(stderr, "woven %s: error: %s: directory '%s' is not writable or does not exist\n", cmd, path, dir);
   free(copy);
   return ok;
+}
+
+int cli_check_output(const char *cmd, const char *path, const char *ext) {
+  size_t n = strlen(path), e = strlen(ext);
+  if (n <= e || strcasecmp(path + n - e, ext)) return cli_usage_error(cmd, "output '%s' must end in %s", path, ext);
+  return cli_check_writable(cmd, path) ? 0 : WV_ERR_IO;
 }

@@ -67,6 +67,9 @@ void cli_progress_end(cli_progress *p);
 double cli_now(void);
 /* Refuses early, before minutes of work, an output whose directory is not writable (prints why). */
 int cli_check_writable(const char *cmd, const char *path);
+/* An output file: its name must end in ext and its directory be writable; returns 0,
+ * or the exit code after printing why not. */
+int cli_check_output(const char *cmd, const char *path, const char *ext);
 
 /* A fit to run (woven fit and woven capture). */
 #include "woven/descriptor.h"
@@ -119,5 +122,7 @@ int cmd_predict(int argc, char **argv);
 int cmd_capture(int argc, char **argv);
 int cmd_scene(int argc, char **argv);
 int cmd_cloth(int argc, char **argv);
+int cmd_export(int argc, char **argv);
+int cmd_view(int argc, char **argv);
 
 #endif

@@ -7,7 +7,7 @@
 #include "woven/metrics.h"
 
 static const char *HELP =
-    "usage: woven compare A B [--channels luma|rgb] [--json]\n"
+    "usage: woven compare A B [--channels luma|rgb] [--blur SIGMA] [--json]\n"
     "\n"
     "Compares two images of the same size: SSIM (Wang et al. 2004, 11x11 Gaussian window,\n"
     "sigma 1.5, data range 1, mean over the valid region) on luminance (default) or per\n"
@@ -15,7 +15,9 @@ static const char *HELP =
     "the log power spectra of the luminance detail of the centre 256 x 256 pixels, DC left\n"
     "out: 1 for the same periodic structure wherever its yarns lie, about 0 against noise;\n"
     "docs/fit.md; omitted below 32 x 32 pixels), and the mean absolute difference. Values\n"
-    "are compared as stored (8/16-bit scaled to [0,1], EXR as is).\n";
+    "are compared as stored (8/16-bit scaled to [0,1], EXR as is).\n"
+    "  --blur SIGMA  compare Gaussian blurs of both (sigma in pixels): the shading without\n"
+    "                the pixel-scale weave and its noise\n";
 
 int cmd_compare(int argc, char **argv) {
   cli_ctx c = {0, 0, "compare"};
@@ -24,6 +26,7 @@ int cmd_compare(int argc, char **argv) {
   const char *files[2] = {NULL, NULL};
   int nfiles = 0;
   wv_ssim_mode mode = WV_SSIM_LUMA;
+  double blur = 0;
   for (const char *s; (s = cli_next(&a));) {
     if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
       fputs(HELP, stdout);
@@ -34,6 +37,13 @@ int cmd_compare(int argc, char **argv) {
       if (!strcmp(v, "luma")) mode = WV_SSIM_LUMA;
       else if (!strcmp(v, "rgb")) mode = WV_SSIM_RGB;
       else return cli_usage_error(c.cmd, "--channels must be luma or rgb");
+    } else if (cli_is(&a, s, "--blur")) {
+      const char *v = cli_value(&a, "--blur");
+      if (!v) return EXIT_USAGE;
+      char *end;
+      blur = strtod(v, &end);
+      if (*v == '\0' || *end != '\0' || !(blur >= 0 && blur <= 100))
+        return cli_usage_error(c.cmd, "--blur: '%s' is not a number in 0..100", v);
     } else if (cli_common_flag(&c, s)) {
       /* --quiet, -q, --json */
     } else if (s[0] == '-' && s[1]) {
@@ -53,7 +63,15 @@ int cmd_compare(int argc, char **argv) {
       return cli_fail(&c, &err);
     }
   double ssim = 0, mae = 0, wsc = 0;
-  wv_status st = wv_ssim(&im[0], &im[1], mode, &ssim, &err);
+  wv_status st = WV_OK;
+  for (int i = 0; i < 2 && blur > 0 && !st; i++) {
+    wv_image b;
+    if (!(st = wv_image_blur(&im[i], blur, &b, &err))) {
+      wv_image_free(&im[i]);
+      im[i] = b;
+    }
+  }
+  if (!st) st = wv_ssim(&im[0], &im[1], mode, &ssim, &err);
   if (!st) st = wv_mae(&im[0], &im[1], &mae, &err);
   int has_wsc = im[0].w >= 32 && im[0].h >= 32;
   if (!st && has_wsc) st = wv_wsc(&im[0], &im[1], &wsc, &err);
@@ -64,9 +82,9 @@ int cmd_compare(int argc, char **argv) {
     return cli_fail(&c, &err);
   }
   if (c.json)
-    cli_print_json(json_pack("{s:o,s:o,s:o,s:s,s:o,s:o}", "a", cli_str(files[0]), "b", cli_str(files[1]), "ssim", cli_real(ssim, 6),
-                             "ssim_channels", mode == WV_SSIM_LUMA ? "luma" : "rgb",
-                             "wsc", has_wsc ? cli_real(wsc, 6) : json_null(), "mae", cli_real(mae, 6)));
+    cli_print_json(json_pack("{s:o,s:o,s:o,s:s,s:o,s:o,s:o}", "a", cli_str(files[0]), "b", cli_str(files[1]), "ssim", cli_real(ssim, 6),
+                             "ssim_channels", mode == WV_SSIM_LUMA ? "luma" : "rgb", "wsc",
+                             has_wsc ? cli_real(wsc, 6) : json_null(), "mae", cli_real(mae, 6), "blur", cli_real(blur, 6)));
   else if (!c.quiet && has_wsc)
     printf("SSIM (%s) %.4f  WSC %.4f  MAE %.5f\n", mode == WV_SSIM_LUMA ? "luma" : "rgb", ssim, wsc, mae);
   else if (!c.quiet)

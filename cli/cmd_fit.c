@@ -18,6 +18,7 @@
 #include "woven/photo.h"
 #include "woven/render.h"
 #include "woven/report.h"
+#include "woven/view.h"
 
 static const char *HELP =
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
@@ -53,7 +54,8 @@ static const char *HELP =
     "                    iterations), or add iterations to a finished one\n"
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), zoom.png (their\n"
     "centre crop enlarged 4x), spectra.png (their weave spectra), loss.svg, report.html (with\n"
-    "SSIM and WSC, the weave-spectrum correlation, of start and fit), maps/, and fit.json +\n"
+    "SSIM and WSC, the weave-spectrum correlation, of start and fit), viewer.html (woven view),\n"
+    "maps/, and fit.json +\n"
     "checkpoint.json (for --resume). DIR is replaced whole at the end; it may not hold other\n"
     "files, nor any input.\n";
 
@@ -158,8 +160,8 @@ static int on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
 /* What a fit directory may hold (woven capture adds network.json). */
 static const char *const FIT_FILES[] = {"fit.json",    "checkpoint.json", "params.json", "render.png",
                                         "start.png",   "photo.png",       "compare.png", "loss.svg",
-                                        "report.html", "maps",            "scene.json",  "network.json",
-                                        "zoom.png",    "spectra.png",     NULL};
+                                        "report.html", "viewer.html", "maps",            "scene.json",  "network.json",
+                                        "zoom.png",    "spectra.png", NULL};
 
 typedef enum { FIT_DIR_NONE, FIT_DIR_UNFINISHED, FIT_DIR_FINISHED } fit_dir_state;
 
@@ -269,7 +271,12 @@ static wv_status write_results(const fit_job *job, const char *dir, const wv_fit
                    .start_label = job->start_label, .ssim_start = *ssim_start, .ssim_fit = *ssim_fit,
                    .start = &st->start, .fit = &st->params, .loss_svg = svg, .timing = &st->timing,
                    .iters = st->iter, .descriptor = wv_descriptor_name(job->desc),
-                   .pattern_choice = job->pattern_choice, .weave = wv, .camera_blur = fit_scene->psf_sigma};
+                   .pattern_choice = job->pattern_choice, .weave = wv, .camera_blur = fit_scene->psf_sigma,
+                   .viewer_html = "viewer.html"};
+  /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
+  wv_view_opts vo = {&st->params, fit_scene, pphoto, job->title};
+  snprintf(path, sizeof path, "%s/viewer.html", dir);
+  if (!rc) rc = wv_view_write(path, &vo, err);
   snprintf(path, sizeof path, "%s/report.html", dir);
   if (!rc) rc = wv_report_write_html(path, &rep, err);
   free(svg);

@@ -20,6 +20,8 @@ static const struct {
     {"capture", cmd_capture, "photo -> parameters: network estimate, then the fit, all outputs"},
     {"scene", cmd_scene, "render the fabric on meshes (a draped cloth) under new light, with edits"},
     {"cloth", cmd_cloth, "drape a UV-mapped square with the cloth simulation and write it as OBJ"},
+    {"export", cmd_export, "write a glTF 2.0 binary with the fabric baked into PBR textures"},
+    {"view", cmd_view, "write a self-contained HTML viewer of the true model (WebGL)"},
 };
 
 static void usage(FILE *f) {

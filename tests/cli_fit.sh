@@ -7,14 +7,15 @@ echo "$scene" >"$T/tiny.json"
 "$WOVEN" render --params "$SRC/examples/satin.json" --scene "$T/tiny.json" -o "$T/photo.png" -q || exit 1
 
 check "fit" 0 '"ssim_fit"' -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" --pattern satin -o "$T/fit" --iters 6 --iter-scale 1 --iter-spp 2 --json
-for f in params.json render.png compare.png loss.svg report.html maps/normal.png fit.json checkpoint.json scene.json; do
+for f in params.json render.png compare.png loss.svg report.html viewer.html maps/normal.png fit.json checkpoint.json scene.json; do
   [[ -s $T/fit/$f ]] || { echo "FAIL fit output $f missing"; fails=$((fails + 1)); }
 done
 grep -q "<svg" "$T/fit/loss.svg" || { echo "FAIL loss.svg is not SVG"; fails=$((fails + 1)); }
 grep -q "data:image/png;base64," "$T/fit/report.html" || { echo "FAIL report.html does not embed images"; fails=$((fails + 1)); }
+grep -q '<iframe src="viewer.html"' "$T/fit/report.html" || { echo "FAIL report.html does not embed the viewer"; fails=$((fails + 1)); }
 # the fit's scene.json (the registered offset) re-renders render.png exactly
 check "render the fit" 0 "" -- "$WOVEN" render --params "$T/fit/params.json" --scene "$T/fit/scene.json" -o "$T/refit.png" -q
-check "re-render equals render.png" 0 '"mae": 0.0}' -- "$WOVEN" compare "$T/refit.png" "$T/fit/render.png" --json
+check "re-render equals render.png" 0 '"mae": 0.0,' -- "$WOVEN" compare "$T/refit.png" "$T/fit/render.png" --json
 check "compare" 0 '"ssim"' -- "$WOVEN" compare "$T/photo.png" "$T/fit/render.png" --json
 check "resume further" 0 '"iterations": 9' -- "$WOVEN" fit --resume "$T/fit" --iters 9 --json
 check "resume finished" 0 '"iterations": 9' -- "$WOVEN" fit --resume "$T/fit" --json

@@ -199,20 +199,48 @@ static void test_maps_tile(void **state) {
   wv_maps_free(&a), wv_maps_free(&b);
 }
 
-/* Golden images guard against unintended changes of the forward model.
+/* Golden images guard against unintended changes of the forward model. The
+ * cases reach every shading path: whole vectors of one pixel's samples (16 spp),
+ * vectors packed with several pixels' samples (3 spp, and 12 = one vector and
+ * 4 packed), silhouette pixels traced sample by sample (a field of view three
+ * times the preset's), segment noise, gaps and glints, and points past the
+ * 8-wide integer range, which fall back to the scalar kernel (a fabric offset
+ * of 10 km).
  * To update after an intended change: WOVEN_UPDATE_GOLDEN=1 ./test_render
  * (from the build's tests/ directory), then review and commit tests/golden/. */
 static void test_golden(void **state) {
   (void)state;
-  const char *cases[][2] = {{"cylinder", "twill"}, {"cylinder", "satin"}, {"flat45", "plain"},
-                            {"flat45", "twill90"}, {"flat45", "satin90"}};
+  static const struct {
+    const char *scene, *pattern, *file;
+    int spp, variant; /* 0: the preset's centre; 1: wide view, noise, gaps; 2: far offset (the fabric coordinates at the limit) */
+  } cases[] = {{"cylinder", "twill", "cylinder_twill", 16, 0},
+               {"cylinder", "satin", "cylinder_satin", 16, 0},
+               {"flat45", "plain", "flat45_plain", 16, 0},
+               {"flat45", "twill90", "flat45_twill90", 16, 0},
+               {"flat45", "satin90", "flat45_satin90", 16, 0},
+               {"cylinder", "twill", "cylinder_twill_wide_spp12", 12, 1},
+               {"flat45", "satin", "flat45_satin_spp3", 3, 1},
+               {"flat45", "plain", "flat45_plain_far", 8, 2}};
   int update = getenv("WOVEN_UPDATE_GOLDEN") != NULL;
-  for (int i = 0; i < 5; i++) {
-    wv_image img, ref;
-    render(cases[i][0], cases[i][1], 64, 48, 16, 0, 3, &img);
-    char path[512];
-    snprintf(path, sizeof path, "%s/tests/golden/%s_%s.exr", WOVEN_SOURCE_DIR, cases[i][0], cases[i][1]);
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    wv_scene s;
+    wv_params p;
     wv_error err = {0};
+    assert_int_equal(wv_scene_preset(cases[i].scene, &s, &err), WV_OK);
+    crop_scene(&s, 64, 48);
+    assert_int_equal(wv_params_default(cases[i].pattern, &p, &err), WV_OK);
+    p.seed = 3;
+    if (cases[i].variant == 1) {
+      s.vfov_deg *= 3;
+      p.noise_level = 4, p.yarn_width = 0.85, p.specular_noise = 1;
+    } else if (cases[i].variant == 2) {
+      s.fabric_offset[0] = 1e4, s.fabric_offset[1] = -1e4; /* the scenes' limit, WV_SCENE_MAX_OFFSET_MM */
+    }
+    wv_render_opts o = {cases[i].spp, 0, NULL, NULL, NULL};
+    wv_image img, ref;
+    if (wv_render(&s, &p, &o, &img, NULL, &err)) fail_msg("%s", err.msg);
+    char path[512];
+    snprintf(path, sizeof path, "%s/tests/golden/%s.exr", WOVEN_SOURCE_DIR, cases[i].file);
     if (update) {
       assert_int_equal(wv_image_write_exr(path, &img, &err), WV_OK);
       print_message("updated %s\n", path);

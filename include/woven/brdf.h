@@ -1,4 +1,4 @@
-/* woven: fabric shading (SPEC section 4, paper section 3.2).
+/* woven: fabric shading (SPEC section 4, paper section 3.2), one point at a time.
  * SGGX fiber microflakes (Heitz et al. 2015) in a SpongeCake single-scattering
  * slab (Wang et al. 2022) for the specular lobe, blended Lambert for the diffuse.
  * All vectors are unit length and in one common frame; wi (to light) and wo (to
@@ -12,20 +12,15 @@ static inline float wv_dot3(const float a[3], const float b[3]) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
+/* The functions below evaluate the renderer's own shading kernel (one float
+ * lane of src/kernel/kernel_impl.h), so what they are tested for is what renders. */
+
 /* SGGX projected area for fiber-like flakes around tangent t:
  * sigma(w) = sqrt(w_b^2 + w_n^2 + alpha^2 w_t^2) = sqrt(1 - (1 - alpha^2)(w.t)^2). */
-static inline float wv_sggx_sigma(const float t[3], float alpha, const float w[3]) {
-  float wt = wv_dot3(w, t);
-  float s2 = 1.0f - (1.0f - alpha * alpha) * wt * wt;
-  return sqrtf(s2 > 0.0f ? s2 : 0.0f);
-}
+float wv_sggx_sigma(const float t[3], float alpha, const float w[3]);
 
 /* SGGX flake normal density D(h) = 1 / (pi alpha (h_b^2 + h_n^2 + h_t^2/alpha^2)^2), unit h. */
-static inline float wv_sggx_D(const float t[3], float alpha, const float h[3]) {
-  float ht = wv_dot3(h, t);
-  float q = 1.0f + (1.0f / (alpha * alpha) - 1.0f) * ht * ht;
-  return 1.0f / (3.14159265358979f * alpha * q * q);
-}
+float wv_sggx_D(const float t[3], float alpha, const float h[3]);
 
 /* SpongeCake single-scattering specular without k_s and U_s:
  * D(h) (1 - exp(-T A)) / (4 mu_i mu_o A), A = sigma(wi)/mu_i + sigma(wo)/mu_o.

@@ -21,5 +21,8 @@ static inline float *wv_image_px(const wv_image *img, int x, int y) {
 /* Mean absolute difference over all samples; -1 if shapes differ. */
 double wv_image_mad(const wv_image *a, const wv_image *b);
 double wv_image_mean(const wv_image *a);
+/* Gaussian blur of standard deviation sigma pixels (kernel radius ceil(3 sigma),
+ * edges clamped), every channel; out is allocated here. */
+wv_status wv_image_blur(const wv_image *in, double sigma, wv_image *out, wv_error *err);
 
 #endif

@@ -52,6 +52,7 @@ typedef struct {
   const wv_pattern_choice *pattern_choice;     /* the pattern was chosen automatically (NULL: given) */
   const wv_weave_views *weave;                 /* zoom, spectra, SSIM per channel, WSC (NULL: none) */
   double camera_blur;                          /* the camera blur's sigma in pixels the renders used */
+  const char *viewer_html;                     /* the interactive viewer beside the report (NULL: none) */
 } wv_report;
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err);

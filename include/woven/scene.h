@@ -52,7 +52,8 @@ wv_status wv_scene_load(const char *name_or_path, wv_scene *s, wv_error *err);
 char *wv_scene_to_json(const wv_scene *s);
 
 /* Sensor response: capture = mask * encode(clip(exposure * radiance)). In place allowed.
- * The camera blur is not part of it: wv_scene_capture applies both. */
+ * (Its adjoint is applied inside the gradient renderer, woven/grad.h.) The camera blur is
+ * not part of it: wv_scene_capture applies both. */
 void wv_scene_response(const wv_scene *s, const wv_image *radiance, wv_image *capture);
 /* What the camera makes of the radiance reaching it: the blur (wv_psf_apply with
  * s->psf_sigma), then wv_scene_response. capture must be allocated like radiance. */
@@ -63,9 +64,6 @@ wv_status wv_scene_capture(const wv_scene *s, const wv_image *radiance, wv_image
  * applies its transpose (for the gradient). in and out must differ. sigma <= 0 copies. */
 wv_status wv_psf_apply(double sigma, int w, int h, int c, const double *in, double *out, int adjoint,
                        wv_error *err);
-/* Adjoint of the response: given dL/dcapture, dL/dradiance (uses the radiance). */
-void wv_scene_response_backward(const wv_scene *s, const wv_image *radiance, const wv_image *dcapture,
-                                wv_image *dradiance);
 /* Encoding of one value and its inverse (used to decode photos). */
 float wv_encode(const wv_scene *s, float linear);
 float wv_decode(const wv_scene *s, float encoded);

@@ -24,9 +24,13 @@ typedef struct {
   /* Derived by wv_yarn_model_update() from the fields above. */
   float sin_psi, cos_psi, sin_umax, cos_umax;
   float inv_spacing[2], umax_over_spacing[2], v_scale[2];
+  /* weave.cell[r][c] as type | len << 8 | index << 16 at r * WV_WEAVE_MAX + c:
+   * one 32-bit load per lookup, also for eight lookups at once */
+  int32_t cellpack[WV_WEAVE_MAX * WV_WEAVE_MAX];
 } wv_yarn_model;
 
-/* Recompute the derived fields; call after changing umax or psi. */
+/* Recompute the derived fields; call after changing the weave, umax, psi,
+ * spacing or width. */
 void wv_yarn_model_update(wv_yarn_model *m);
 
 typedef struct {
@@ -40,11 +44,5 @@ typedef struct {
 
 /* Fabric row/column of a point: rows grow toward -y, columns toward +x. */
 void wv_yarn_eval(const wv_yarn_model *m, float x, float y, wv_yarn_point *out);
-
-/* Local bent-cylinder frame before heightfield scaling (exposed for tests):
- * yarn running along +y, angles u (along) and v (around). */
-void wv_yarn_frame(float u, float v, float sin_psi, float cos_psi, float n[3], float t[3]);
-/* Heightfield scaling of a frame by beta (keeps n.t = 0 and unit length). */
-void wv_yarn_scale(float beta, float n[3], float t[3]);
 
 #endif

@@ -1,4 +1,20 @@
+/* The public BRDF functions (woven/brdf.h): thin wrappers that put the
+ * caller's vectors into the shading kernel's form and call it, so tests of
+ * this API test the renderer's arithmetic. Also the specular albedo by
+ * quadrature. */
 #include "woven/brdf.h"
+
+#include "kernel/kernel.h"
+
+#define PI_F 3.14159265358979f
+
+float wv_sggx_sigma(const float t[3], float alpha, const float w[3]) {
+  return wv_sggx_sigma_f(1.0f - alpha * alpha, wv_dot3(w, t));
+}
+
+float wv_sggx_D(const float t[3], float alpha, const float h[3]) {
+  return wv_sggx_D_f(PI_F * alpha, wv_sggx_q_f(1.0f / (alpha * alpha) - 1.0f, wv_dot3(h, t)));
+}
 
 float wv_brdf_specular(const float t[3], float alpha, float thickness, const float wi[3],
                        const float wo[3], const float wm[3]) {
@@ -8,16 +24,17 @@ float wv_brdf_specular(const float t[3], float alpha, float thickness, const flo
   float hl = sqrtf(wv_dot3(h, h));
   if (hl < 1e-12f) return 0.0f;
   h[0] /= hl, h[1] /= hl, h[2] /= hl;
-  float A = wv_sggx_sigma(t, alpha, wi) / mi + wv_sggx_sigma(t, alpha, wo) / mo;
-  if (A <= 0.0f) return 0.0f;
-  return wv_sggx_D(t, alpha, h) * (1.0f - expf(-thickness * A)) / (4.0f * mi * mo * A);
+  float a2 = alpha * alpha;
+  /* the kernel returns f_s mu_i */
+  return wv_spongecake_f(wv_dot3(t, wi), wv_dot3(t, wo), wv_dot3(t, h), mi, mo, alpha, 1.0f - a2, 1.0f / a2 - 1.0f,
+                         PI_F * alpha, 1.0f / alpha, thickness, 1.0f, NULL) /
+         mi;
 }
 
 float wv_brdf_diffuse_cos(const float n[3], float blend_w, const float wi[3], const float wm[3]) {
   float mi = wv_dot3(wi, wm);
   if (mi <= 0.0f) return 0.0f;
-  float ni = wv_dot3(wi, n);
-  return (blend_w * (ni > 0.0f ? ni : 0.0f) + (1.0f - blend_w) * mi) * (1.0f / 3.14159265358979f);
+  return wv_diffuse_f(wv_dot3(wi, n), mi, blend_w, NULL, NULL);
 }
 
 double wv_brdf_specular_albedo(const float t[3], float alpha, float thickness, const float wo[3],

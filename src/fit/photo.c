@@ -1,9 +1,11 @@
-/* woven: a photo brought to a scene's image: read, cropped (the one place a crop is
- * checked against the photo), response applied to linear photos, area-averaged. */
+/* Loading a photo for comparison with a capture-scene render (woven/photo.h):
+ * read, crop, a linear photo through the scene's sensor response, area-average
+ * to the scene's size. */
 #include "woven/photo.h"
 
 #include <string.h>
 
+#include "sensor/sensor.h"
 #include "woven/imgops.h"
 #include "woven/io.h"
 
@@ -45,14 +47,8 @@ wv_status wv_photo_load(const char *path, const wv_scene *s, const wv_crop *crop
   for (int y = 0; y < ch; y++)
     memcpy(wv_image_px(&cropped, 0, y), wv_image_px(&raw, x0, y0 + y), sizeof(float) * 3 * (size_t)cw);
   wv_image_free(&raw);
-  if (ii.is_float) { /* linear photo: apply the camera response the scene describes (no mask) */
-    float ex = (float)s->exposure, clip = (float)s->clip;
-    for (size_t i = 0; i < (size_t)cw * ch * 3; i++) {
-      float v = cropped.data[i] * ex;
-      if (clip > 0 && v > clip) v = clip;
-      cropped.data[i] = wv_encode(s, v);
-    }
-  }
+  if (ii.is_float) /* linear photo: apply the camera response the scene describes (no mask) */
+    for (size_t i = 0; i < (size_t)cw * ch * 3; i++) cropped.data[i] = wv_respond_f(s, 1.0, cropped.data[i], NULL);
   if (cw == s->width && ch == s->height) {
     *out = cropped;
   } else {

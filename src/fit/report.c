@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "woven/analysis.h"
+#include "util/base64.h"
 #include "woven/io.h"
 #include "woven/metrics.h"
 
@@ -194,17 +195,14 @@ static void sb_base64_file(sbuf *b, const char *path, wv_status *st, wv_error *e
   char *data;
   size_t len;
   if ((*st = wv_read_file(path, &data, &len, err))) return;
-  static const char *tab = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  const unsigned char *d = (const unsigned char *)data;
-  char q[5] = {0};
-  for (size_t i = 0; i < len; i += 3) {
-    unsigned v = (unsigned)d[i] << 16 | (i + 1 < len ? (unsigned)d[i + 1] << 8 : 0) | (i + 2 < len ? d[i + 2] : 0);
-    q[0] = tab[v >> 18 & 63], q[1] = tab[v >> 12 & 63];
-    q[2] = i + 1 < len ? tab[v >> 6 & 63] : '=';
-    q[3] = i + 2 < len ? tab[v & 63] : '=';
-    sb_printf(b, "%s", q);
-  }
+  char *text = wv_base64(data, len);
   free(data);
+  if (!text) {
+    b->failed = 1;
+    return;
+  }
+  sb_printf(b, "%s", text);
+  free(text);
 }
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err) {
@@ -306,6 +304,11 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                                                : "the smallest fit loss of its estimate rendered with each built-in");
     }
   }
+  if (r->viewer_html)
+    sb_printf(&b, "<h2>Interactive viewer</h2>\n<p>The true model in WebGL: orbit, move the light, edit the "
+                  "parameters, compare with the photo (<a href=\"%s\">open it alone</a>).</p>\n"
+                  "<iframe src=\"%s\" style=\"width:100%%;height:640px;border:1px solid #ccc\"></iframe>\n",
+              r->viewer_html, r->viewer_html);
   sb_printf(&b, "<h2>Parameters</h2>\n<table><tr><th>parameter</th><th>%s</th><th>fit</th></tr>\n", r->start_label);
   sb_printf(&b, "<tr><td>pattern</td><td>%s</td><td>%s</td></tr>\n", r->start->pattern, r->fit->pattern);
   sb_printf(&b, "<tr><td>density.warp (yarns/inch)</td><td>%.1f</td><td>%.1f</td></tr>\n", r->start->density[0],

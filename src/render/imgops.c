@@ -1,4 +1,5 @@
-/* Image operations with adjoints, for losses on processed renders. */
+/* Image operations with adjoints, for losses on processed renders: area
+ * downsampling and its transpose, the L1 difference. */
 #include "woven/imgops.h"
 
 #include <math.h>
@@ -88,73 +89,7 @@ wv_status wv_image_downsample_backward(int in_w, int in_h, const wv_image *dout,
   return WV_OK;
 }
 
-/* ---- sensor response pieces ---- */
-
-double wv_encode_d(const wv_scene *s, double x) {
-  if (x <= 0.0) return 0.0;
-  switch (s->encoding) {
-    case WV_ENC_SRGB: return x <= 0.0031308 ? 12.92 * x : 1.055 * pow(x, 1.0 / 2.4) - 0.055;
-    case WV_ENC_GAMMA: return pow(x, 1.0 / s->gamma);
-    default: return x;
-  }
-}
-
-double wv_encode_slope(const wv_scene *s, double x) {
-  if (x <= 0.0) return 0.0;
-  switch (s->encoding) {
-    case WV_ENC_SRGB: return x <= 0.0031308 ? 12.92 : 1.055 / 2.4 * pow(x, 1.0 / 2.4 - 1.0);
-    case WV_ENC_GAMMA: return pow(x, 1.0 / s->gamma - 1.0) / s->gamma;
-    default: return 1.0;
-  }
-}
-
-/* The same expression as response.c, so the float mask is bitwise the same. */
-double wv_falloff_mask(const wv_scene *s, int x, int y) {
-  if (!s->falloff) return 1.0;
-  double dx = x + 0.5 - 0.5 * s->width, dy = y + 0.5 - 0.5 * s->height;
-  return exp(-(dx * dx + dy * dy) / (s->falloff_sigma * s->falloff_sigma));
-}
-
 static size_t count(const wv_image *im) { return (size_t)im->w * im->h * im->c; }
-
-void wv_image_encode(const wv_scene *s, const wv_image *in, wv_image *out) {
-  for (size_t i = 0, n = count(in); i < n; i++) out->data[i] = wv_encode(s, in->data[i]);
-}
-
-void wv_image_encode_backward(const wv_scene *s, const wv_image *in, const wv_image *dout, wv_image *din) {
-  for (size_t i = 0, n = count(in); i < n; i++)
-    din->data[i] = (float)(dout->data[i] * wv_encode_slope(s, in->data[i]));
-}
-
-void wv_image_clip(const wv_image *in, float clip, wv_image *out) {
-  for (size_t i = 0, n = count(in); i < n; i++) {
-    float v = in->data[i];
-    out->data[i] = clip > 0.0f && v > clip ? clip : v;
-  }
-}
-
-void wv_image_clip_backward(const wv_image *in, float clip, const wv_image *dout, wv_image *din) {
-  for (size_t i = 0, n = count(in); i < n; i++)
-    din->data[i] = clip > 0.0f && in->data[i] > clip ? 0.0f : dout->data[i];
-}
-
-void wv_image_mask(const wv_scene *s, const wv_image *in, wv_image *out) {
-  for (int y = 0; y < in->h; y++)
-    for (int x = 0; x < in->w; x++) {
-      float m = (float)wv_falloff_mask(s, x, y);
-      const float *p = wv_image_px(in, x, y);
-      float *o = wv_image_px(out, x, y);
-      for (int c = 0; c < in->c; c++) o[c] = m * p[c];
-    }
-}
-
-void wv_image_mask_backward(const wv_scene *s, const wv_image *dout, wv_image *din) {
-  wv_image_mask(s, dout, din); /* the mask is a diagonal linear map: its own adjoint */
-}
-
-void wv_image_scale(const wv_image *in, float k, wv_image *out) {
-  for (size_t i = 0, n = count(in); i < n; i++) out->data[i] = k * in->data[i];
-}
 
 double wv_image_l1(const wv_image *a, const wv_image *b, wv_image *da) {
   if (a->w != b->w || a->h != b->h || a->c != b->c) return -1.0;
@@ -168,49 +103,7 @@ double wv_image_l1(const wv_image *a, const wv_image *b, wv_image *da) {
   return sum * inv;
 }
 
-/* ---- Gaussian blur and 8-bit quantisation ---- */
-
-wv_status wv_image_blur(const wv_image *in, double sigma, wv_image *out, wv_error *err) {
-  wv_status st = wv_image_alloc(out, in->w, in->h, in->c, err);
-  if (st) return st;
-  size_t n = (size_t)in->w * in->h * in->c;
-  int r = sigma > 0 ? (int)ceil(3 * sigma) : 0;
-  if (r == 0) {
-    for (size_t i = 0; i < n; i++) out->data[i] = in->data[i];
-    return WV_OK;
-  }
-  double *g = malloc(sizeof(double) * (size_t)(2 * r + 1)), gs = 0;
-  float *tmp = malloc(sizeof(float) * n);
-  if (!g || !tmp) {
-    free(g), free(tmp), wv_image_free(out);
-    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a blur");
-  }
-  for (int k = -r; k <= r; k++) gs += g[k + r] = exp(-0.5 * k * k / (sigma * sigma));
-  for (int k = 0; k <= 2 * r; k++) g[k] /= gs;
-  int w = in->w, h = in->h, c = in->c;
-  for (int y = 0; y < h; y++) /* along x into tmp */
-    for (int x = 0; x < w; x++)
-      for (int ch = 0; ch < c; ch++) {
-        double s = 0;
-        for (int k = -r; k <= r; k++) {
-          int xx = x + k < 0 ? 0 : x + k >= w ? w - 1 : x + k;
-          s += g[k + r] * in->data[((size_t)y * w + xx) * c + ch];
-        }
-        tmp[((size_t)y * w + x) * c + ch] = (float)s;
-      }
-  for (int y = 0; y < h; y++) /* along y into out */
-    for (int x = 0; x < w; x++)
-      for (int ch = 0; ch < c; ch++) {
-        double s = 0;
-        for (int k = -r; k <= r; k++) {
-          int yy = y + k < 0 ? 0 : y + k >= h ? h - 1 : y + k;
-          s += g[k + r] * tmp[((size_t)yy * w + x) * c + ch];
-        }
-        out->data[((size_t)y * w + x) * c + ch] = (float)s;
-      }
-  free(g), free(tmp);
-  return WV_OK;
-}
+/* ---- 8-bit quantisation ---- */
 
 void wv_image_quantise8(wv_image *img) {
   size_t n = (size_t)img->w * img->h * img->c;

@@ -8,11 +8,29 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "sampler/sampler.h"
 #include "scene3d/world_internal.h"
+#include "sensor/sensor.h"
 #include "util/hash.h"
 
 #define PI_F 3.14159265358979f
 #define CMJ_DEPTHS 2 /* path vertices whose light and bounce samples are stratified */
+
+/* One sample sequence of a pixel (the capture renderer's sampler, sampler/sampler.h)
+ * and the grid of its spp. */
+typedef struct {
+  wv_pixel_sampler_f ps;
+  int nx, ny;
+} wv_pixel_sampler;
+
+static void wv_pixel_sampler_init(wv_pixel_sampler *p, int px, int py, int spp, int width, uint64_t seed) {
+  wv_pixel_grid(spp, &p->nx, &p->ny);
+  p->ps = wv_pixel_sampler_make(px, py, width, seed);
+}
+
+static void wv_pixel_sampler_at(const wv_pixel_sampler *p, int s, float *sx, float *sy) {
+  wv_sample_at_f(&p->ps, p->nx, p->ny, s, sx, sy);
+}
 
 /* Per-hit fabric parameters after the edits, handed to shade_fabric. */
 typedef struct {
@@ -24,10 +42,10 @@ typedef struct {
  * average of (f_s + f_d) mu_i over n fabric positions (mm), for directions wi
  * (to the light) and wo (to the viewer) in the fabric's local frame (x weft, y
  * warp, z macro normal), with the edits applied. Everything the mesh renderer
- * knows about the fabric model is here: it runs the capture renderer's per-point
- * shading (wv_shade, render_internal.h) with unit light, on a per-thread copy of
- * the prepared fabric when edits change k_d, beta or alpha at this point. When
- * the shared shading kernel lands, its entry point replaces this body. */
+ * knows about the fabric model is here: it runs the shading kernel's scalar
+ * flavour (wv_shade_f, kernel/kernel.h) with unit light, with the parameters of a
+ * per-thread copy of the prepared fabric when edits change k_d, beta or alpha at
+ * this point. */
 static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric_edit *e, const float wi[3],
                          const float wo[3], const float (*pos)[2], int n, float out[3]) {
   out[0] = out[1] = out[2] = 0.0f;
@@ -35,18 +53,19 @@ static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric
   const wv_fabric *f = base;
   if (e->active && scratch) {
     for (int y = 0; y < 2; y++) {
-      for (int c = 0; c < 3; c++) scratch->kd[y][c] = e->kd[y][c];
-      scratch->ym.beta[y] = e->beta[y];
-      scratch->alpha[y] = e->alpha[y];
+      for (int c = 0; c < 3; c++) scratch->P.kd[y][c] = e->kd[y][c];
+      scratch->ym.beta[y] = scratch->P.beta[y] = e->beta[y];
+      wv_shade_params_set_roughness(&scratch->P, y, e->alpha[y]);
     }
     f = scratch;
   }
-  wv_hit h = {0};
-  for (int i = 0; i < 3; i++) h.wi[i] = wi[i], h.wo[i] = wo[i];
-  h.light = 1.0f;
-  wv_dirs d;
-  wv_dirs_from_hit(&h, &d);
-  for (int k = 0; k < n; k++) wv_shade(f, &d, pos[k][0], pos[k][1], out);
+  wv_dirs_f d;
+  wv_dirs_make_f(wi, wo, 1.0f, &d);
+  for (int k = 0; k < n; k++) {
+    float r[3];
+    wv_shade_f(f, &f->P, &d, pos[k][0], pos[k][1], r, NULL);
+    out[0] += r[0], out[1] += r[1], out[2] += r[2];
+  }
   float inv = 1.0f / (float)n;
   out[0] *= inv, out[1] *= inv, out[2] *= inv;
 }
@@ -68,8 +87,8 @@ static void eval_edits(const wv_world_material *m, float u, float v, fabric_edit
   if (!e->active) return;
   const wv_fabric *f = m->fab;
   for (int y = 0; y < 2; y++) {
-    for (int c = 0; c < 3; c++) e->kd[y][c] = f->kd[y][c];
-    e->beta[y] = f->ym.beta[y], e->alpha[y] = f->alpha[y];
+    for (int c = 0; c < 3; c++) e->kd[y][c] = f->P.kd[y][c];
+    e->beta[y] = f->ym.beta[y], e->alpha[y] = f->P.alpha[y];
   }
   for (int i = 0; i < m->nedits; i++) {
     const wv_edit_map *em = &m->edits[i];

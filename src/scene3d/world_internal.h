@@ -4,7 +4,7 @@
 #ifndef WOVEN_WORLD_INTERNAL_H
 #define WOVEN_WORLD_INTERNAL_H
 
-#include "render/render_internal.h"
+#include "kernel/kernel.h"
 #include "tracer/tracer.h"
 #include "woven/emitters.h"
 #include "woven/mesh.h"

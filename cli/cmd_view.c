@@ -1,0 +1,73 @@
+/* woven view: a self-contained HTML viewer of the true woven model. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "woven/export.h"
+#include "woven/view.h"
+
+static const char *HELP =
+    "usage: woven view DIR|P.json -o VIEWER.html [--scene S.json|cylinder|flat45] [--photo PHOTO]\n"
+    "                  [--quiet] [--json]\n"
+    "\n"
+    "Writes one HTML file that shades the true woven model in WebGL (three.js is inside it;\n"
+    "nothing is fetched when it is opened): the capture rig as its camera sees it, a flat\n"
+    "swatch and a draped sheet under studio light, with an orbit camera, a movable light,\n"
+    "sliders for the parameters and a before/after toggle against the photo. See docs/viewer.md.\n"
+    "  DIR            a finished fit's directory: its parameters, scene.json and photo.png\n"
+    "  P.json         a parameter file (the rig: --scene, default flat45)\n"
+    "  --scene S      the capture rig (overrides the fit's scene)\n"
+    "  --photo PHOTO  a photo taken in that rig, for the before/after toggle\n"
+    "Page options (append to the file's URL): ?mode=rig|swatch|drape&spp=N&frames=N&w=W&h=H\n";
+
+int cmd_view(int argc, char **argv) {
+  cli_ctx c = {0, 0, "view"};
+  cli_args a;
+  cli_args_init(&a, argc, argv, c.cmd);
+  const char *in = NULL, *out = NULL, *scene_name = NULL, *photo = NULL;
+  for (const char *s; (s = cli_next(&a));) {
+    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
+      fputs(HELP, stdout);
+      return 0;
+    } else if (cli_is(&a, s, "-o") || cli_is(&a, s, "--output")) {
+      if (!(out = cli_value(&a, "-o"))) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "--scene")) {
+      if (!(scene_name = cli_value(&a, "--scene"))) return EXIT_USAGE;
+    } else if (cli_is(&a, s, "--photo")) {
+      if (!(photo = cli_value(&a, "--photo"))) return EXIT_USAGE;
+    } else if (cli_common_flag(&c, s)) {
+      /* --quiet, -q, --json */
+    } else if (s[0] == '-' && s[1]) {
+      return cli_usage_error(c.cmd, "unknown option '%s'", s);
+    } else if (!in) {
+      in = s;
+    } else {
+      return cli_usage_error(c.cmd, "unexpected argument '%s'", s);
+    }
+  }
+  if (!in) return cli_usage_error(c.cmd, "a fit directory or a parameter file is required");
+  if (!out) return cli_usage_error(c.cmd, "-o VIEWER.html is required");
+  int rc = cli_check_output(c.cmd, out, ".html");
+  if (rc) return rc;
+  wv_error err = {0};
+  wv_source src;
+  if (wv_source_load(in, &src, &err)) return cli_fail(&c, &err);
+  wv_scene scene;
+  if (scene_name) {
+    if (wv_scene_load(scene_name, &scene, &err)) return cli_fail(&c, &err);
+  } else if (src.has_scene) {
+    scene = src.scene;
+  } else if (wv_scene_preset("flat45", &scene, &err)) {
+    return cli_fail(&c, &err);
+  }
+  if (!photo && src.has_photo && !scene_name) photo = src.photo; /* the fit's photo fits the fit's scene */
+  char title[200];
+  snprintf(title, sizeof title, "woven: %s", src.params.pattern);
+  wv_view_opts vo = {&src.params, &scene, photo, title};
+  if (wv_view_write(out, &vo, &err)) return cli_fail(&c, &err);
+  cli_info(&c, "wrote %s (%s, scene %s%s)\n", out, src.params.pattern, scene.name, photo ? ", with the photo" : "");
+  if (c.json)
+    printf("{\"output\": \"%s\", \"pattern\": \"%s\", \"scene\": \"%s\", \"photo\": %s}\n", out, src.params.pattern,
+           scene.name, photo ? "true" : "false");
+  return 0;
+}

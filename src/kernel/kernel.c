@@ -1,0 +1,99 @@
+/* The shading kernel's non-inline parts: preparing a fabric (parameters in
+ * the kernel's float form, the glint table, the weave's packed cells) and the
+ * entry points wv_kernel_shade / wv_kernel_shade8 (kernel/kernel.h). */
+#include "kernel/kernel.h"
+
+#include <math.h>
+#include <string.h>
+
+#define DEG (3.14159265358979323846 / 180.0)
+
+void wv_shade_params_from_yarn(const wv_yarn_model *m, wv_shade_params_f *P) {
+  for (int t = 0; t < 2; t++) {
+    P->beta[t] = m->beta[t];
+    P->uos[t] = m->umax_over_spacing[t];
+    P->ispc[t] = m->inv_spacing[t];
+    P->vsc[t] = m->v_scale[t];
+  }
+  P->sin_psi = m->sin_psi, P->cos_psi = m->cos_psi;
+  P->noise = 0.1f * (float)m->noise_level;
+}
+
+void wv_shade_params_set_roughness(wv_shade_params_f *P, int t, float a) {
+  P->alpha[t] = a;
+  P->k[t] = 1.0f - a * a;
+  P->ia2m1[t] = 1.0f / (a * a) - 1.0f;
+  P->pia[t] = 3.14159265358979f * a;
+  P->ia[t] = 1.0f / a;
+}
+
+wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
+  memset(f, 0, sizeof *f);
+  wv_status st = wv_params_validate(p, err);
+  if (st) return st;
+  if ((st = wv_params_yarn_model(p, &f->ym, err))) return st;
+  wv_shade_params_f *P = &f->P;
+  wv_shade_params_from_yarn(&f->ym, P);
+  for (int t = 0; t < 2; t++) {
+    for (int c = 0; c < 3; c++) {
+      P->kd[t][c] = (float)p->diffuse[t][c];
+      P->ks[t][c] = (float)p->specular[t][c];
+    }
+    wv_shade_params_set_roughness(P, t, (float)p->roughness[t]);
+  }
+  P->blend = (float)p->diffuse_blend;
+  P->thickness = (float)p->thickness;
+  f->glints = p->specular_noise;
+  f->inv_glint_cell[0] = 1.0f / (f->ym.spacing[WV_WARP] / 8.0f);
+  f->inv_glint_cell[1] = 1.0f / (f->ym.spacing[WV_WEFT] / 8.0f);
+  for (int i = 0; i < 4096; i++) {
+    float u = (float)-log(1.0 - (i + 0.5) / 4096.0);
+    f->glint_table[i] = u < 10.0f ? u : 10.0f;
+  }
+  f->seed = (uint64_t)p->seed;
+  return WV_OK;
+}
+
+void wv_shade_params_double(const wv_params *p, wv_shade_params_d *P) {
+  memset(P, 0, sizeof *P);
+  for (int t = 0; t < 2; t++) {
+    double spacing = 25.4 / p->density[t], a = p->roughness[t];
+    P->beta[t] = p->heightfield[t];
+    P->uos[t] = p->inclination_deg * DEG / spacing;
+    P->ispc[t] = 1.0 / spacing;
+    P->vsc[t] = 3.14159265358979323846 / (spacing * p->yarn_width);
+    P->alpha[t] = a;
+    P->k[t] = 1.0 - a * a;
+    P->ia2m1[t] = 1.0 / (a * a) - 1.0;
+    P->pia[t] = 3.14159265358979323846 * a;
+    P->ia[t] = 1.0 / a;
+    for (int c = 0; c < 3; c++) P->kd[t][c] = p->diffuse[t][c], P->ks[t][c] = p->specular[t][c];
+  }
+  P->sin_psi = sin(p->twist_deg * DEG), P->cos_psi = cos(p->twist_deg * DEG);
+  P->noise = 0.1 * (double)p->noise_level;
+  P->blend = p->diffuse_blend, P->thickness = p->thickness;
+}
+
+void wv_kernel_shade(const wv_fabric *f, float x, float y, const float wi[3], const float wo[3], float out[3]) {
+  out[0] = out[1] = out[2] = 0.0f;
+  if (!(wi[2] > 0.0f && wo[2] > 0.0f)) return;
+  wv_dirs_f d;
+  wv_dirs_make_f(wi, wo, 1.0f, &d);
+  wv_shade_f(f, &f->P, &d, x, y, out, NULL);
+}
+
+WV_SIMD_CLONES
+void wv_kernel_shade8(const wv_fabric *f, const float x[8], const float y[8], const float wi[3][8],
+                      const float wo[3][8], float out[3][8]) {
+  wv_f8 px, py, vi[3], vo[3], rad[3];
+  memcpy(&px, x, sizeof px), memcpy(&py, y, sizeof py);
+  for (int k = 0; k < 3; k++) memcpy(&vi[k], wi[k], sizeof vi[k]), memcpy(&vo[k], wo[k], sizeof vo[k]);
+  wv_i8 up = (vi[2] > 0.0f) & (vo[2] > 0.0f);
+  wv_dirs_8 d;
+  wv_dirs_make_8(vi, vo, wv_splat8(1.0f), &d);
+  wv_shade_8(f, &f->P, &d, px, py, rad, NULL);
+  for (int k = 0; k < 3; k++) {
+    rad[k] = wv_sel(up, rad[k], wv_splat8(0.0f));
+    memcpy(out[k], &rad[k], sizeof rad[k]);
+  }
+}

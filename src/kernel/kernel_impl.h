@@ -1,0 +1,388 @@
+/* The shading model, written once: yarn geometry (SPEC section 3), SGGX /
+ * SpongeCake specular and blended Lambert diffuse (section 4), and their
+ * derivatives with respect to the continuous parameters. A lane template (see
+ * kernel/lanes.h), instantiated by kernel/kernel.h as wv_*_f (float),
+ * wv_*_8 (8-wide) and wv_*_d (double shading, float positions).
+ *
+ * Value lines are in the order and form every renderer has always used (that
+ * order is what makes all paths bit-identical). Each derivative sits right
+ * under the value it differentiates, in a comment-quoted "d(value = ...)"
+ * line: forward mode through the geometry (tangents of the normal and fiber
+ * direction with respect to beta, u_max and psi), partial derivatives inside
+ * the BRDF (with respect to t.wi, t.wo, t.h, n.wi, alpha and the blend), and
+ * the chain rule where the two meet (wv_shade). Derivatives are only computed
+ * when the caller asks (a NULL pointer removes them after inlining). */
+
+#if WV_LANE == WV_LANE_D
+#define K_PARAMS wv_shade_params_d
+#else
+#define K_PARAMS wv_shade_params_f
+#endif
+
+/* Per-type parameter picked per lane: warp ? a : b. */
+WV_INLINE WV_L WV_FN(wv_pick)(WV_M warp, WV_R a, WV_R b) { return wv_sel(warp, WV_B(a), WV_B(b)); }
+WV_INLINE WV_P WV_FN(wv_pickp)(WV_M warp, float a, float b) { return wv_sel(warp, WV_PB(a), WV_PB(b)); }
+
+/* ======================= yarn geometry: the cell ======================= */
+
+/* The visible yarn at fabric points (x, y) mm: which float, and where in it.
+ * Nothing here depends on a continuous parameter (positions stay in float in
+ * every flavour, so all flavours see the same cells). */
+typedef struct {
+  WV_M ok;           /* 0: a coordinate is beyond the lane type's integer range (8-wide only) */
+  WV_M warp;         /* a warp yarn (else weft) */
+  WV_M lit;          /* on a yarn (not in a gap between yarns) */
+  WV_I row, col;     /* the cell (rows grow toward -y, columns toward +x) */
+  WV_I index;        /* the cell's index in its float */
+  WV_P a, l;         /* mm across the yarn from its centre line, along it from the float's centre */
+  WV_P len;          /* float length L in cells */
+  WV_P half_w, half_len; /* half the yarn's width and the float's half length, mm */
+} WV_FN(wv_yarn_cell);
+
+WV_INLINE void WV_FN(wv_yarn_locate)(const wv_yarn_model *m, WV_P x, WV_P y, WV_FN(wv_yarn_cell) * c) {
+  const float dx = m->spacing[WV_WARP], dy = m->spacing[WV_WEFT];
+  WV_P r = -y * m->inv_spacing[WV_WEFT], cc = x * m->inv_spacing[WV_WARP];
+  c->ok = wv_indexable(r) & wv_indexable(cc);
+  if (!wv_all(c->ok)) return;
+  WV_I I = wv_floori(r), J = wv_floori(cc);
+  WV_P fr = r - wv_itof(I), fc = cc - wv_itof(J);
+  /* the weave's segment table (wv_weave_at), one packed word per lookup */
+  WV_I ci = wv_modn(I, m->weave.rows) * WV_WEAVE_MAX + wv_modn(J, m->weave.cols);
+  WV_I pk = (WV_I)wv_gather32(m->cellpack, ci);
+  WV_I ty = pk & 0xff, len = (pk >> 8) & 0xff, idx = pk >> 16;
+  c->warp = ty == WV_WARP;
+  c->row = I, c->col = J, c->index = idx;
+  WV_P L = wv_itof(len), kk = wv_itof(idx);
+  c->len = L;
+  /* Local coordinates (see yarn.h for the frame): warp a = x - x_centre, l toward
+   * +y; weft: the same turned by -90 degrees about z. */
+  c->a = wv_sel(c->warp, (fc - 0.5f) * dx, (fr - 0.5f) * dy);
+  c->l = wv_sel(c->warp, -((kk + fr) - 0.5f * L) * dy, ((kk + fc) - 0.5f * L) * dx);
+  c->half_w = WV_FN(wv_pickp)(c->warp, 0.5f * dx * m->width, 0.5f * dy * m->width);
+  c->half_len = 0.5f * L * WV_FN(wv_pickp)(c->warp, dy, dx);
+  c->lit = wv_not(wv_abs(c->a) > c->half_w); /* |a| > w/2: a gap narrower than the spacing */
+}
+
+/* v, or v mod period when the identities repeat (tiled maps). */
+WV_INLINE WV_I WV_FN(wv_wrap)(WV_I v, int period) { return period > 0 ? wv_modn(v, period) : v; }
+
+/* The visible segment's identity (a hash of type, yarn index, float start, seed). */
+WV_INLINE WV_U WV_FN(wv_yarn_segment)(const wv_yarn_model *m, const WV_FN(wv_yarn_cell) * c) {
+  const int pr = m->period_rows, pc = m->period_cols;
+  WV_U ha = wv_selu(c->warp, wv_tou64(WV_FN(wv_wrap)(c->col, pc)) << 1,
+                    (wv_tou64(WV_FN(wv_wrap)(c->row, pr)) << 1) | 1);
+  WV_U hb = wv_tou64(wv_seli(c->warp, WV_FN(wv_wrap)(c->row - c->index, pr), WV_FN(wv_wrap)(c->col - c->index, pc)));
+  return wv_hash2g(ha, hb, m->seed);
+}
+
+/* ================== yarn geometry: the bent-cylinder frame ================== */
+
+/* The frame in the yarn's local frame (yarn along +y; for a weft yarn the
+ * fabric frame turned by -90 degrees about z: fabric (x, y, z) = local (y, -x, z)). */
+typedef struct {
+  WV_L n[3], t[3]; /* unit normal and fiber tangent after heightfield scaling, local frame */
+  WV_L u, v;       /* inclination along and angle around the yarn (radians) */
+  WV_L beta;       /* the segment's heightfield scaling after noise U_n */
+} WV_FN(wv_yarn_frame);
+
+/* Tangents of the frame (forward mode, WV_T_*), local frame. */
+typedef struct {
+  WV_L dn[2][3]; /* d n / d beta, d n / d u_max */
+  WV_L dt[3][3]; /* d t / d beta, d t / d u_max, d t / d psi */
+} WV_FN(wv_yarn_dframe);
+
+/* d(w = v / |v|) for a change dv of v: (dv - w (w . dv)) / |v|; il = 1 / |v|. */
+WV_INLINE void WV_FN(wv_dnormalize)(const WV_L w[3], WV_L il, const WV_L dv[3], WV_L out[3]) {
+  WV_L wd = w[0] * dv[0] + w[1] * dv[1] + w[2] * dv[2];
+  for (int i = 0; i < 3; i++) out[i] = (dv[i] - w[i] * wd) * il;
+}
+
+/* The frame at angles u (along the yarn) and v (around it), twist psi, after
+ * scaling by the segment's bs; du and dbs: d u / d u_max and d bs / d beta. */
+WV_INLINE void WV_FN(wv_yarn_bend)(WV_L u, WV_L du, WV_L v, WV_L bs, WV_L dbs, WV_R sp, WV_R cp,
+                                   WV_FN(wv_yarn_frame) * f, WV_FN(wv_yarn_dframe) * df) {
+  f->u = u, f->v = v, f->beta = bs;
+  /* Bent cylinder along +y, before heightfield scaling. */
+  WV_L su = wv_sin(u), cu = wv_cos(u), sv = wv_sin(v), cv = wv_cos(v);
+  WV_L dsu = cu * du, dcu = -su * du; /* d(su = sin u), d(cu = cos u) per u_max (exact derivatives) */
+  WV_L n0 = sv, n1 = su * cv, n2 = cu * cv;
+  WV_L dn1_u = dsu * cv, dn2_u = dcu * cv; /* d(n1 = su cv), d(n2 = cu cv) / d u_max */
+  WV_L t0 = -cv * sp, t1 = cu * cp + su * sv * sp, t2 = -su * cp + cu * sv * sp;
+  WV_L dt1_u = dcu * cp + dsu * sv * sp, dt2_u = -dsu * cp + dcu * sv * sp; /* d(t1, t2) / d u_max */
+  WV_L dt0_p = -cv * cp, dt1_p = -cu * sp + su * sv * cp, dt2_p = su * sp + cu * sv * cp; /* d(t0, t1, t2) / d psi */
+  /* Heightfield scaling: n' = normalize(bs n_x, bs n_y, n_z), t' = normalize(t_x, t_y, bs t_z)
+   * (SPEC's k = 1/beta rescaling of t, in a form without 0/0 at t_z = 0: docs/model.md). */
+  WV_L nx = bs * n0, ny = bs * n1, nz = n2;
+  WV_L dmn[2][3] = {{dbs * n0, dbs * n1, WV_B(0)}, /* d(nx = bs n0, ny = bs n1, nz = n2) / d beta */
+                    {WV_B(0), bs * dn1_u, dn2_u}}; /*                                  / d u_max */
+  WV_L ln2 = nx * nx + ny * ny + nz * nz;
+  WV_M flat = ln2 < 1e-24f; /* yarn silhouette flattened completely: face up */
+  nx = wv_sel(flat, WV_B(0), nx), ny = wv_sel(flat, WV_B(0), ny), nz = wv_sel(flat, WV_B(1), nz);
+  ln2 = wv_sel(flat, WV_B(1), ln2);
+  WV_L il = 1.0f / wv_sqrt(ln2);
+  f->n[0] = nx * il, f->n[1] = ny * il, f->n[2] = nz * il;
+  if (df) /* d(n = m / |m|), 0 where the normal was replaced */
+    for (int p = 0; p < 2; p++) {
+      WV_FN(wv_dnormalize)(f->n, il, dmn[p], df->dn[p]);
+      for (int i = 0; i < 3; i++) df->dn[p][i] = wv_sel(flat, WV_B(0), df->dn[p][i]);
+    }
+  WV_L tx = t0, ty = t1, tz = bs * t2;
+  WV_L dmt[3][3] = {{WV_B(0), WV_B(0), dbs * t2},        /* d(tx = t0, ty = t1, tz = bs t2) / d beta */
+                    {WV_B(0), dt1_u, bs * dt2_u},        /*                                / d u_max */
+                    {dt0_p, dt1_p, bs * dt2_p}};         /*                                / d psi */
+  WV_L lt2 = tx * tx + ty * ty + tz * tz;
+  WV_M up = lt2 < 1e-24f; /* fiber along z at beta 0: any in-plane tangent is valid */
+  tx = wv_sel(up, WV_B(0), tx), ty = wv_sel(up, WV_B(1), ty), tz = wv_sel(up, WV_B(0), tz);
+  lt2 = wv_sel(up, WV_B(1), lt2);
+  WV_L it = 1.0f / wv_sqrt(lt2);
+  f->t[0] = tx * it, f->t[1] = ty * it, f->t[2] = tz * it;
+  if (df) /* d(t = m_t / |m_t|), 0 where the tangent was replaced */
+    for (int p = 0; p < 3; p++) {
+      WV_FN(wv_dnormalize)(f->t, it, dmt[p], df->dt[p]);
+      for (int i = 0; i < 3; i++) df->dt[p][i] = wv_sel(up, WV_B(0), df->dt[p][i]);
+    }
+}
+
+/* The frame of the yarn in cell c: the segment's noise, the angles u and v, the bent cylinder. */
+WV_INLINE void WV_FN(wv_yarn_shape)(const wv_yarn_model *m, const K_PARAMS *P, const WV_FN(wv_yarn_cell) * c,
+                                    WV_FN(wv_yarn_frame) * f, WV_FN(wv_yarn_dframe) * df) {
+  const WV_M warp = c->warp;
+  /* Segment noise U_n: beta_s = max(0, beta (1 + 0.1 Q (2 xi - 1))), xi per segment. */
+  WV_L bs = WV_FN(wv_pick)(warp, P->beta[WV_WARP], P->beta[WV_WEFT]);
+  WV_L dbs = WV_B(1); /* d bs / d beta */
+  if (m->noise_level > 0) {
+    WV_L xi = WV_LP(wv_u01g(wv_mix64g(WV_FN(wv_yarn_segment)(m, c) ^ 0x5851f42d4c957f2dULL)));
+    WV_L fn = 1.0f + P->noise * (2.0f * xi - 1.0f);
+    bs = bs * fn;
+    dbs = fn; /* d(bs = beta fn) */
+    bs = wv_sel(bs > 0.0f, bs, WV_B(0));
+    dbs = wv_sel(dbs > 0.0f, dbs, WV_B(0)); /* d(bs = max(0, bs)): fn >= 0, one-sided at beta = 0 */
+  }
+  /* u = l / (L spacing_along / 2) u_max, v = a / (w/2) pi/2, without divisions */
+  WV_L l2 = WV_LP(c->l) * (2.0f * (1.0f / WV_LP(c->len)));
+  WV_L u = l2 * WV_FN(wv_pick)(warp, P->uos[WV_WEFT], P->uos[WV_WARP]);
+  WV_L du = l2 * WV_FN(wv_pick)(warp, P->ispc[WV_WEFT], P->ispc[WV_WARP]); /* d(u = l2 u_max / spacing) / d u_max */
+  WV_L v = WV_LP(c->a) * WV_FN(wv_pick)(warp, P->vsc[WV_WARP], P->vsc[WV_WEFT]);
+  WV_FN(wv_yarn_bend)(u, du, v, bs, dbs, P->sin_psi, P->cos_psi, f, df);
+}
+
+/* A direction in the fabric frame seen in the yarn's local frame: weft
+ * (x, y, z) -> (-y, x, z). Dot products with it equal, bit for bit, those of
+ * the frame turned into the fabric frame (the same two products are added
+ * first, in the other order). */
+WV_INLINE void WV_FN(wv_to_local)(WV_M warp, const WV_L w[3], WV_L out[3]) {
+  out[0] = wv_sel(warp, w[0], -w[1]);
+  out[1] = wv_sel(warp, w[1], w[0]);
+  out[2] = w[2];
+}
+/* The other way: a local vector in the fabric frame, weft (x, y, z) -> (y, -x, z). */
+WV_INLINE void WV_FN(wv_to_fabric)(WV_M warp, const WV_L v[3], WV_L out[3]) {
+  WV_L v0 = v[0];
+  out[0] = wv_sel(warp, v0, v[1]);
+  out[1] = wv_sel(warp, v[1], -v0);
+  out[2] = v[2];
+}
+
+/* ======================= BRDF: SGGX / SpongeCake ======================= */
+
+/* SGGX projected area for fiber-like flakes around t, wt = w.t, k = 1 - alpha^2:
+ * sigma(w) = sqrt(w_b^2 + w_n^2 + alpha^2 w_t^2) = sqrt(1 - (1 - alpha^2)(w.t)^2). */
+WV_INLINE WV_L WV_FN(wv_sggx_sigma)(WV_L k, WV_L wt) {
+  WV_L s2 = 1.0f - k * wt * wt;
+  return wv_sqrt(wv_sel(s2 > 0.0f, s2, WV_B(0)));
+}
+/* SGGX flake normal density at unit h, ht = h.t:
+ * D(h) = 1 / (pi alpha (h_b^2 + h_n^2 + h_t^2/alpha^2)^2) = 1 / (pi alpha q^2),
+ * q = 1 + (1/alpha^2 - 1) ht^2; pia = pi alpha, ia2m1 = 1/alpha^2 - 1. */
+WV_INLINE WV_L WV_FN(wv_sggx_q)(WV_L ia2m1, WV_L ht) { return 1.0f + ia2m1 * ht * ht; }
+WV_INLINE WV_L WV_FN(wv_sggx_D)(WV_L pia, WV_L q) { return 1.0f / (pia * q * q); }
+
+/* Partial derivatives of the specular factor. */
+typedef struct {
+  WV_L ti, to, th, alpha;
+} WV_FN(wv_spec_partials);
+
+/* SpongeCake single scattering times mu_i, without k_s, times the glint g:
+ *   spec = g D(h) (1 - exp(-T A)) / (4 mu_o A),  A = sigma(wi) / mu_i + sigma(wo) / mu_o,
+ * from ti = t.wi, to = t.wo, th = t.h (h the unit half vector), mi = mu_i > 0,
+ * mo = mu_o > 0. Per type: k = 1 - alpha^2, ia2m1 = 1/alpha^2 - 1, pia = pi alpha,
+ * ia = 1/alpha (for the derivative). Partials in S when non-NULL. */
+WV_INLINE WV_L WV_FN(wv_spongecake)(WV_L ti, WV_L to, WV_L th, WV_L mi, WV_L mo, WV_L alpha, WV_L k, WV_L ia2m1,
+                                    WV_L pia, WV_L ia, WV_R thickness, WV_L g, WV_FN(wv_spec_partials) * S) {
+  /* (Partials nobody asks for are dropped by the compiler after inlining.) */
+  WV_L si = WV_FN(wv_sggx_sigma)(k, ti), so = WV_FN(wv_sggx_sigma)(k, to);
+  /* d(si = sqrt(1 - k ti^2)) = (-k ti dti + alpha ti^2 dalpha) / si, as k = 1 - alpha^2; 0 where si = 0 */
+  WV_L isi = wv_sel(si > 0.0f, 1.0f / si, WV_B(0)), iso = wv_sel(so > 0.0f, 1.0f / so, WV_B(0));
+  WV_L si_ti = -k * ti * isi, si_al = alpha * ti * ti * isi, so_to = -k * to * iso, so_al = alpha * to * to * iso;
+  WV_L A = si / mi + so / mo;
+  /* d(A = si / mi + so / mo) */
+  WV_L A_ti = si_ti / mi, A_to = so_to / mo, A_al = si_al / mi + so_al / mo;
+  WV_L q = WV_FN(wv_sggx_q)(ia2m1, th);
+  /* d(q = 1 + (1/alpha^2 - 1) th^2) = 2 (1/alpha^2 - 1) th dth - 2 th^2 / alpha^3 dalpha */
+  WV_L q_th = 2.0f * ia2m1 * th, q_al = -2.0f * th * th * ia * ia * ia;
+  WV_L D = WV_FN(wv_sggx_D)(pia, q);
+  /* d(D = 1 / (pi alpha q^2)) / D = -2 dq / q - dalpha / alpha */
+  WV_L lD_q = -2.0f / q, lD_al = -ia;
+  WV_L E = wv_exp(-thickness * A);
+  /* d(E = exp(-T A)) / (1 - E) = -T E / (1 - E) dA; 0 where E = 1 (A = 0) */
+  WV_L lE_A = wv_sel(E < 1.0f, -thickness * E / (1.0f - E), WV_B(0));
+  WV_L spec = wv_sel(A > 0.0f, D * (1.0f - E) / (4.0f * mo * A), WV_B(0)) * g;
+  /* d(spec = g D (1 - E) / (4 mo A)) = spec (dD / D - dE / (1 - E) - dA / A) */
+  WV_L s_A = wv_sel(A > 0.0f, spec * (-lE_A - 1.0f / A), WV_B(0)), s_q = spec * lD_q;
+  if (S) {
+    S->ti = s_A * A_ti, S->to = s_A * A_to, S->th = s_q * q_th;
+    S->alpha = s_A * A_al + s_q * q_al + spec * lD_al;
+  }
+  return spec;
+}
+
+/* Blended Lambert times mu_i, without k_d: (w max(0, ni) + (1 - w) mu_i) / pi,
+ * ni = n.wi; with its partials d / d ni and d / d w when asked. */
+WV_INLINE WV_L WV_FN(wv_diffuse)(WV_L ni, WV_L mi, WV_R blend, WV_L *d_ni, WV_L *d_blend) {
+  const WV_R inv_pi = (WV_R)1 / (WV_R)3.14159265358979323846;
+  WV_L nip = wv_sel(ni > 0.0f, ni, WV_B(0));
+  WV_L diff = (blend * nip + (1.0f - blend) * mi) * inv_pi;
+  /* d(diff = (w nip + (1 - w) mi) / pi), nip = max(0, ni): w / pi d ni where ni > 0, (nip - mi) / pi d w */
+  if (d_ni) *d_ni = wv_sel(ni > 0.0f, WV_B(blend * inv_pi), WV_B(0));
+  if (d_blend) *d_blend = (nip - mi) * inv_pi;
+  return diff;
+}
+
+/* ============================ the sample ============================ */
+
+/* Light and view at the shaded points, fabric tangent frame (z = macro normal):
+ * unit wi (to light), wo (to camera), h = normalize(wi + wo); mi = wi.z,
+ * mo = wo.z (both > 0); light = I / r^2. */
+typedef struct {
+  WV_L wi[3], wo[3], h[3];
+  WV_L mi, mo, light;
+} WV_FN(wv_dirs);
+
+WV_INLINE void WV_FN(wv_dirs_make)(const WV_L wi[3], const WV_L wo[3], WV_L light, WV_FN(wv_dirs) * d) {
+  WV_L h[3], l2 = WV_B(0);
+  for (int i = 0; i < 3; i++) {
+    d->wi[i] = wi[i], d->wo[i] = wo[i];
+    h[i] = wi[i] + wo[i];
+    l2 += h[i] * h[i];
+  }
+  WV_L il = wv_sel(l2 > 0.0f, 1.0f / wv_sqrt(wv_sel(l2 > 0.0f, l2, WV_B(1))), WV_B(0));
+  for (int i = 0; i < 3; i++) d->h[i] = h[i] * il;
+  d->mi = wi[2], d->mo = wo[2], d->light = light;
+}
+
+/* Per lane, what the gradient renderer sums (already times the light): the
+ * specular and diffuse factors radiance is linear in (radiance of channel c =
+ * ks[type][c] S + kd[type][c] DF) and their derivatives with respect to the
+ * non-linear parameters of the lane's yarn type (WV_J_* in kernel/kernel.h).
+ * 0 in a gap. */
+typedef struct {
+  WV_M warp;
+  WV_L J[WV_J_COUNT];
+} WV_FN(wv_shade_grad);
+
+/* Glint factor U_s = min(-ln xi, 10), xi hashed on a grid of 1/8 of the yarn spacing. */
+WV_INLINE WV_L WV_FN(wv_glint)(const wv_fabric *fab, WV_P x, WV_P y) {
+  if (!fab->glints) return WV_B(1);
+  WV_U g = wv_hash2g(wv_tou64(wv_floori(x * fab->inv_glint_cell[0])), wv_tou64(wv_floori(y * fab->inv_glint_cell[1])),
+                     fab->seed ^ 0x676c696eULL);
+  return WV_LP(wv_gatherf(fab->glint_table, g >> 52));
+}
+
+#if WV_LANE == WV_LANE_8
+WV_INLINE void wv_shade_lanewise_8(const wv_fabric *fab, const wv_shade_params_f *P, const wv_dirs_8 *d, wv_f8 x,
+                                   wv_f8 y, wv_f8 rad[3], wv_shade_grad_8 *G);
+#endif
+
+/* Radiance of the points (x, y) mm under the light and view d: per channel in
+ * rad (0 in a gap). With G, also what the gradient sums. */
+WV_INLINE void WV_FN(wv_shade)(const wv_fabric *fab, const K_PARAMS *P, const WV_FN(wv_dirs) * d, WV_P x, WV_P y,
+                               WV_L rad[3], WV_FN(wv_shade_grad) * G) {
+  const wv_yarn_model *m = &fab->ym;
+  WV_FN(wv_yarn_cell) c;
+  WV_FN(wv_yarn_locate)(m, x, y, &c);
+#if WV_LANE == WV_LANE_8
+  if (!wv_all(c.ok)) { /* beyond 32-bit cell indices: lane by lane in scalar float */
+    wv_shade_lanewise_8(fab, P, d, x, y, rad, G);
+    return;
+  }
+#endif
+  if (G) {
+    G->warp = c.warp;
+    for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = WV_B(0);
+  }
+  for (int ch = 0; ch < 3; ch++) rad[ch] = WV_B(0);
+  if (!wv_any(c.lit)) return;
+  const WV_M warp = c.warp;
+  WV_FN(wv_yarn_frame) f;
+  WV_FN(wv_yarn_dframe) df;
+  WV_FN(wv_yarn_shape)(m, P, &c, &f, G ? &df : NULL);
+
+  /* the directions in the yarn's frame */
+  WV_L wi[3], wo[3], h[3];
+  WV_FN(wv_to_local)(warp, d->wi, wi);
+  WV_FN(wv_to_local)(warp, d->wo, wo);
+  WV_FN(wv_to_local)(warp, d->h, h);
+  WV_L ti = f.t[0] * wi[0] + f.t[1] * wi[1] + f.t[2] * wi[2];
+  WV_L to = f.t[0] * wo[0] + f.t[1] * wo[1] + f.t[2] * wo[2];
+  WV_L th = f.t[0] * h[0] + f.t[1] * h[1] + f.t[2] * h[2];
+  WV_L ni = wi[0] * f.n[0] + wi[1] * f.n[1] + wi[2] * f.n[2];
+
+  WV_L alpha = WV_FN(wv_pick)(warp, P->alpha[WV_WARP], P->alpha[WV_WEFT]);
+  WV_L k = WV_FN(wv_pick)(warp, P->k[WV_WARP], P->k[WV_WEFT]);
+  WV_L ia2m1 = WV_FN(wv_pick)(warp, P->ia2m1[WV_WARP], P->ia2m1[WV_WEFT]);
+  WV_L pia = WV_FN(wv_pick)(warp, P->pia[WV_WARP], P->pia[WV_WEFT]);
+  WV_L ia = WV_FN(wv_pick)(warp, P->ia[WV_WARP], P->ia[WV_WEFT]);
+  WV_FN(wv_spec_partials) S;
+  WV_L spec = WV_FN(wv_spongecake)(ti, to, th, d->mi, d->mo, alpha, k, ia2m1, pia, ia, P->thickness,
+                                   WV_FN(wv_glint)(fab, x, y), G ? &S : NULL);
+  WV_L diff_ni, diff_w;
+  WV_L diff = WV_FN(wv_diffuse)(ni, d->mi, P->blend, G ? &diff_ni : NULL, G ? &diff_w : NULL);
+  for (int ch = 0; ch < 3; ch++) {
+    WV_L ks = WV_FN(wv_pick)(warp, P->ks[WV_WARP][ch], P->ks[WV_WEFT][ch]);
+    WV_L kd = WV_FN(wv_pick)(warp, P->kd[WV_WARP][ch], P->kd[WV_WEFT][ch]);
+    rad[ch] = wv_sel(c.lit, d->light * (ks * spec + kd * diff), WV_B(0));
+  }
+  if (!G) return;
+
+  /* The chain rule: d(ti = t.wi) = dt.wi and so on, with the frame's tangents. */
+  WV_L ds[3], dd[2];
+  for (int p = 0; p < 3; p++) {
+    const WV_L *dt = df.dt[p];
+    WV_L dti = dt[0] * wi[0] + dt[1] * wi[1] + dt[2] * wi[2];
+    WV_L dto = dt[0] * wo[0] + dt[1] * wo[1] + dt[2] * wo[2];
+    WV_L dth = dt[0] * h[0] + dt[1] * h[1] + dt[2] * h[2];
+    ds[p] = S.ti * dti + S.to * dto + S.th * dth; /* d spec */
+  }
+  for (int p = 0; p < 2; p++) {
+    const WV_L *dn = df.dn[p];
+    dd[p] = diff_ni * (wi[0] * dn[0] + wi[1] * dn[1] + wi[2] * dn[2]); /* d(diff) through d(ni = n.wi) */
+  }
+  WV_L J[WV_J_COUNT];
+  J[WV_J_S] = spec, J[WV_J_DF] = diff;
+  J[WV_J_S_BETA] = ds[WV_T_BETA], J[WV_J_S_ALPHA] = S.alpha, J[WV_J_S_UMAX] = ds[WV_T_UMAX];
+  J[WV_J_S_PSI] = ds[WV_T_PSI], J[WV_J_DF_BETA] = dd[WV_T_BETA], J[WV_J_DF_UMAX] = dd[WV_T_UMAX];
+  J[WV_J_DF_BLEND] = diff_w;
+  for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(c.lit, d->light * J[j], WV_B(0));
+}
+
+#if WV_LANE == WV_LANE_8
+/* wv_shade_8 one lane at a time with the scalar float kernel (64-bit cells). */
+WV_INLINE void wv_shade_lanewise_8(const wv_fabric *fab, const wv_shade_params_f *P, const wv_dirs_8 *d, wv_f8 x,
+                                   wv_f8 y, wv_f8 rad[3], wv_shade_grad_8 *G) {
+  for (int i = 0; i < WV_LANES; i++) {
+    wv_dirs_f di;
+    for (int k = 0; k < 3; k++) di.wi[k] = d->wi[k][i], di.wo[k] = d->wo[k][i], di.h[k] = d->h[k][i];
+    di.mi = d->mi[i], di.mo = d->mo[i], di.light = d->light[i];
+    float r[3];
+    wv_shade_grad_f g;
+    wv_shade_f(fab, P, &di, x[i], y[i], r, G ? &g : NULL);
+    for (int k = 0; k < 3; k++) rad[k][i] = r[k];
+    if (G) {
+      G->warp[i] = g.warp ? -1 : 0;
+      for (int j = 0; j < WV_J_COUNT; j++) G->J[j][i] = g.J[j];
+    }
+  }
+}
+#endif
+
+#undef K_PARAMS

@@ -1,0 +1,109 @@
+/* The camera rig of a capture scene (camera, shape, light) prepared for
+ * tracing, per-pixel footprints (made per render, or once for many renders of
+ * one geometry: wv_footprints), and wv_render_fabric_at. */
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sensor/sensor.h"
+
+static void normalize3(float v[3]) {
+  float l = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  v[0] /= l, v[1] /= l, v[2] /= l;
+}
+
+void wv_rig_prepare(const wv_scene *s, wv_camera_rig *r) {
+  memset(r, 0, sizeof *r);
+  r->width = s->width, r->height = s->height;
+  float up[3];
+  for (int i = 0; i < 3; i++) {
+    r->cpos[i] = (float)s->cam_pos[i];
+    r->fwd[i] = (float)(s->cam_look_at[i] - s->cam_pos[i]);
+    up[i] = (float)s->cam_up[i];
+    r->lpos[i] = (float)s->light_pos[i];
+  }
+  normalize3(r->fwd);
+  /* right = fwd x up, true up = right x fwd */
+  r->right[0] = r->fwd[1] * up[2] - r->fwd[2] * up[1];
+  r->right[1] = r->fwd[2] * up[0] - r->fwd[0] * up[2];
+  r->right[2] = r->fwd[0] * up[1] - r->fwd[1] * up[0];
+  normalize3(r->right);
+  r->up[0] = r->right[1] * r->fwd[2] - r->right[2] * r->fwd[1];
+  r->up[1] = r->right[2] * r->fwd[0] - r->right[0] * r->fwd[2];
+  r->up[2] = r->right[0] * r->fwd[1] - r->right[1] * r->fwd[0];
+  r->tan_half = (float)tan(0.5 * s->vfov_deg * 3.14159265358979323846 / 180.0);
+  r->aspect = (float)s->width / (float)s->height;
+  wv_shape_prepare(s, &r->shape);
+  r->lint = (float)s->light_intensity;
+}
+
+WV_SIMD_CLONES
+void wv_footprint_prepare(const wv_camera_rig *rig, int px, int py, wv_footprint *fp) {
+  if (rig->cache) {
+    *fp = rig->cache[(size_t)py * rig->width + px];
+    return;
+  }
+  /* one 8-wide trace: the centre, then the corners (0,0), (1,0), (0,1), (1,1) */
+  wv_f8 x = (float)px + (wv_f8){0.5f, 0, 1, 0, 1, 0.5f, 0.5f, 0.5f};
+  wv_f8 y = (float)py + (wv_f8){0.5f, 0, 0, 1, 1, 0.5f, 0.5f, 0.5f};
+  wv_hit_8 h;
+  wv_trace_8(rig, x, y, &h);
+  fp->fast = (wv_bits_8(h.hit) & 0x1f) == 0x1f;
+  for (int i = 0; i < 4; i++) fp->fx[i] = h.fx[i + 1], fp->fy[i] = h.fy[i + 1];
+  if (h.hit[0]) {
+    float wi[3] = {h.wi[0][0], h.wi[1][0], h.wi[2][0]}, wo[3] = {h.wo[0][0], h.wo[1][0], h.wo[2][0]};
+    wv_dirs_make_f(wi, wo, h.light[0], &fp->dirs);
+  } else {
+    memset(&fp->dirs, 0, sizeof fp->dirs);
+  }
+}
+
+int wv_render_fabric_at(const wv_scene *s, double x, double y, double f[2]) {
+  wv_camera_rig rig;
+  wv_rig_prepare(s, &rig);
+  wv_hit_f hit;
+  wv_trace_f(&rig, (float)x, (float)y, &hit);
+  if (!hit.hit) return 0;
+  f[0] = hit.fx, f[1] = hit.fy;
+  return 1;
+}
+
+struct wv_footprints {
+  wv_camera_rig rig; /* the geometry they were made for (cache NULL) */
+  wv_footprint *fp;  /* width x height */
+};
+
+wv_status wv_footprints_create(const wv_scene *s, int threads, wv_footprints **out, wv_error *err) {
+  *out = NULL;
+  wv_status st = wv_scene_validate(s, err);
+  if (st) return st;
+  wv_footprints *f = calloc(1, sizeof *f);
+  if (f) f->fp = malloc(sizeof *f->fp * (size_t)s->width * s->height);
+  if (!f || !f->fp) {
+    free(f);
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for the footprints of %d x %d pixels", s->width, s->height);
+  }
+  wv_rig_prepare(s, &f->rig);
+  threads = threads > 0 ? threads : omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+  for (int py = 0; py < s->height; py++)
+    for (int px = 0; px < s->width; px++) wv_footprint_prepare(&f->rig, px, py, &f->fp[(size_t)py * s->width + px]);
+  *out = f;
+  return WV_OK;
+}
+
+void wv_footprints_free(wv_footprints *f) {
+  if (!f) return;
+  free(f->fp);
+  free(f);
+}
+
+wv_status wv_rig_prepare_opts(const wv_scene *s, const wv_render_opts *opt, wv_camera_rig *rig, wv_error *err) {
+  wv_rig_prepare(s, rig);
+  if (!opt || !opt->footprints) return WV_OK;
+  if (memcmp(rig, &opt->footprints->rig, sizeof *rig))
+    return wv_fail(err, WV_ERR_INVALID, "render: the footprints were made for another scene geometry");
+  rig->cache = opt->footprints->fp;
+  return WV_OK;
+}

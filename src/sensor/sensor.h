@@ -1,0 +1,69 @@
+/* The sensor side of a capture scene: the camera rig (pinhole camera, the
+ * sample's shape, the point light) with its ray tracing in scalar and 8-wide
+ * form (sensor/trace_impl.h), each pixel's footprint on the fabric, and the
+ * sensor response with its adjoint (sensor/response_impl.h), written once for
+ * float and double. Internal to the library. */
+#ifndef WOVEN_SENSOR_H
+#define WOVEN_SENSOR_H
+
+#include <math.h>
+
+#include "kernel/kernel.h"
+#include "shape/shape.h"
+#include "woven/render.h"
+#include "woven/scene.h"
+
+/* The scene's geometry prepared for tracing. */
+typedef struct {
+  int width, height;
+  float cpos[3], fwd[3], right[3], up[3];
+  float tan_half, aspect;
+  wv_shape shape;
+  float lpos[3], lint;
+  const struct wv_footprint_s *cache; /* per-pixel footprints made once (wv_footprints) or NULL */
+} wv_camera_rig;
+
+void wv_rig_prepare(const wv_scene *s, wv_camera_rig *rig);
+/* wv_rig_prepare plus opt's footprint cache, refused if made for another geometry. */
+wv_status wv_rig_prepare_opts(const wv_scene *s, const wv_render_opts *opt, wv_camera_rig *rig, wv_error *err);
+
+#define WV_LANE WV_LANE_F
+#include "kernel/lane_begin.h"
+#include "sensor/trace_impl.h"
+#include "kernel/lane_end.h"
+#define WV_LANE WV_LANE_8
+#include "kernel/lane_begin.h"
+#include "sensor/trace_impl.h"
+#include "kernel/lane_end.h"
+
+/* A pixel's footprint on the fabric. A pixel spans ~1e-3 rad seen from the
+ * light and the camera, so light and view directions are taken at the pixel
+ * centre while the fabric position (what changes across yarns) is per sample:
+ * bilinear in the four corners, used when all four and the centre hit the
+ * sample (exact for the plane up to perspective, and within 1e-6 of a pixel on
+ * the cylinder away from its silhouette). Other pixels trace every sample. */
+typedef struct wv_footprint_s {
+  int fast;           /* 1: use corners and dirs; 0: trace every sample */
+  float fx[4], fy[4]; /* corners (0,0), (1,0), (0,1), (1,1) */
+  wv_dirs_f dirs;
+} wv_footprint;
+
+void wv_footprint_prepare(const wv_camera_rig *rig, int px, int py, wv_footprint *fp);
+
+/* ---- sensor response ---- */
+#define wv_pow(x, y) _Generic((x), float: powf, double: pow)(x, y)
+/* d encode / d linear in double (0 for linear <= 0, where encode is clamped to 0). */
+double wv_encode_slope(const wv_scene *s, double linear);
+/* The falloff mask at pixel (x, y) of the scene's full image (1 without falloff). */
+double wv_response_mask(const wv_scene *s, int x, int y);
+
+#define WV_LANE WV_LANE_F
+#include "kernel/lane_begin.h"
+#include "sensor/response_impl.h"
+#include "kernel/lane_end.h"
+#define WV_LANE WV_LANE_D
+#include "kernel/lane_begin.h"
+#include "sensor/response_impl.h"
+#include "kernel/lane_end.h"
+
+#endif

@@ -1,0 +1,183 @@
+/* The shading kernel (src/kernel/kernel_impl.h): its 8-wide flavour against
+ * the scalar one bit for bit (values and derivative sums, on yarns, in gaps,
+ * with noise and glints, and past the 8-wide integer range where lanes fall
+ * back to scalar); its derivative sums per sample against central differences
+ * of the double flavour; the public entry points. */
+#include <math.h>
+#include <string.h>
+
+#include "kernel/kernel.h"
+#include "testutil.h"
+
+typedef struct {
+  uint64_t s;
+} rng;
+static double rnd(rng *r) {
+  r->s = r->s * 6364136223846793005ULL + 1442695040888963407ULL;
+  return (double)(r->s >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* A random unit vector above the surface (z > 0.05). */
+static void above(rng *r, float w[3]) {
+  do {
+    for (int k = 0; k < 3; k++) w[k] = (float)(2 * rnd(r) - 1);
+  } while (w[0] * w[0] + w[1] * w[1] + w[2] * w[2] > 1 || w[2] < 0.05f);
+  float l = sqrtf(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+  for (int k = 0; k < 3; k++) w[k] /= l;
+}
+
+static void fabric(int k, wv_params *p, wv_fabric *f) {
+  static const char *pats[] = {"twill", "satin", "plain", "twill90", "satin90"};
+  wv_error err = {0};
+  assert_int_equal(wv_params_default(pats[k % 5], p, &err), WV_OK);
+  p->noise_level = k % 3 ? 4 : 0;
+  p->specular_noise = k % 2;
+  p->yarn_width = k % 2 ? 0.8 : 1.0;
+  p->twist_deg = -25 + 9 * k;
+  p->seed = 11 + k;
+  assert_int_equal(wv_fabric_prepare(p, f, &err), WV_OK);
+}
+
+static void test_scalar_equals_8wide(void **state) {
+  (void)state;
+  rng r = {3};
+  static wv_fabric f;
+  wv_params p;
+  int fallbacks = 0, gaps = 0;
+  for (int k = 0; k < 10; k++) {
+    fabric(k, &p, &f);
+    for (int rep = 0; rep < 200; rep++) {
+      wv_dirs_8 d8;
+      wv_f8 x, y;
+      wv_dirs_f d1[8];
+      for (int i = 0; i < 8; i++) {
+        float wi[3], wo[3];
+        above(&r, wi), above(&r, wo);
+        wv_dirs_make_f(wi, wo, (float)(0.5 + rnd(&r)), &d1[i]);
+        for (int c = 0; c < 3; c++) d8.wi[c][i] = d1[i].wi[c], d8.wo[c][i] = d1[i].wo[c], d8.h[c][i] = d1[i].h[c];
+        d8.mi[i] = d1[i].mi, d8.mo[i] = d1[i].mo, d8.light[i] = d1[i].light;
+        /* mostly near the origin; some far away, past the 8-wide cell range */
+        double scale = rep % 17 == 0 && i == 3 ? 3e6 : 40.0;
+        x[i] = (float)(scale * (2 * rnd(&r) - 1)), y[i] = (float)(scale * (2 * rnd(&r) - 1));
+      }
+      wv_f8 rad8[3];
+      wv_shade_grad_8 g8;
+      wv_shade_8(&f, &f.P, &d8, x, y, rad8, &g8);
+      wv_yarn_cell_8 cell;
+      wv_yarn_locate_8(&f.ym, x, y, &cell);
+      fallbacks += !wv_all(cell.ok);
+      for (int i = 0; i < 8; i++) {
+        float rad1[3];
+        wv_shade_grad_f g1;
+        wv_shade_f(&f, &f.P, &d1[i], x[i], y[i], rad1, &g1);
+        for (int c = 0; c < 3; c++) assert_true(memcmp(&rad1[c], &rad8[c][i], sizeof(float)) == 0);
+        assert_int_equal(g1.warp != 0, g8.warp[i] != 0);
+        for (int j = 0; j < WV_J_COUNT; j++) assert_true(memcmp(&g1.J[j], &g8.J[j][i], sizeof(float)) == 0);
+        gaps += rad1[0] == 0.0f;
+        /* and without the derivatives: the same radiance */
+        float rad2[3];
+        wv_shade_f(&f, &f.P, &d1[i], x[i], y[i], rad2, NULL);
+        assert_true(memcmp(rad1, rad2, sizeof rad1) == 0);
+      }
+    }
+  }
+  assert_true(fallbacks > 0 && gaps > 0); /* both paths seen */
+}
+
+/* The public entry points agree with each other and with the directions' horizon rule. */
+static void test_entry_points(void **state) {
+  (void)state;
+  rng r = {8};
+  static wv_fabric f;
+  wv_params p;
+  fabric(3, &p, &f);
+  float x[8], y[8], wi[3][8], wo[3][8], out8[3][8];
+  for (int i = 0; i < 8; i++) {
+    float a[3], b[3];
+    above(&r, a), above(&r, b);
+    if (i == 5) a[2] = -a[2]; /* light below the surface */
+    for (int c = 0; c < 3; c++) wi[c][i] = a[c], wo[c][i] = b[c];
+    x[i] = (float)(10 * rnd(&r)), y[i] = (float)(-10 * rnd(&r));
+  }
+  wv_kernel_shade8(&f, x, y, (const float(*)[8])wi, (const float(*)[8])wo, out8);
+  int lit = 0;
+  for (int i = 0; i < 8; i++) {
+    float a[3] = {wi[0][i], wi[1][i], wi[2][i]}, b[3] = {wo[0][i], wo[1][i], wo[2][i]}, out[3];
+    wv_kernel_shade(&f, x[i], y[i], a, b, out);
+    for (int c = 0; c < 3; c++) assert_true(memcmp(&out[c], &out8[c][i], sizeof(float)) == 0);
+    if (i == 5) assert_true(out[0] == 0.0f && out[1] == 0.0f && out[2] == 0.0f);
+    lit += out[0] > 0.0f;
+  }
+  assert_true(lit >= 4);
+}
+
+/* d J / d theta of one sample: the double kernel's sums against central
+ * differences of its own S and DF, for every non-linear parameter. */
+static void test_sample_derivatives(void **state) {
+  (void)state;
+  rng r = {21};
+  static wv_fabric f;
+  wv_params p;
+  int checked = 0;
+  for (int k = 0; k < 6; k++) {
+    fabric(k, &p, &f);
+    for (int rep = 0; rep < 60; rep++) {
+      float wi[3], wo[3];
+      above(&r, wi), above(&r, wo);
+      wv_dirs_f df;
+      wv_dirs_make_f(wi, wo, 1.0f, &df);
+      wv_dirs_d d;
+      for (int c = 0; c < 3; c++) d.wi[c] = df.wi[c], d.wo[c] = df.wo[c], d.h[c] = df.h[c];
+      d.mi = df.mi, d.mo = df.mo, d.light = 1.0;
+      float x = (float)(20 * rnd(&r)), y = (float)(-20 * rnd(&r));
+      wv_shade_params_d P;
+      wv_shade_params_double(&p, &P);
+      double rad[3];
+      wv_shade_grad_d g;
+      wv_shade_d(&f, &P, &d, x, y, rad, &g);
+      if (g.J[WV_J_DF] == 0.0) continue; /* a gap */
+      int ty = g.warp ? WV_WARP : WV_WEFT;
+      /* parameter, slot of S's derivative, slot of DF's derivative (-1: none) */
+      struct {
+        double *v;
+        double scale;
+        int js, jd;
+      } ps[] = {{&p.heightfield[ty], 1, WV_J_S_BETA, WV_J_DF_BETA},
+                {&p.roughness[ty], 1, WV_J_S_ALPHA, -1},
+                {&p.inclination_deg, 3.14159265358979323846 / 180, WV_J_S_UMAX, WV_J_DF_UMAX},
+                {&p.twist_deg, 3.14159265358979323846 / 180, WV_J_S_PSI, -1},
+                {&p.diffuse_blend, 1, -1, WV_J_DF_BLEND}};
+      for (size_t q = 0; q < sizeof ps / sizeof ps[0]; q++) {
+        double v0 = *ps[q].v, h = 1e-6 * (fabs(v0) + 0.1), J[2][2];
+        for (int side = 0; side < 2; side++) {
+          *ps[q].v = v0 + (side ? h : -h);
+          wv_shade_params_double(&p, &P);
+          double rr[3];
+          wv_shade_grad_d gg;
+          wv_shade_d(&f, &P, &d, x, y, rr, &gg);
+          J[side][0] = gg.J[WV_J_S], J[side][1] = gg.J[WV_J_DF];
+        }
+        *ps[q].v = v0;
+        for (int which = 0; which < 2; which++) {
+          int slot = which ? ps[q].jd : ps[q].js;
+          double fd = (J[1][which] - J[0][which]) / (2 * h) / ps[q].scale;
+          double an = slot < 0 ? 0.0 : g.J[slot];
+          double tol = 1e-5 * (fabs(fd) + fabs(an)) + 1e-7 * (fabs(g.J[which ? WV_J_DF : WV_J_S]) + 1e-3);
+          if (fabs(fd - an) > tol)
+            print_error("fabric %d param %zu %s: analytic %.9g finite difference %.9g\n", k, q, which ? "DF" : "S", an,
+                        fd);
+          assert_true(fabs(fd - an) <= tol);
+          checked++;
+        }
+      }
+      wv_shade_params_double(&p, &P);
+    }
+  }
+  assert_true(checked > 1000);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_scalar_equals_8wide), cmocka_unit_test(test_entry_points),
+                                     cmocka_unit_test(test_sample_derivatives)};
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,529 @@
+// woven viewer: the page's program. It loads the three.js modules inlined in the
+// page, shades the true woven model (fabric.frag) on the capture rig, a flat
+// swatch or the draped cloth, accumulates frames progressively, and offers the
+// parameters as sliders. Everything it needs is in the page (written by
+// `woven view`, src/view/view.c); nothing is fetched.
+//
+// Anti-aliasing: each frame takes uSpp samples per pixel of the fabric position
+// inside the pixel's footprint (the parallelogram of the screen-space
+// derivatives of the fabric coordinates), light and view directions at the
+// pixel centre as in the C renderer; frames continue one low-discrepancy
+// sequence and are averaged until `frames` is reached, so a still view
+// converges to the C render's pixel average.
+//
+// A small API for tests and scripts: window.woven.render({frames, spp}) renders
+// and resolves when done; snapshot() returns the canvas as a PNG data URL;
+// fps(ms) measures frames per second; setParam(key, value) edits a parameter.
+
+const $ = (id) => document.getElementById(id);
+const DATA = JSON.parse($('woven-data').textContent);
+const status = (s) => { $('status').textContent = s; };
+function showError(msg) {
+  const e = $('error');
+  e.textContent = msg;
+  e.style.display = msg ? 'block' : 'none';
+}
+
+// ---- three.js from the page: gzip + base64 script blocks become module URLs ----
+async function inflate(id) {
+  const b64 = $(id).textContent.trim();
+  const bin = atob(b64);
+  const bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+  const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream('gzip'));
+  return new Response(stream).text();
+}
+function moduleUrl(text, from, to) {
+  const src = from ? text.split(from).join(to) : text;
+  return URL.createObjectURL(new Blob([src], { type: 'text/javascript' }));
+}
+const coreUrl = moduleUrl(await inflate('woven-three-core'));
+const threeUrl = moduleUrl(await inflate('woven-three-module'), "'./three.core.js'", JSON.stringify(coreUrl));
+const orbitUrl = moduleUrl(await inflate('woven-three-orbit'), "'three'", JSON.stringify(threeUrl));
+const THREE = await import(threeUrl);
+const { OrbitControls } = await import(orbitUrl);
+const shader = (id) => $(id).textContent;
+
+// ---- parameters ----
+// Paths like "diffuse.warp[1]" (wv_param_name) into the parameter object.
+function pathOf(key) { return key.replace(/\[(\d)\]/, '.$1').split('.'); }
+function getP(p, key) { return pathOf(key).reduce((o, k) => (o == null ? undefined : o[k]), p); }
+function setP(p, key, v) {
+  const path = pathOf(key), last = path.pop();
+  path.reduce((o, k) => o[k], p)[last] = v;
+}
+const RANGES = Object.fromEntries(DATA.ranges.map((r) => [r.key, [r.lo, r.hi]]));
+
+// The parameter's problems, or []: out of range, not a number, unknown pattern.
+function problems(p) {
+  const out = [];
+  for (const [key, [lo, hi]] of Object.entries(RANGES)) {
+    const v = getP(p, key);
+    if (typeof v !== 'number' || !Number.isFinite(v) || v < lo || v > hi)
+      out.push(`${key} = ${v} is outside ${lo}..${hi}`);
+  }
+  if (!DATA.weaves[p.pattern]) out.push(`pattern '${p.pattern}' is not one of ${Object.keys(DATA.weaves).join(', ')}`);
+  if (!(p.yarn_width > 0 && p.yarn_width <= 1)) out.push(`yarn_width = ${p.yarn_width} is outside (0, 1]`);
+  if (!(p.thickness > 0 && Number.isFinite(p.thickness))) out.push(`thickness = ${p.thickness} is not positive`);
+  if (!Number.isInteger(p.noise_level)) out.push(`noise_level = ${p.noise_level} is not an integer`);
+  return out;
+}
+
+// The fabric's uniforms: a mirror of wv_params_yarn_model, wv_yarn_model_update
+// and wv_fabric_prepare (float rounding as in C: Math.fround).
+function prepareFabric(p, seedWords) {
+  const f = Math.fround, DEG = Math.PI / 180, PI_F = f(3.14159265358979);
+  const sp = [f(25.4 / p.density.warp), f(25.4 / p.density.weft)];
+  const umax = f(p.inclination_deg * DEG), psi = f(p.twist_deg * DEG), width = f(p.yarn_width);
+  return {
+    uSpacing: sp, uInvSpacing: sp.map((s) => f(1 / s)), uUmaxOverSpacing: sp.map((s) => f(umax / s)),
+    uVScale: sp.map((s) => f(PI_F / f(s * width))), uBeta: [p.heightfield.warp, p.heightfield.weft],
+    uYarnWidth: width, uSinPsi: f(Math.sin(psi)), uCosPsi: f(Math.cos(psi)), uNoise: p.noise_level,
+    uSeed: seedWords, uKd: [new THREE.Vector3(...p.diffuse.warp), new THREE.Vector3(...p.diffuse.weft)],
+    uKs: [new THREE.Vector3(...p.specular.warp), new THREE.Vector3(...p.specular.weft)],
+    uAlpha: [p.roughness.warp, p.roughness.weft], uBlend: p.diffuse_blend, uThickness: p.thickness,
+    uGlints: p.specular_noise !== false, uInvGlintCell: sp.map((s) => f(1 / f(s / 8))),
+  };
+}
+
+// ---- geometry ----
+function floats(b64, Type = Float32Array) {
+  const bin = atob(b64), bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+  return new Type(bytes.buffer);
+}
+function meshGeometry(m) {
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(floats(m.positions), 3));
+  g.setAttribute('normal', new THREE.BufferAttribute(floats(m.normals), 3));
+  g.setAttribute('tangent', new THREE.BufferAttribute(floats(m.tangents), 4));
+  g.setAttribute('uv', new THREE.BufferAttribute(floats(m.uvs), 2));
+  g.setIndex(new THREE.BufferAttribute(floats(m.indices, Uint32Array), 1));
+  g.computeBoundingSphere();
+  return g;
+}
+// The capture rig's sample (src/render/rig.c): the plane z = 0 or a cylinder
+// around the x axis, large enough to fill the camera's view.
+function rigGeometry(sc) {
+  const cam = new THREE.Vector3(...sc.camera.position_mm);
+  const reach = 4 * cam.length() + 10;
+  if (sc.sample.shape === 'cylinder') {
+    const g = new THREE.CylinderGeometry(sc.sample.radius_mm, sc.sample.radius_mm, 2 * reach, 720, 1, true);
+    g.rotateZ(Math.PI / 2); // axis along x
+    return g;
+  }
+  return new THREE.PlaneGeometry(2 * reach, 2 * reach, 1, 1);
+}
+
+// ---- renderer and passes ----
+const params = structuredClone(DATA.params);
+let seedWords = DATA.seed_words.slice();
+const stage = $('stage');
+const url = new URLSearchParams(location.search);
+const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true, alpha: false });
+renderer.autoClear = false;
+stage.appendChild(renderer.domElement);
+const gl = renderer.getContext();
+
+const weaveTex = new THREE.DataTexture(new Uint32Array(32 * 32), 32, 32, THREE.RedIntegerFormat, THREE.UnsignedIntType);
+weaveTex.internalFormat = 'R32UI';
+weaveTex.minFilter = weaveTex.magFilter = THREE.NearestFilter;
+
+const fabricUniforms = {
+  uWeave: { value: weaveTex }, uRows: { value: 1 }, uCols: { value: 1 },
+  uShape: { value: 0 }, uRadius: { value: 1 }, uRotC: { value: 1 }, uRotS: { value: 0 }, uMmPerUnit: { value: 1 },
+  uOffset: { value: [0, 0] }, uWarpAlongAxis: { value: true }, uUvMm: { value: 1 },
+  uCamPos: { value: new THREE.Vector3() }, uLightPos: { value: new THREE.Vector3() }, uLightI: { value: 1 },
+  uBoxes: { value: 0 }, uBoxC: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
+  uBoxU: { value: [0, 1, 2].map(() => new THREE.Vector3()) }, uBoxV: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
+  uBoxL: { value: [0, 0, 0] }, uAmbient: { value: 0 }, uSpp: { value: 4 }, uFrame: { value: 0 },
+};
+for (const [k, v] of Object.entries(prepareFabric(params, seedWords))) fabricUniforms[k] = { value: v };
+const fabricMaterial = new THREE.RawShaderMaterial({
+  glslVersion: THREE.GLSL3, vertexShader: shader('woven-fabric-vert'), fragmentShader: shader('woven-fabric-frag'),
+  uniforms: fabricUniforms, side: THREE.DoubleSide,
+});
+const scene = new THREE.Scene();
+const fabricMesh = new THREE.Mesh(new THREE.BufferGeometry(), fabricMaterial);
+fabricMesh.frustumCulled = false;
+scene.add(fabricMesh);
+const camera = new THREE.PerspectiveCamera(35, 1, 0.01, 100);
+
+function screenPass(fragmentShader, uniforms) {
+  const m = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), new THREE.RawShaderMaterial({
+    glslVersion: THREE.GLSL3, vertexShader: shader('woven-screen-vert'), fragmentShader, uniforms,
+    depthTest: false, depthWrite: false,
+  }));
+  m.frustumCulled = false;
+  const s = new THREE.Scene();
+  s.add(m);
+  return { scene: s, uniforms };
+}
+const accumulate = screenPass(shader('woven-accumulate-frag'), {
+  uPrev: { value: null }, uCurrent: { value: null }, uKeep: { value: 0 },
+});
+const photoTex = new THREE.Texture();
+const display = screenPass(shader('woven-display-frag'), {
+  uAcc: { value: null }, uInvFrames: { value: 1 }, uRig: { value: true }, uExposure: { value: 1 }, uClip: { value: 1 },
+  uGamma: { value: 2.2 }, uSigma: { value: 450 }, uEncoding: { value: 1 }, uFalloff: { value: false },
+  uSize: { value: new THREE.Vector2(1, 1) }, uPhoto: { value: photoTex }, uSplit: { value: 0 },
+});
+const quadCamera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
+
+let targets = null;
+function makeTargets(w, h) {
+  if (targets) for (const t of targets) t.dispose();
+  const opt = { type: THREE.FloatType, format: THREE.RGBAFormat, minFilter: THREE.NearestFilter,
+                magFilter: THREE.NearestFilter, generateMipmaps: false };
+  targets = [new THREE.WebGLRenderTarget(w, h, { ...opt, depthBuffer: true }),
+             new THREE.WebGLRenderTarget(w, h, { ...opt, depthBuffer: false }),
+             new THREE.WebGLRenderTarget(w, h, { ...opt, depthBuffer: false })];
+}
+
+// ---- views ----
+const SC = DATA.scene;
+const studio = { exposure: 1.0 };
+const state = {
+  mode: ['rig', 'swatch', 'drape'].includes(url.get('mode')) ? url.get('mode') : 'rig',
+  spp: Math.max(1, Math.min(256, Number(url.get('spp')) || 4)),
+  frames: Math.max(1, Math.min(4096, Number(url.get('frames')) || 64)),
+  frame: 0, split: 0, light: null, controls: null, size: [1, 1], valid: true,
+};
+const meshes = {};
+
+// A light as (azimuth, elevation, distance) about a centre, with z or y up; intensity.
+function lightFromPosition(centre, pos, intensity, upZ) {
+  const d = new THREE.Vector3().subVectors(pos, centre), r = d.length();
+  const [x, y, up] = upZ ? [d.x, d.y, d.z] : [d.x, d.z, d.y];
+  return { centre, r, az: Math.atan2(y, x), el: Math.asin(Math.min(1, up / r)), intensity, pos: pos.clone(), upZ };
+}
+function lightPosition(L, upZ) {
+  const c = Math.cos(L.el);
+  const d = upZ ? new THREE.Vector3(c * Math.cos(L.az), c * Math.sin(L.az), Math.sin(L.el))
+                : new THREE.Vector3(c * Math.cos(L.az), Math.sin(L.el), c * Math.sin(L.az));
+  return d.multiplyScalar(L.r).add(L.centre);
+}
+
+function setMode(mode) {
+  state.mode = mode;
+  $('mode').value = mode;
+  if (state.controls) { state.controls.dispose(); state.controls = null; }
+  const u = fabricUniforms;
+  if (mode === 'rig') {
+    fabricMesh.geometry = rigGeometry(SC);
+    fabricMaterial.side = THREE.FrontSide;
+    const cyl = SC.sample.shape === 'cylinder';
+    u.uShape.value = cyl ? 1 : 0;
+    u.uRadius.value = SC.sample.radius_mm || 1;
+    const rot = (SC.sample.rotation_deg || 0) * Math.PI / 180;
+    u.uRotC.value = Math.cos(rot), u.uRotS.value = Math.sin(rot);
+    u.uMmPerUnit.value = SC.sample.mm_per_unit, u.uOffset.value = SC.sample.offset_mm;
+    u.uWarpAlongAxis.value = SC.sample.warp !== 'around_axis';
+    u.uBoxes.value = 0, u.uAmbient.value = 0;
+    const w = SC.image.width, h = SC.image.height;
+    state.size = [w, h];
+    camera.fov = SC.camera.vfov_deg;
+    camera.aspect = w / h;
+    camera.position.set(...SC.camera.position_mm);
+    camera.up.set(...SC.camera.up);
+    const look = new THREE.Vector3(...SC.camera.look_at_mm);
+    camera.lookAt(look);
+    const dist = camera.position.distanceTo(look);
+    camera.near = dist * 1e-3, camera.far = dist * 100;
+    state.light = lightFromPosition(look, new THREE.Vector3(...SC.light.position_mm), SC.light.intensity, true);
+    renderer.setPixelRatio(1);
+  } else {
+    const m = meshes[mode] || (meshes[mode] = meshGeometry(DATA.meshes[mode]));
+    fabricMesh.geometry = m;
+    fabricMaterial.side = THREE.DoubleSide;
+    u.uShape.value = 2;
+    u.uUvMm.value = DATA.meshes[mode].uv_mm;
+    const bs = m.boundingSphere, R = bs.radius, c = bs.center;
+    const w = Number(url.get('w')) || Math.max(64, stage.clientWidth), h = Number(url.get('h')) || Math.max(64, stage.clientHeight);
+    state.size = [w, h];
+    camera.fov = 30, camera.aspect = w / h;
+    camera.up.set(0, 1, 0);
+    const d = R / Math.sin(camera.fov * Math.PI / 360) * 1.05;
+    camera.position.set(c.x + 0.55 * d, c.y + 0.5 * d, c.z + 0.67 * d);
+    camera.near = d * 1e-3, camera.far = d * 100;
+    camera.lookAt(c);
+    // Studio: a key point light, three soft boxes (key above left, fill right, rim
+    // behind) and a dim uniform sky, all scaled to the object.
+    const key = new THREE.Vector3(c.x - 1.2 * R, c.y + 2.2 * R, c.z + 1.6 * R);
+    state.light = lightFromPosition(c, key, 12.0 * R * R, false);
+    const boxes = [
+      { c: [c.x - 2.0 * R, c.y + 2.5 * R, c.z + 1.0 * R], u: [0.9 * R, 0, 0.5 * R], v: [0, 0.2 * R, -0.9 * R], L: 0.9 },
+      { c: [c.x + 2.6 * R, c.y + 0.8 * R, c.z + 0.8 * R], u: [0, 0.8 * R, 0], v: [-0.3 * R, 0, 0.9 * R], L: 0.35 },
+      { c: [c.x + 0.5 * R, c.y + 1.5 * R, c.z - 2.6 * R], u: [1.0 * R, 0, 0], v: [0, 0.6 * R, 0.3 * R], L: 0.6 },
+    ];
+    const pointOnly = url.get('lights') === 'point'; // the key light alone (for comparisons)
+    u.uBoxes.value = pointOnly ? 0 : 3;
+    boxes.forEach((b, i) => {
+      u.uBoxC.value[i].set(...b.c), u.uBoxU.value[i].set(...b.u), u.uBoxV.value[i].set(...b.v);
+      u.uBoxL.value[i] = b.L;
+    });
+    u.uAmbient.value = pointOnly ? 0 : 0.08;
+    renderer.setPixelRatio(url.get('w') ? 1 : Math.min(2, window.devicePixelRatio || 1));
+    state.controls = new OrbitControls(camera, renderer.domElement);
+    state.controls.target.copy(c);
+    state.controls.update(); // settle on the target before listening: only the user's moves restart
+    state.controls.addEventListener('change', restart);
+  }
+  camera.updateProjectionMatrix();
+  renderer.setSize(state.size[0], state.size[1]);
+  const px = renderer.getDrawingBufferSize(new THREE.Vector2());
+  makeTargets(px.x, px.y);
+  display.uniforms.uSize.value.copy(px);
+  const rig = mode === 'rig';
+  display.uniforms.uRig.value = rig;
+  display.uniforms.uExposure.value = rig ? SC.response.exposure : studio.exposure;
+  display.uniforms.uClip.value = rig ? SC.response.clip : 1;
+  display.uniforms.uEncoding.value = rig ? { linear: 0, srgb: 1, gamma: 2 }[SC.response.encoding] : 1;
+  display.uniforms.uGamma.value = SC.response.gamma || 2.2;
+  display.uniforms.uFalloff.value = rig && SC.falloff.type === 'gaussian';
+  display.uniforms.uSigma.value = SC.falloff.sigma_px || 1;
+  $('photoRow').style.display = rig && DATA.photo ? '' : 'none';
+  display.uniforms.uSplit.value = rig && DATA.photo ? state.split : 0;
+  buildLightControls();
+  applyLight();
+}
+
+function applyLight() {
+  const L = state.light;
+  fabricUniforms.uLightPos.value.copy(L.moved ? lightPosition(L, L.upZ) : L.pos);
+  fabricUniforms.uLightI.value = L.intensity;
+  restart();
+}
+
+function restart() { state.frame = 0; }
+
+// One frame of the progressive render: fabric pass, accumulation, display.
+function renderFrame() {
+  const [cur, a, b] = targets;
+  const prev = state.frame % 2 ? b : a, next = state.frame % 2 ? a : b;
+  fabricUniforms.uCamPos.value.copy(camera.position);
+  fabricUniforms.uSpp.value = state.spp;
+  fabricUniforms.uFrame.value = state.frame;
+  renderer.setRenderTarget(cur);
+  renderer.setClearColor(0x000000, 0);
+  renderer.clear(true, true, false);
+  if (state.valid) renderer.render(scene, camera);
+  accumulate.uniforms.uPrev.value = prev.texture;
+  accumulate.uniforms.uCurrent.value = cur.texture;
+  accumulate.uniforms.uKeep.value = state.frame > 0 ? 1 : 0;
+  renderer.setRenderTarget(next);
+  renderer.render(accumulate.scene, quadCamera);
+  state.frame++;
+  display.uniforms.uAcc.value = next.texture;
+  display.uniforms.uInvFrames.value = 1 / state.frame;
+  renderer.setRenderTarget(null);
+  renderer.render(display.scene, quadCamera);
+}
+
+function loop() {
+  if (state.controls) state.controls.update();
+  if (state.frame < state.frames) {
+    renderFrame();
+    status(`${state.frame} / ${state.frames} frames, ${state.frame * state.spp} samples per pixel`);
+  }
+  requestAnimationFrame(loop);
+}
+
+// ---- fabric uniforms from the parameters ----
+function applyParams() {
+  const bad = problems(params);
+  state.valid = bad.length === 0;
+  if (!state.valid) { // refused visibly: nothing is drawn from invalid parameters
+    showError(`These parameters are refused:\n${bad.join('\n')}`);
+    restart();
+    return;
+  }
+  showError('');
+  const wv = DATA.weaves[params.pattern];
+  const data = weaveTex.image.data;
+  data.fill(0);
+  for (let r = 0; r < wv.rows; r++) for (let c = 0; c < wv.cols; c++) data[r * 32 + c] = wv.cells[r * wv.cols + c];
+  weaveTex.needsUpdate = true;
+  fabricUniforms.uRows.value = wv.rows, fabricUniforms.uCols.value = wv.cols;
+  for (const [k, v] of Object.entries(prepareFabric(params, seedWords))) fabricUniforms[k].value = v;
+  restart();
+}
+
+// ---- controls ----
+function slider(parent, label, lo, hi, step, get, set, key) {
+  const row = document.createElement('div');
+  row.className = 'row';
+  row.innerHTML = `<label title="${key || label}">${label}</label><input type="range"><input type="number">`;
+  const [range, num] = row.querySelectorAll('input');
+  for (const el of [range, num]) el.min = lo, el.max = hi, el.step = step;
+  const show = () => { range.value = get(); num.value = +(+get()).toPrecision(6); num.classList.remove('bad'); };
+  range.addEventListener('input', () => { set(Number(range.value)); show(); $('msg').textContent = ''; });
+  num.addEventListener('change', () => {
+    const v = Number(num.value);
+    if (num.value === '' || !Number.isFinite(v) || v < lo || v > hi) { // refused, shown, not applied
+      num.classList.add('bad');
+      $('msg').textContent = `${key || label} = ${num.value} is outside ${lo}..${hi}: not applied`;
+      return;
+    }
+    $('msg').textContent = '';
+    set(v);
+    show();
+  });
+  show();
+  parent.appendChild(row);
+  return show;
+}
+
+const srgbEnc = (x) => (x <= 0.0031308 ? 12.92 * x : 1.055 * x ** (1 / 2.4) - 0.055);
+const srgbDec = (y) => (y <= 0.04045 ? y / 12.92 : ((y + 0.055) / 1.055) ** 2.4);
+function colour(parent, label, key) {
+  const row = document.createElement('div');
+  row.className = 'wide';
+  row.innerHTML = `<label>${label}</label><input type="color">`;
+  const input = row.querySelector('input');
+  const hex = (v) => '#' + v.map((x) => Math.round(255 * srgbEnc(Math.min(1, Math.max(0, x)))).toString(16).padStart(2, '0')).join('');
+  input.value = hex(getP(params, key));
+  input.addEventListener('input', () => {
+    const v = [1, 3, 5].map((i) => Math.round(1e4 * srgbDec(parseInt(input.value.slice(i, i + 2), 16) / 255)) / 1e4);
+    setP(params, key, v);
+    applyParams();
+  });
+  parent.appendChild(row);
+}
+
+function buildFabricControls() {
+  const box = $('fabricControls');
+  box.innerHTML = '';
+  const onP = (key) => (v) => { setP(params, key, v); applyParams(); };
+  const num = (key, label, step) => slider(box, label, RANGES[key][0], RANGES[key][1], step, () => getP(params, key), onP(key), key);
+  num('density.warp', 'density warp /in', 1);
+  num('density.weft', 'density weft /in', 1);
+  num('heightfield.warp', 'heightfield warp', 0.01);
+  num('heightfield.weft', 'heightfield weft', 0.01);
+  num('roughness.warp', 'roughness warp', 0.005);
+  num('roughness.weft', 'roughness weft', 0.005);
+  colour(box, 'diffuse warp', 'diffuse.warp');
+  colour(box, 'diffuse weft', 'diffuse.weft');
+  colour(box, 'specular warp', 'specular.warp');
+  colour(box, 'specular weft', 'specular.weft');
+  num('twist_deg', 'twist (deg)', 1);
+  num('inclination_deg', 'inclination (deg)', 0.5);
+  num('diffuse_blend', 'diffuse blend', 0.01);
+  num('noise_level', 'noise level Q', 1);
+  slider(box, 'seed', 0, 2147483647, 1, () => params.seed, (v) => {
+    params.seed = Math.round(v);
+    seedWords = [0, params.seed >>> 0];
+    applyParams();
+  }, 'seed');
+  const row = document.createElement('div');
+  row.className = 'wide';
+  row.innerHTML = '<label>glints U_s</label><input type="checkbox">';
+  const cb = row.querySelector('input');
+  cb.checked = params.specular_noise !== false;
+  cb.addEventListener('change', () => { params.specular_noise = cb.checked; applyParams(); });
+  box.appendChild(row);
+}
+
+function buildViewControls() {
+  const box = $('viewControls');
+  box.innerHTML = '';
+  slider(box, 'samples / frame', 1, 64, 1, () => state.spp, (v) => { state.spp = v; restart(); });
+  slider(box, 'frames', 1, 1024, 1, () => state.frames, (v) => { state.frames = v; restart(); });
+  slider(box, 'studio exposure', 0.05, 8, 0.05, () => studio.exposure, (v) => {
+    studio.exposure = v;
+    if (state.mode !== 'rig') display.uniforms.uExposure.value = v;
+    restart();
+  });
+}
+
+function buildLightControls() {
+  const box = $('lightControls'), L = state.light;
+  box.innerHTML = '';
+  const deg = 180 / Math.PI;
+  const moved = (fn) => (v) => { fn(v); L.moved = true; applyLight(); };
+  slider(box, 'azimuth (deg)', -180, 180, 1, () => Math.round(L.az * deg), moved((v) => { L.az = v / deg; }));
+  slider(box, 'elevation (deg)', 1, 90, 1, () => Math.round(L.el * deg), moved((v) => { L.el = v / deg; }));
+  slider(box, 'distance', +(0.2 * L.r).toPrecision(3), +(5 * L.r).toPrecision(3), +(L.r / 100).toPrecision(2),
+         () => +L.r.toPrecision(4), moved((v) => { L.r = v; }));
+  slider(box, 'intensity', +(L.intensity / 20).toPrecision(3), +(L.intensity * 20).toPrecision(3),
+         +(L.intensity / 100).toPrecision(2), () => +L.intensity.toPrecision(4), (v) => { L.intensity = v; applyLight(); });
+  const reset = document.createElement('button');
+  reset.textContent = 'reset light';
+  reset.addEventListener('click', () => { setMode(state.mode); });
+  box.appendChild(reset);
+}
+
+// ---- start ----
+$('title').textContent = DATA.title || 'woven';
+$('subtitle').textContent = `${params.pattern} — scene ${SC.name}${DATA.photo ? ', with the photo' : ''}`;
+$('about').textContent = `The true woven model in WebGL (three.js r${THREE.REVISION}): yarn geometry, ` +
+  'SGGX/SpongeCake specular, blended diffuse and glints computed per sample, as woven renders them.';
+const pat = $('pattern');
+for (const name of Object.keys(DATA.weaves)) pat.add(new Option(name, name));
+pat.value = params.pattern;
+pat.addEventListener('change', () => { params.pattern = pat.value; applyParams(); });
+$('mode').addEventListener('change', () => setMode($('mode').value));
+if (DATA.photo) {
+  const img = new Image();
+  img.src = DATA.photo;
+  await img.decode();
+  photoTex.image = img;
+  photoTex.flipY = false;
+  photoTex.colorSpace = THREE.NoColorSpace;
+  photoTex.needsUpdate = true;
+  const split = $('split');
+  split.addEventListener('input', () => { state.split = Number(split.value); display.uniforms.uSplit.value = state.split; restart(); });
+  $('photoToggle').addEventListener('click', () => {
+    state.split = state.split > 0 ? 0 : Number(split.value) || 0.5;
+    $('photoToggle').classList.toggle('on', state.split > 0);
+    display.uniforms.uSplit.value = state.split;
+    restart();
+  });
+}
+buildViewControls();
+buildFabricControls();
+applyParams();
+setMode(state.mode);
+window.addEventListener('resize', () => { if (state.mode !== 'rig' && !url.get('w')) setMode(state.mode); });
+
+window.woven = {
+  THREE,
+  // Render `frames` frames of `spp` samples (without waiting for the screen).
+  render({ frames = state.frames, spp = state.spp } = {}) {
+    state.frames = frames, state.spp = spp;
+    restart();
+    while (state.frame < state.frames) renderFrame();
+    gl.finish();
+    status(`${state.frame} / ${state.frames} frames, ${state.frame * state.spp} samples per pixel`);
+    return { frames: state.frame, spp: state.spp, valid: state.valid };
+  },
+  snapshot: () => renderer.domElement.toDataURL('image/png'),
+  // Frames per second of the progressive render over ms milliseconds, each
+  // frame finished by the GPU before the next starts.
+  fps(ms = 3000) {
+    const px = new Uint8Array(4);
+    let n = 0;
+    const t0 = performance.now();
+    while (performance.now() - t0 < ms) {
+      renderFrame();
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+      n++;
+      if (state.frame >= 1e6) restart();
+    }
+    const dbg = gl.getExtension('WEBGL_debug_renderer_info');
+    return { fps: (n * 1000) / (performance.now() - t0), frames: n, spp: state.spp, size: state.size,
+             renderer: gl.getParameter(dbg ? dbg.UNMASKED_RENDERER_WEBGL : gl.RENDERER) };
+  },
+  // The current camera, light and display, to reproduce the view elsewhere.
+  view: () => ({
+    camera: { position: camera.position.toArray(), target: state.controls ? state.controls.target.toArray() : null,
+              up: camera.up.toArray(), fov: camera.fov, aspect: camera.aspect },
+    light: { position: fabricUniforms.uLightPos.value.toArray(), intensity: fabricUniforms.uLightI.value },
+    exposure: display.uniforms.uExposure.value, size: state.size, mode: state.mode,
+  }),
+  setParam(key, value) { setP(params, key, value); applyParams(); return problems(params); },
+  setMode,
+  problems: () => problems(params),
+};
+status('ready');
+requestAnimationFrame(loop);
