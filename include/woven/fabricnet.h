@@ -150,6 +150,8 @@ typedef struct {
    * none. Used as wv_rank_opts.prob (weight w_prob) and, without a lattice, as the choice. */
   const float *prob;
   double w_prob;  /* 0.25 */
+  double psf_sigma; /* camera blur of the candidates' renders: -1 (default) the scene's, else measured
+                     * from the photo on the network's estimate (wv_psf_estimate); >= 0 this sigma */
 } wv_pattern_opts;
 void wv_pattern_opts_default(wv_pattern_opts *o);
 typedef struct {
@@ -172,6 +174,7 @@ typedef struct {
   int spp;                  /* what the loss criterion's renders used */
   double w_pixel;           /* what the criterion used */
   double seconds;           /* analysis, renders and descriptor passes */
+  double psf_sigma;         /* the camera blur the candidates were rendered with */
 } wv_pattern_choice;
 /* The loss criterion of candidate i of a choice made for this photo (a no-op when known). */
 wv_status wv_pattern_loss(struct wv_descriptor *d, const wv_scene *s, const wv_image *photo, const float *gram_photo,

@@ -10,6 +10,7 @@
 
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
+#include "woven/fit.h"
 #include "woven/imgops.h"
 #include "woven/loss.h"
 #include "woven/render.h"
@@ -24,6 +25,7 @@ void wv_pattern_opts_default(wv_pattern_opts *o) {
   o->family_tie = WV_PATTERN_FAMILY_TIE;
   o->prob = NULL;
   o->w_prob = 0.25;
+  o->psf_sigma = -1;
 }
 
 /* The loss criterion of candidate i: its parameters rendered over the whole image at sc's
@@ -130,6 +132,13 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
   wv_status st = WV_OK;
   for (int i = 0; i < nb && !st; i++) st = wv_fabricnet_params(n, y, wv_weave_builtin_name(i), &out->params[i], err);
   out->lattice.best = -1;
+  /* the candidates are rendered through the camera's blur, as the fit will render them:
+   * without it a render's spectrum keeps a flat envelope the photo's does not have */
+  wv_scene sb = *s;
+  if (o->psf_sigma >= 0) sb.psf_sigma = o->psf_sigma;
+  else if (!st && !(s->psf_sigma > 0)) st = wv_psf_estimate(s, photo, &out->params[0], o->threads, &sb.psf_sigma, NULL, err);
+  sc.psf_sigma = out->psf_sigma = sb.psf_sigma;
+  s = &sb;
   if (!st && o->lattice) st = wv_lattice_analyse(s, photo, &out->lattice, err);
   wv_image_loss *loss = NULL;
   if (!st) st = criterion_create(photo, d, gram_photo, o, &loss, err);
@@ -221,6 +230,7 @@ char *wv_pattern_choice_to_json(const wv_pattern_choice *c) {
                               per_candidate(c, c->loss), "gram_loss", per_candidate(c, c->gram), "pixel_loss",
                               per_candidate(c, c->pixel))
                   : NULL;
+  if (o) json_object_set_new(o, "camera_blur_px", json_real(c->psf_sigma));
   if (o && c->has_prob) {
     json_t *pr = json_object();
     for (int i = 0; i < wv_weave_builtin_count(); i++)
