@@ -94,6 +94,8 @@ typedef struct {
   const char *extra_name, *extra_text;
   /* Files read by the command: none may lie inside the directory, which is replaced whole. */
   const char *inputs[6];
+  /* The mesh scene the report shows the fit on (NULL: the bundled draped cloth; "none": no drape). */
+  const char *drape;
 } fit_job;
 /* The output directory check, before any slow step: refuses a file, a directory
  * holding files that are not a fit's, an input inside it, and (unless --force or
@@ -108,7 +110,7 @@ int fit_pipeline(cli_ctx *c, const fit_job *job);
 /* The fit's tuning options, shared by woven fit and woven capture: --iters,
  * --iter-spp, --iter-scale, --seed, --align-radius, --threads. Sets *handled;
  * returns EXIT_USAGE after printing a message for a bad value. */
-int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled);
+int cli_parse_fit_opt(cli_args *a, const char *s, fit_job *job, int *iters_given, int *handled);
 /* x,y,w,h: non-negative integers, w and h positive. */
 int cli_parse_crop(const char *s, wv_crop *c);
 

@@ -18,6 +18,7 @@
 #include "woven/photo.h"
 #include "woven/render.h"
 #include "woven/report.h"
+#include "woven/scene3d.h"
 #include "woven/view.h"
 
 static const char *HELP =
@@ -25,7 +26,7 @@ static const char *HELP =
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
     "                 [--register-radius N] [--w-struct X] [--no-colour-split] [--camera-blur auto|S]\n"
-    "                 [--seed N] [--threads N]\n"
+    "                 [--seed N] [--threads N] [--drape S.json|none]\n"
     "                 [--force] [--quiet] [--json]\n"
     "       woven fit --resume DIR [--iters N] [--quiet] [--json]\n"
     "\n"
@@ -49,19 +50,26 @@ static const char *HELP =
     "                    render; auto (default): the scene's, else measured from the photo's spectrum\n"
     "  --iter-scale N    iterate on the image downscaled N times (default 1); the final render\n"
     "                    and SSIM use the scene's full resolution and spp\n"
+    "  --drape S.json    the mesh scene the report shows the fit on (default: the bundled\n"
+    "                    draped cloth, scenes/drape-studio.json, at 512 x 384; 'none': no drape)\n"
     "  --force           replace an earlier fit in DIR (it stays whole until the new one is done)\n"
     "  --resume DIR      continue a fit that was stopped (checkpoints at the start and every 10\n"
     "                    iterations), or add iterations to a finished one\n"
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), zoom.png (their\n"
     "centre crop enlarged 4x), spectra.png (their weave spectra), loss.svg, report.html (with\n"
     "SSIM and WSC, the weave-spectrum correlation, of start and fit), viewer.html (woven view),\n"
-    "maps/, and fit.json +\n"
+    "drape.png (the fit on a draped cloth), maps/, and fit.json +\n"
     "checkpoint.json (for --resume). DIR is replaced whole at the end; it may not hold other\n"
     "files, nor any input.\n";
 
-int cli_parse_fit_opt(cli_args *a, const char *s, wv_fit_opts *o, int *iters_given, int *handled) {
+int cli_parse_fit_opt(cli_args *a, const char *s, fit_job *job, int *iters_given, int *handled) {
+  wv_fit_opts *o = &job->opts;
   long v;
   *handled = 1;
+  if (cli_is(a, s, "--drape")) {
+    if (!(job->drape = cli_value(a, "--drape"))) return EXIT_USAGE;
+    return 0;
+  }
   if (cli_is(a, s, "--iters")) {
     if (!cli_int(a, "--iters", 0, WV_FIT_MAX_ITERS, &v)) return EXIT_USAGE;
     o->iters = (int)v, *iters_given = 1;
@@ -160,7 +168,7 @@ static int on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
 /* What a fit directory may hold (woven capture adds network.json). */
 static const char *const FIT_FILES[] = {"fit.json",    "checkpoint.json", "params.json", "render.png",
                                         "start.png",   "photo.png",       "compare.png", "loss.svg",
-                                        "report.html", "viewer.html", "maps",            "scene.json",  "network.json",
+                                        "report.html", "viewer.html", "drape.png", "maps",            "scene.json",  "network.json",
                                         "zoom.png",    "spectra.png", NULL};
 
 typedef enum { FIT_DIR_NONE, FIT_DIR_UNFINISHED, FIT_DIR_FINISHED } fit_dir_state;
@@ -241,6 +249,39 @@ static char *job_json(const fit_job *job) {
 }
 
 /* The results of a finished fit, written into dir (a temporary directory). */
+#ifndef WOVEN_SCENE_DIR
+#define WOVEN_SCENE_DIR "scenes"
+#endif
+
+/* drape.png: the fit on a mesh scene (--drape, default the bundled draped cloth in
+ * $WOVEN_SCENE_DIR or the source tree's scenes/), at 512 x 384 and 16 spp. A missing
+ * default scene (woven run away from its tree) is noted in the report, not an error;
+ * a scene the user named must render. Returns 1 when drape.png was written. */
+static int render_drape(const fit_job *job, const char *dir, const wv_params *p, int threads, char *out, size_t cap,
+                        char *note, size_t ncap, wv_error *err, wv_status *rc) {
+  if (job->drape && !strcmp(job->drape, "none")) return 0;
+  char scene[4096];
+  const char *d = getenv("WOVEN_SCENE_DIR");
+  if (job->drape) snprintf(scene, sizeof scene, "%s", job->drape);
+  else snprintf(scene, sizeof scene, "%s/drape-studio.json", d && *d ? d : WOVEN_SCENE_DIR);
+  struct stat sb;
+  if (!job->drape && stat(scene, &sb) != 0) {
+    snprintf(note, ncap, "No drape: the bundled scene %s was not found (set WOVEN_SCENE_DIR).", scene);
+    return 0;
+  }
+  wv_scene3d_preview po = {512, 384, 16, threads};
+  wv_image img = {0};
+  snprintf(out, cap, "%s/drape.png", dir);
+  *rc = wv_scene3d_render_file(scene, p, &po, &img, err);
+  if (!*rc) *rc = wv_image_write_png(out, &img, 8, err);
+  wv_image_free(&img);
+  if (*rc) return 0;
+  snprintf(note, ncap, "The fit on %s under its lights, 512 x 384, 16 samples per pixel "
+           "(<code>woven scene %s --params params.json</code> renders it in full).", job->drape ? "the scene given" :
+           "the bundled draped cloth", job->drape ? "S.json" : "scenes/drape-studio.json");
+  return 1;
+}
+
 static wv_status write_results(const fit_job *job, const char *dir, const wv_fit_state *st, const wv_fit_opts *o,
                                const wv_scene *fit_scene, double *ssim_start, double *ssim_fit, wv_weave_views *wv,
                                wv_error *err) {
@@ -265,6 +306,9 @@ static wv_status write_results(const fit_job *job, const char *dir, const wv_fit
   snprintf(path, sizeof path, "%s/compare.png", dir);
   if (!rc) rc = wv_image_write_png(path, &cmp, 8, err);
   wv_image_free(&r_start), wv_image_free(&r_fit), wv_image_free(&cmp);
+  char pdrape[4096], note[1024] = "";
+  int drape = 0;
+  if (!rc) drape = render_drape(job, dir, &st->params, o->threads, pdrape, sizeof pdrape, note, sizeof note, err, &rc);
   char *svg = rc ? NULL : wv_loss_svg(st->log, st->iter, o);
   if (!rc) rc = write_text(dir, "loss.svg", svg, err);
   wv_report rep = {.title = job->title, .photo_png = pphoto, .start_png = pstart, .fit_png = pfit,
@@ -272,7 +316,8 @@ static wv_status write_results(const fit_job *job, const char *dir, const wv_fit
                    .start = &st->start, .fit = &st->params, .loss_svg = svg, .timing = &st->timing,
                    .iters = st->iter, .descriptor = wv_descriptor_name(job->desc),
                    .pattern_choice = job->pattern_choice, .weave = wv, .camera_blur = fit_scene->psf_sigma,
-                   .viewer_html = "viewer.html"};
+                   .viewer_html = "viewer.html", .drape_png = drape ? pdrape : NULL,
+                   .drape_note = note[0] ? note : NULL};
   /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
   wv_view_opts vo = {&st->params, fit_scene, pphoto, job->title};
   snprintf(path, sizeof path, "%s/viewer.html", dir);
@@ -359,6 +404,11 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   wv_fit_opts o = job->opts;
   wv_outdir od = {NULL, NULL, -1};
   int staged = 0;
+  if (job->drape && strcmp(job->drape, "none")) { /* a scene that cannot render is refused before the fit */
+    wv_scene3d s3;
+    if (wv_scene3d_read(job->drape, &s3, &err)) return cli_fail(c, &err);
+    wv_scene3d_free(&s3);
+  }
   if (open_state(job, &st, &o, &od, &staged, work, sizeof work, &err)) {
     wv_outdir_abort(&od, &err);
     return cli_fail(c, &err);
@@ -495,7 +545,7 @@ int cmd_fit(int argc, char **argv) {
   wv_fit_opts_default(&job.opts);
   for (const char *s; (s = cli_next(&a));) {
     int handled;
-    if (cli_parse_fit_opt(&a, s, &job.opts, &iters_given, &handled)) return EXIT_USAGE;
+    if (cli_parse_fit_opt(&a, s, &job, &iters_given, &handled)) return EXIT_USAGE;
     if (handled) continue;
     if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
       fputs(HELP, stdout);

@@ -35,6 +35,7 @@ static const char *CAPTURE_HELP =
     "usage: woven capture PHOTO --scene S.json|cylinder|flat45 -o DIR [--pattern NAME]\n"
     "                     [--model M] [--iters N] [--crop x,y,w,h] [--iter-spp N] [--iter-scale N]\n"
     "                     [--align-radius N] [--register-radius N] [--seed N] [--threads N] [--descriptor default|vgg19]\n"
+    "                     [--drape S.json|none]\n"
     "                     [--vgg19-weights FILE] [--force] [--quiet] [--json]\n"
     "\n"
     "The whole capture: FabricNet's estimate (as 'woven predict'), then the fit from it (as\n"
@@ -43,7 +44,8 @@ static const char *CAPTURE_HELP =
     "its losses go to fit.json, report.html and the --json summary (the fit keeps the pattern).\n"
     "Writes to DIR: network.json (the estimate), params.json (the fit), render.png, start.png\n"
     "(the network's estimate rendered), compare.png (photo | network | fit), loss.svg,\n"
-    "report.html, maps/, fit.json and checkpoint.json ('woven fit --resume DIR' continues).\n";
+    "report.html, viewer.html, drape.png (the fit on the bundled draped cloth, --drape), maps/,\n"
+    "fit.json and checkpoint.json ('woven fit --resume DIR' continues).\n";
 
 #ifndef WOVEN_MODEL_DIR
 #define WOVEN_MODEL_DIR "models"
@@ -259,7 +261,7 @@ int cmd_capture(int argc, char **argv) {
     }
     if ((rc = parse_common(&a, s, &pa, &handled))) return rc;
     if (handled) continue;
-    if (cli_parse_fit_opt(&a, s, &job.opts, &iters_given, &handled)) return EXIT_USAGE;
+    if (cli_parse_fit_opt(&a, s, &job, &iters_given, &handled)) return EXIT_USAGE;
     if (handled) continue;
     if (cli_common_flag(&c, s)) {
       /* --quiet, -q, --json */

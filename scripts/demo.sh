@@ -12,8 +12,8 @@ mkdir -p out
 # The whole product in one command. 60 fit iterations instead of 200 keep the demo at a
 # few minutes on 2 cores; drop --iters for the full fit.
 ./build/woven capture examples/photo_twill_cylinder.png --scene cylinder --pattern twill -o out/capture --iters 60 --force
-# The capture on a draped cloth under new light (a 512 x 384 preview of scenes/drape-studio.json).
-./build/woven scene scenes/drape-studio.json --params out/capture/params.json --size 512x384 -o out/capture/drape.png
+# The capture on the draped cloth under new light, scenes/drape-studio.json at 1024 x 768.
+./build/woven scene scenes/drape-studio.json --params out/capture/params.json -o out/capture_drape_studio.png
 ./build/woven render --params examples/twill.json --scene scenes/cylinder.json -o out/twill_cylinder.png
 ./build/woven render --params examples/twill.json --scene scenes/flat45.json -o out/twill_flat45.png
 ./build/woven maps --params examples/twill.json --size 512 -o out/twill_maps

@@ -53,6 +53,8 @@ typedef struct {
   const wv_weave_views *weave;                 /* zoom, spectra, SSIM per channel, WSC (NULL: none) */
   double camera_blur;                          /* the camera blur's sigma in pixels the renders used */
   const char *viewer_html;                     /* the interactive viewer beside the report (NULL: none) */
+  const char *drape_png;                       /* the fit on the draped cloth under new light (NULL: none) */
+  const char *drape_note;                      /* what the drape shows, or why it is missing */
 } wv_report;
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err);

@@ -154,4 +154,15 @@ typedef struct {
 wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_scene3d_opts *opt, wv_image *capture,
                             wv_image *radiance, wv_scene3d_stats *stats, wv_error *err);
 
+/* A scene file rendered with every fabric's parameters replaced (the capture's
+ * report shows a fit on the bundled draped cloth this way). */
+typedef struct {
+  int width, height; /* image size instead of the scene's (same camera); 0: the scene's */
+  int spp;           /* 0: the scene's */
+  int threads;       /* 0: OpenMP default */
+} wv_scene3d_preview;
+
+wv_status wv_scene3d_render_file(const char *scene_path, const wv_params *params, const wv_scene3d_preview *opt,
+                                 wv_image *capture, wv_error *err);
+
 #endif

@@ -304,6 +304,18 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                                                : "the smallest fit loss of its estimate rendered with each built-in");
     }
   }
+  if (r->drape_png || r->drape_note) {
+    sb_printf(&b, "<h2>On a draped cloth</h2>\n");
+    if (r->drape_png && !st) {
+      sb_printf(&b, "<figure><img alt=\"photo\" style=\"height:384px;width:auto\" src=\"data:image/png;base64,");
+      sb_base64_file(&b, r->photo_png, &st, err);
+      sb_printf(&b, "\"><figcaption>photo</figcaption></figure>\n<figure><img alt=\"drape\" "
+                    "style=\"image-rendering:auto\" src=\"data:image/png;base64,");
+      sb_base64_file(&b, r->drape_png, &st, err);
+      sb_printf(&b, "\"><figcaption>the fit on a draped cloth</figcaption></figure>\n");
+    }
+    if (r->drape_note) sb_printf(&b, "<p>%s</p>\n", r->drape_note);
+  }
   if (r->viewer_html)
     sb_printf(&b, "<h2>Interactive viewer</h2>\n<p>The true model in WebGL: orbit, move the light, edit the "
                   "parameters, compare with the photo (<a href=\"%s\">open it alone</a>).</p>\n"
