@@ -45,6 +45,7 @@ static double run(const wv_scene *s, int spp, int n) {
   wv_dataset_info info;
   memset(&info, 0, sizeof info);
   info.version = WV_DATASET_VERSION, info.renderer = WV_RENDER_VERSION, info.seed = 1000, info.per_pattern = n;
+  info.augment = 1;
   info.spp = spp, info.scene = *s, info.n_feat = (int)wv_descriptor_size(d[0]);
   double t0 = bench_now();
   wv_footprints *fp = NULL; /* made once per scene, as woven dataset does (inside the timing) */

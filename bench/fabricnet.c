@@ -43,7 +43,7 @@ int main(int argc, char **argv) {
   if (wv_descriptor_create("default", NULL, &d, &e)) return die(&e);
   if (wv_fabricnet_check(&net, mpath, wv_descriptor_name(d), wv_descriptor_size(d), &info.scene, &e)) return die(&e);
   const wv_scene *s = &info.scene;
-  int total = WV_NET_PATTERNS * info.per_pattern;
+  int total = wv_dataset_pattern_count(&info) * info.per_pattern;
   float *feat = malloc(sizeof(float) * (size_t)net.n_in);
   double err_sum[WV_NET_OUT] = {0}, ssim_net = 0, t_pred = 1e9;
   double fit_ssim_net = 0, fit_ssim_prior = 0, loss_net = 0, loss_prior = 0, ssim_net_sub = 0;
@@ -54,9 +54,9 @@ int main(int argc, char **argv) {
   printf("{\"samples\": [\n");
   for (int k = 0; k < total; k++) {
     char png[4096], pj[4096], name[64];
-    wv_dataset_path(dir, k, "png", png, sizeof png);
-    wv_dataset_path(dir, k, "json", pj, sizeof pj);
-    wv_dataset_sample_name(k, name, sizeof name);
+    wv_dataset_path(dir, &info, k, "png", png, sizeof png);
+    wv_dataset_path(dir, &info, k, "json", pj, sizeof pj);
+    wv_dataset_sample_name(&info, k, name, sizeof name);
     wv_params truth, pred;
     wv_image photo = {0}, r_net = {0};
     wv_photo_info pinfo;
@@ -65,7 +65,7 @@ int main(int argc, char **argv) {
     double tp = bench_now();
     if (wv_photo_load(png, s, &crop, &photo, &pinfo, &e)) return die(&e);
     float y[WV_NET_OUT], yt[WV_NET_OUT];
-    if (wv_fabricnet_predict(&net, d, &photo, feat, y, &e)) return die(&e);
+    if (wv_fabricnet_predict(&net, d, &photo, feat, y, NULL, &e)) return die(&e);
     if (wv_fabricnet_params(&net, y, truth.pattern, &pred, &e)) return die(&e);
     tp = bench_now() - tp + t_load;
     if (tp < t_pred) t_pred = tp;

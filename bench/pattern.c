@@ -1,15 +1,17 @@
-/* Automatic choice of the weave pattern (wv_fabricnet_predict_pattern) on a held-out
- * synthetic set or on real photos.
- *   pattern MODEL SCENE [--per-pattern N] [--seed S] [--spp N] [--w-pixel W] [--target-spp N] [--oracle]
- *     N prior draws per pattern (wv_dataset_sample_params with dataset seed S, default 2022;
- *     the default models were trained on seed 1), rendered in SCENE at --target-spp (default:
- *     the scene's spp) and quantised to 8 bits like a photo; prints the confusion matrix
- *     (rows: true pattern, columns: chosen). --oracle also chooses from the true continuous
- *     parameters instead of the network's (is a miss the criterion's or the network's?).
+/* Automatic choice of the weave pattern over the built-in library
+ * (wv_fabricnet_predict_pattern) on synthetic targets or on real photos.
+ *   pattern MODEL SCENE [--per-pattern N] [--seed S] [--spp N] [--target-spp N] [--tie T]
+ *                       [--family-tie T] [--blur SIGMA] [--noise SIGMA] [--no-lattice]
+ *     N prior draws of every canonical built-in (wv_params_sample_prior, seeds from S), rendered
+ *     in SCENE at --target-spp (default: the scene's spp), optionally blurred (Gaussian, sigma
+ *     in pixels) and given Gaussian noise (sigma in 8-bit levels / 255) as a camera would, and
+ *     quantised to 8 bits. Reports how often the chosen pattern, its family and (for twills)
+ *     its direction are right, the density error when the pattern is right, the families'
+ *     confusion matrix, what the lattice alone and the render ranking alone would have chosen,
+ *     and the choice replayed with other margins of the family and pattern ties (the loss
+ *     criterion deciding near ties; wv_pattern_decide).
  *   pattern MODEL SCENE --real DIR
- *     every .png file in DIR as a photo in SCENE: the chosen pattern and the five losses.
- * --spp, --w-pixel: wv_pattern_opts (defaults WV_PATTERN_SPP, WV_PATTERN_W_PIXEL); the synthetic
- * mode also reports the accuracy the same renders give with other pixel weights.
+ *     every .png file in DIR as a photo in SCENE: the weave analysis and the chosen pattern.
  * Prints progress on stderr and one JSON object on the last line of stdout. */
 #include <math.h>
 #include <stdio.h>
@@ -17,8 +19,10 @@
 #include <string.h>
 
 #include "bench_common.h"
+#include "util/hash.h"
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
+#include "woven/metrics.h"
 #include "woven/photo.h"
 #include "woven/render.h"
 
@@ -27,58 +31,39 @@ static void die(const wv_error *e) {
   exit(1);
 }
 
-static void quantise8(wv_image *img) {
+/* Blur, noise and 8-bit quantisation: what a camera adds to a render. */
+static void camera(wv_image *img, double blur, double noise, uint64_t seed) {
+  wv_error e = {0};
+  if (blur > 0) {
+    wv_image b;
+    if (wv_image_gaussian(img, blur, &b, &e)) die(&e);
+    wv_image_free(img);
+    *img = b;
+  }
   size_t n = (size_t)img->w * img->h * img->c;
   for (size_t i = 0; i < n; i++) {
-    float v = img->data[i] < 0 ? 0 : img->data[i] > 1 ? 1 : img->data[i];
-    img->data[i] = floorf(v * 255.0f + 0.5f) / 255.0f;
+    double v = img->data[i];
+    if (noise > 0) { /* Box-Muller from two hashes of (seed, sample) */
+      double u1 = wv_u01d(wv_hash2(seed, 2 * i, 17)), u2 = wv_u01d(wv_hash2(seed, 2 * i + 1, 17));
+      v += noise / 255.0 * sqrt(-2 * log(u1 + 1e-300)) * cos(2 * 3.14159265358979323846 * u2);
+    }
+    v = v < 0 ? 0 : v > 1 ? 1 : v;
+    img->data[i] = (float)(floor(v * 255.0 + 0.5) / 255.0);
   }
 }
 
-static void print_losses(FILE *f, const wv_pattern_choice *c) {
-  fprintf(f, "{");
-  for (int i = 0; i < WV_NET_PATTERNS; i++)
-    fprintf(f, "%s\"%s\": [%.6f, %.6f]", i ? ", " : "", wv_net_pattern(i), c->gram[i], c->pixel[i]);
-  fprintf(f, "}");
+static int fam_index(const char *name) {
+  static const char *F[4] = {"plain", "basket", "twill", "satin"};
+  for (int i = 0; i < 4; i++)
+    if (!strcmp(wv_weave_family(name), F[i])) return i;
+  return 0;
 }
 
-/* The same renders judged with other weights of the pixel term: how many are right. */
-#define NW 6
-static const double W_PIXEL[NW] = {0, 0.1, 0.2, 0.5, 1, 2};
-static void tally_weights(const wv_pattern_choice *c, int truth, int *right) {
-  for (int w = 0; w < NW; w++) {
-    int best = 0;
-    for (int i = 1; i < WV_NET_PATTERNS; i++)
-      if (c->gram[i] + W_PIXEL[w] * c->pixel[i] < c->gram[best] + W_PIXEL[w] * c->pixel[best]) best = i;
-    right[w] += best == truth;
-  }
-}
-
-static void print_by_weight(const char *key, const int *right, int total) {
-  printf(", \"%s\": {", key);
-  for (int w = 0; w < NW; w++) printf("%s\"%g\": %.4f", w ? ", " : "", W_PIXEL[w], (double)right[w] / total);
-  printf("}");
-}
-
-static void print_matrix(const char *key, int m[WV_NET_PATTERNS][WV_NET_PATTERNS]) {
-  printf(", \"%s\": {", key);
-  for (int t = 0; t < WV_NET_PATTERNS; t++) {
-    printf("%s\"%s\": [", t ? ", " : "", wv_net_pattern(t));
-    for (int c = 0; c < WV_NET_PATTERNS; c++) printf("%s%d", c ? ", " : "", m[t][c]);
-    printf("]");
-  }
-  printf("}");
-}
-
-static void stderr_matrix(const char *title, int m[WV_NET_PATTERNS][WV_NET_PATTERNS]) {
-  fprintf(stderr, "%s (rows: truth, columns: chosen)\n%-8s", title, "");
-  for (int c = 0; c < WV_NET_PATTERNS; c++) fprintf(stderr, " %8s", wv_net_pattern(c));
-  fprintf(stderr, "\n");
-  for (int t = 0; t < WV_NET_PATTERNS; t++) {
-    fprintf(stderr, "%-8s", wv_net_pattern(t));
-    for (int c = 0; c < WV_NET_PATTERNS; c++) fprintf(stderr, " %8d", m[t][c]);
-    fprintf(stderr, "\n");
-  }
+/* 1 S, -1 Z, 0 not a twill */
+static int twill_dir(const char *name) {
+  const char *c = wv_weave_canonical(name);
+  if (!c || strcmp(wv_weave_family(c), "twill")) return 0;
+  return strchr(c, 'z') ? -1 : 1;
 }
 
 static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s, const char *dir,
@@ -101,28 +86,33 @@ static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s
     if (wv_photo_load(path, s, &crop, &photo, NULL, &e) ||
         wv_fabricnet_predict_pattern(net, d, s, &photo, po, y, &c, &e))
       die(&e);
-    fprintf(stderr, "%s: %s, ", names[i], wv_net_pattern(c.best));
-    print_losses(stderr, &c);
-    fprintf(stderr, " (%.2f s)\n", c.seconds);
-    printf("%s{\"photo\": \"%s\", \"chosen\": \"%s\", \"seconds\": %.3f, \"gram_and_pixel_loss\": ", i ? ", " : "", names[i],
-           wv_net_pattern(c.best), c.seconds);
-    print_losses(stdout, &c);
-    printf("}");
+    const char *chosen = wv_weave_builtin_name(c.best);
+    fprintf(stderr, "%s: %s (%s, %s), %.2f s\n", names[i], chosen, wv_weave_family(chosen), c.method, c.seconds);
+    char *cj = wv_pattern_choice_to_json(&c);
+    printf("%s{\"photo\": \"%s\", \"choice\": %s}", i ? ", " : "", names[i], cj ? cj : "null");
+    free(cj);
     wv_image_free(&photo);
   }
   printf("]}\n");
   return 0;
 }
 
+/* Margins the same runs are replayed with (every candidate's loss is computed): family
+ * ties x pattern ties. */
+#define NF 4
+#define NT 4
+static const double FTIES[NF] = {0, 0.05, 0.1, 0.2}, TIES[NT] = {0, 0.02, 0.05, 0.1};
+
 int main(int argc, char **argv) {
   if (argc < 3) {
-    fprintf(stderr, "usage: pattern MODEL SCENE [--per-pattern N] [--seed S] [--spp N] [--w-pixel W] [--target-spp N]\n"
-                    "                     [--oracle]\n"
+    fprintf(stderr, "usage: pattern MODEL SCENE [--per-pattern N] [--seed S] [--spp N] [--target-spp N] [--tie T]\n"
+                    "                           [--family-tie T] [--blur SIGMA] [--noise SIGMA] [--no-lattice]\n"
                     "       pattern MODEL SCENE --real DIR [--spp N]\n");
     return 1;
   }
   const char *mpath = argv[1], *real = NULL;
-  int per = 10, target_spp = 0, oracle = 0;
+  int per = 2, target_spp = 0;
+  double blur = 0, noise = 0;
   uint64_t seed = 2022;
   wv_pattern_opts po;
   wv_pattern_opts_default(&po);
@@ -130,91 +120,117 @@ int main(int argc, char **argv) {
     if (!strcmp(argv[i], "--per-pattern") && i + 1 < argc) per = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--seed") && i + 1 < argc) seed = strtoull(argv[++i], NULL, 10);
     else if (!strcmp(argv[i], "--spp") && i + 1 < argc) po.spp = atoi(argv[++i]);
-    else if (!strcmp(argv[i], "--w-pixel") && i + 1 < argc) po.w_pixel = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--tie") && i + 1 < argc) po.tie = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--family-tie") && i + 1 < argc) po.family_tie = atof(argv[++i]);
     else if (!strcmp(argv[i], "--target-spp") && i + 1 < argc) target_spp = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--blur") && i + 1 < argc) blur = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--noise") && i + 1 < argc) noise = atof(argv[++i]);
     else if (!strcmp(argv[i], "--real") && i + 1 < argc) real = argv[++i];
-    else if (!strcmp(argv[i], "--oracle")) oracle = 1;
+    else if (!strcmp(argv[i], "--no-lattice")) po.lattice = 0;
     else {
       fprintf(stderr, "pattern bench: unknown argument '%s'\n", argv[i]);
       return 1;
     }
   }
   wv_error e = {0};
-  wv_dataset_info info;
-  memset(&info, 0, sizeof info);
-  if (wv_scene_load(argv[2], &info.scene, &e)) die(&e);
-  const wv_scene *s = &info.scene;
+  wv_scene s;
+  if (wv_scene_load(argv[2], &s, &e)) die(&e);
   wv_fabricnet net;
   wv_descriptor *d;
   if (wv_fabricnet_load(mpath, &net, &e) || wv_descriptor_create("default", NULL, &d, &e) ||
-      wv_fabricnet_check(&net, mpath, wv_descriptor_name(d), wv_descriptor_size(d), s, &e))
+      wv_fabricnet_check(&net, mpath, wv_descriptor_name(d), wv_descriptor_size(d), &s, &e))
     die(&e);
   if (real) {
-    int rc = run_real(&net, d, s, real, &po);
+    int rc = run_real(&net, d, &s, real, &po);
     wv_descriptor_free(d);
     wv_fabricnet_free(&net);
     return rc;
   }
-  info.seed = seed, info.per_pattern = per;
-  int conf[WV_NET_PATTERNS][WV_NET_PATTERNS] = {{0}}, conf_oracle[WV_NET_PATTERNS][WV_NET_PATTERNS] = {{0}};
-  int right = 0, right_oracle = 0, total = WV_NET_PATTERNS * per;
-  int right_w[NW] = {0}, right_w_oracle[NW] = {0};
-  double *secs = malloc(sizeof(double) * (size_t)total), margin_sum = 0;
+  /* The loss criterion runs for every candidate so that the choice under each pair of
+   * margins can be replayed (wv_pattern_decide); the reported choice uses the options. */
+  int nb = wv_weave_builtin_count(), total = nb * per;
+  int right = 0, fam_right = 0, dir_right = 0, dir_total = 0, lat_fam = 0, rank_fam = 0, found = 0;
+  int tie_right[NF][NT] = {{0}}, tie_fam[NF][NT] = {{0}}, conf[4][4] = {{0}};
   float *gram = malloc(sizeof(float) * wv_descriptor_size(d));
+  double dens_err = 0;
+  int dens_n = 0;
+  double *secs = malloc(sizeof(double) * (size_t)total);
   wv_render_opts ro = {target_spp, 0, NULL, NULL, NULL};
   for (int k = 0; k < total; k++) {
+    int t = k % nb;
+    const char *tname = wv_weave_builtin_name(t);
     wv_params truth;
     wv_image photo = {0};
-    if (wv_dataset_sample_params(&info, k, &truth, &e) || wv_render(s, &truth, &ro, &photo, NULL, &e)) die(&e);
-    quantise8(&photo);
+    if (wv_params_sample_prior(tname, wv_hash4(seed, (uint64_t)t, (uint64_t)(k / nb), 7), &truth, &e) ||
+        wv_render(&s, &truth, &ro, &photo, NULL, &e))
+      die(&e);
+    camera(&photo, blur, noise, wv_hash4(seed, (uint64_t)k, 3, 5));
     float y[WV_NET_OUT];
     wv_pattern_choice c;
-    if (wv_fabricnet_predict_pattern(&net, d, s, &photo, &po, y, &c, &e)) die(&e);
-    int t = k % WV_NET_PATTERNS;
-    conf[t][c.best]++, right += c.best == t;
-    tally_weights(&c, t, right_w);
-    secs[k] = c.seconds;
-    double second = INFINITY;
-    for (int i = 0; i < WV_NET_PATTERNS; i++)
-      if (i != c.best && c.loss[i] < second) second = c.loss[i];
-    margin_sum += second / c.loss[c.best] - 1;
-    char name[64];
-    wv_dataset_sample_name(k, name, sizeof name);
-    fprintf(stderr, "%-10s -> %-8s ", name, wv_net_pattern(c.best));
-    print_losses(stderr, &c);
-    if (oracle) {
-      /* the true continuous parameters, through the same mapping */
-      float yt[WV_NET_OUT];
-      wv_pattern_choice co;
-      wv_fabricnet_targets(&truth, yt);
-      if (wv_descriptor_forward(d, &photo, gram, &e) ||
-          wv_fabricnet_choose_pattern(&net, d, s, &photo, gram, yt, &po, &co, &e))
-        die(&e);
-      conf_oracle[t][co.best]++, right_oracle += co.best == t;
-      tally_weights(&co, t, right_w_oracle);
-      fprintf(stderr, "  oracle -> %s", wv_net_pattern(co.best));
+    if (wv_fabricnet_predict_pattern(&net, d, &s, &photo, &po, y, &c, &e)) die(&e);
+    /* the choice with the requested margin, and with every other one, from the same scores */
+    int chosen = c.best;
+    if (c.lattice.found) {
+      if (wv_descriptor_forward(d, &photo, gram, &e)) die(&e);
+      for (int i = 0; i < nb; i++)
+        if (wv_pattern_loss(d, &s, &photo, gram, &po, i, &c, &e)) die(&e);
+      for (int f = 0; f < NF; f++)
+        for (int m = 0; m < NT; m++) {
+          int b = wv_pattern_decide(&c, FTIES[f], TIES[m], NULL);
+          tie_right[f][m] += b == t, tie_fam[f][m] += fam_index(wv_weave_builtin_name(b)) == fam_index(tname);
+        }
+      found++;
+      lat_fam += fam_index(wv_weave_builtin_name(c.lattice.best)) == fam_index(tname);
+      rank_fam += fam_index(wv_weave_builtin_name(c.ranking.best)) == fam_index(tname);
     }
-    fprintf(stderr, " (%.2f s)\n", c.seconds);
+    const char *cname = wv_weave_builtin_name(chosen);
+    right += chosen == t;
+    fam_right += fam_index(cname) == fam_index(tname);
+    conf[fam_index(tname)][fam_index(cname)]++;
+    if (twill_dir(tname)) {
+      dir_total++;
+      dir_right += twill_dir(cname) == twill_dir(tname);
+    }
+    if (chosen == t && c.lattice.found)
+      for (int y2 = 0; y2 < 2; y2++, dens_n++)
+        dens_err += fabs(c.lattice.fit[t].density[y2] - truth.density[y2]) / truth.density[y2];
+    secs[k] = c.seconds;
+    fprintf(stderr, "%-12s %6.1f/%6.1f -> %-12s (%s) lattice %s %6.1f/%6.1f (%.2f s)\n", tname, truth.density[0],
+            truth.density[1], cname, c.method, c.lattice.found ? wv_weave_builtin_name(c.lattice.best) : "none",
+            c.lattice.found ? c.lattice.fit[t].density[0] : 0.0, c.lattice.found ? c.lattice.fit[t].density[1] : 0.0,
+            c.seconds);
     wv_image_free(&photo);
   }
-  stderr_matrix("network estimate", conf);
-  if (oracle) stderr_matrix("true continuous parameters", conf_oracle);
-  printf("{\"mode\": \"synthetic\", \"model\": \"%s\", \"scene\": \"%s\", \"seed\": %llu, \"per_pattern\": %d, "
-         "\"target_spp\": %d, \"spp\": %d, \"w_pixel\": %g, \"accuracy\": %.4f, \"choice_seconds_median\": %.3f, "
-         "\"mean_relative_margin\": %.4f",
-         mpath, s->name, (unsigned long long)seed, per, target_spp ? target_spp : s->spp, po.spp, po.w_pixel,
-         (double)right / total, bench_median(secs, total), margin_sum / total);
-  printf(", \"patterns\": [");
-  for (int i = 0; i < WV_NET_PATTERNS; i++) printf("%s\"%s\"", i ? ", " : "", wv_net_pattern(i));
-  printf("]");
-  print_matrix("confusion", conf);
-  print_by_weight("accuracy_by_w_pixel", right_w, total);
-  if (oracle) {
-    printf(", \"accuracy_oracle\": %.4f", (double)right_oracle / total);
-    print_matrix("confusion_oracle", conf_oracle);
-    print_by_weight("accuracy_oracle_by_w_pixel", right_w_oracle, total);
+  static const char *FAM[4] = {"plain", "basket", "twill", "satin"};
+  fprintf(stderr, "families (rows: truth, columns: chosen)\n%-8s", "");
+  for (int j = 0; j < 4; j++) fprintf(stderr, " %7s", FAM[j]);
+  fprintf(stderr, "\n");
+  for (int i = 0; i < 4; i++) {
+    fprintf(stderr, "%-8s", FAM[i]);
+    for (int j = 0; j < 4; j++) fprintf(stderr, " %7d", conf[i][j]);
+    fprintf(stderr, "\n");
   }
-  printf("}\n");
+  printf("{\"mode\": \"synthetic\", \"model\": \"%s\", \"scene\": \"%s\", \"seed\": %llu, \"per_pattern\": %d, "
+         "\"targets\": %d, \"target_spp\": %d, \"blur\": %g, \"noise\": %g, \"spp\": %d, \"tie\": %g, \"family_tie\": %g, "
+         "\"pattern_right\": %.4f, \"family_right\": %.4f, \"twill_direction_right\": %.4f, "
+         "\"lattice_found\": %.4f, \"family_right_lattice_alone\": %.4f, \"family_right_ranking_alone\": %.4f, "
+         "\"density_rel_error_when_right\": %.4f, \"choice_seconds_median\": %.3f, \"by_margins\": {",
+         mpath, s.name, (unsigned long long)seed, per, total, target_spp ? target_spp : s.spp, blur, noise, po.spp, po.tie, po.family_tie,
+         (double)right / total, (double)fam_right / total, dir_total ? (double)dir_right / dir_total : 0.0,
+         (double)found / total, found ? (double)lat_fam / found : 0.0, found ? (double)rank_fam / found : 0.0,
+         dens_n ? dens_err / dens_n : 0.0, bench_median(secs, total));
+  for (int f = 0; f < NF; f++)
+    for (int m = 0; m < NT; m++)
+      printf("%s\"family %g, pattern %g\": {\"pattern\": %.4f, \"family\": %.4f}", f || m ? ", " : "", FTIES[f],
+             TIES[m], found ? (double)tie_right[f][m] / found : 0.0, found ? (double)tie_fam[f][m] / found : 0.0);
+  printf("}");
+  printf(", \"family_confusion\": {");
+  for (int i = 0; i < 4; i++) {
+    printf("%s\"%s\": [", i ? ", " : "", FAM[i]);
+    for (int j = 0; j < 4; j++) printf("%s%d", j ? ", " : "", conf[i][j]);
+    printf("]");
+  }
+  printf("}}\n");
   free(secs), free(gram);
   wv_descriptor_free(d);
   wv_fabricnet_free(&net);

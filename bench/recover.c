@@ -1,207 +1,338 @@
-/* Recovery study for the fit (issue: woven fit).
- *   recover [--per-pattern N] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]
- *     Synthetic: N random parameter sets per pattern from the SPEC priors, rendered
- *     in the cylinder scene with one noise seed, fitted from the pattern's prior
- *     mean with another seed. Prints SSIM(target, fit) and normalised errors.
- *   recover --real DIR [--iters N]
- *     Real photos DIR/<pattern><n>_*.png in the flat45 scene: SSIM start and fit. The
- *     orientation (pattern or pattern90) is the one whose prior mean has the lower
- *     fit loss; both losses are printed.
- * SSIM is always measured on full-quality renders at the scene's resolution and spp.
- * Prints one line per fit, then one JSON object on the last line. */
+/* Recovery study of the capture (the network's estimate, the pattern choice over the
+ * built-in library, then the fit), on synthetic targets or on real photos.
+ *   recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b,...] [--seed S]
+ *           [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]
+ *     Synthetic: N prior draws of every canonical built-in (or of the listed patterns; the
+ *     earlier names twill, satin, twill90, satin90 are built-ins too); every second draw is
+ *     a two-colour cloth (a dark blue warp and a near-white weft, as denim), rendered in the
+ *     scene (default flat45) at its spp and quantised to 8 bits. --start network (default):
+ *     the capture as `woven capture` runs it without --pattern; --start prior: the fit from
+ *     the true pattern's prior mean (the choice is not tested). Per target: the chosen
+ *     pattern and whether its family is right, SSIM (per RGB channel, averaged) of start and
+ *     fit, the ceiling (the true parameters rendered with the fit's noise seed instead of the
+ *     target's), the fit's share of the ceiling, and WSC of the fit and of the ceiling.
+ *   recover --real DIR [--model M] [--iters N] ...
+ *     Every DIR/<pattern><n>_*.png as a photo in the flat45 scene, captured as `woven
+ *     capture` does: the chosen pattern, SSIM (RGB and luminance) and WSC of start and fit,
+ *     the baseline SSIM of the photo's own copy blurred with a Gaussian of sigma 4 px, the
+ *     WSC of the photo's four 256 x 256 quadrants against each other (the mean of the six
+ *     pairs: what the same weave scores), and SSIM and WSC of the fit's render blurred by a
+ *     Gaussian of sigma 0.8 px afterwards (what a camera's blur, which the renderer does not
+ *     model, would change).
+ * SSIM and WSC are measured on full-quality renders at the scene's resolution and spp.
+ * Prints one line per target, then one JSON object on the last line. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "bench_common.h"
+#include "util/hash.h"
 #include "woven/descriptor.h"
+#include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
 #include "woven/photo.h"
 #include "woven/render.h"
-
-static const char *PATTERNS[5] = {"plain", "twill", "satin", "twill90", "satin90"};
 
 static void die(const wv_error *e) {
   fprintf(stderr, "recover: %s\n", e->msg);
   exit(1);
 }
 
-/* Fit p0 to photo; returns the fitted parameters, the scene they are registered
- * to (s with the registration's offset) and the fit time. */
-static double run_fit(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p0,
-                      const wv_fit_opts *o, wv_params *out, wv_scene *out_scene, wv_fit_timing *timing) {
-  wv_fit_state st;
+typedef struct {
+  const wv_scene *s;
+  wv_descriptor *d;
+  wv_fabricnet *net; /* NULL: --start prior */
+  wv_fit_opts o;
+} study;
+
+/* What one capture gave. */
+typedef struct {
+  char chosen[16];
+  const char *method;
+  wv_params start, fit;
+  wv_scene fit_scene; /* the scene with the registration's offset */
+  double seconds, choice_seconds;
+} capture;
+
+/* The capture of photo: the network's estimate and the pattern choice (or the given start),
+ * then the fit. */
+static void run_capture(const study *st, const wv_image *photo, const wv_params *given, capture *c) {
   wv_error err = {0};
-  if (wv_fit_state_init(&st, p0, o, &err)) die(&err);
   double t0 = bench_now();
-  if (wv_fit_run(&st, s, photo, d, o, NULL, NULL, &err)) die(&err);
-  double t = bench_now() - t0;
-  *out = st.params;
-  wv_fit_scene(&st, s, out_scene);
-  if (timing) *timing = st.timing;
-  wv_fit_state_free(&st);
-  return t;
+  memset(c, 0, sizeof *c);
+  if (given) {
+    c->start = *given;
+    c->method = "given";
+  } else {
+    float y[WV_NET_OUT];
+    wv_pattern_choice *pc = malloc(sizeof *pc);
+    if (!pc) exit(1);
+    if (wv_fabricnet_predict_pattern(st->net, st->d, st->s, photo, NULL, y, pc, &err)) die(&err);
+    c->start = pc->params[pc->best];
+    c->method = pc->method;
+    c->choice_seconds = pc->seconds;
+    free(pc);
+  }
+  snprintf(c->chosen, sizeof c->chosen, "%s", c->start.pattern);
+  wv_fit_state fs;
+  if (wv_fit_state_init(&fs, &c->start, &st->o, &err) || wv_fit_run(&fs, st->s, photo, st->d, &st->o, NULL, NULL, &err))
+    die(&err);
+  c->fit = fs.params;
+  wv_fit_scene(&fs, st->s, &c->fit_scene);
+  wv_fit_state_free(&fs);
+  c->seconds = bench_now() - t0;
 }
 
-static double ssim_of(const wv_scene *s, const wv_params *p, const wv_image *ref, int threads) {
+/* SSIM (RGB and luminance) and WSC of a full-quality render of p in s against ref; with
+ * blur > 0 also both of the render blurred by that sigma (blurred[0] SSIM, [1] WSC). */
+static void measure(const wv_scene *s, const wv_params *p, const wv_image *ref, int threads, double *ssim_rgb,
+                    double *ssim_luma, double *wsc, double blur, double blurred[2]) {
   wv_render_opts ro = {0, threads, NULL, NULL, NULL};
-  wv_image img;
+  wv_image img, b;
   wv_error err = {0};
   if (wv_render(s, p, &ro, &img, NULL, &err)) die(&err);
-  double v;
-  if (wv_ssim(ref, &img, WV_SSIM_LUMA, &v, &err)) die(&err);
+  if (wv_ssim(ref, &img, WV_SSIM_RGB, ssim_rgb, &err) || (ssim_luma && wv_ssim(ref, &img, WV_SSIM_LUMA, ssim_luma, &err)) ||
+      wv_wsc(ref, &img, wsc, &err))
+    die(&err);
+  if (blur > 0) {
+    if (wv_image_gaussian(&img, blur, &b, &err) || wv_ssim(ref, &b, WV_SSIM_RGB, &blurred[0], &err) ||
+        wv_wsc(ref, &b, &blurred[1], &err))
+      die(&err);
+    wv_image_free(&b);
+  }
   wv_image_free(&img);
-  return v;
 }
 
-static int synthetic(int per, const wv_fit_opts *o, wv_descriptor *d) {
-  wv_scene s;
+/* WSC of the four quadrants of img against each other: the mean of the six pairs. */
+static double wsc_quadrants(const wv_image *img) {
+  int h = img->w < img->h ? img->w / 2 : img->h / 2;
+  wv_image q[4];
   wv_error err = {0};
-  wv_scene_preset("cylinder", &s, NULL);
-  double err_sum[WV_P_COUNT + 3] = {0}, start_err_sum[WV_P_COUNT + 3] = {0};
-  double ssim_sum = 0, ssim_start_sum = 0, ssim_oracle_sum = 0, time_sum = 0;
-  wv_fit_timing tsum = {0};
-  int n = 0;
-  for (int k = 0; k < 5; k++)
+  for (int k = 0; k < 4; k++) {
+    if (wv_image_alloc(&q[k], h, h, 3, &err)) die(&err);
+    for (int y = 0; y < h; y++)
+      memcpy(wv_image_px(&q[k], 0, y), wv_image_px(img, (k & 1) * h, (k >> 1) * h + y), sizeof(float) * 3 * (size_t)h);
+  }
+  double sum = 0, v;
+  for (int a = 0; a < 4; a++)
+    for (int b = a + 1; b < 4; b++) {
+      if (wv_wsc(&q[a], &q[b], &v, &err)) die(&err);
+      sum += v;
+    }
+  for (int k = 0; k < 4; k++) wv_image_free(&q[k]);
+  return sum / 6;
+}
+
+static void quantise8(wv_image *img) {
+  size_t n = (size_t)img->w * img->h * img->c;
+  for (size_t i = 0; i < n; i++) {
+    float v = img->data[i] < 0 ? 0 : img->data[i] > 1 ? 1 : img->data[i];
+    img->data[i] = floorf(v * 255.0f + 0.5f) / 255.0f;
+  }
+}
+
+/* A two-colour cloth as denim: a dark blue warp and a near-white weft, a little varied. */
+static void two_colour(wv_params *p, uint64_t seed) {
+  double j[4];
+  for (int k = 0; k < 4; k++) j[k] = wv_u01d(wv_hash2(seed, (uint64_t)k, 99));
+  double warp[3] = {0.03 + 0.04 * j[0], 0.07 + 0.06 * j[1], 0.25 + 0.2 * j[2]};
+  double weft[3] = {0.75 + 0.15 * j[3], 0.74 + 0.15 * j[3], 0.68 + 0.15 * j[3]};
+  for (int c = 0; c < 3; c++) {
+    p->diffuse[WV_WARP][c] = warp[c], p->diffuse[WV_WEFT][c] = weft[c];
+    p->specular[WV_WARP][c] = sqrt(warp[c]), p->specular[WV_WEFT][c] = sqrt(weft[c]);
+  }
+}
+
+static const char *family(const char *pattern) { return wv_weave_family(pattern); }
+
+#define MAXP 32
+static int synthetic(const study *st, int per, const char **pats, int np, uint64_t seed, int prior_start) {
+  wv_error err = {0};
+  const wv_scene *s = st->s;
+  double sum_fit = 0, sum_start = 0, sum_ceil = 0, sum_ratio = 0, sum_wsc = 0, sum_wsc_ceil = 0, sum_t = 0;
+  double pat_fit[MAXP] = {0}, pat_ceil[MAXP] = {0}, pat_wsc[MAXP] = {0};
+  int pat_fam[MAXP] = {0}, fam_right = 0, n = 0, two = 0;
+  double two_fit = 0, two_ceil = 0;
+  for (int k = 0; k < np; k++)
     for (int i = 0; i < per; i++) {
-      wv_params target, start, fit;
-      wv_scene fs;
-      if (wv_params_sample_prior(PATTERNS[k], 1000u * k + i, &target, &err)) die(&err);
-      wv_render_opts ro = {0, o->threads, NULL, NULL, NULL};
+      wv_params target, prior;
+      uint64_t ts = wv_hash4(seed, (uint64_t)k, (uint64_t)i, 1);
+      if (wv_params_sample_prior(pats[k], ts, &target, &err)) die(&err);
+      int denim = i % 2 == 1;
+      if (denim) two_colour(&target, ts);
+      wv_render_opts ro = {0, st->o.threads, NULL, NULL, NULL};
       wv_image photo;
-      if (wv_render(&s, &target, &ro, &photo, NULL, &err)) die(&err);
-      wv_params_default(PATTERNS[k], &start, NULL);
-      start.seed = target.seed + 7919; /* another noise seed than the target's */
-      wv_fit_timing t;
-      time_sum += run_fit(&s, &photo, d, &start, o, &fit, &fs, &t);
-      tsum.render += t.render, tsum.gradient += t.gradient, tsum.descriptor += t.descriptor;
-      tsum.discrete += t.discrete;
-      tsum.registration += t.registration;
-      double s0 = ssim_of(&s, &start, &photo, o->threads), s1 = ssim_of(&fs, &fit, &photo, o->threads);
-      /* the ceiling: the true parameters rendered with the fit's noise seed */
+      if (wv_render(s, &target, &ro, &photo, NULL, &err)) die(&err);
+      quantise8(&photo);
+      capture c;
+      if (prior_start && wv_params_default(pats[k], &prior, &err)) die(&err);
+      run_capture(st, &photo, prior_start ? &prior : NULL, &c);
+      double s0, s1, sc, w0, w1, wc;
+      measure(s, &c.start, &photo, st->o.threads, &s0, NULL, &w0, 0, NULL);
+      measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &s1, NULL, &w1, 0, NULL);
+      /* the ceiling: the truth with the fit's noise seed */
       wv_params oracle = target;
-      oracle.seed = start.seed;
-      double so = ssim_of(&s, &oracle, &photo, o->threads);
-      ssim_sum += s1, ssim_start_sum += s0, ssim_oracle_sum += so;
-      for (int j = 0; j < WV_P_COUNT; j++) {
-        double lo, hi;
-        wv_param_range(j, &lo, &hi);
-        err_sum[j] += fabs(wv_param_get(&fit, j) - wv_param_get(&target, j)) / (hi - lo);
-        start_err_sum[j] += fabs(wv_param_get(&start, j) - wv_param_get(&target, j)) / (hi - lo);
-      }
-      for (int y = 0; y < 2; y++) {
-        err_sum[WV_P_COUNT + y] += fabs(fit.density[y] - target.density[y]) / 230.0;
-        start_err_sum[WV_P_COUNT + y] += fabs(start.density[y] - target.density[y]) / 230.0;
-      }
-      err_sum[WV_P_COUNT + 2] += abs(fit.noise_level - target.noise_level) / 10.0;
-      start_err_sum[WV_P_COUNT + 2] += abs(start.noise_level - target.noise_level) / 10.0;
+      oracle.seed = c.fit.seed;
+      measure(s, &oracle, &photo, st->o.threads, &sc, NULL, &wc, 0, NULL);
+      int fam_ok = !strcmp(family(c.chosen), family(pats[k]));
+      fam_right += fam_ok, pat_fam[k] += fam_ok;
+      sum_fit += s1, sum_start += s0, sum_ceil += sc, sum_ratio += s1 / sc, sum_wsc += w1, sum_wsc_ceil += wc;
+      sum_t += c.seconds;
+      pat_fit[k] += s1, pat_ceil[k] += sc, pat_wsc[k] += w1;
+      if (denim) two++, two_fit += s1, two_ceil += sc;
       n++;
-      printf("%-8s %2d: SSIM start %.4f fit %.4f truth-with-fit-seed %.4f  (%.1f s)\n", PATTERNS[k], i, s0, s1, so,
-             t.total);
+      printf("%-12s %d%s -> %-12s %-5s SSIM start %.4f fit %.4f ceiling %.4f (%.3f)  WSC fit %.3f ceiling %.3f  "
+             "density %.1f/%.1f (truth %.0f/%.0f)  %.1f s\n",
+             pats[k], i, denim ? " two-colour" : "", c.chosen, fam_ok ? "ok" : "WRONG", s0, s1, sc, s1 / sc, w1, wc,
+             c.fit.density[0], c.fit.density[1], target.density[0], target.density[1], c.seconds);
       fflush(stdout);
       wv_image_free(&photo);
     }
-  printf("{\"mode\": \"synthetic\", \"scene\": \"cylinder\", \"fits\": %d, \"iters\": %d, \"iter_spp\": %d, "
-         "\"iter_scale\": %d, \"ssim_start_mean\": %.4f, \"ssim_fit_mean\": %.4f, \"ssim_truth_other_seed_mean\": %.4f, "
-         "\"fit_s_mean\": %.2f, "
-         "\"fit_breakdown_s_mean\": {\"render\": %.2f, \"gradient\": %.2f, \"descriptor\": %.2f, \"discrete\": %.2f, \"registration\": %.2f}, "
-         "\"normalised_error_fit\": {",
-         n, o->iters, o->iter_spp, o->iter_scale, ssim_start_sum / n, ssim_sum / n, ssim_oracle_sum / n, time_sum / n, tsum.render / n,
-         tsum.gradient / n, tsum.descriptor / n, tsum.discrete / n, tsum.registration / n);
-  for (int j = 0; j < WV_P_COUNT + 3; j++)
-    printf("%s\"%s\": %.4f", j ? ", " : "",
-           j < WV_P_COUNT ? wv_param_name(j) : j == WV_P_COUNT ? "density.warp" : j == WV_P_COUNT + 1 ? "density.weft" : "noise_level",
-           err_sum[j] / n);
-  printf("}, \"normalised_error_start\": {");
-  for (int j = 0; j < WV_P_COUNT + 3; j++)
-    printf("%s\"%s\": %.4f", j ? ", " : "",
-           j < WV_P_COUNT ? wv_param_name(j) : j == WV_P_COUNT ? "density.warp" : j == WV_P_COUNT + 1 ? "density.weft" : "noise_level",
-           start_err_sum[j] / n);
+  printf("{\"mode\": \"synthetic\", \"scene\": \"%s\", \"start\": \"%s\", \"targets\": %d, \"per_pattern\": %d, "
+         "\"iters\": %d, \"iter_spp\": %d, \"iter_scale\": %d, \"ssim\": \"rgb\", \"ssim_start_mean\": %.4f, "
+         "\"ssim_fit_mean\": %.4f, \"ssim_ceiling_mean\": %.4f, \"fit_over_ceiling\": %.4f, "
+         "\"mean_fit_over_ceiling\": %.4f, \"two_colour_fit_over_ceiling\": %.4f, \"wsc_fit_mean\": %.4f, "
+         "\"wsc_ceiling_mean\": %.4f, \"family_right\": %.4f, \"capture_s_mean\": %.1f, \"per_pattern_results\": {",
+         s->name, prior_start ? "prior" : "network", n, per, st->o.iters, st->o.iter_spp, st->o.iter_scale,
+         sum_start / n, sum_fit / n, sum_ceil / n, sum_fit / sum_ceil, sum_ratio / n, two ? two_fit / two_ceil : 0.0,
+         sum_wsc / n, sum_wsc_ceil / n, (double)fam_right / n, sum_t / n);
+  for (int k = 0; k < np; k++)
+    printf("%s\"%s\": {\"ssim_fit\": %.4f, \"ceiling\": %.4f, \"wsc_fit\": %.4f, \"family_right\": %d}", k ? ", " : "",
+           pats[k], pat_fit[k] / per, pat_ceil[k] / per, pat_wsc[k] / per, pat_fam[k]);
   printf("}}\n");
   return 0;
 }
 
-static int real(const char *dir, const wv_fit_opts *o, wv_descriptor *d) {
-  wv_scene s;
-  wv_error err = {0};
-  wv_scene_preset("flat45", &s, NULL);
+static int real(const study *st, const char *dir) {
   char names[64][256];
   int n = bench_list_png(dir, names);
   if (n < 0) {
     fprintf(stderr, "recover: cannot open %s\n", dir);
     return 1;
   }
-  printf("{\"mode\": \"real\", \"scene\": \"flat45\", \"iters\": %d, \"photos\": [", o->iters);
-  char json[8192] = "";
+  char json[16384] = "";
   size_t jl = 0;
-  int raised = 0;
+  double sum[5] = {0};
+  int fam_right = 0, counted = 0;
   for (int i = 0; i < n; i++) {
-    char pattern[32] = "";
-    for (int k = 0; k < 32 && names[i][k] && !(names[i][k] >= '0' && names[i][k] <= '9') && names[i][k] != '_'; k++)
-      pattern[k] = names[i][k], pattern[k + 1] = 0;
-    wv_params start, fit;
-    wv_scene fs;
-    if (wv_params_default(pattern, &start, &err)) {
-      fprintf(stderr, "recover: %s: no pattern in the file name (%s)\n", names[i], err.msg);
-      continue;
-    }
+    char named[32] = ""; /* the weave the file name gives: its family is the truth */
+    for (int k = 0; k < 31 && names[i][k] && !(names[i][k] >= '0' && names[i][k] <= '9') && names[i][k] != '_'; k++)
+      named[k] = names[i][k], named[k + 1] = 0;
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, names[i]);
-    wv_image photo;
-    if (wv_photo_load(path, &s, NULL, &photo, NULL, &err)) die(&err);
-    /* The file names the weave, not its orientation ("as seen in the photo"): the
-     * pattern or its 90-degree variant, whichever prior mean the fit's own loss
-     * prefers (decided before fitting, without SSIM). */
-    double loss[2] = {0, 0};
-    char rotated[40];
-    snprintf(rotated, sizeof rotated, "%s90", pattern);
-    wv_params alt;
-    if (!wv_params_default(rotated, &alt, NULL)) {
-      wv_fit_record rec;
-      if (wv_fit_loss(&s, &photo, d, &start, o, &rec, &err)) die(&err);
-      loss[0] = rec.loss;
-      if (wv_fit_loss(&s, &photo, d, &alt, o, &rec, &err)) die(&err);
-      loss[1] = rec.loss;
-      if (loss[1] < loss[0]) start = alt, snprintf(pattern, sizeof pattern, "%s", rotated);
-    }
-    double t = run_fit(&s, &photo, d, &start, o, &fit, &fs, NULL);
-    double s0 = ssim_of(&s, &start, &photo, o->threads), s1 = ssim_of(&fs, &fit, &photo, o->threads);
-    raised += s1 > s0;
-    fprintf(stderr, "%s (%s): SSIM start %.4f fit %.4f (%.1f s)\n", names[i], pattern, s0, s1, t);
+    wv_image photo, blurred;
+    wv_error err = {0};
+    if (wv_photo_load(path, st->s, NULL, &photo, NULL, &err)) die(&err);
+    double base;
+    if (wv_image_gaussian(&photo, 4.0, &blurred, &err) || wv_ssim(&photo, &blurred, WV_SSIM_RGB, &base, &err)) die(&err);
+    wv_image_free(&blurred);
+    capture c;
+    run_capture(st, &photo, NULL, &c);
+    double s0, s1, l0, l1, w0, w1, bl[2], quads = wsc_quadrants(&photo);
+    measure(st->s, &c.start, &photo, st->o.threads, &s0, &l0, &w0, 0, NULL);
+    measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &s1, &l1, &w1, 0.8, bl);
+    int known = wv_weave_is_builtin(named), ok = known && !strcmp(family(named), family(c.chosen));
+    fam_right += ok, counted += known;
+    sum[0] += base, sum[1] += s0, sum[2] += s1, sum[3] += w0, sum[4] += w1;
+    printf("%-14s -> %-12s (%s, family %s)  blurred copy SSIM %.4f, quadrants WSC %.3f | SSIM start %.4f fit %.4f "
+           "(luminance %.4f -> %.4f) | WSC start %.3f fit %.3f | fit blurred 0.8 px: SSIM %.4f WSC %.3f | %.1f s\n",
+           names[i], c.chosen, c.method, !known ? "?" : ok ? "right" : "WRONG", base, quads, s0, s1, l0, l1, w0, w1,
+           bl[0], bl[1], c.seconds);
+    fflush(stdout);
     jl += (size_t)snprintf(json + jl, sizeof json - jl,
-                           "%s{\"file\": \"%s\", \"pattern\": \"%s\", \"prior_loss\": [%.6f, %.6f], "
-                           "\"ssim_start\": %.4f, \"ssim_fit\": %.4f, \"fit_s\": %.1f}",
-                           i ? ", " : "", names[i], pattern, loss[0], loss[1], s0, s1, t);
+                           "%s{\"file\": \"%s\", \"chosen\": \"%s\", \"family_right\": %s, \"method\": \"%s\", "
+                           "\"blurred_copy_ssim\": %.4f, \"wsc_quadrants\": %.4f, \"ssim_start\": %.4f, "
+                           "\"ssim_fit\": %.4f, \"fit_blurred_0.8px\": {\"ssim\": %.4f, \"wsc\": %.4f}, "
+                           "\"ssim_luma_start\": %.4f, \"ssim_luma_fit\": %.4f, \"wsc_start\": %.4f, \"wsc_fit\": %.4f, "
+                           "\"density\": [%.1f, %.1f], \"capture_s\": %.1f, \"choice_s\": %.1f}",
+                           i ? ", " : "", names[i], c.chosen, !known ? "null" : ok ? "true" : "false", c.method, base,
+                           quads, s0, s1, bl[0], bl[1], l0, l1, w0, w1, c.fit.density[0], c.fit.density[1], c.seconds,
+                           c.choice_seconds);
     if (jl >= sizeof json) jl = sizeof json - 1;
     wv_image_free(&photo);
   }
-  printf("%s], \"raised\": %d, \"count\": %d}\n", json, raised, n);
+  printf("{\"mode\": \"real\", \"scene\": \"%s\", \"iters\": %d, \"ssim\": \"rgb\", \"photos\": [%s], "
+         "\"blurred_copy_ssim_mean\": %.4f, \"ssim_start_mean\": %.4f, \"ssim_fit_mean\": %.4f, \"wsc_start_mean\": %.4f, "
+         "\"wsc_fit_mean\": %.4f, \"family_right\": %d, \"count\": %d}\n",
+         st->s->name, st->o.iters, json, sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n, sum[4] / n, fam_right, counted);
   return 0;
 }
 
 int main(int argc, char **argv) {
-  wv_fit_opts o;
-  wv_fit_opts_default(&o);
-  int per = 10;
-  const char *real_dir = NULL;
+  study st;
+  wv_fit_opts_default(&st.o);
+  int per = 4, prior_start = 0;
+  uint64_t seed = 1;
+  const char *real_dir = NULL, *scene_name = "flat45", *model = NULL, *patlist = NULL;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--per-pattern") && i + 1 < argc) per = atoi(argv[++i]);
-    else if (!strcmp(argv[i], "--iters") && i + 1 < argc) o.iters = atoi(argv[++i]);
-    else if (!strcmp(argv[i], "--iter-spp") && i + 1 < argc) o.iter_spp = atoi(argv[++i]);
-    else if (!strcmp(argv[i], "--iter-scale") && i + 1 < argc) o.iter_scale = atoi(argv[++i]);
-    else if (!strcmp(argv[i], "--threads") && i + 1 < argc) o.threads = atoi(argv[++i]);
-    else if (!strcmp(argv[i], "--real") && i + 1 < argc) real_dir = argv[++i];
+    else if (!strcmp(argv[i], "--iters") && i + 1 < argc) st.o.iters = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--iter-spp") && i + 1 < argc) st.o.iter_spp = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--iter-scale") && i + 1 < argc) st.o.iter_scale = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--threads") && i + 1 < argc) st.o.threads = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--seed") && i + 1 < argc) seed = strtoull(argv[++i], NULL, 10);
+    else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene_name = argv[++i];
+    else if (!strcmp(argv[i], "--model") && i + 1 < argc) model = argv[++i];
+    else if (!strcmp(argv[i], "--patterns") && i + 1 < argc) patlist = argv[++i];
+    else if (!strcmp(argv[i], "--start") && i + 1 < argc) {
+      const char *v = argv[++i];
+      if (strcmp(v, "network") && strcmp(v, "prior")) {
+        fprintf(stderr, "recover: --start is network or prior\n");
+        return 1;
+      }
+      prior_start = !strcmp(v, "prior");
+    } else if (!strcmp(argv[i], "--real") && i + 1 < argc) real_dir = argv[++i];
     else {
-      fprintf(stderr, "usage: recover [--per-pattern N] [--iters N] [--iter-spp N] [--iter-scale N] [--real DIR]\n");
+      fprintf(stderr, "usage: recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b] [--seed S]\n"
+                      "               [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]\n"
+                      "       recover --real DIR [--model M] [--iters N] ...\n");
       return 1;
     }
   }
-  wv_descriptor *d;
+  if (per < 1 || st.o.iters < 0) {
+    fprintf(stderr, "recover: --per-pattern must be at least 1 and --iters not negative\n");
+    return 1;
+  }
   wv_error err = {0};
-  if (wv_descriptor_create_default(&d, &err)) die(&err);
-  int rc = real_dir ? real(real_dir, &o, d) : synthetic(per, &o, d);
-  wv_descriptor_free(d);
+  wv_scene s;
+  if (wv_scene_load(real_dir ? "flat45" : scene_name, &s, &err)) die(&err);
+  st.s = &s;
+  if (wv_descriptor_create_default(&st.d, &err)) die(&err);
+  wv_fabricnet net;
+  st.net = NULL;
+  if (!prior_start || real_dir) {
+    char mpath[4096];
+    if (model) snprintf(mpath, sizeof mpath, "%s", model);
+    else snprintf(mpath, sizeof mpath, "%s/models/fabricnet-%s.bin", WOVEN_SOURCE_DIR, s.name);
+    if (wv_fabricnet_load(mpath, &net, &err) ||
+        wv_fabricnet_check(&net, mpath, wv_descriptor_name(st.d), wv_descriptor_size(st.d), &s, &err))
+      die(&err);
+    st.net = &net;
+  }
+  int rc;
+  if (real_dir) {
+    rc = real(&st, real_dir);
+  } else {
+    const char *pats[MAXP];
+    char buf[1024];
+    int np = 0;
+    if (patlist) {
+      snprintf(buf, sizeof buf, "%s", patlist);
+      for (char *t = strtok(buf, ","); t && np < MAXP; t = strtok(NULL, ",")) {
+        if (!wv_weave_is_builtin(t)) {
+          fprintf(stderr, "recover: '%s' is not a built-in pattern\n", t);
+          return 1;
+        }
+        pats[np++] = t;
+      }
+    } else {
+      for (int i = 0; i < wv_weave_builtin_count(); i++) pats[np++] = wv_weave_builtin_name(i);
+    }
+    rc = synthetic(&st, per, pats, np, seed, prior_start);
+  }
+  if (st.net) wv_fabricnet_free(st.net);
+  wv_descriptor_free(st.d);
   return rc;
 }

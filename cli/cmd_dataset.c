@@ -15,12 +15,16 @@
 
 static const char *HELP =
     "usage: woven dataset --scene S.json|cylinder|flat45 --per-pattern N -o DIR [--seed N] [--spp N]\n"
-    "                     [--jobs N] [--descriptor default|vgg19] [--vgg19-weights FILE] [--quiet] [--json]\n"
+    "                     [--no-augment] [--jobs N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
+    "                     [--quiet] [--json]\n"
     "\n"
-    "Renders N samples for each of the five patterns (plain, twill, satin, twill90, satin90),\n"
-    "parameters drawn from the SPEC section 5 priors, and caches their descriptor features.\n"
+    "Renders N samples for each built-in weave pattern (plain, basket, the twills, the satins and\n"
+    "their 90-degree variants), parameters drawn from the SPEC section 5 priors, passes each\n"
+    "through a camera (glints, defocus, exposure and white balance, sensor noise, JPEG), and\n"
+    "caches their descriptor features.\n"
     "  --seed N      dataset seed (default 1); sample parameters are a function of (seed, pattern, i)\n"
     "  --spp N       samples per pixel (default: the scene's)\n"
+    "  --no-augment  store the renders as they are (8-bit), without the camera\n"
     "  --jobs N      samples rendered at once, one thread each (default: all cores)\n"
     "Writes DIR/dataset.json and DIR/samples/<pattern>_<i>.{json,png,feat} (docs/fabricnet.md).\n"
     "Run the same command again to resume after an interruption: finished samples are kept,\n"
@@ -50,6 +54,7 @@ int cmd_dataset(int argc, char **argv) {
   cli_args_init(&a, argc, argv, c.cmd);
   const char *scene_name = NULL, *dir = NULL, *desc_name = "default", *weights = NULL;
   long per = 0, seed = 1, spp = 0, jobs = 0;
+  int augment = 1;
   for (const char *s; (s = cli_next(&a));) {
     if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
       fputs(HELP, stdout);
@@ -64,6 +69,8 @@ int cmd_dataset(int argc, char **argv) {
       if (!cli_int(&a, "--seed", 0, 2147483647L, &seed)) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--spp")) {
       if (!cli_int(&a, "--spp", 1, WV_SCENE_MAX_SPP, &spp)) return EXIT_USAGE;
+    } else if (!strcmp(s, "--no-augment")) {
+      augment = 0;
     } else if (cli_is(&a, s, "--jobs")) {
       if (!cli_int(&a, "--jobs", 1, 1024, &jobs)) return EXIT_USAGE;
     } else if (cli_is(&a, s, "--descriptor")) {
@@ -99,6 +106,7 @@ int cmd_dataset(int argc, char **argv) {
   snprintf(want.scene_json, sizeof want.scene_json, "%s", sj);
   free(sj);
   want.version = WV_DATASET_VERSION, want.renderer = WV_RENDER_VERSION, want.seed = (uint64_t)seed, want.per_pattern = (int)per;
+  want.augment = augment;
   want.spp = spp ? (int)spp : want.scene.spp;
   if (jobs == 0) jobs = omp_get_max_threads();
 
@@ -144,7 +152,9 @@ int cmd_dataset(int argc, char **argv) {
       wv_scene hs = have.scene;
       char *hj = wv_scene_to_json(&hs);
       char *wj = wv_scene_to_json(&want.scene);
-      const char *why = have.seed != want.seed              ? "seed"
+      const char *why = have.version != want.version        ? "format version"
+                        : have.seed != want.seed            ? "seed"
+                        : have.augment != want.augment      ? "camera augmentation setting"
                         : strcmp(have.descriptor, want.descriptor) || have.n_feat != want.n_feat ? "descriptor"
                         : have.spp != want.spp               ? "spp"
                         : have.renderer != want.renderer     ? "renderer version"
@@ -183,7 +193,7 @@ int cmd_dataset(int argc, char **argv) {
   rc = wv_dist_max_int(&dist, rc ? rc : shared[0]);
   want.per_pattern = shared[1];
 
-  int total = WV_NET_PATTERNS * want.per_pattern, ntodo = 0, nbefore = 0, nleft = 0;
+  int total = wv_dataset_pattern_count(&want) * want.per_pattern, ntodo = 0, nbefore = 0, nleft = 0;
   int *todo = NULL;
   if (!rc && wv_dist_share(&dist, total, sample_done, &(sample_check){dir, &want}, &todo, &ntodo, &nleft, &err))
     rc = cli_fail(&c, &err);

@@ -9,6 +9,7 @@
 
 #include "cli.h"
 #include "util/json.h"
+#include "woven/analysis.h"
 #include "woven/descriptor.h"
 #include "woven/fit.h"
 #include "woven/io.h"
@@ -24,13 +25,14 @@ static const char *HELP =
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
-    "                 [--register-radius N]\n"
+    "                 [--register-radius N] [--w-struct X] [--no-colour-split] [--camera-blur auto|S]\n"
     "                 [--seed N] [--threads N] [--drape S.json|none]\n"
     "                 [--force] [--quiet] [--json]\n"
     "       woven fit --resume DIR [--iters N] [--quiet] [--json]\n"
     "\n"
     "Refines fabric parameters so that a render of the scene matches the photo (paper 4.3):\n"
-    "Gram-matrix loss + 16x8 pixel loss + heightfield prior, Adam (lr 0.01) on the continuous\n"
+    "Gram-matrix loss + 16x8 pixel loss + heightfield prior + the weave's spectrum (structure),\n"
+    "Adam (lr 0.01) on the continuous\n"
     "parameters, random steps of noise level and densities every 5 iterations.\n"
     "  --init P.json     start here; --pattern NAME starts from the pattern's prior mean\n"
     "  --iters N         iterations (default 200)\n"
@@ -41,6 +43,11 @@ static const char *HELP =
     "  --register-radius N  then register the weave to the photo: densities on a 2-D grid\n"
     "                    +-N yarns/inch refined to 0.1, and the weave's offset, by phase\n"
     "                    correlation; kept if the SSIM rises (default 6; 0 = off)\n"
+    "  --w-struct X      weight of the structure term, the weave's log power spectrum (default 0.002;\n"
+    "                    0 = off)\n"
+    "  --no-colour-split do not try starts that split the warp and weft diffuse colours\n"
+    "  --camera-blur auto|S  the camera's blur, a Gaussian of sigma S pixels on the radiance in every\n"
+    "                    render; auto (default): the scene's, else measured from the photo's spectrum\n"
     "  --iter-scale N    iterate on the image downscaled N times (default 1); the final render\n"
     "                    and SSIM use the scene's full resolution and spp\n"
     "  --drape S.json    the mesh scene the report shows the fit on (default: the bundled\n"
@@ -48,9 +55,12 @@ static const char *HELP =
     "  --force           replace an earlier fit in DIR (it stays whole until the new one is done)\n"
     "  --resume DIR      continue a fit that was stopped (checkpoints at the start and every 10\n"
     "                    iterations), or add iterations to a finished one\n"
-    "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), loss.svg,\n"
-    "report.html, viewer.html (woven view), drape.png (the fit on a draped cloth), maps/, and fit.json + checkpoint.json (for --resume).\n"
-    "DIR is replaced whole at the end; it may not hold other files, nor any input.\n";
+    "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), zoom.png (their\n"
+    "centre crop enlarged 4x), spectra.png (their weave spectra), loss.svg, report.html (with\n"
+    "SSIM and WSC, the weave-spectrum correlation, of start and fit), viewer.html (woven view),\n"
+    "drape.png (the fit on a draped cloth), maps/, and fit.json +\n"
+    "checkpoint.json (for --resume). DIR is replaced whole at the end; it may not hold other\n"
+    "files, nor any input.\n";
 
 int cli_parse_fit_opt(cli_args *a, const char *s, fit_job *job, int *iters_given, int *handled) {
   wv_fit_opts *o = &job->opts;
@@ -78,6 +88,23 @@ int cli_parse_fit_opt(cli_args *a, const char *s, fit_job *job, int *iters_given
   } else if (cli_is(a, s, "--register-radius")) {
     if (!cli_int(a, "--register-radius", 0, WV_FIT_MAX_REGISTER_RADIUS, &v)) return EXIT_USAGE;
     o->register_radius = (int)v;
+  } else if (cli_is(a, s, "--w-struct")) {
+    const char *t = cli_value(a, "--w-struct");
+    char *end;
+    if (!t) return EXIT_USAGE;
+    double w = strtod(t, &end);
+    if (*end || !(w >= 0 && w <= 100)) return cli_usage_error(a->cmd, "--w-struct must be a number in [0, 100]");
+    o->w_struct = w;
+  } else if (cli_is(a, s, "--camera-blur")) {
+    const char *t = cli_value(a, "--camera-blur");
+    char *end;
+    if (!t) return EXIT_USAGE;
+    double b = strcmp(t, "auto") ? strtod(t, &end) : WV_FIT_PSF_AUTO;
+    if (strcmp(t, "auto") && (*end || !(b >= 0 && b <= WV_PSF_MAX_SIGMA)))
+      return cli_usage_error(a->cmd, "--camera-blur must be 'auto' or a sigma in pixels in [0, %g]", WV_PSF_MAX_SIGMA);
+    o->psf_sigma = b;
+  } else if (!strcmp(s, "--no-colour-split")) {
+    o->colour_split = 0;
   } else if (cli_is(a, s, "--threads")) {
     if (!cli_int(a, "--threads", 1, 1024, &v)) return EXIT_USAGE;
     o->threads = (int)v;
@@ -124,8 +151,9 @@ static int on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
   const wv_fit_record *r = &st->log[st->iter - 1];
   if (u->bar.enabled) {
     double el = cli_now() - u->bar.start, f = (double)st->iter / o->iters;
-    fprintf(stderr, "\rfit %3d/%d  loss %.5f (Gram %.5f, pixel %.4f, prior %.3f)  %.0fs, %.0fs left ", st->iter,
-            o->iters, r->loss, r->gram, r->pixel, r->prior, el, f > 0 ? el * (1 - f) / f : 0.0);
+    fprintf(stderr, "\rfit %3d/%d  loss %.5f (Gram %.5f, pixel %.4f, prior %.3f, structure %.3f)  %.0fs, %.0fs left ",
+            st->iter, o->iters, r->loss, r->gram, r->pixel, r->prior, r->structure, el,
+            f > 0 ? el * (1 - f) / f : 0.0);
     fflush(stderr);
   }
   if (u->ckpt && o->checkpoint_every > 0 && (st->iter % o->checkpoint_every == 0 || st->iter == o->iters)) {
@@ -141,7 +169,7 @@ static int on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
 static const char *const FIT_FILES[] = {"fit.json",    "checkpoint.json", "params.json", "render.png",
                                         "start.png",   "photo.png",       "compare.png", "loss.svg",
                                         "report.html", "viewer.html", "drape.png", "maps",            "scene.json",  "network.json",
-                                        NULL};
+                                        "zoom.png",    "spectra.png", NULL};
 
 typedef enum { FIT_DIR_NONE, FIT_DIR_UNFINISHED, FIT_DIR_FINISHED } fit_dir_state;
 
@@ -255,14 +283,18 @@ static int render_drape(const fit_job *job, const char *dir, const wv_params *p,
 }
 
 static wv_status write_results(const fit_job *job, const char *dir, const wv_fit_state *st, const wv_fit_opts *o,
-                               const wv_scene *fit_scene, double *ssim_start, double *ssim_fit, wv_error *err) {
+                               const wv_scene *fit_scene, double *ssim_start, double *ssim_fit, wv_weave_views *wv,
+                               wv_error *err) {
   wv_render_opts ro = {0, o->threads, NULL, NULL, NULL};
   wv_image r_start = {0}, r_fit = {0}, cmp = {0};
   char path[4096], pphoto[4096], pstart[4096], pfit[4096];
-  wv_status rc = wv_render(job->scene, &st->start, &ro, &r_start, NULL, err);
+  wv_scene start_scene = *job->scene; /* the start seen through the same camera blur as the fit */
+  start_scene.psf_sigma = fit_scene->psf_sigma;
+  wv_status rc = wv_render(&start_scene, &st->start, &ro, &r_start, NULL, err);
   if (!rc) rc = wv_render(fit_scene, &st->params, &ro, &r_fit, NULL, err);
   if (!rc) rc = wv_ssim(job->photo, &r_start, WV_SSIM_LUMA, ssim_start, err);
   if (!rc) rc = wv_ssim(job->photo, &r_fit, WV_SSIM_LUMA, ssim_fit, err);
+  if (!rc) rc = wv_weave_views_write(dir, job->photo, &r_start, &r_fit, wv, err);
   const wv_image *side[3] = {job->photo, &r_start, &r_fit};
   if (!rc) rc = wv_image_hconcat(side, 3, 4, &cmp, err);
   snprintf(pphoto, sizeof pphoto, "%s/photo.png", dir);
@@ -279,9 +311,13 @@ static wv_status write_results(const fit_job *job, const char *dir, const wv_fit
   if (!rc) drape = render_drape(job, dir, &st->params, o->threads, pdrape, sizeof pdrape, note, sizeof note, err, &rc);
   char *svg = rc ? NULL : wv_loss_svg(st->log, st->iter, o);
   if (!rc) rc = write_text(dir, "loss.svg", svg, err);
-  wv_report rep = {job->title,  pphoto,      pstart,     pfit,       job->start_label, *ssim_start, *ssim_fit,
-                   &st->start,  &st->params, svg,        &st->timing, st->iter,        wv_descriptor_name(job->desc),
-                   job->pattern_choice, "viewer.html", drape ? pdrape : NULL, note[0] ? note : NULL};
+  wv_report rep = {.title = job->title, .photo_png = pphoto, .start_png = pstart, .fit_png = pfit,
+                   .start_label = job->start_label, .ssim_start = *ssim_start, .ssim_fit = *ssim_fit,
+                   .start = &st->start, .fit = &st->params, .loss_svg = svg, .timing = &st->timing,
+                   .iters = st->iter, .descriptor = wv_descriptor_name(job->desc),
+                   .pattern_choice = job->pattern_choice, .weave = wv, .camera_blur = fit_scene->psf_sigma,
+                   .viewer_html = "viewer.html", .drape_png = drape ? pdrape : NULL,
+                   .drape_note = note[0] ? note : NULL};
   /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
   wv_view_opts vo = {&st->params, fit_scene, pphoto, job->title};
   snprintf(path, sizeof path, "%s/viewer.html", dir);
@@ -394,12 +430,13 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
       rc = copy_into(job->dir, "network.json", od.tmp, 1, &err);
   }
   double ssim_start = 0, ssim_fit = 0;
+  wv_weave_views wv = {.wsc = {-2, -2}};
   wv_scene fit_scene; /* with the registration's fabric offset */
   wv_fit_scene(&st, job->scene, &fit_scene);
   if (!rc)
     cli_info(c, "rendering start and fit at %d x %d, %d spp\n", job->scene->width, job->scene->height,
              job->scene->spp);
-  if (!rc) rc = write_results(job, od.tmp, &st, &o, &fit_scene, &ssim_start, &ssim_fit, &err);
+  if (!rc) rc = write_results(job, od.tmp, &st, &o, &fit_scene, &ssim_start, &ssim_fit, &wv, &err);
   if (!rc) rc = wv_outdir_commit(&od, &err);
   if (rc) {
     wv_outdir_abort(&od, &err);
@@ -407,8 +444,8 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
     return cli_fail(c, &err);
   }
   const wv_fit_record *last = st.iter ? &st.log[st.iter - 1] : NULL;
-  cli_info(c, "SSIM %s %.4f -> fit %.4f; %d iterations in %.1f s; results in %s/\n", job->start_label, ssim_start,
-           ssim_fit, st.iter, st.timing.total, job->dir);
+  cli_info(c, "SSIM %s %.4f -> fit %.4f, WSC %.3f -> %.3f; %d iterations in %.1f s; results in %s/\n",
+           job->start_label, ssim_start, ssim_fit, wv.wsc[0], wv.wsc[1], st.iter, st.timing.total, job->dir);
   if (c->json) {
     json_t *o_json = json_pack(
         "{s:o,s:i,s:o,s:o,s:o,s:{s:o,s:o,s:o,s:o,s:o,s:o},s:[o,o],s:{s:[o,o],s:[o,o],s:[o,o]}}", "dir",
@@ -425,6 +462,16 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
       json_object_set_new(o_json, "pattern_choice",
                           job->pattern_choice ? cli_json_text(wv_pattern_choice_to_json(job->pattern_choice))
                                               : json_null());
+      json_object_set_new(o_json, "camera_blur_px", cli_real(fit_scene.psf_sigma, 3));
+      json_object_set_new(o_json, "ssim_rgb_start", cli_real(wv.ssim_rgb[0], 6));
+      json_object_set_new(o_json, "ssim_rgb_fit", cli_real(wv.ssim_rgb[1], 6));
+      json_object_set_new(o_json, "wsc_start", wv.wsc[0] > -2 ? cli_real(wv.wsc[0], 6) : json_null());
+      json_object_set_new(o_json, "wsc_fit", wv.wsc[1] > -2 ? cli_real(wv.wsc[1], 6) : json_null());
+      char bounds[WV_P_COUNT + 3][96];
+      int nb = wv_params_at_bounds(&st.params, bounds, WV_P_COUNT + 3);
+      json_t *ab = json_array();
+      for (int i = 0; i < nb && ab; i++) json_array_append_new(ab, cli_str(bounds[i]));
+      json_object_set_new(o_json, "at_bounds", ab ? ab : json_null());
       json_object_set_new(o_json, "params", cli_json_text(wv_params_to_json(&st.params)));
     }
     cli_print_json(o_json);

@@ -16,12 +16,16 @@ static const char *PREDICT_HELP =
     "                     [--force] [--quiet] [--json]\n"
     "\n"
     "FabricNet's estimate of the fabric parameters of PHOTO taken in the scene.\n"
-    "  --pattern NAME  plain, twill, satin, twill90 or satin90. Without it the pattern is chosen\n"
-    "                  (the network does not predict it): the estimate is rendered with each of\n"
-    "                  the five at 4 spp and the smallest fit loss (Gram + 0.2 pixel) against the\n"
-    "                  photo wins (about 0.5 s more at 800 x 300 on 2 idle cores); --json gives\n"
-    "                  the losses. Twill and satin are often confused (docs/fabricnet.md)\n"
-    "                  The noise level Q is the pattern's prior value\n"
+    "  --pattern NAME  a built-in pattern (plain, basket, twill21s ... twill31z, satin5, satin8,\n"
+    "                  the _90 variants; docs/model.md). Without it the pattern is chosen over the\n"
+    "                  whole library (the network does not predict it): the weave analysis finds\n"
+    "                  the lattice of the photo's spectral peaks, explains it for each built-in by\n"
+    "                  densities and an orientation, and ranks the built-ins by how well their own\n"
+    "                  render (4 spp, centre 256 x 256) shows the photo's peaks; near ties go to the\n"
+    "                  fit's loss (Gram + 0.2 pixel), which also decides alone when the photo shows\n"
+    "                  no weave lattice. The chosen pattern starts from its lattice densities;\n"
+    "                  --json gives the analysis (docs/analysis.md). The noise level Q is the\n"
+    "                  pattern's prior value\n"
     "  --model M       a model from 'woven train' (default: models/fabricnet-<scene name>.bin;\n"
     "                  the directory can be changed with WOVEN_MODEL_DIR)\n"
     "  --descriptor    the texture descriptor (default: default); the model must match it\n"
@@ -58,6 +62,36 @@ typedef struct {
   wv_crop crop;
   int force;
 } predict_args;
+
+/* Why the pattern was chosen: the weave analysis and the deciding scores, on stderr. */
+static void cli_print_choice(cli_ctx *c, const wv_pattern_choice *pc) {
+  const wv_lattice *l = &pc->lattice;
+  const char *name = wv_weave_builtin_name(pc->best);
+  if (l->found) {
+    const wv_lattice_fit *f = &l->fit[l->best];
+    cli_info(c, "weave analysis: %d spectral peaks; best lattice %s: %.1f x %.1f yarns/inch (%.2f x %.2f px), "
+                "angle %.1f deg, skew %.1f deg, repeat %d, shear %+d (%.2f s)\n",
+             l->n_peaks, wv_weave_builtin_name(l->best), f->density[0], f->density[1], l->spacing_px[0],
+             l->spacing_px[1], f->angle_deg, f->skew_deg, l->repeat, l->shear, l->seconds);
+    char line[512];
+    int len = snprintf(line, sizeof line, "pattern %s chosen (%s; %s family): render match", name, pc->method,
+                       wv_weave_family(name));
+    for (int k = 0; k < 4 && len > 0 && (size_t)len < sizeof line; k++) {
+      int i = pc->ranking.order[k];
+      len += snprintf(line + len, sizeof line - (size_t)len, "%s %s %.3f", k ? "," : "", wv_weave_builtin_name(i),
+                      pc->ranking.score[i]);
+      if (pc->evaluated[i] && len > 0 && (size_t)len < sizeof line)
+        len += snprintf(line + len, sizeof line - (size_t)len, " (loss %.5f)", pc->loss[i]);
+    }
+    cli_info(c, "%s (%.2f s)\n", line, pc->seconds);
+  } else {
+    cli_info(c, "weave analysis: %s\n", l->reason);
+    cli_info(c, "pattern %s chosen (%s; %s family): %s (%.2f s)\n", name, pc->method, wv_weave_family(name),
+             !strcmp(pc->method, "network") ? "the network's most probable pattern"
+                                            : "the smallest fit loss of the estimate rendered with each built-in",
+             pc->seconds);
+  }
+}
 
 /* What run_predict found: the estimate, and how its pattern was chosen when not given. */
 typedef struct {
@@ -110,7 +144,7 @@ static int run_predict(cli_ctx *c, const predict_args *pa, wv_scene *scene, wv_i
   } else if (!rc) {
     float *feat = malloc(sizeof(float) * (size_t)net.n_in);
     if (!feat) rc = cli_usage_error(c->cmd, "out of memory");
-    else if (wv_fabricnet_predict(&net, *desc, img, feat, y, &err) ||
+    else if (wv_fabricnet_predict(&net, *desc, img, feat, y, NULL, &err) ||
              wv_fabricnet_params(&net, y, pa->pattern, &res->params, &err))
       rc = cli_fail(c, &err);
     free(feat);
@@ -122,18 +156,7 @@ static int run_predict(cli_ctx *c, const predict_args *pa, wv_scene *scene, wv_i
     *desc = NULL;
   }
   res->seconds = cli_now() - t0;
-  if (!rc && res->chosen) {
-    /* why: the five losses, smallest first marked */
-    const wv_pattern_choice *pc = &res->choice;
-    char line[512];
-    int len = snprintf(line, sizeof line, "pattern %s chosen: smallest fit loss (Gram + %g pixel) of the estimate "
-                                          "rendered with each pattern (%d spp, %.2f s):", wv_net_pattern(pc->best),
-                       pc->w_pixel, pc->spp, pc->seconds);
-    for (int i = 0; i < WV_NET_PATTERNS && len > 0 && (size_t)len < sizeof line; i++)
-      len += snprintf(line + len, sizeof line - (size_t)len, "%s %s %.6f", i ? "," : "", wv_net_pattern(i),
-                      pc->loss[i]);
-    cli_info(c, "%s\n", line);
-  }
+  if (!rc && res->chosen) cli_print_choice(c, &res->choice);
   return rc;
 }
 

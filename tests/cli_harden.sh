@@ -115,7 +115,7 @@ rm -f "$T"/r.png.tmp.*
 # -- dataset: a corrupt .json or a truncated .png is not a finished sample
 "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 1 -o "$T/ds" -q
 echo '{' >"$T/ds/samples/plain_0.json"
-head -c 100 "$T/ds/samples/satin_0.png" >"$T/ds/samples/x" && mv "$T/ds/samples/x" "$T/ds/samples/satin_0.png"
+head -c 100 "$T/ds/samples/satin5_0.png" >"$T/ds/samples/x" && mv "$T/ds/samples/x" "$T/ds/samples/satin5_0.png"
 check "dataset redoes damaged samples" 0 '"rendered": 2' -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 1 -o "$T/ds" --json
 jpatch "$T/ds/dataset.json" 'd["per_pattern"] = 1000000000'
 check "dataset per_pattern" 2 "dataset.json: 'per_pattern' = 1000000000 is outside 1..1000000" -- "$WOVEN" train "$T/ds" -o "$T/m.bin"
@@ -125,12 +125,12 @@ python3 - "$SRC/models/fabricnet-cylinder.bin" "$T" <<'EOF' || fail "could not p
 import sys, zlib, struct
 b = bytearray(open(sys.argv[1], 'rb').read())
 def seal(b):
-    b[496:500] = struct.pack('<I', zlib.crc32(bytes(b[504:])))
-    b[500:504] = struct.pack('<I', zlib.crc32(bytes(b[:500])))
+    b[504:508] = struct.pack('<I', zlib.crc32(bytes(b[512:]))) # format 2: a 512-byte header
+    b[508:512] = struct.pack('<I', zlib.crc32(bytes(b[:508])))
 k = bytearray(b); k[12:16] = struct.pack('<I', 99); seal(k)
 open(sys.argv[2] + '/kind99.bin', 'wb').write(k)
 n_in = struct.unpack('<I', b[48:52])[0]
-w = bytearray(b); off = 504 + 8 * n_in; w[off:off + 2] = b'\x00\x7e'; seal(w) # first weight: f16 NaN
+w = bytearray(b); off = 512 + 8 * n_in; w[off:off + 2] = b'\x00\x7e'; seal(w) # first weight: f16 NaN
 open(sys.argv[2] + '/nan.bin', 'wb').write(w)
 EOF
 check "model of unknown kind" 4 "kind99.bin: unknown FabricNet file kind 99" -- "$WOVEN" predict "$T/photo.png" "${PRED[@]}" --model "$T/kind99.bin" -o "$T/p.json"

@@ -1,15 +1,21 @@
-/* FabricNet: backward against finite differences, training on a learnable toy set,
- * parameter mapping, model and checkpoint files (round trip and every corruption),
- * half floats and CRC-32. */
+/* FabricNet: backward (L1 and the pattern head's cross-entropy) against finite
+ * differences, training on a learnable toy set, wv_train on a small rendered dataset (the
+ * loss falls; a resumed run equals an uninterrupted one), the camera augmentation,
+ * parameter mapping, model and checkpoint files (round trip, every corruption, version 1
+ * files), half floats and CRC-32. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "testutil.h"
 #include "woven/fabricnet.h"
+#include "woven/descriptor.h"
 #include "woven/io.h"
 #include "woven/nn.h"
+#include "woven/render.h"
+#include "woven/weave.h"
 
 static wv_scene tiny_scene(void) {
   wv_scene s;
@@ -18,15 +24,23 @@ static wv_scene tiny_scene(void) {
   return s;
 }
 
-static double net_loss(wv_fabricnet *n, const float *x, const float *y, int batch) {
+/* L1 + ce_weight CE, in double from the forward pass (labels may be NULL: L1 only). */
+static double net_loss_ce(wv_fabricnet *n, const float *x, const float *y, const int *labels, double ce_weight,
+                          int batch) {
   wv_fabricnet_acts a;
   wv_error e;
   assert_int_equal(wv_fabricnet_acts_alloc(&a, batch, &e), WV_OK);
   wv_fabricnet_forward(n, x, batch, &a);
-  double s = 0;
+  double s = 0, ce = 0;
   for (int i = 0; i < batch * WV_NET_OUT; i++) s += fabs((double)a.out[i] - y[i]);
+  if (labels)
+    for (int b = 0; b < batch; b++) ce -= log((double)a.prob[(size_t)b * n->n_cls + labels[b]]);
   wv_fabricnet_acts_free(&a);
-  return s / (batch * WV_NET_OUT);
+  return s / (batch * WV_NET_OUT) + ce_weight * ce / batch;
+}
+
+static double net_loss(wv_fabricnet *n, const float *x, const float *y, int batch) {
+  return net_loss_ce(n, x, y, NULL, 0, batch);
 }
 
 static void test_gradient(void **state) {
@@ -36,28 +50,33 @@ static void test_gradient(void **state) {
   wv_error e;
   const int nin = 12, batch = 3;
   assert_int_equal(wv_fabricnet_init(&n, "default", nin, &s, 7, &e), WV_OK);
+  assert_int_equal(n.n_cls, WV_NET_CLASSES);
   /* larger weights than the init so every layer matters */
-  float *t[6];
-  size_t len[6];
+  float *t[WV_NET_TENSORS];
+  size_t len[WV_NET_TENSORS];
   wv_fabricnet_tensors(&n, t, len);
   wv_rng r;
   wv_rng_seed(&r, 3);
-  for (int i = 0; i < 6; i++)
+  for (int i = 0; i < WV_NET_TENSORS; i++)
     for (size_t j = 0; j < len[i]; j++) t[i][j] *= 2.0f;
   float x[batch * 12], y[batch * WV_NET_OUT];
+  const int labels[3] = {3, 0, 15};
+  const float cw = 0.5f; /* large enough that the head's share is checked, not drowned */
   wv_rng_fill_uniform(&r, x, sizeof x / sizeof x[0], -1, 1);
   wv_rng_fill_uniform(&r, y, sizeof y / sizeof y[0], 0, 1);
   size_t P = wv_fabricnet_param_count(&n);
-  float *g = calloc(P, sizeof(float)), *gt[6];
+  float *g = calloc(P, sizeof(float)), *gt[WV_NET_TENSORS];
   size_t off = 0;
-  for (int i = 0; i < 6; i++) gt[i] = g + off, off += len[i];
+  for (int i = 0; i < WV_NET_TENSORS; i++) gt[i] = g + off, off += len[i];
   wv_fabricnet_acts a;
   assert_int_equal(wv_fabricnet_acts_alloc(&a, batch, &e), WV_OK);
-  float loss = wv_fabricnet_backward(&n, x, y, batch, &a, gt);
-  assert_true(fabs(loss - net_loss(&n, x, y, batch)) < 1e-6);
+  float l1, ce;
+  float loss = wv_fabricnet_backward(&n, x, y, labels, cw, batch, &a, gt, &l1, &ce);
+  assert_true(fabs(loss - net_loss_ce(&n, x, y, labels, cw, batch)) < 1e-5);
+  assert_true(fabs(l1 - net_loss(&n, x, y, batch)) < 1e-6 && ce > 0);
   /* spot-check entries of every tensor with central differences */
   double worst = 0;
-  for (int i = 0; i < 6; i++) {
+  for (int i = 0; i < WV_NET_TENSORS; i++) {
     /* relative errors with a floor of a tenth of the tensor's largest gradient: the
      * float loss makes tiny derivatives noisy in absolute terms */
     double gmax = 0;
@@ -65,9 +84,9 @@ static void test_gradient(void **state) {
     for (size_t j = 0; j < len[i]; j += len[i] / 7 + 1) {
       float save = t[i][j], h = 2e-3f;
       t[i][j] = save + h;
-      double fp = net_loss(&n, x, y, batch);
+      double fp = net_loss_ce(&n, x, y, labels, cw, batch);
       t[i][j] = save - h;
-      double fm = net_loss(&n, x, y, batch);
+      double fm = net_loss_ce(&n, x, y, labels, cw, batch);
       t[i][j] = save;
       double num = (fp - fm) / (2 * h), an = gt[i][j];
       double err = fabs(num - an) / (fabs(num) + fabs(an) + 0.1 * gmax + 1e-6);
@@ -97,10 +116,10 @@ static void test_training_reduces_loss(void **state) {
   for (int i = 0; i < N; i++)
     for (int k = 0; k < WV_NET_OUT; k++) y[i * WV_NET_OUT + k] = 0.5f + 0.4f * sinf(x[i * nin + k] + x[i * nin + k + 1]);
   size_t P = wv_fabricnet_param_count(&n);
-  float *g = calloc(P, sizeof(float)), *gt[6], *t[6];
-  size_t len[6], off = 0;
+  float *g = calloc(P, sizeof(float)), *gt[WV_NET_TENSORS], *t[WV_NET_TENSORS];
+  size_t len[WV_NET_TENSORS], off = 0;
   wv_fabricnet_tensors(&n, t, len);
-  for (int i = 0; i < 6; i++) gt[i] = g + off, off += len[i];
+  for (int i = 0; i < WV_NET_TENSORS; i++) gt[i] = g + off, off += len[i];
   wv_nn_adam adam;
   assert_int_equal(wv_nn_adam_init(&adam, P, 1e-3f, &e), WV_OK);
   wv_fabricnet_acts a;
@@ -109,7 +128,7 @@ static void test_training_reduces_loss(void **state) {
   for (int ep = 0; ep < 60; ep++)
     for (int b = 0; b < N; b += batch) {
       memset(g, 0, P * sizeof(float));
-      wv_fabricnet_backward(&n, x + (size_t)b * nin, y + (size_t)b * WV_NET_OUT, batch, &a, gt);
+      wv_fabricnet_backward(&n, x + (size_t)b * nin, y + (size_t)b * WV_NET_OUT, NULL, 0, batch, &a, gt, NULL, NULL);
       wv_nn_adam_step(&adam, n.w1, g);
     }
   double last = net_loss(&n, x, y, N);
@@ -128,8 +147,8 @@ static void test_param_mapping(void **state) {
   wv_scene s = tiny_scene();
   wv_fabricnet n;
   assert_int_equal(wv_fabricnet_init(&n, "default", 4, &s, 1, &e), WV_OK);
-  for (int pat = 0; pat < WV_NET_PATTERNS; pat++) {
-    assert_int_equal(wv_params_sample_prior(wv_net_pattern(pat), 99 + pat, &p, &e), WV_OK);
+  for (int pat = 0; pat < wv_weave_builtin_count(); pat++) {
+    assert_int_equal(wv_params_sample_prior(wv_weave_builtin_name(pat), 99 + pat, &p, &e), WV_OK);
     float y[WV_NET_OUT];
     wv_fabricnet_targets(&p, y);
     for (int k = 0; k < WV_NET_OUT; k++) assert_true(y[k] >= 0 && y[k] <= 1);
@@ -160,12 +179,13 @@ static void write_bytes(const char *path, const unsigned char *b, size_t n) {
   fclose(f);
 }
 
-/* Recomputes the payload and header checksums of a patched model file. */
+/* Recomputes the payload and header checksums of a patched model file (format 2: a
+ * 512-byte header, payload CRC at 504, header CRC at 508 over the bytes before it). */
 static void reseal(unsigned char *b, size_t n) {
-  uint32_t c = wv_crc32(0, b + 504, n - 504);
-  for (int i = 0; i < 4; i++) b[496 + i] = (unsigned char)(c >> (8 * i));
-  c = wv_crc32(0, b, 500);
-  for (int i = 0; i < 4; i++) b[500 + i] = (unsigned char)(c >> (8 * i));
+  uint32_t c = wv_crc32(0, b + 512, n - 512);
+  for (int i = 0; i < 4; i++) b[504 + i] = (unsigned char)(c >> (8 * i));
+  c = wv_crc32(0, b, 508);
+  for (int i = 0; i < 4; i++) b[508 + i] = (unsigned char)(c >> (8 * i));
 }
 
 static void expect_load_fails(const char *path, const char *needle) {
@@ -196,11 +216,12 @@ static void test_files(void **state) {
   assert_string_equal(m.scene, "flat45");
   assert_int_equal(m.n_in, 100);
   for (int i = 0; i < 100; i++) assert_true(m.mean[i] == n.mean[i] && m.std[i] == n.std[i]);
-  float *tn[6], *tm[6];
-  size_t len[6];
+  float *tn[WV_NET_TENSORS], *tm[WV_NET_TENSORS];
+  size_t len[WV_NET_TENSORS];
   wv_fabricnet_tensors(&n, tn, len);
   wv_fabricnet_tensors(&m, tm, len);
-  for (int i = 0; i < 6; i++)
+  assert_int_equal(m.n_cls, WV_NET_CLASSES);
+  for (int i = 0; i < WV_NET_TENSORS; i++)
     for (size_t j = 0; j < len[i]; j++) assert_true(fabsf(tn[i][j] - tm[i][j]) <= fabsf(tn[i][j]) * 1e-3f + 1e-7f);
   /* the descriptor and scene checks */
   assert_int_equal(wv_fabricnet_check(&m, path, "default", 100, &s, &e), WV_OK);
@@ -261,7 +282,7 @@ static void test_files(void **state) {
   assert_int_equal(ts2.adam_t, 30);
   assert_true(ts2.rng == 42 && ts2.best_val == 0.25f);
   wv_fabricnet_tensors(&m, tm, len);
-  for (int i = 0; i < 6; i++) assert_memory_equal(tn[i], tm[i], len[i] * sizeof(float)); /* f32: exact */
+  for (int i = 0; i < WV_NET_TENSORS; i++) assert_memory_equal(tn[i], tm[i], len[i] * sizeof(float)); /* f32: exact */
   free(am), free(av), free(mm);
   wv_fabricnet_free(&m);
   /* the trainer's counters are checked: a negative epoch would index the loss history */
@@ -285,10 +306,17 @@ static void test_files(void **state) {
   write_bytes(bad, b, n_bytes);
   expect_load_fails(bad, "unknown FabricNet file kind 99");
   memcpy(b, data, n_bytes);
-  b[504 + 8 * 100] = 0x00, b[504 + 8 * 100 + 1] = 0x7e; /* the first f16 weight: NaN */
+  b[512 + 8 * 100] = 0x00, b[512 + 8 * 100 + 1] = 0x7e; /* the first f16 weight: NaN */
   reseal(b, n_bytes);
   write_bytes(bad, b, n_bytes);
   expect_load_fails(bad, "layer 1 weights hold NaN");
+  /* a model of another library (the class checksum): refused with a clear message */
+  memcpy(b, data, n_bytes);
+  b[492] ^= 1;
+  uint32_t hc = wv_crc32(0, b, 508);
+  for (int i = 0; i < 4; i++) b[508 + i] = (unsigned char)(hc >> (8 * i));
+  write_bytes(bad, b, n_bytes);
+  expect_load_fails(bad, "weave library");
   /* missing file: an I/O error naming it */
   snprintf(bad, sizeof bad, "%s/none.bin", dir);
   assert_int_equal(wv_fabricnet_load(bad, &m, &e), WV_ERR_IO);
@@ -323,11 +351,171 @@ static void test_features_file(void **state) {
   free(d);
 }
 
+/* A version 1 file (no pattern head) still loads, and gives every pattern 1 / count. */
+static void test_v1_model(void **state) {
+  (void)state;
+  const char *dir = tu_tmpdir("fabricnet_v1");
+  char path[512], old[512];
+  snprintf(path, sizeof path, "%s/v2.bin", dir);
+  snprintf(old, sizeof old, "%s/v1.bin", dir);
+  wv_scene s = tiny_scene();
+  wv_fabricnet n, m;
+  wv_error e;
+  assert_int_equal(wv_fabricnet_init(&n, "default", 40, &s, 9, &e), WV_OK);
+  n.n_cls = 0; /* the first six tensors only, as version 1 stored them */
+  assert_int_equal(wv_fabricnet_save(path, &n, &e), WV_OK);
+  char *data;
+  size_t len;
+  assert_int_equal(wv_read_file(path, &data, &len, &e), WV_OK);
+  /* version 2 -> version 1 layout: payload size, payload CRC, header CRC at 488, 496, 500 */
+  unsigned char *b = malloc(len);
+  memcpy(b, data, 488);
+  memcpy(b + 488, data + 496, 8);
+  memcpy(b + 496, data + 504, 4);
+  b[8] = 1, b[9] = b[10] = b[11] = 0;
+  uint32_t hc = wv_crc32(0, b, 500);
+  for (int i = 0; i < 4; i++) b[500 + i] = (unsigned char)(hc >> (8 * i));
+  memcpy(b + 504, data + 512, len - 512);
+  write_bytes(old, b, len - 8);
+  assert_int_equal(wv_fabricnet_load(old, &m, &e), WV_OK);
+  assert_int_equal(m.n_cls, 0);
+  assert_true(m.w3[5] == wv_nn_f16_to_f32(wv_f32_to_f16(n.w3[5])) && m.b3[2] == n.b3[2]);
+  float feat[40], y[WV_NET_OUT], probs[WV_NET_CLASSES];
+  for (int i = 0; i < 40; i++) feat[i] = 0.1f * i;
+  assert_int_equal(wv_fabricnet_predict_features(&m, feat, y, probs, &e), WV_OK);
+  for (int i = 0; i < WV_NET_CLASSES; i++) assert_true(fabsf(probs[i] - 1.0f / WV_NET_CLASSES) < 1e-7f);
+  wv_fabricnet_free(&m);
+  /* a model with the head: probabilities indexed like the library, summing to 1 */
+  n.n_cls = WV_NET_CLASSES;
+  for (int i = 0; i < 40; i++) feat[i] = 0.1f * i;
+  assert_int_equal(wv_fabricnet_predict_features(&n, feat, y, probs, &e), WV_OK);
+  double sum = 0;
+  for (int i = 0; i < WV_NET_CLASSES; i++) assert_true(probs[i] > 0), sum += probs[i];
+  assert_true(fabs(sum - 1) < 1e-5);
+  free(b), free(data);
+  wv_fabricnet_free(&n);
+}
+
+/* The camera: deterministic in its seed, different across seeds, 8-bit values. */
+static void test_augment(void **state) {
+  (void)state;
+  wv_scene s;
+  tu_centre_window(&s, "flat45", 96, 64, 4);
+  wv_params p;
+  wv_error e;
+  assert_int_equal(wv_params_sample_prior("twill21z", 5, &p, &e), WV_OK);
+  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_image cap = {0}, rad = {0}, a = {0}, b = {0}, c = {0};
+  assert_int_equal(wv_render(&s, &p, &ro, &cap, &rad, &e), WV_OK);
+  assert_int_equal(wv_camera_augment(&s, &rad, 11, &a, &e), WV_OK);
+  assert_int_equal(wv_camera_augment(&s, &rad, 11, &b, &e), WV_OK);
+  assert_int_equal(wv_camera_augment(&s, &rad, 12, &c, &e), WV_OK);
+  size_t n = (size_t)a.w * a.h * 3;
+  assert_int_equal(a.w, s.width);
+  assert_memory_equal(a.data, b.data, n * sizeof(float));
+  double diff = wv_image_mad(&a, &c), ma = wv_image_mean(&a), mc = wv_image_mean(&cap);
+  fprintf(stderr, "augment: mean %.3f (render %.3f), another seed differs by %.4f\n", ma, mc, diff);
+  assert_true(diff > 1e-3);
+  assert_true(fabs(ma - mc) < 0.25 * mc + 0.02); /* exposure within half a stop, not another picture */
+  for (size_t i = 0; i < n; i++) assert_true(fabsf(a.data[i] * 255 - floorf(a.data[i] * 255 + 0.5f)) < 1e-3f);
+  wv_image_free(&cap), wv_image_free(&rad), wv_image_free(&a), wv_image_free(&b), wv_image_free(&c);
+}
+
+/* A small dataset of every built-in (2 each, 64 x 48 at 2 spp, augmented). */
+static void make_dataset(const char *dir) {
+  wv_dataset_info info;
+  memset(&info, 0, sizeof info);
+  wv_error e;
+  assert_int_equal(wv_scene_preset("flat45", &info.scene, &e), WV_OK);
+  tu_centre_window(&info.scene, "flat45", 64, 48, 2);
+  snprintf(info.scene.name, sizeof info.scene.name, "tiny");
+  char *sj = wv_scene_to_json(&info.scene);
+  snprintf(info.scene_json, sizeof info.scene_json, "%s", sj);
+  free(sj);
+  wv_descriptor *d;
+  assert_int_equal(wv_descriptor_create_default(&d, &e), WV_OK);
+  info.version = WV_DATASET_VERSION, info.renderer = WV_RENDER_VERSION, info.seed = 4, info.per_pattern = 2;
+  info.spp = 2, info.augment = 1, info.n_feat = (int)wv_descriptor_size(d);
+  snprintf(info.descriptor, sizeof info.descriptor, "%s", wv_descriptor_name(d));
+  assert_int_equal(wv_dataset_info_write(dir, &info, &e), WV_OK);
+  char sub[512];
+  snprintf(sub, sizeof sub, "%s/samples", dir);
+  assert_int_equal(mkdir(sub, 0777), 0);
+  float *feat = malloc(sizeof(float) * (size_t)info.n_feat);
+  for (int k = 0; k < 2 * wv_weave_builtin_count(); k++) {
+    assert_int_equal(wv_dataset_make_sample(dir, &info, k, 0, NULL, d, feat, &e), WV_OK);
+    assert_true(wv_dataset_sample_done(dir, &info, k));
+  }
+  free(feat);
+  wv_descriptor_free(d);
+}
+
+typedef struct {
+  double first, last;
+  int n;
+} curve;
+
+static void record_epoch(void *user, const wv_train_epoch *ep) {
+  curve *c = user;
+  if (c->n++ == 0) c->first = ep->train + 0.1 * ep->train_ce;
+  c->last = ep->train + 0.1 * ep->train_ce;
+}
+
+static void test_train(void **state) {
+  (void)state;
+  const char *dir = tu_tmpdir("fabricnet_train");
+  char ds[512], m1[512], m2[512], c1[600], c2[600];
+  snprintf(ds, sizeof ds, "%s/ds", dir);
+  assert_int_equal(mkdir(ds, 0777), 0);
+  make_dataset(ds);
+  snprintf(m1, sizeof m1, "%s/a.bin", dir);
+  snprintf(m2, sizeof m2, "%s/b.bin", dir);
+  wv_train_opts o;
+  wv_train_opts_default(&o);
+  o.epochs = 12, o.batch = 8, o.lr = 1e-3, o.val_frac = 0.25, o.checkpoint_every = 3;
+  curve cv = {0, 0, 0};
+  o.on_epoch = record_epoch, o.user = &cv;
+  wv_train_result r;
+  wv_error e;
+  assert_int_equal(wv_train(ds, m1, &o, &r, &e), WV_OK);
+  fprintf(stderr, "wv_train: %d samples (%d train), loss %.4f -> %.4f, validation L1 %.4f, pattern accuracy %.2f\n",
+          r.samples, r.train, cv.first, cv.last, r.val_f16, r.val_accuracy);
+  assert_int_equal(r.samples, 2 * WV_NET_CLASSES);
+  assert_int_equal(cv.n, 12);
+  assert_true(cv.last < 0.8 * cv.first);
+  /* interrupted after 6 epochs, then resumed to 12: the same weights and Adam state */
+  o.epochs = 6, o.on_epoch = NULL;
+  assert_int_equal(wv_train(ds, m2, &o, &r, &e), WV_OK);
+  o.epochs = 12, o.resume = 1;
+  assert_int_equal(wv_train(ds, m2, &o, &r, &e), WV_OK);
+  assert_int_equal(r.resumed_epoch, 6);
+  snprintf(c1, sizeof c1, "%s.train/checkpoint.bin", m1);
+  snprintf(c2, sizeof c2, "%s.train/checkpoint.bin", m2);
+  char *a, *b;
+  size_t la, lb;
+  assert_int_equal(wv_read_file(c1, &a, &la, &e), WV_OK);
+  assert_int_equal(wv_read_file(c2, &b, &lb, &e), WV_OK);
+  assert_int_equal(la, lb);
+  assert_memory_equal(a, b, la);
+  free(a), free(b);
+  assert_int_equal(wv_read_file(m1, &a, &la, &e), WV_OK);
+  assert_int_equal(wv_read_file(m2, &b, &lb, &e), WV_OK);
+  assert_int_equal(la, lb);
+  assert_memory_equal(a, b, la);
+  free(a), free(b);
+  /* a second fresh start over an existing checkpoint is refused */
+  o.resume = 0;
+  assert_int_equal(wv_train(ds, m1, &o, &r, &e), WV_ERR_IO);
+  assert_non_null(strstr(e.msg, "--resume"));
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_gradient),   cmocka_unit_test(test_training_reduces_loss),
       cmocka_unit_test(test_param_mapping), cmocka_unit_test(test_f16_crc),
       cmocka_unit_test(test_files),      cmocka_unit_test(test_features_file),
+      cmocka_unit_test(test_v1_model),   cmocka_unit_test(test_augment),
+      cmocka_unit_test(test_train),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

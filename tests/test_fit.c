@@ -170,6 +170,31 @@ static void test_photo_load(void **state) {
 
 /* Sizes the fit cannot work at are refused before it starts (the descriptor's
  * minimum, also at the iteration scale), and so are options out of range. */
+/* The camera blur measured from a photo: none on a plain render, the scene's on a
+ * blurred one (the estimate starts from the truth, so only the blur is in question). */
+static void test_psf_estimate(void **state) {
+  (void)state;
+  wv_error err = {0};
+  wv_scene s;
+  assert_int_equal(wv_scene_preset("flat45", &s, &err), WV_OK);
+  s.width = s.height = 128, s.spp = 16, s.vfov_deg = 14;
+  wv_params p;
+  assert_int_equal(wv_params_default("twill31z", &p, &err), WV_OK);
+  p.density[0] = p.density[1] = 110;
+  double want[3] = {0, 0.6, 1.2};
+  for (int i = 0; i < 3; i++) {
+    wv_scene sb = s;
+    sb.psf_sigma = want[i];
+    wv_image photo;
+    assert_int_equal(wv_render(&sb, &p, NULL, &photo, NULL, &err), WV_OK);
+    double sigma, d;
+    assert_int_equal(wv_psf_estimate(&s, &photo, &p, 0, &sigma, &d, &err), WV_OK);
+    printf("camera blur %.1f px: measured %.2f (envelope distance %.4f)\n", want[i], sigma, d);
+    assert_true(fabs(sigma - want[i]) <= 0.15);
+    wv_image_free(&photo);
+  }
+}
+
 static void test_limits(void **state) {
   (void)state;
   wv_descriptor *d;
@@ -201,6 +226,7 @@ static void test_limits(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fit_improves), cmocka_unit_test(test_resume_equals_straight),
-                                     cmocka_unit_test(test_photo_load), cmocka_unit_test(test_limits)};
+                                     cmocka_unit_test(test_photo_load), cmocka_unit_test(test_psf_estimate),
+                                     cmocka_unit_test(test_limits)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

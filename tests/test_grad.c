@@ -385,6 +385,50 @@ static void test_record(void **state) {
   wv_image_free(&dc);
 }
 
+/* The camera blur: its adjoint is the transpose (<K x, y> = <x, K^T y>); the gradient
+ * through it matches finite differences; the capture equals wv_render's. */
+static void test_camera_blur(void **state) {
+  (void)state;
+  rng r = {31};
+  wv_error err;
+  int w = 13, h = 9;
+  double x[13 * 9 * 3], y[13 * 9 * 3], kx[13 * 9 * 3], kty[13 * 9 * 3];
+  for (int i = 0; i < w * h * 3; i++) x[i] = rnd(&r), y[i] = rnd(&r) - 0.5;
+  assert_int_equal(wv_psf_apply(1.3, w, h, 3, x, kx, 0, &err), WV_OK);
+  assert_int_equal(wv_psf_apply(1.3, w, h, 3, y, kty, 1, &err), WV_OK);
+  double a = 0, b = 0, sx = 0, skx = 0;
+  for (int i = 0; i < w * h * 3; i++) a += kx[i] * y[i], b += x[i] * kty[i], sx += x[i], skx += kx[i];
+  assert_true(fabs(a - b) < 1e-12 * (fabs(a) + 1));
+  assert_true(fabs(skx - sx) < 0.2 * sx); /* a blur, not a gain (edges clamped: close, not equal) */
+  assert_int_equal(wv_psf_apply(9.0, w, h, 3, x, kx, 0, &err), WV_ERR_INVALID);
+  wv_scene s = small_scene("flat45", 40, 32, 4);
+  s.psf_sigma = 0.8;
+  wv_params p;
+  random_params("twill", &r, &p);
+  wv_image dc;
+  assert_int_equal(wv_image_alloc(&dc, 40, 32, 3, &err), WV_OK);
+  fill_random(&dc, &r);
+  wv_grad_opts g = {0, 0, 40, 32, 1};
+  wv_grad_check_entry e[WV_P_COUNT];
+  assert_int_equal(wv_grad_check(&s, &p, NULL, &g, &dc, 1e-5, e, &err), WV_OK);
+  for (int i = 0; i < WV_P_COUNT; i++) {
+    if (e[i].rel_err >= 1e-3)
+      print_error("blurred %s: analytic %.9e, finite difference %.9e\n", wv_param_name(i), e[i].analytic,
+                  e[i].numeric);
+    assert_true(e[i].rel_err < 1e-3);
+  }
+  /* the float path's capture is wv_render's, and the blur changes it */
+  wv_image cap, ref, sharp;
+  double gr[WV_P_COUNT];
+  assert_int_equal(wv_render_grad(&s, &p, NULL, &dc, gr, &cap, &err), WV_OK);
+  assert_int_equal(wv_render(&s, &p, NULL, &ref, NULL, &err), WV_OK);
+  assert_int_equal(memcmp(cap.data, ref.data, sizeof(float) * 40 * 32 * 3), 0);
+  s.psf_sigma = 0;
+  assert_int_equal(wv_render(&s, &p, NULL, &sharp, NULL, &err), WV_OK);
+  assert_true(memcmp(sharp.data, ref.data, sizeof(float) * 40 * 32 * 3) != 0);
+  wv_image_free(&cap), wv_image_free(&ref), wv_image_free(&sharp), wv_image_free(&dc);
+}
+
 static void test_errors(void **state) {
   (void)state;
   wv_scene s = small_scene("flat45", 32, 32, 2);
@@ -413,6 +457,6 @@ int main(void) {
       cmocka_unit_test(test_capture_and_windows), cmocka_unit_test(test_exact_zeros),
       cmocka_unit_test(test_range_edges),        cmocka_unit_test(test_deterministic),
       cmocka_unit_test(test_chain_with_downsampling), cmocka_unit_test(test_record),
-      cmocka_unit_test(test_errors)};
+      cmocka_unit_test(test_camera_blur),        cmocka_unit_test(test_errors)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

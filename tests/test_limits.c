@@ -20,7 +20,7 @@ static char *checkpoint_text(const char *path) {
   wv_fit_state st;
   assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
   st.iter = 1;
-  st.log[0] = (wv_fit_record){0, 0.5, 0.4, 0.01, 0.09, 0, 0};
+  st.log[0] = (wv_fit_record){0, 0.5, 0.4, 0.01, 0.09, 0.0, 0, 0};
   assert_int_equal(wv_fit_checkpoint_write(path, &st, &o, "default", &err), WV_OK);
   wv_fit_state_free(&st);
   char *text;

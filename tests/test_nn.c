@@ -375,6 +375,28 @@ static void test_adam(void **state) {
   wv_nn_adam_free(&a);
 }
 
+/* Projected Adam, as the fit uses it: the same steps as plain Adam inside the box, clamped
+ * at its faces; a target outside the box ends on the nearest face. */
+static void test_adam_box(void **state) {
+  (void)state;
+  float m[2] = {0}, v[2] = {0}, m2[2] = {0}, v2[2] = {0};
+  wv_nn_adam a = {2, 0.05f, 0.9f, 0.999f, 1e-8f, 0.0f, 0, m, v}, b = {2, 0.05f, 0.9f, 0.999f, 1e-8f, 0.0f, 0, m2, v2};
+  float p[2] = {0.5f, 0.5f}, q[2] = {0.5f, 0.5f}, g[2];
+  const float t[2] = {0.7f, 1.6f}; /* the second target lies outside [0, 1] */
+  for (int it = 0; it < 400; it++) {
+    for (int i = 0; i < 2; i++) g[i] = 2.0f * (p[i] - t[i]);
+    wv_nn_adam_step_box(&a, p, g, 0.0f, 1.0f);
+    assert_true(p[0] >= 0 && p[0] <= 1 && p[1] >= 0 && p[1] <= 1);
+    if (it < 5) { /* before any clamp, identical to the plain step */
+      for (int i = 0; i < 2; i++) g[i] = 2.0f * (q[i] - t[i]);
+      wv_nn_adam_step(&b, q, g);
+      assert_true(q[0] == p[0] && q[1] == p[1]);
+    }
+  }
+  assert_true(fabsf(p[0] - 0.7f) < 1e-2f && p[1] == 1.0f);
+  assert_int_equal(a.t, 400);
+}
+
 /* ---- The FabricNet pieces together: FC -> LeakyReLU -> FC -> sigmoid, L1, Adam ---- */
 static void test_mlp_training(void **state) {
   (void)state;
@@ -457,7 +479,7 @@ int main(void) {
       cmocka_unit_test(test_elementwise), cmocka_unit_test(test_avgpool),
       cmocka_unit_test(test_gram),    cmocka_unit_test(test_fc),
       cmocka_unit_test(test_l1),      cmocka_unit_test(test_sgemm),
-      cmocka_unit_test(test_adam),    cmocka_unit_test(test_mlp_training),
+      cmocka_unit_test(test_adam),    cmocka_unit_test(test_adam_box),  cmocka_unit_test(test_mlp_training),
       cmocka_unit_test(test_rng_half),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

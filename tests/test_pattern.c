@@ -1,7 +1,8 @@
-/* Choosing the weave pattern (wv_fabricnet_choose_pattern): synthetic targets drawn from
- * the prior of each pattern, rendered in a small close-up scene, and the choice made from
- * their true continuous parameters. That tests the criterion, not a network's accuracy
- * (bench/pattern measures both on the cylinder scene). */
+/* Choosing the weave pattern over the built-in library (wv_fabricnet_choose_pattern):
+ * synthetic targets drawn from the prior of built-ins, rendered in a small close-up scene,
+ * and the choice made from their true continuous parameters. That tests the criterion, not
+ * a network's accuracy (bench/pattern measures both). A photo without a weave falls back to
+ * the loss criterion over every built-in. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,14 +13,8 @@
 #include "woven/fabricnet.h"
 #include "woven/render.h"
 
-/* Flat sample seen from above, close enough that yarns are 2..11 pixels apart (0.044 mm
- * per pixel): the weave is visible, as in a photo at the rig's full resolution. */
-static const char *SCENE =
-    "{\"name\":\"close\",\"image\":{\"width\":96,\"height\":64,\"spp\":16},"
-    "\"camera\":{\"position_mm\":[0,0,8],\"look_at_mm\":[0,0,0],\"vfov_deg\":20},\"sample\":{\"shape\":\"plane\"},"
-    "\"light\":{\"position_mm\":[0,8,8],\"intensity\":300},\"response\":{\"encoding\":\"gamma\",\"gamma\":2.2},"
-    "\"falloff\":{\"type\":\"gaussian\",\"sigma_px\":80}}";
-
+/* The centre 256 x 256 pixels of the flat45 rig: yarns one to two and a half pixels apart,
+ * as in its photos. */
 typedef struct {
   wv_scene scene;
   wv_descriptor *d;
@@ -30,7 +25,7 @@ typedef struct {
 static int setup(void **state) {
   fixture *f = calloc(1, sizeof *f);
   wv_error e;
-  assert_int_equal(wv_scene_parse(SCENE, "test", &f->scene, &e), WV_OK);
+  tu_centre_window(&f->scene, "flat45", 256, 256, 8);
   assert_int_equal(wv_descriptor_create_default(&f->d, &e), WV_OK);
   int n = (int)wv_descriptor_size(f->d);
   assert_int_equal(wv_fabricnet_init(&f->net, "default", n, &f->scene, 1, &e), WV_OK);
@@ -61,25 +56,72 @@ static int choose(fixture *f, const char *pattern, uint64_t seed, wv_pattern_cho
   wv_fabricnet_targets(&truth, y);
   assert_int_equal(wv_fabricnet_choose_pattern(&f->net, f->d, &f->scene, &photo, f->gram, y, NULL, c, &e), WV_OK);
   wv_image_free(&photo);
-  fprintf(stderr, "%s seed %llu -> %s:", pattern, (unsigned long long)seed, wv_net_pattern(c->best));
-  for (int i = 0; i < WV_NET_PATTERNS; i++) fprintf(stderr, " %s %.6f", wv_net_pattern(i), c->loss[i]);
-  fprintf(stderr, "\n");
+  fprintf(stderr, "%s seed %llu -> %s (%s; lattice %s %.3f, %d families within the margin)\n", pattern,
+          (unsigned long long)seed, wv_weave_builtin_name(c->best), c->method,
+          c->lattice.found ? wv_weave_builtin_name(c->lattice.best) : "none",
+          c->lattice.found ? c->lattice.fit[c->lattice.best].score : 0.0, c->family_contenders);
   return c->best;
 }
 
-static void test_picks_true_pattern(void **state) {
+static void test_picks_true_family(void **state) {
   fixture *f = *state;
-  int wrong = 0;
-  for (int p = 0; p < WV_NET_PATTERNS; p++)
-    for (uint64_t seed = 1; seed <= 3; seed++) {
+  static const char *PATTERNS[] = {"plain", "twill31s", "twill21z", "satin5", "twill31s_90", "satin5_90", "basket"};
+  int wrong = 0, n = (int)(sizeof PATTERNS / sizeof PATTERNS[0]);
+  for (int p = 0; p < n; p++)
+    for (uint64_t seed = 1; seed <= 1; seed++) {
       wv_pattern_choice c;
-      int best = choose(f, wv_net_pattern(p), seed, &c);
-      wrong += best != p;
+      int best = choose(f, PATTERNS[p], seed, &c);
+      wrong += strcmp(wv_weave_family(wv_weave_builtin_name(best)), wv_weave_family(PATTERNS[p])) != 0;
       /* each candidate is the network mapping with its own pattern */
-      for (int i = 0; i < WV_NET_PATTERNS; i++) assert_string_equal(c.params[i].pattern, wv_net_pattern(i));
+      for (int i = 0; i < wv_weave_builtin_count(); i++)
+        assert_string_equal(c.params[i].pattern, wv_weave_builtin_name(i));
       assert_int_equal(c.spp, WV_PATTERN_SPP);
+      assert_true(c.lattice.found);
+      assert_non_null(strstr(c.method, "lattice"));
+      /* the chosen pattern starts from its lattice densities */
+      for (int y = 0; y < 2; y++)
+        assert_true(fabs(c.params[best].density[y] - c.lattice.fit[best].density[y]) < 1e-9 ||
+                    c.lattice.fit[best].density[y] < WV_DENSITY_MIN || c.lattice.fit[best].density[y] > WV_DENSITY_MAX);
     }
   assert_int_equal(wrong, 0);
+}
+
+/* A flat grey card has no weave: the analysis says so and the loss criterion chooses among
+ * every built-in. */
+static void test_no_lattice_falls_back(void **state) {
+  fixture *f = *state;
+  wv_error e = {0};
+  wv_image photo;
+  float y[WV_NET_OUT];
+  wv_params p;
+  wv_params_default("plain", &p, NULL);
+  wv_fabricnet_targets(&p, y);
+  assert_int_equal(wv_image_alloc(&photo, f->scene.width, f->scene.height, 3, &e), WV_OK);
+  for (size_t i = 0; i < (size_t)photo.w * photo.h * 3; i++) photo.data[i] = 0.4f;
+  assert_int_equal(wv_descriptor_forward(f->d, &photo, f->gram, &e), WV_OK);
+  wv_pattern_choice c;
+  assert_int_equal(wv_fabricnet_choose_pattern(&f->net, f->d, &f->scene, &photo, f->gram, y, NULL, &c, &e), WV_OK);
+  assert_false(c.lattice.found);
+  assert_non_null(strstr(c.lattice.reason, "no weave lattice"));
+  assert_string_equal(c.method, "loss");
+  for (int i = 0; i < wv_weave_builtin_count(); i++) {
+    assert_true(c.evaluated[i]);
+    assert_true(c.loss[c.best] <= c.loss[i]);
+  }
+  char *js = wv_pattern_choice_to_json(&c);
+  assert_non_null(js);
+  assert_non_null(strstr(js, "\"found\": false"));
+  free(js);
+  /* with the network's class probabilities and no lattice, the most probable class wins */
+  float prob[WV_WEAVE_BUILTINS] = {0};
+  prob[9] = 0.6f, prob[3] = 0.4f;
+  wv_pattern_opts o;
+  wv_pattern_opts_default(&o);
+  o.prob = prob;
+  assert_int_equal(wv_fabricnet_choose_pattern(&f->net, f->d, &f->scene, &photo, f->gram, y, &o, &c, &e), WV_OK);
+  assert_int_equal(c.best, 9);
+  assert_string_equal(c.method, "network");
+  wv_image_free(&photo);
 }
 
 /* A photo of another size is an error naming both sizes, not a wrong answer. */
@@ -93,13 +135,14 @@ static void test_photo_size(void **state) {
   assert_int_equal(wv_fabricnet_choose_pattern(&f->net, f->d, &f->scene, &photo, f->gram, y, NULL, &c, &e),
                    WV_ERR_INVALID);
   assert_non_null(strstr(e.msg, "64 x 64"));
-  assert_non_null(strstr(e.msg, "96 x 64"));
+  assert_non_null(strstr(e.msg, "256 x 256"));
   wv_image_free(&photo);
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test_setup_teardown(test_picks_true_pattern, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_picks_true_family, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_no_lattice_falls_back, setup, teardown),
       cmocka_unit_test_setup_teardown(test_photo_size, setup, teardown),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,9 +1,11 @@
 /* woven: refine fabric parameters from a photo by differentiable rendering
  * (paper section 4.3, SPEC section 7).
- *   L = L_g + w1 L_p + w2 L_c
+ *   L = L_g + w1 L_p + w2 L_c + w3 L_s
  *   L_g = mean |Gram(photo) - Gram(render)|        (the texture descriptor)
  *   L_p = sum over warp, weft of (beta - mu)^2 / (2 sigma^2)   (pattern prior)
  *   L_c = mean |down(photo) - down(render)|        (area average to 16 x 8)
+ *   L_s = the weave's log power spectrum in the yarn band (phase-invariant structure;
+ *         include/woven/loss.h)
  * Adam on the continuous parameters (normalised to [0,1] by their ranges, kept
  * inside them), the twist included (we have its gradient); every few iterations
  * a random step of a discrete parameter (noise level Q, warp or weft density) is
@@ -24,6 +26,8 @@ typedef struct {
   double lr;          /* Adam learning rate in normalised units: 0.01 */
   double w_prior;     /* w1 = 0.0005 */
   double w_pixel;     /* w2 = 0.2 */
+  double w_struct;    /* w3 = WV_FIT_W_STRUCT (0: no structure term) */
+  int colour_split;   /* 1: before the first iteration, try starts that split warp and weft colours (1) */
   int down_w, down_h; /* 16 x 8 */
   int discrete_every; /* 5 (0: no discrete search) */
   int iter_scale;     /* iterate on the image downscaled by this factor (1) */
@@ -33,9 +37,13 @@ typedef struct {
   int checkpoint_every; /* 10 */
   int align_radius;   /* density alignment: search +-this many yarns/inch (230: the whole range; 0 = off) */
   int register_radius; /* registration: whole-yarn grid +-this many yarns/inch around the fit (6; 0 = off) */
+  double psf_sigma;   /* camera blur in pixels: WV_FIT_PSF_AUTO (-1, the default) measures it from the
+                       * photo (wv_psf_estimate) unless the scene gives one; >= 0: this sigma */
 } wv_fit_opts;
 
 void wv_fit_opts_default(wv_fit_opts *o);
+#define WV_FIT_PSF_AUTO -1.0
+#define WV_FIT_W_STRUCT 0.002 /* the structure term's weight (docs/fit.md: how it was chosen) */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000
@@ -59,7 +67,7 @@ wv_status wv_fit_check_sizes(const wv_scene *s, const wv_descriptor *d, const wv
 /* One iteration's record. */
 typedef struct {
   int iter;
-  double loss, gram, prior, pixel;
+  double loss, gram, prior, pixel, structure;
   int discrete_tried, discrete_kept;
 } wv_fit_record;
 
@@ -73,12 +81,15 @@ typedef struct {
   wv_params start, params;
   int iter; /* iterations done */
   int aligned; /* the density alignment after the last iteration is done */
+  int colour_split; /* the start's colours: 0 as given, 1..4 split (darker on the warp: 1, 3; weft: 2, 4; 3, 4 twice as far) */
   double align_ssim_before, align_ssim_after; /* its criterion at the start and end */
   int registered; /* the registration after the alignment is done */
   double offset_mm[2]; /* fabric offset found by the registration (added to the scene's) */
+  int psf_done;        /* the camera blur is settled (measured, or given): */
+  double psf_sigma;    /* ... its sigma in pixels of the scene's image (0: none) */
   double reg_ncc_before, reg_ncc_after;   /* correlation with the photo at zero shift, whole image */
   double reg_ssim_before, reg_ssim_after; /* SSIM of the whole image at the iteration spp */
-  double adam_m[WV_P_COUNT], adam_v[WV_P_COUNT];
+  float adam_m[WV_P_COUNT], adam_v[WV_P_COUNT]; /* wv_nn_adam's moments */
   uint64_t rng;
   wv_fit_record *log; /* iter entries */
   int log_cap;
@@ -114,7 +125,20 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
 wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                           wv_error *err);
 
-/* The scene the fit's parameters are meant for: s with the registration's offset. */
+/* The camera blur of photo (the scene's size): the sigma in 0..WV_PSF_RANGE pixels, in
+ * steps of WV_PSF_RANGE / WV_PSF_STEPS, whose Gaussian blur of p's render (at WV_PSF_SPP)
+ * gives the envelope of the photo's weave spectrum (the median of each ring of the
+ * centre 256 x 256 pixels' spectrum, wv_weave_spectrum) the least squared difference
+ * (returned in distance, may be NULL). Photos under WV_PSF_MIN_SIDE pixels: 0. */
+#define WV_PSF_RANGE 2.0
+#define WV_PSF_STEPS 20
+#define WV_PSF_SPP 16
+#define WV_PSF_MIN_SIDE 64
+wv_status wv_psf_estimate(const wv_scene *s, const wv_image *photo, const wv_params *p, int threads,
+                          double *sigma, double *distance, wv_error *err);
+
+/* The scene the fit's parameters are meant for: s with the registration's offset and
+ * the camera blur the fit settled on. */
 void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out);
 
 /* Loss terms of params against photo at the scene's own resolution and spp. */

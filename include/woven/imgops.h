@@ -19,6 +19,9 @@ wv_status wv_image_downsample(const wv_image *in, int w, int h, wv_image *out, w
 /* Adjoint: din (allocated here, in_w x in_h, dout->c channels) from dout. */
 wv_status wv_image_downsample_backward(int in_w, int in_h, const wv_image *dout, wv_image *din, wv_error *err);
 
+/* Clamp to [0, 1] and round to 8 bits (what a PNG stores and a photo arrives as); in place. */
+void wv_image_quantise8(wv_image *img);
+
 /* mean |a - b| over all samples; da (optional, allocated by the caller, a's
  * shape) receives d/da = sign(a - b) / count (0 where a = b). -1 if shapes differ. */
 double wv_image_l1(const wv_image *a, const wv_image *b, wv_image *da);

@@ -45,6 +45,9 @@ wv_status wv_image_write(const char *path, const wv_image *img, wv_error *err);
 wv_status wv_image_write_png(const char *path, const wv_image *img, int bit_depth, wv_error *err);
 wv_status wv_image_write_exr(const char *path, const wv_image *img, wv_error *err);
 
+/* Compresses an image (values in [0,1], 1 or 3+ channels) to JPEG at quality 1..100 in
+ * memory and decodes it again into out (3 channels, allocated here). */
+wv_status wv_image_jpeg_roundtrip(const wv_image *in, int quality, wv_image *out, wv_error *err);
 /* An 8-bit PNG in memory (RGB, or RGBA for a 4-channel image; values clamped
  * to [0,1], no colour encoding applied). *out is malloc'ed; the caller frees it. */
 wv_status wv_image_encode_png(const wv_image *img, unsigned char **out, size_t *len, wv_error *err);

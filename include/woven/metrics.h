@@ -19,4 +19,40 @@ wv_status wv_ssim(const wv_image *a, const wv_image *b, wv_ssim_mode mode, doubl
 /* Mean absolute difference over all samples. */
 wv_status wv_mae(const wv_image *a, const wv_image *b, double *out, wv_error *err);
 
+/* ---- the weave's spectrum ----
+ * A weave is a periodic texture, and at one or two pixels per yarn its structure lives
+ * in the detail of the luminance, not in its shading. These functions share one
+ * definition of that detail and of its power spectrum: the registration's phase
+ * correlation, the weave-spectrum correlation and the weave analysis (analysis.h). */
+#define WV_DETAIL_SIGMA 4.0   /* pixels: keeps the yarn and rib frequencies, drops shading and falloff */
+#define WV_WSC_SIZE 256       /* WSC compares the centre 256 x 256 pixels */
+#define WV_WSC_DC_RADIUS 4.0  /* bins around DC left out of the correlation */
+
+/* Gaussian blur (sigma in pixels, kernel radius ceil(3 sigma), edges clamped) of every
+ * channel of in into out (allocated here, in's shape). */
+wv_status wv_image_gaussian(const wv_image *in, double sigma, wv_image *out, wv_error *err);
+
+/* Luminance detail of the w x h window of img at (x0, y0): Y (Rec. 709 weights of the
+ * stored values) minus its Gaussian blur of sigma WV_DETAIL_SIGMA, standardised to zero
+ * mean and unit variance (a flat window gives zeros), times the 2-D Hann window
+ * (0.5 - 0.5 cos(2 pi (x + 0.5) / w)) (the same in y). out: w * h floats. */
+wv_status wv_image_detail(const wv_image *img, int x0, int y0, int w, int h, float *out, wv_error *err);
+
+/* The weave spectrum of the n x n window of img at (x0, y0) (n even, inside the image):
+ * log(1 + |FFT(detail)|^2), unnormalised FFT, centred (row-major, DC at (n/2, n/2),
+ * frequency (u, v) bins at (n/2 + u, n/2 + v), v downward as image rows).
+ * out: n * n floats. */
+wv_status wv_weave_spectrum(const wv_image *img, int x0, int y0, int n, float *out, wv_error *err);
+
+/* Weave-spectrum correlation (WSC): the Pearson correlation of the weave spectra of
+ * the centre 256 x 256 pixels of a and b over the bins farther than 4 bins from DC.
+ * Phase-invariant: it asks whether the two images hold the same periodic structure
+ * (the same yarn spacings, ribs and floats), not whether their yarns line up. Two
+ * regions of one weave score high, a weave against white noise about 0. Images may
+ * differ in size; a side under 256 pixels uses the largest centred even square
+ * both images hold (at least 32 pixels). */
+wv_status wv_wsc(const wv_image *a, const wv_image *b, double *out, wv_error *err);
+/* The same from two spectra of n x n (from wv_weave_spectrum). */
+double wv_wsc_spectra(const float *sa, const float *sb, int n);
+
 #endif

@@ -115,6 +115,13 @@ void wv_nn_sigmoid_backward(float *dx, const float *y, const float *dy, size_t n
 float wv_nn_l1_forward(const float *pred, const float *target, size_t n);
 void wv_nn_l1_backward(float *dpred, const float *pred, const float *target, float dloss, size_t n);
 
+/* ---- Softmax cross-entropy over k classes: logits (batch, k), labels (batch) in 0..k-1.
+ * forward returns the mean over the batch of -log softmax(logits)[label] and, when
+ * prob is not NULL, fills it with the softmax (batch, k); backward adds
+ * dloss (softmax - onehot) / batch to dlogits, from the probabilities. ---- */
+float wv_nn_softmax_xent_forward(float *prob, const float *logits, const int *labels, int batch, int k);
+void wv_nn_softmax_xent_backward(float *dlogits, const float *prob, const int *labels, float dloss, int batch, int k);
+
 /* ---- Adam (Kingma & Ba 2015) with bias correction; optional decoupled weight decay
  * (AdamW, Loshchilov & Hutter 2019). ---- */
 typedef struct {
@@ -124,9 +131,14 @@ typedef struct {
   float *m, *v;    /* moments, n floats each, owned */
 } wv_nn_adam;
 
-/* Defaults beta1 0.9, beta2 0.999, eps 1e-8, weight_decay 0; moments zero. */
+/* Defaults beta1 0.9, beta2 0.999, eps 1e-8, weight_decay 0; moments zero. A caller may
+ * also fill the struct itself with m, v pointing at its own storage (then it must not
+ * call wv_nn_adam_free). */
 wv_status wv_nn_adam_init(wv_nn_adam *a, size_t n, float lr, wv_error *err);
 void wv_nn_adam_step(wv_nn_adam *a, float *params, const float *grads);
+/* The same step, then every parameter clamped to [lo, hi] (projected Adam: the fit keeps
+ * each normalised parameter inside its range this way). */
+void wv_nn_adam_step_box(wv_nn_adam *a, float *params, const float *grads, float lo, float hi);
 void wv_nn_adam_free(wv_nn_adam *a);
 
 /* ---- safetensors (Hugging Face): 8-byte little-endian header length, a JSON

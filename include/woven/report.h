@@ -15,6 +15,30 @@ wv_status wv_image_hconcat(const wv_image *const *imgs, int n, int gap, wv_image
 /* An SVG line plot of the loss terms (total, Gram, w2*pixel, w1*prior), log scale. */
 char *wv_loss_svg(const wv_fit_record *log, int n, const wv_fit_opts *o);
 
+/* The centre side x side pixels of img enlarged factor times (nearest neighbour: the
+ * pixels stay visible); side is reduced to fit the image. */
+wv_status wv_image_centre_zoom(const wv_image *img, int side, int factor, wv_image *out, wv_error *err);
+
+/* The parameters of p that lie on a bound of their range (the fit keeps every parameter
+ * inside its range, so these are the ones it wanted to push further): up to cap entries
+ * of text such as "inclination_deg = 70 (upper bound)" into lines (each 96 chars). */
+int wv_params_at_bounds(const wv_params *p, char (*lines)[96], int cap);
+
+/* What shows the weave to a person, next to SSIM: SSIM per RGB channel and WSC of start
+ * and fit against the photo, the weave spectra of photo, start and fit (spectra.png) and
+ * the same centre crop of the three, enlarged (zoom.png). Empty paths: not made (the
+ * image is too small); wsc -2: not measured. */
+#define WV_WEAVE_ZOOM 4
+typedef struct {
+  double ssim_rgb[2], wsc[2]; /* [0] start, [1] fit */
+  char zoom_png[4096], spectra_png[4096];
+  int zoom_side, zoom_factor;
+} wv_weave_views;
+
+/* Measures v and writes dir/zoom.png and dir/spectra.png. */
+wv_status wv_weave_views_write(const char *dir, const wv_image *photo, const wv_image *start, const wv_image *fit,
+                               wv_weave_views *v, wv_error *err);
+
 typedef struct {
   const char *title;
   const char *photo_png, *start_png, *fit_png; /* files embedded as data URIs */
@@ -26,6 +50,8 @@ typedef struct {
   int iters;
   const char *descriptor;
   const wv_pattern_choice *pattern_choice;     /* the pattern was chosen automatically (NULL: given) */
+  const wv_weave_views *weave;                 /* zoom, spectra, SSIM per channel, WSC (NULL: none) */
+  double camera_blur;                          /* the camera blur's sigma in pixels the renders used */
   const char *viewer_html;                     /* the interactive viewer beside the report (NULL: none) */
   const char *drape_png;                       /* the fit on the draped cloth under new light (NULL: none) */
   const char *drape_note;                      /* what the drape shows, or why it is missing */

@@ -31,6 +31,8 @@ typedef struct {
   double gamma;         /* for WV_ENC_GAMMA: encoded = linear^(1/gamma) */
   int falloff;          /* 1 = Gaussian mask exp(-d^2/sigma^2), d in pixels from the centre */
   double falloff_sigma;
+  double psf_sigma;     /* camera blur: Gaussian point-spread function of this sigma in pixels on
+                         * the radiance, before exposure (0: none; docs/scenes.md) */
 } wv_scene;
 
 /* Limits on what a scene may request (memory and time guards). */
@@ -50,8 +52,18 @@ wv_status wv_scene_load(const char *name_or_path, wv_scene *s, wv_error *err);
 char *wv_scene_to_json(const wv_scene *s);
 
 /* Sensor response: capture = mask * encode(clip(exposure * radiance)). In place allowed.
- * (Its adjoint is applied inside the gradient renderer, woven/grad.h.) */
+ * (Its adjoint is applied inside the gradient renderer, woven/grad.h.) The camera blur is
+ * not part of it: wv_scene_capture applies both. */
 void wv_scene_response(const wv_scene *s, const wv_image *radiance, wv_image *capture);
+/* What the camera makes of the radiance reaching it: the blur (wv_psf_apply with
+ * s->psf_sigma), then wv_scene_response. capture must be allocated like radiance. */
+wv_status wv_scene_capture(const wv_scene *s, const wv_image *radiance, wv_image *capture, wv_error *err);
+#define WV_PSF_MAX_SIGMA 8.0 /* pixels */
+/* The camera blur: a separable Gaussian of sigma pixels (truncated at 3 sigma, weights
+ * summing to 1, edges clamped), on w x h images of c interleaved channels; adjoint != 0
+ * applies its transpose (for the gradient). in and out must differ. sigma <= 0 copies. */
+wv_status wv_psf_apply(double sigma, int w, int h, int c, const double *in, double *out, int adjoint,
+                       wv_error *err);
 /* Encoding of one value and its inverse (used to decode photos). */
 float wv_encode(const wv_scene *s, float linear);
 float wv_decode(const wv_scene *s, float encoded);

@@ -34,6 +34,7 @@ typedef struct {
 wv_status wv_weave_builtin(const char *name, wv_weave *w, wv_error *err);
 int wv_weave_is_builtin(const char *name);
 /* Canonical built-ins, in a fixed order (the index FabricNet's pattern head uses). */
+#define WV_WEAVE_BUILTINS 16 /* wv_weave_builtin_count(), for arrays over the library */
 int wv_weave_builtin_count(void);
 const char *wv_weave_builtin_name(int i); /* NULL outside 0..count-1 */
 /* The canonical name of a built-in (also of an earlier alias), NULL when not built in. */

@@ -1,5 +1,6 @@
-/* woven: the fit (paper section 4.3): loss, Adam and discrete steps, density
- * alignment, option ranges, checkpoints. */
+/* woven: the fit (include/woven/fit.h): Adam on the continuous parameters against the
+ * weighted image losses of include/woven/loss.h, the random discrete steps, the density
+ * alignment, and the fit's checkpoints. */
 #include "woven/fit.h"
 #include "fit/fit_internal.h"
 
@@ -16,7 +17,9 @@
 #include "woven/grad.h"
 #include "woven/imgops.h"
 #include "woven/io.h"
+#include "woven/loss.h"
 #include "woven/metrics.h"
+#include "woven/nn.h"
 #include "woven/render.h"
 
 void wv_fit_opts_default(wv_fit_opts *o) {
@@ -25,7 +28,9 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->lr = 0.01;
   o->w_prior = 0.0005;
   o->w_pixel = 0.2;
-  o->down_w = 16, o->down_h = 8;
+  o->w_struct = WV_FIT_W_STRUCT;
+  o->colour_split = 1;
+  o->down_w = WV_LOSS_DOWN_W, o->down_h = WV_LOSS_DOWN_H;
   o->discrete_every = 5;
   o->iter_scale = 1;
   o->iter_spp = 4;
@@ -33,6 +38,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->checkpoint_every = 10;
   o->align_radius = 230;
   o->register_radius = 6;
+  o->psf_sigma = WV_FIT_PSF_AUTO;
 }
 
 /* Every option's range, in one table: wv_fit_opts_validate and the checkpoint
@@ -60,6 +66,9 @@ static const opt_range OPT_RANGES[] = {
     OPT(checkpoint_every, 'i', 0, WV_FIT_MAX_ITERS, 0),
     OPT(align_radius, 'i', 0, WV_FIT_MAX_ALIGN_RADIUS, 1),
     OPT(register_radius, 'i', 0, WV_FIT_MAX_REGISTER_RADIUS, 2),
+    OPT(w_struct, 'd', 0, 1e6, 2),
+    OPT(colour_split, 'i', 0, 1, 2),
+    OPT(psf_sigma, 'd', WV_FIT_PSF_AUTO, WV_PSF_MAX_SIGMA, 2),
 };
 #undef OPT
 #define N_OPTS (sizeof OPT_RANGES / sizeof OPT_RANGES[0])
@@ -146,27 +155,24 @@ void wv_fit_state_free(wv_fit_state *st) {
 /* What stays fixed during a fit: the target at the iteration resolution. */
 typedef struct {
   wv_scene scene;
-  wv_image photo, photo_down;
-  float *gram_photo, *gram, *dgram;
-  size_t ng;
-  wv_image render, dcap, dcap_pix, down, ddown;
-  wv_descriptor *d;
+  wv_image photo;
+  wv_image render, dcap;
+  wv_image_loss *loss; /* the photo's side of every image loss term */
   const wv_fit_opts *o;
   wv_fit_timing *timing;
   wv_footprints *fp; /* the iteration scene's camera geometry, made once */
 } fit_ctx;
 
 static void ctx_free(fit_ctx *c) {
-  wv_image_free(&c->photo), wv_image_free(&c->photo_down), wv_image_free(&c->render);
-  wv_image_free(&c->dcap), wv_image_free(&c->dcap_pix), wv_image_free(&c->down), wv_image_free(&c->ddown);
-  free(c->gram_photo), free(c->gram), free(c->dgram);
+  wv_image_free(&c->photo), wv_image_free(&c->render), wv_image_free(&c->dcap);
+  wv_image_loss_free(c->loss);
   wv_footprints_free(c->fp);
 }
 
 static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, wv_descriptor *d, int scale,
                           int spp, const wv_fit_opts *o, wv_fit_timing *timing, wv_error *err) {
   memset(c, 0, sizeof *c);
-  c->d = d, c->o = o, c->timing = timing;
+  c->o = o, c->timing = timing;
   wv_fit_opts so = *o;
   so.iter_scale = scale;
   wv_status st = wv_fit_check_sizes(s, d, &so, err);
@@ -175,6 +181,7 @@ static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, 
   if (scale > 1) {
     c->scene.width = s->width / scale, c->scene.height = s->height / scale;
     c->scene.falloff_sigma = s->falloff_sigma / scale;
+    c->scene.psf_sigma = s->psf_sigma / scale; /* the blur in pixels of the smaller image */
   }
   if (spp > 0) c->scene.spp = spp;
   if (photo->w != s->width || photo->h != s->height)
@@ -186,13 +193,8 @@ static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, 
   } else if ((st = wv_image_downsample(photo, c->scene.width, c->scene.height, &c->photo, err))) {
     return st;
   }
-  if ((st = wv_image_downsample(&c->photo, o->down_w, o->down_h, &c->photo_down, err))) return st;
-  c->ng = wv_descriptor_size(d);
-  c->gram_photo = malloc(sizeof(float) * c->ng);
-  c->gram = malloc(sizeof(float) * c->ng);
-  c->dgram = malloc(sizeof(float) * c->ng);
-  if (!c->gram_photo || !c->gram || !c->dgram) return wv_fail(err, WV_ERR_NOMEM, "out of memory for Gram matrices");
-  if ((st = wv_descriptor_forward(d, &c->photo, c->gram_photo, err))) return st;
+  wv_loss_weights lw = {o->w_pixel, o->w_struct, o->down_w, o->down_h};
+  if ((st = wv_image_loss_create(&c->photo, d, NULL, &lw, &c->loss, err))) return st;
   if ((st = wv_image_alloc(&c->dcap, c->scene.width, c->scene.height, 3, err))) return st;
   return wv_footprints_create(&c->scene, o->threads, &c->fp, err);
 }
@@ -212,42 +214,19 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   if (st) return st;
   double t1 = omp_get_wtime();
   c->timing->render += t1 - t0;
-  /* L_g = mean |G_p - G_r| */
-  if ((st = wv_descriptor_forward(c->d, &c->render, c->gram, err))) goto fail;
-  double lg = 0;
-  for (size_t i = 0; i < c->ng; i++) {
-    float df = c->gram[i] - c->gram_photo[i];
-    lg += fabsf(df);
-    c->dgram[i] = (float)((df > 0) - (df < 0)) / (float)c->ng;
-  }
-  lg /= (double)c->ng;
-  /* L_c = mean |down(photo) - down(render)| */
-  wv_image_free(&c->down);
-  if ((st = wv_image_downsample(&c->render, o->down_w, o->down_h, &c->down, err))) goto fail;
-  if (!c->ddown.data && (st = wv_image_alloc(&c->ddown, o->down_w, o->down_h, 3, err))) goto fail;
-  double lc = wv_image_l1(&c->down, &c->photo_down, grad ? &c->ddown : NULL);
+  /* the image terms (and with a gradient wanted, dL/dcapture) */
+  wv_loss_terms lt;
+  if ((st = wv_image_loss_eval(c->loss, &c->render, &lt, grad ? &c->dcap : NULL, err))) goto fail;
   /* L_p on beta */
   double mu, sg;
   wv_fit_beta_prior(p->pattern, &mu, &sg);
   double lp = 0;
   for (int y = 0; y < 2; y++) lp += (p->heightfield[y] - mu) * (p->heightfield[y] - mu) / (2 * sg * sg);
-  rec->gram = lg, rec->pixel = lc, rec->prior = lp;
-  rec->loss = lg + o->w_prior * lp + o->w_pixel * lc;
-  double t2 = omp_get_wtime();
-  c->timing->descriptor += t2 - t1;
-  if (!grad) return WV_OK;
-  /* dL/dcapture: descriptor backward plus the pixel term through the downsampling */
-  st = wv_descriptor_backward(c->d, &c->render, c->dgram, NULL, &c->dcap, err);
-  wv_image_free(&c->dcap_pix);
-  if (!st) st = wv_image_downsample_backward(c->scene.width, c->scene.height, &c->ddown, &c->dcap_pix, err);
-  if (st) {
-    wv_record_free(record);
-    return st;
-  }
-  size_t n = (size_t)c->scene.width * c->scene.height * 3;
-  for (size_t i = 0; i < n; i++) c->dcap.data[i] += (float)o->w_pixel * c->dcap_pix.data[i];
+  rec->gram = lt.gram, rec->pixel = lt.pixel, rec->prior = lp, rec->structure = lt.structure;
+  rec->loss = lt.total + o->w_prior * lp;
   double t3 = omp_get_wtime();
-  c->timing->descriptor += t3 - t2;
+  c->timing->descriptor += t3 - t1;
+  if (!grad) return WV_OK;
   st = wv_record_grad(record, &c->dcap, grad, NULL, err);
   wv_record_free(record);
   if (st) return st;
@@ -365,6 +344,92 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
   return WV_OK;
 }
 
+/* The photo's two colours as ratios to their neighbourhood's mean colour (linear values,
+ * so illumination and the falloff cancel): 2-means over every pixel, r[0] the darker
+ * cluster. Returns 0 when the image has no colour detail to split. */
+static int photo_colour_ratios(const fit_ctx *c, double r[2][3], wv_error *err) {
+  const wv_image *ph = &c->photo;
+  size_t n = (size_t)ph->w * ph->h;
+  wv_image lin = {0}, mean = {0};
+  if (wv_image_alloc(&lin, ph->w, ph->h, 3, err)) return 0;
+  for (size_t i = 0; i < 3 * n; i++) lin.data[i] = wv_decode(&c->scene, ph->data[i]);
+  if (wv_image_blur(&lin, 4.0, &mean, err)) {
+    wv_image_free(&lin);
+    return 0;
+  }
+  for (size_t i = 0; i < 3 * n; i++) lin.data[i] /= mean.data[i] + 1e-4f;
+  wv_image_free(&mean);
+  /* start: the pixels below and above the mean luminance ratio */
+  double cen[2][3] = {{0}}, cnt[2] = {0};
+  for (size_t i = 0; i < n; i++) {
+    const float *v = lin.data + 3 * i;
+    int k = 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2] > 1.0;
+    for (int ch = 0; ch < 3; ch++) cen[k][ch] += v[ch];
+    cnt[k]++;
+  }
+  for (int it = 0; it < 10; it++) {
+    for (int k = 0; k < 2; k++)
+      for (int ch = 0; ch < 3; ch++) cen[k][ch] = cnt[k] > 0 ? cen[k][ch] / cnt[k] : 1.0;
+    double acc[2][3] = {{0}}, nk[2] = {0};
+    for (size_t i = 0; i < n; i++) {
+      const float *v = lin.data + 3 * i;
+      double d0 = 0, d1 = 0;
+      for (int ch = 0; ch < 3; ch++) d0 += (v[ch] - cen[0][ch]) * (v[ch] - cen[0][ch]), d1 += (v[ch] - cen[1][ch]) * (v[ch] - cen[1][ch]);
+      int k = d1 < d0;
+      for (int ch = 0; ch < 3; ch++) acc[k][ch] += v[ch];
+      nk[k]++;
+    }
+    memcpy(cen, acc, sizeof cen), memcpy(cnt, nk, sizeof cnt);
+  }
+  wv_image_free(&lin);
+  for (int k = 0; k < 2; k++)
+    for (int ch = 0; ch < 3; ch++) r[k][ch] = cnt[k] > 0 ? cen[k][ch] / cnt[k] : 1.0;
+  double l0 = 0.2126 * r[0][0] + 0.7152 * r[0][1] + 0.0722 * r[0][2];
+  double l1 = 0.2126 * r[1][0] + 0.7152 * r[1][1] + 0.0722 * r[1][2];
+  if (l0 > l1)
+    for (int ch = 0; ch < 3; ch++) {
+      double t = r[0][ch];
+      r[0][ch] = r[1][ch], r[1][ch] = t;
+    }
+  return cnt[0] > 0 && cnt[1] > 0 && fabs(l1 - l0) > 1e-3;
+}
+
+/* A start that splits warp and weft colours. A start with one diffuse colour for both
+ * yarn types is a symmetric point the gradient does not leave (both colours move
+ * alike), while a two-colour photo needs them apart. Candidates: the photo's two local
+ * colours (photo_colour_ratios), once and twice as far apart (yarns of one or two pixels
+ * mix them), on the warp and the weft each way round, scaled to the start's mean
+ * diffuse colour; the candidate with the lowest loss (the start included) is kept. */
+static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
+  double r[2][3];
+  wv_fit_record base = {0};
+  wv_status rc = evaluate(c, &st->params, &base, NULL, err);
+  if (rc || !photo_colour_ratios(c, r, err)) return rc;
+  double best = base.loss, lo, hi;
+  int choice = 0;
+  wv_params best_p = st->params;
+  for (int cand = 1; cand <= 4 && !rc; cand++) {
+    double alpha = cand <= 2 ? 1.0 : 2.0;
+    int dark = (cand & 1) ? WV_WARP : WV_WEFT; /* the yarn type given the darker colour */
+    wv_params p = st->params;
+    for (int ch = 0; ch < 3; ch++) {
+      double m = 0.5 * (st->params.diffuse[WV_WARP][ch] + st->params.diffuse[WV_WEFT][ch]);
+      for (int k = 0; k < 2; k++) {
+        int y = k == 0 ? dark : 1 - dark, id = y == WV_WARP ? WV_P_KD_WARP_R + ch : WV_P_KD_WEFT_R + ch;
+        wv_param_range(id, &lo, &hi);
+        double v = m * (1 + alpha * (r[k][ch] - 1));
+        p.diffuse[y][ch] = v < lo ? lo : v > hi ? hi : v;
+      }
+    }
+    wv_fit_record rec = {0};
+    if ((rc = evaluate(c, &p, &rec, NULL, err))) break;
+    if (rec.loss < best) best = rec.loss, choice = cand, best_p = p;
+  }
+  st->params = best_p;
+  st->colour_split = choice;
+  return rc;
+}
+
 wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
                      const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err) {
   wv_status vs = wv_fit_opts_validate(o, err);
@@ -378,25 +443,51 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
   fit_ctx c;
   double t_start = omp_get_wtime();
   wv_status rc = ctx_init(&c, s, photo, d, o->iter_scale, o->iter_spp, o, &st->timing, err);
-  const double b1 = 0.9, b2 = 0.999, eps = 1e-8;
+  if (!rc && !st->psf_done) {
+    /* the camera blur: given by the options or the scene, else measured on the start */
+    double tp = omp_get_wtime();
+    st->psf_sigma = o->psf_sigma >= 0 ? o->psf_sigma : s->psf_sigma;
+    if (o->psf_sigma < 0 && !(s->psf_sigma > 0)) {
+      wv_scene se;
+      wv_fit_scene(st, s, &se);
+      rc = wv_psf_estimate(&se, photo, &st->params, o->threads, &st->psf_sigma, NULL, err);
+    }
+    st->psf_done = !rc;
+    st->timing.discrete += omp_get_wtime() - tp;
+  }
+  wv_scene sb; /* the scene with the fit's camera blur */
+  wv_fit_scene(st, s, &sb);
+  sb.fabric_offset[0] = s->fabric_offset[0], sb.fabric_offset[1] = s->fabric_offset[1];
+  c.scene.psf_sigma = sb.psf_sigma / (o->iter_scale > 1 ? o->iter_scale : 1);
+  if (!rc && st->iter == 0 && o->colour_split && o->iters > 0) {
+    double td = omp_get_wtime();
+    wv_fit_timing saved = st->timing;
+    rc = colour_split(&c, st, err);
+    st->timing.render = saved.render, st->timing.descriptor = saved.descriptor; /* counted as a discrete step */
+    st->timing.discrete += omp_get_wtime() - td;
+  }
   while (!rc && st->iter < o->iters) {
     wv_fit_record rec = {0};
     rec.iter = st->iter;
     double g[WV_P_COUNT] = {0};
     if ((rc = evaluate(&c, &st->params, &rec, g, err))) break;
-    /* Adam in normalised coordinates z = (theta - lo) / (hi - lo), kept in [0, 1] */
+    /* Adam in normalised coordinates z = (theta - lo) / (hi - lo), projected onto [0, 1];
+     * z is remade from the parameters every step, so a resumed fit repeats this exactly. */
     int t = st->iter + 1;
+    float z[WV_P_COUNT], gz[WV_P_COUNT];
     for (int i = 0; i < WV_P_COUNT; i++) {
       double lo, hi;
       wv_param_range(i, &lo, &hi);
-      double gz = g[i] * (hi - lo);
-      if (!isfinite(gz)) gz = 0;
-      st->adam_m[i] = b1 * st->adam_m[i] + (1 - b1) * gz;
-      st->adam_v[i] = b2 * st->adam_v[i] + (1 - b2) * gz * gz;
-      double mh = st->adam_m[i] / (1 - pow(b1, t)), vh = st->adam_v[i] / (1 - pow(b2, t));
-      double z = (wv_param_get(&st->params, i) - lo) / (hi - lo) - o->lr * mh / (sqrt(vh) + eps);
-      z = z < 0 ? 0 : z > 1 ? 1 : z;
-      wv_param_set(&st->params, i, lo + z * (hi - lo));
+      double gi = g[i] * (hi - lo);
+      gz[i] = isfinite(gi) ? (float)gi : 0.0f;
+      z[i] = (float)((wv_param_get(&st->params, i) - lo) / (hi - lo));
+    }
+    wv_nn_adam adam = {WV_P_COUNT, (float)o->lr, 0.9f, 0.999f, 1e-8f, 0.0f, st->iter, st->adam_m, st->adam_v};
+    wv_nn_adam_step_box(&adam, z, gz, 0.0f, 1.0f);
+    for (int i = 0; i < WV_P_COUNT; i++) {
+      double lo, hi;
+      wv_param_range(i, &lo, &hi);
+      wv_param_set(&st->params, i, lo + z[i] * (hi - lo));
     }
     /* Discrete search: keep a random step only if it lowers the loss. */
     if (o->discrete_every > 0 && t % o->discrete_every == 0) {
@@ -427,7 +518,7 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
   ctx_free(&c);
   if (!rc && st->iter >= o->iters && !st->aligned && o->align_radius > 0) {
     double ta = omp_get_wtime();
-    rc = align_densities(st, s, photo, o, err);
+    rc = align_densities(st, &sb, photo, o, err);
     st->timing.discrete += omp_get_wtime() - ta;
     st->timing.total += omp_get_wtime() - ta;
   }
@@ -470,8 +561,10 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
                                 st->reg_ssim_after));
   json_object_set_new(root, "start", params_json(&st->start));
   json_object_set_new(root, "params", params_json(&st->params));
-  json_object_set_new(root, "adam_m", darray(st->adam_m, WV_P_COUNT));
-  json_object_set_new(root, "adam_v", darray(st->adam_v, WV_P_COUNT));
+  double am[WV_P_COUNT], av[WV_P_COUNT];
+  for (int i = 0; i < WV_P_COUNT; i++) am[i] = st->adam_m[i], av[i] = st->adam_v[i];
+  json_object_set_new(root, "adam_m", darray(am, WV_P_COUNT));
+  json_object_set_new(root, "adam_v", darray(av, WV_P_COUNT));
   char rng[32];
   snprintf(rng, sizeof rng, "%016llx", (unsigned long long)st->rng);
   json_object_set_new(root, "rng", json_string(rng));
@@ -485,11 +578,15 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
                                 "iter_spp", o->iter_spp, "seed", (json_int_t)o->seed, "align_radius",
                                 o->align_radius));
   json_object_set_new(json_object_get(root, "opts"), "register_radius", json_integer(o->register_radius));
+  json_object_set_new(json_object_get(root, "opts"), "w_struct", json_real(o->w_struct));
+  json_object_set_new(json_object_get(root, "opts"), "colour_split", json_integer(o->colour_split));
+  json_object_set_new(root, "colour_split", json_integer(st->colour_split));
+  json_object_set_new(root, "camera_blur", json_pack("{s:b,s:f}", "done", st->psf_done, "sigma_px", st->psf_sigma));
   json_t *log = json_array();
   for (int i = 0; i < st->iter; i++) {
     const wv_fit_record *r = &st->log[i];
-    json_array_append_new(log, json_pack("[i,f,f,f,f,i,i]", r->iter, r->loss, r->gram, r->prior, r->pixel,
-                                         r->discrete_tried, r->discrete_kept));
+    json_array_append_new(log, json_pack("[i,f,f,f,f,i,i,f]", r->iter, r->loss, r->gram, r->prior, r->pixel,
+                                         r->discrete_tried, r->discrete_kept, r->structure));
   }
   json_object_set_new(root, "log", log);
   char *text = json_dumps(root, JSON_COMPACT | JSON_REAL_PRECISION(17));
@@ -535,13 +632,17 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
     return wv_fail(err, WV_ERR_FORMAT, "not a woven fit checkpoint (version 1)");
   wv_fit_opts_default(o);
   o->register_radius = 0; /* absent in checkpoints older than the registration */
+  o->w_struct = 0, o->colour_split = 0; /* absent before the structure term: a resume stays without it */
+  o->psf_sigma = 0;                      /* absent before the camera blur: none */
   if ((rc = read_opts(json_object_get(root, "opts"), o, err))) return rc;
   wv_params start;
   if ((rc = read_params_obj(root, path, "start", &start, err))) return rc;
   if ((rc = wv_fit_state_init(st, &start, o, err))) return rc;
   if ((rc = read_params_obj(root, path, "params", &st->params, err))) return rc;
-  if ((rc = read_darray(root, "adam_m", st->adam_m, WV_P_COUNT, -1e30, 1e30, err))) return rc;
-  if ((rc = read_darray(root, "adam_v", st->adam_v, WV_P_COUNT, 0, 1e60, err))) return rc;
+  double am[WV_P_COUNT], av[WV_P_COUNT];
+  if ((rc = read_darray(root, "adam_m", am, WV_P_COUNT, -1e30, 1e30, err))) return rc;
+  if ((rc = read_darray(root, "adam_v", av, WV_P_COUNT, 0, 1e30, err))) return rc;
+  for (int i = 0; i < WV_P_COUNT; i++) st->adam_m[i] = (float)am[i], st->adam_v[i] = (float)av[i];
   /* The RNG state is written as exactly 16 hex digits. */
   json_t *jr = json_object_get(root, "rng");
   const char *rng = json_string_value(jr);
@@ -558,6 +659,17 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   json_t *al = json_object_get(root, "aligned");
   if (!json_is_boolean(al)) return wv_fail(err, WV_ERR_INVALID, "'aligned' must be true or false");
   st->aligned = json_is_true(al);
+  json_t *cb = json_object_get(root, "camera_blur"); /* absent before it existed: none, settled */
+  st->psf_done = 1, st->psf_sigma = 0;
+  if (cb) {
+    json_t *done = json_object_get(cb, "done");
+    if (!json_is_boolean(done)) return wv_fail(err, WV_ERR_INVALID, "'camera_blur.done' must be true or false");
+    st->psf_done = json_is_true(done);
+    if ((rc = wv_json_number(cb, "camera_blur", "sigma_px", 0, WV_PSF_MAX_SIGMA, 1, &st->psf_sigma, err))) return rc;
+  }
+  long long cs = 0; /* the start's colour split (absent before it existed: none) */
+  if ((rc = wv_json_integer(root, NULL, "colour_split", 0, 4, 0, &cs, err))) return rc;
+  st->colour_split = (int)cs;
   json_t *reg = json_object_get(root, "registration"); /* absent in checkpoints before it existed */
   if (reg) {
     json_t *done = json_object_get(reg, "done"), *off = json_object_get(reg, "offset_mm");
@@ -585,8 +697,9 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   for (int i = 0; i < st->iter; i++) {
     wv_fit_record *r = &st->log[i];
     json_t *e = json_array_get(log, i);
-    if (!json_is_array(e) || json_array_size(e) != 7)
-      return wv_fail(err, WV_ERR_INVALID, "'log[%d]' must be an array of 7 values", i);
+    /* the 8th value, the structure term, is absent in fits made before it existed */
+    if (!json_is_array(e) || json_array_size(e) < 7 || json_array_size(e) > 8)
+      return wv_fail(err, WV_ERR_INVALID, "'log[%d]' must be an array of 7 or 8 values", i);
     double *v[4] = {&r->loss, &r->gram, &r->prior, &r->pixel};
     long long x;
     char name[40];
@@ -601,6 +714,11 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
       snprintf(name, sizeof name, "log[%d][%d]", i, k + 5);
       if ((rc = wv_json_integer_value(json_array_get(e, (size_t)k + 5), name, 0, 1, &x, err))) return rc;
       *(k ? &r->discrete_kept : &r->discrete_tried) = (int)x;
+    }
+    r->structure = 0;
+    if (json_array_size(e) == 8) {
+      snprintf(name, sizeof name, "log[%d][7]", i);
+      if ((rc = wv_json_number_value(json_array_get(e, 7), name, -1e30, 1e30, &r->structure, err))) return rc;
     }
   }
   json_t *tm = json_object_get(root, "timing"); /* informative: absent or odd values are not fatal */

@@ -1,7 +1,11 @@
+/* Image comparison metrics: SSIM, mean absolute difference, and the weave's spectrum
+ * (the luminance detail, its log power spectrum and the weave-spectrum correlation). */
 #include "woven/metrics.h"
 
+#include <fftw3.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #define WIN 11
 #define RAD 5
@@ -81,4 +85,175 @@ wv_status wv_mae(const wv_image *a, const wv_image *b, double *out, wv_error *er
     return wv_fail(err, WV_ERR_INVALID, "images differ in size: %d x %d and %d x %d", a->w, a->h, b->w, b->h);
   *out = wv_image_mad(a, b);
   return WV_OK;
+}
+
+/* ---- the weave's spectrum ---- */
+
+static const double PI = 3.14159265358979323846;
+
+/* Normalised Gaussian taps g[0..2r], r = ceil(3 sigma) (at most cap). */
+static int gauss_taps(double sigma, double *g, int cap) {
+  int r = (int)ceil(3 * sigma);
+  if (r > cap) r = cap;
+  double gs = 0;
+  for (int k = -r; k <= r; k++) gs += g[k + r] = exp(-0.5 * k * k / (sigma * sigma));
+  for (int k = 0; k <= 2 * r; k++) g[k] /= gs;
+  return r;
+}
+
+#define GAUSS_CAP 64
+
+/* One pass of a separable blur along x (vertical 0) or y (1) of a plane with stride
+ * `stride` floats between pixels, edges clamped; sums in double. */
+static void blur_pass(const float *in, float *out, int w, int h, int stride, int vertical, const double *g, int r) {
+  for (int y = 0; y < h; y++)
+    for (int x = 0; x < w; x++) {
+      double s = 0;
+      for (int k = -r; k <= r; k++) {
+        int xx = vertical ? x : x + k < 0 ? 0 : x + k >= w ? w - 1 : x + k;
+        int yy = !vertical ? y : y + k < 0 ? 0 : y + k >= h ? h - 1 : y + k;
+        s += g[k + r] * in[((size_t)yy * w + xx) * stride];
+      }
+      out[((size_t)y * w + x) * stride] = (float)s;
+    }
+}
+
+wv_status wv_image_gaussian(const wv_image *in, double sigma, wv_image *out, wv_error *err) {
+  if (!(sigma > 0) || sigma > GAUSS_CAP / 3.0)
+    return wv_fail(err, WV_ERR_INVALID, "Gaussian blur: sigma %g outside (0, %g]", sigma, GAUSS_CAP / 3.0);
+  wv_status st = wv_image_alloc(out, in->w, in->h, in->c, err);
+  if (st) return st;
+  float *tmp = malloc(sizeof(float) * (size_t)in->w * in->h * in->c);
+  if (!tmp) {
+    wv_image_free(out);
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a Gaussian blur");
+  }
+  double g[2 * GAUSS_CAP + 1];
+  int r = gauss_taps(sigma, g, GAUSS_CAP);
+  for (int c = 0; c < in->c; c++) {
+    blur_pass(in->data + c, tmp + c, in->w, in->h, in->c, 0, g, r);
+    blur_pass(tmp + c, out->data + c, in->w, in->h, in->c, 1, g, r);
+  }
+  free(tmp);
+  return WV_OK;
+}
+
+wv_status wv_image_detail(const wv_image *img, int x0, int y0, int w, int h, float *out, wv_error *err) {
+  if (w < 1 || h < 1 || x0 < 0 || y0 < 0 || x0 + w > img->w || y0 + h > img->h)
+    return wv_fail(err, WV_ERR_INVALID, "detail window %d x %d at (%d, %d) is not inside the %d x %d image", w, h, x0,
+                   y0, img->w, img->h);
+  size_t n = (size_t)w * h;
+  float *tmp = malloc(sizeof(float) * n * 2), *blur = tmp + n;
+  double *hx = malloc(sizeof(double) * (size_t)(w + h)), *hy = hx + w;
+  if (!tmp || !hx) {
+    free(tmp), free(hx);
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a %d x %d detail image", w, h);
+  }
+  for (int y = 0; y < h; y++)
+    for (int x = 0; x < w; x++) {
+      const float *c = wv_image_px(img, x0 + x, y0 + y);
+      out[(size_t)y * w + x] = img->c >= 3 ? 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2] : c[0];
+    }
+  double g[2 * GAUSS_CAP + 1];
+  int r = gauss_taps(WV_DETAIL_SIGMA, g, GAUSS_CAP);
+  blur_pass(out, tmp, w, h, 1, 0, g, r);
+  blur_pass(tmp, blur, w, h, 1, 1, g, r);
+  double m = 0, v = 0;
+  for (size_t i = 0; i < n; i++) m += out[i] -= blur[i];
+  m /= (double)n;
+  for (size_t i = 0; i < n; i++) v += (out[i] - m) * (out[i] - m);
+  double is = v > 1e-20 ? 1.0 / sqrt(v / (double)n) : 0.0; /* a flat window has no detail */
+  for (int x = 0; x < w; x++) hx[x] = 0.5 - 0.5 * cos(2 * PI * (x + 0.5) / w);
+  for (int y = 0; y < h; y++) hy[y] = 0.5 - 0.5 * cos(2 * PI * (y + 0.5) / h);
+  for (int y = 0; y < h; y++)
+    for (int x = 0; x < w; x++) {
+      size_t i = (size_t)y * w + x;
+      out[i] = (float)((out[i] - m) * is) * (float)(hx[x] * hy[y]);
+    }
+  free(tmp), free(hx);
+  return WV_OK;
+}
+
+wv_status wv_weave_spectrum(const wv_image *img, int x0, int y0, int n, float *out, wv_error *err) {
+  if (n < 2 || n % 2)
+    return wv_fail(err, WV_ERR_INVALID, "weave spectrum: the window side must be even and at least 2, not %d", n);
+  int nc = n / 2 + 1;
+  float *a = fftwf_alloc_real((size_t)n * n);
+  fftwf_complex *f = fftwf_alloc_complex((size_t)n * nc);
+  if (!a || !f) {
+    fftwf_free(a), fftwf_free(f);
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a %d x %d spectrum", n, n);
+  }
+  wv_status st = wv_image_detail(img, x0, y0, n, n, a, err);
+  fftwf_plan plan = NULL;
+  if (!st) {
+    /* FFTW's planner is not thread-safe; FFTW_ESTIMATE keeps results reproducible. */
+#pragma omp critical(wv_fftw_planner)
+    plan = fftwf_plan_dft_r2c_2d(n, n, a, f, FFTW_ESTIMATE);
+    if (!plan) st = wv_fail(err, WV_ERR_NOMEM, "cannot plan a %d x %d FFT", n, n);
+  }
+  if (!st) {
+    fftwf_execute(plan);
+    /* Bin (u, v) of the half spectrum is row v mod n, column u; the other half is
+     * its conjugate mirror: |F(-u, -v)| = |F(u, v)|. */
+    for (int v = -n / 2; v < n / 2; v++)
+      for (int u = -n / 2; u < n / 2; u++) {
+        int uu = u, vv = v;
+        if (uu < 0) uu = -uu, vv = -vv;
+        const float *c = f[(size_t)((vv % n + n) % n) * nc + uu];
+        double p = (double)c[0] * c[0] + (double)c[1] * c[1];
+        out[(size_t)(v + n / 2) * n + (u + n / 2)] = (float)log1p(p);
+      }
+  }
+  if (plan) {
+#pragma omp critical(wv_fftw_planner)
+    fftwf_destroy_plan(plan);
+  }
+  fftwf_free(a), fftwf_free(f);
+  return st;
+}
+
+double wv_wsc_spectra(const float *sa, const float *sb, int n) {
+  double ma = 0, mb = 0;
+  long cnt = 0;
+  const double r2 = WV_WSC_DC_RADIUS * WV_WSC_DC_RADIUS;
+  for (int pass = 0; pass < 2; pass++) {
+    double saa = 0, sbb = 0, sab = 0;
+    for (int v = -n / 2; v < n / 2; v++)
+      for (int u = -n / 2; u < n / 2; u++) {
+        if ((double)u * u + (double)v * v <= r2) continue;
+        size_t i = (size_t)(v + n / 2) * n + (u + n / 2);
+        if (pass == 0) {
+          ma += sa[i], mb += sb[i], cnt++;
+        } else {
+          double da = sa[i] - ma, db = sb[i] - mb;
+          saa += da * da, sbb += db * db, sab += da * db;
+        }
+      }
+    if (pass == 0) {
+      if (!cnt) return 0;
+      ma /= (double)cnt, mb /= (double)cnt;
+    } else {
+      return saa > 0 && sbb > 0 ? sab / sqrt(saa * sbb) : 0.0; /* a flat spectrum correlates with nothing */
+    }
+  }
+  return 0;
+}
+
+wv_status wv_wsc(const wv_image *a, const wv_image *b, double *out, wv_error *err) {
+  int n = WV_WSC_SIZE;
+  int side = a->w < a->h ? a->w : a->h;
+  if (b->w < side) side = b->w;
+  if (b->h < side) side = b->h;
+  if (side < n) n = side - side % 2;
+  if (n < 32)
+    return wv_fail(err, WV_ERR_INVALID, "images of %d x %d and %d x %d are too small for WSC (at least 32 x 32)", a->w,
+                   a->h, b->w, b->h);
+  float *sa = malloc(sizeof(float) * (size_t)n * n * 2), *sb = sa ? sa + (size_t)n * n : NULL;
+  if (!sa) return wv_fail(err, WV_ERR_NOMEM, "out of memory for WSC");
+  wv_status st = wv_weave_spectrum(a, (a->w - n) / 2, (a->h - n) / 2, n, sa, err);
+  if (!st) st = wv_weave_spectrum(b, (b->w - n) / 2, (b->h - n) / 2, n, sb, err);
+  if (!st) *out = wv_wsc_spectra(sa, sb, n);
+  free(sa);
+  return st;
 }

@@ -12,13 +12,10 @@
 #include "woven/metrics.h"
 #include "woven/render.h"
 
-#define HP_SIGMA 4.0 /* pixels: keeps the weave and rib frequencies, drops shading and falloff */
-#define HP_RAD 12
-
 /* Everything one window's correlation needs, allocated once per registration. */
 typedef struct {
   int w, h, nc;           /* window, complex row length w/2+1 */
-  float *a, *tmp, *win;   /* w*h: the high-passed image, a blur scratch, the Hann window */
+  float *a;               /* w*h: the luminance detail (wv_image_detail) */
   float *corr;            /* w*h: correlation over all circular shifts */
   fftwf_complex *ref, *spec; /* h*nc: the photo's spectrum, the render's */
   fftwf_plan fwd, inv;
@@ -26,10 +23,12 @@ typedef struct {
 } phasecorr;
 
 static void pc_free(phasecorr *p) {
-  if (p->fwd) fftwf_destroy_plan(p->fwd);
-  if (p->inv) fftwf_destroy_plan(p->inv);
+#pragma omp critical(wv_fftw_planner)
+  {
+    if (p->fwd) fftwf_destroy_plan(p->fwd);
+    if (p->inv) fftwf_destroy_plan(p->inv);
+  }
   fftwf_free(p->a), fftwf_free(p->corr), fftwf_free(p->ref), fftwf_free(p->spec);
-  free(p->tmp), free(p->win);
   memset(p, 0, sizeof *p);
 }
 
@@ -39,68 +38,36 @@ static wv_status pc_init(phasecorr *p, int w, int h, wv_error *err) {
   size_t n = (size_t)w * h, nc = (size_t)h * p->nc;
   p->a = fftwf_alloc_real(n), p->corr = fftwf_alloc_real(n);
   p->ref = fftwf_alloc_complex(nc), p->spec = fftwf_alloc_complex(nc);
-  p->tmp = malloc(sizeof(float) * n), p->win = malloc(sizeof(float) * n);
-  if (!p->a || !p->corr || !p->ref || !p->spec || !p->tmp || !p->win) {
+  if (!p->a || !p->corr || !p->ref || !p->spec) {
     pc_free(p);
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration (%d x %d window)", w, h);
   }
-  /* FFTW_ESTIMATE: no timing-dependent planning, so results are reproducible. */
-  p->fwd = fftwf_plan_dft_r2c_2d(h, w, p->a, p->spec, FFTW_ESTIMATE);
-  p->inv = fftwf_plan_dft_c2r_2d(h, w, p->spec, p->corr, FFTW_ESTIMATE);
+  /* FFTW_ESTIMATE: no timing-dependent planning, so results are reproducible. The
+   * planner is not thread-safe (the same critical section as wv_weave_spectrum). */
+#pragma omp critical(wv_fftw_planner)
+  {
+    p->fwd = fftwf_plan_dft_r2c_2d(h, w, p->a, p->spec, FFTW_ESTIMATE);
+    p->inv = fftwf_plan_dft_c2r_2d(h, w, p->spec, p->corr, FFTW_ESTIMATE);
+  }
   if (!p->fwd || !p->inv) {
     pc_free(p);
     return wv_fail(err, WV_ERR_NOMEM, "cannot plan the registration FFT (%d x %d)", w, h);
   }
-  p->win_energy = 0;
+  p->win_energy = 0; /* of wv_image_detail's Hann window */
   for (int y = 0; y < h; y++)
     for (int x = 0; x < w; x++) {
       double v = (0.5 - 0.5 * cos(2 * 3.14159265358979323846 * (x + 0.5) / w)) * (0.5 - 0.5 * cos(2 * 3.14159265358979323846 * (y + 0.5) / h));
-      p->win[(size_t)y * w + x] = (float)v;
       p->win_energy += v * v;
     }
   return WV_OK;
 }
 
-/* One pass of a separable blur along x (vertical 0) or y (1), edges clamped. */
-static void blur_pass(const float *in, float *out, int w, int h, int vertical, const double *g) {
-  for (int y = 0; y < h; y++)
-    for (int x = 0; x < w; x++) {
-      double s = 0;
-      for (int k = -HP_RAD; k <= HP_RAD; k++) {
-        int xx = vertical ? x : x + k < 0 ? 0 : x + k >= w ? w - 1 : x + k;
-        int yy = !vertical ? y : y + k < 0 ? 0 : y + k >= h ? h - 1 : y + k;
-        s += g[k + HP_RAD] * in[(size_t)yy * w + xx];
-      }
-      out[(size_t)y * w + x] = (float)s;
-    }
-}
-
-/* a = Hann * normalise(Y - gauss(Y)): luminance detail, zero mean, unit variance. */
-static void pc_prepare(phasecorr *p, const wv_image *img) {
-  int w = p->w, h = p->h;
-  double g[2 * HP_RAD + 1], gs = 0;
-  for (int k = -HP_RAD; k <= HP_RAD; k++) gs += g[k + HP_RAD] = exp(-0.5 * k * k / (HP_SIGMA * HP_SIGMA));
-  for (int k = 0; k <= 2 * HP_RAD; k++) g[k] /= gs;
-  for (int y = 0; y < h; y++)
-    for (int x = 0; x < w; x++) {
-      const float *c = wv_image_px(img, x, y);
-      p->a[(size_t)y * w + x] = 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
-    }
-  blur_pass(p->a, p->tmp, w, h, 0, g); /* the blur lands in corr (scratch here) */
-  blur_pass(p->tmp, p->corr, w, h, 1, g);
-  size_t n = (size_t)w * h;
-  double m = 0, v = 0;
-  for (size_t i = 0; i < n; i++) m += p->a[i] -= p->corr[i];
-  m /= (double)n;
-  for (size_t i = 0; i < n; i++) v += (p->a[i] - m) * (p->a[i] - m);
-  double is = v > 1e-20 ? 1.0 / sqrt(v / (double)n) : 0.0; /* a flat image correlates with nothing */
-  for (size_t i = 0; i < n; i++) p->a[i] = (float)((p->a[i] - m) * is) * p->win[i];
-}
-
 /* Correlation of the photo (p->ref) with img over shifts |s| <= max_shift: the best
  * normalised value and the shift s (sub-pixel) with photo(x) ~ img(x - s). */
-static double pc_best(phasecorr *p, const wv_image *img, int max_shift, double shift[2]) {
-  pc_prepare(p, img);
+static wv_status pc_best(phasecorr *p, const wv_image *img, int max_shift, double shift[2], double *out,
+                         wv_error *err) {
+  wv_status rc = wv_image_detail(img, 0, 0, p->w, p->h, p->a, err);
+  if (rc) return rc;
   fftwf_execute(p->fwd);
   size_t nc = (size_t)p->h * p->nc;
   for (size_t i = 0; i < nc; i++) { /* ref * conj(spec) */
@@ -126,7 +93,8 @@ static double pc_best(phasecorr *p, const wv_image *img, int max_shift, double s
     shift[1] = by + (ey < 0 ? 0.5 * (u - d) / ey : 0.0);
   }
 #undef CORR
-  return best;
+  *out = best;
+  return WV_OK;
 }
 
 /* One window size: its scene, the photo's pixels there and their spectrum. */
@@ -158,7 +126,10 @@ static wv_status level_init(level *l, const wv_scene *full, const wv_image *phot
     wv_image_free(&l->ref);
     return rc;
   }
-  pc_prepare(&l->pc, &l->ref);
+  if ((rc = wv_image_detail(&l->ref, 0, 0, w, h, l->pc.a, err))) {
+    level_free(l);
+    return rc;
+  }
   fftwf_execute(l->pc.fwd);
   memcpy(l->pc.ref, l->pc.spec, sizeof(fftwf_complex) * (size_t)h * l->pc.nc);
   return WV_OK;
@@ -173,9 +144,9 @@ static wv_status score(level *l, const wv_params *base, const double dens[2], do
   wv_image img;
   wv_status rc = wv_render(&l->win, &p, &l->ro, &img, NULL, err);
   if (rc) return rc;
-  *out = pc_best(&l->pc, &img, l->max_shift, shift);
+  rc = pc_best(&l->pc, &img, l->max_shift, shift, out, err);
   wv_image_free(&img);
-  return WV_OK;
+  return rc;
 }
 
 /* Correlation at zero shift and SSIM of one render of win against the level's photo. */
@@ -184,8 +155,8 @@ static wv_status measure(level *l, const wv_scene *win, const wv_params *p, cons
   wv_image img;
   wv_status rc = wv_render(win, p, ro, &img, NULL, err);
   if (rc) return rc;
-  *ncc = pc_best(&l->pc, &img, 0, NULL);
-  rc = wv_ssim(&l->ref, &img, WV_SSIM_LUMA, ssim, err);
+  rc = pc_best(&l->pc, &img, 0, NULL, ncc, err);
+  if (!rc) rc = wv_ssim(&l->ref, &img, WV_SSIM_LUMA, ssim, err);
   wv_image_free(&img);
   return rc;
 }
@@ -198,6 +169,7 @@ void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out) {
   *out = *s;
   out->fabric_offset[0] += st->offset_mm[0];
   out->fabric_offset[1] += st->offset_mm[1];
+  if (st->psf_done) out->psf_sigma = st->psf_sigma;
 }
 
 #define MAX_THREADS 16

@@ -1,3 +1,5 @@
+/* What a capture hands back to a person: side-by-side and zoomed images, the loss plot,
+ * the parameters left on a bound, and the self-contained HTML report. */
 #include "woven/report.h"
 
 #include <math.h>
@@ -6,8 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "woven/analysis.h"
 #include "util/base64.h"
 #include "woven/io.h"
+#include "woven/metrics.h"
 
 wv_status wv_image_hconcat(const wv_image *const *imgs, int n, int gap, wv_image *out, wv_error *err) {
   int w = 0, h = imgs[0]->h;
@@ -26,6 +30,83 @@ wv_status wv_image_hconcat(const wv_image *const *imgs, int n, int gap, wv_image
     x0 += imgs[i]->w + gap;
   }
   return WV_OK;
+}
+
+wv_status wv_image_centre_zoom(const wv_image *img, int side, int factor, wv_image *out, wv_error *err) {
+  if (side > img->w) side = img->w;
+  if (side > img->h) side = img->h;
+  if (side < 1 || factor < 1) return wv_fail(err, WV_ERR_INVALID, "zoom: empty crop");
+  wv_status st = wv_image_alloc(out, side * factor, side * factor, 3, err);
+  if (st) return st;
+  int x0 = (img->w - side) / 2, y0 = (img->h - side) / 2;
+  for (int y = 0; y < out->h; y++)
+    for (int x = 0; x < out->w; x++) {
+      const float *s = wv_image_px(img, x0 + x / factor, y0 + y / factor);
+      float *d = wv_image_px(out, x, y);
+      for (int c = 0; c < 3; c++) d[c] = s[img->c >= 3 ? c : 0];
+    }
+  return WV_OK;
+}
+
+wv_status wv_weave_views_write(const char *dir, const wv_image *photo, const wv_image *start, const wv_image *fit,
+                               wv_weave_views *v, wv_error *err) {
+  const wv_image *img[3] = {photo, start, fit};
+  v->wsc[0] = v->wsc[1] = -2;
+  v->zoom_png[0] = v->spectra_png[0] = 0;
+  v->zoom_factor = WV_WEAVE_ZOOM;
+  wv_status st = WV_OK;
+  for (int i = 0; i < 2 && !st; i++) st = wv_ssim(photo, img[i + 1], WV_SSIM_RGB, &v->ssim_rgb[i], err);
+  int n = photo->w < photo->h ? photo->w : photo->h;
+  n = n > WV_WSC_SIZE ? WV_WSC_SIZE : n - n % 2;
+  if (!st && n >= 32) {
+    float *sp = malloc(sizeof(float) * (size_t)n * n * 3);
+    if (!sp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the weave spectra");
+    const float *spec[3] = {sp, sp + (size_t)n * n, sp + (size_t)n * n * 2};
+    for (int i = 0; i < 3 && !st; i++)
+      st = wv_weave_spectrum(img[i], (photo->w - n) / 2, (photo->h - n) / 2, n, (float *)spec[i], err);
+    wv_image pic = {0};
+    if (!st) {
+      v->wsc[0] = wv_wsc_spectra(spec[0], spec[1], n), v->wsc[1] = wv_wsc_spectra(spec[0], spec[2], n);
+      st = wv_spectrum_picture(spec, 3, n, 1, &pic, err);
+    }
+    snprintf(v->spectra_png, sizeof v->spectra_png, "%s/spectra.png", dir);
+    if (!st) st = wv_image_write_png(v->spectra_png, &pic, 8, err);
+    wv_image_free(&pic);
+    free(sp);
+  }
+  /* the centre crop a person can see the yarns in: a quarter of the image, at most 96 pixels */
+  v->zoom_side = (photo->w < photo->h ? photo->w : photo->h) / 4;
+  if (v->zoom_side > 96) v->zoom_side = 96;
+  if (!st && v->zoom_side >= 8) {
+    wv_image z[3] = {{0}, {0}, {0}}, row = {0};
+    for (int i = 0; i < 3 && !st; i++) st = wv_image_centre_zoom(img[i], v->zoom_side, v->zoom_factor, &z[i], err);
+    const wv_image *zs[3] = {&z[0], &z[1], &z[2]};
+    if (!st) st = wv_image_hconcat(zs, 3, 4, &row, err);
+    snprintf(v->zoom_png, sizeof v->zoom_png, "%s/zoom.png", dir);
+    if (!st) st = wv_image_write_png(v->zoom_png, &row, 8, err);
+    for (int i = 0; i < 3; i++) wv_image_free(&z[i]);
+    wv_image_free(&row);
+  }
+  if (st) v->zoom_png[0] = v->spectra_png[0] = 0;
+  return st;
+}
+
+int wv_params_at_bounds(const wv_params *p, char (*lines)[96], int cap) {
+  int n = 0;
+  for (int i = 0; i < WV_P_COUNT && n < cap; i++) {
+    double lo, hi, v = wv_param_get(p, i);
+    wv_param_range(i, &lo, &hi);
+    double tol = 1e-6 * (hi - lo);
+    if (v <= lo + tol || v >= hi - tol)
+      snprintf(lines[n++], 96, "%s = %g (%s bound)", wv_param_name(i), v, v <= lo + tol ? "lower" : "upper");
+  }
+  for (int y = 0; y < 2 && n < cap; y++)
+    if (p->density[y] <= WV_DENSITY_MIN || p->density[y] >= WV_DENSITY_MAX)
+      snprintf(lines[n++], 96, "density.%s = %g (%s bound)", y ? "weft" : "warp", p->density[y],
+               p->density[y] <= WV_DENSITY_MIN ? "lower" : "upper");
+  if (n < cap && (p->noise_level <= 0 || p->noise_level >= 10))
+    snprintf(lines[n++], 96, "noise_level = %d (%s bound)", p->noise_level, p->noise_level <= 0 ? "lower" : "upper");
+  return n;
 }
 
 /* A growing string. */
@@ -144,23 +225,84 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
       sb_printf(&b, "\"><figcaption>%s: SSIM %.4f</figcaption></figure>\n", labels[i],
                 i == 1 ? r->ssim_start : r->ssim_fit);
   }
-  sb_printf(&b, "<p>SSIM against the photo (luminance, Wang et al. 2004, 11x11 Gaussian window): "
-                "%s %.4f &rarr; fit %.4f. %d iterations, descriptor <code>%s</code>.</p>\n",
-            r->start_label, r->ssim_start, r->ssim_fit, r->iters, r->descriptor);
+  if (r->weave && r->weave->zoom_png[0] && !st) {
+    sb_printf(&b, "<h2>The weave, close up</h2>\n<figure><img alt=\"zoom\" src=\"data:image/png;base64,");
+    sb_base64_file(&b, r->weave->zoom_png, &st, err);
+    sb_printf(&b, "\"><figcaption>photo | %s | fit: the centre %d x %d pixels, %d times enlarged</figcaption>"
+                  "</figure>\n",
+              r->start_label, r->weave->zoom_side, r->weave->zoom_side, r->weave->zoom_factor);
+  }
+  if (r->weave && r->weave->spectra_png[0] && !st) {
+    sb_printf(&b, "<figure><img alt=\"spectra\" src=\"data:image/png;base64,");
+    sb_base64_file(&b, r->weave->spectra_png, &st, err);
+    sb_printf(&b, "\"><figcaption>weave spectra (log power of the luminance detail, centre window, DC in the "
+                  "middle): photo | %s | fit. The same weave shows the same lattice of peaks, wherever its yarns "
+                  "lie.</figcaption></figure>\n",
+              r->start_label);
+  }
+  sb_printf(&b, "<table><tr><th>against the photo</th><th>%s</th><th>fit</th></tr>\n", r->start_label);
+  sb_printf(&b, "<tr><td>SSIM (luminance)</td><td>%.4f</td><td>%.4f</td></tr>\n", r->ssim_start, r->ssim_fit);
+  if (r->weave)
+    sb_printf(&b, "<tr><td>SSIM (per RGB channel)</td><td>%.4f</td><td>%.4f</td></tr>\n", r->weave->ssim_rgb[0],
+              r->weave->ssim_rgb[1]);
+  if (r->weave && r->weave->wsc[0] > -2)
+    sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td><td>%.4f</td></tr>\n",
+              r->weave->wsc[0], r->weave->wsc[1]);
+  sb_printf(&b, "</table>\n<p>Both renders pass through the camera blur: a Gaussian of sigma %.2f px on the "
+                "radiance (measured from the photo's spectrum unless given; docs/fit.md).</p>\n",
+            r->camera_blur);
+  sb_printf(&b, "<p>SSIM: Wang et al. 2004, 11x11 Gaussian window. WSC: Pearson correlation of the log "
+                "power spectra of the luminance detail of the centre 256 x 256 pixels, DC left out; 1 for the same "
+                "periodic structure, about 0 for none in common. %d iterations, descriptor <code>%s</code>.</p>\n",
+            r->iters, r->descriptor);
+  char bounds[WV_P_COUNT + 3][96];
+  int nbounds = wv_params_at_bounds(r->fit, bounds, WV_P_COUNT + 3);
+  if (nbounds) {
+    sb_printf(&b, "<p>Parameters of the fit on a bound of their range (the fit wanted to push them further):</p><ul>");
+    for (int i = 0; i < nbounds; i++) sb_printf(&b, "<li>%s</li>", bounds[i]);
+    sb_printf(&b, "</ul>\n");
+  } else {
+    sb_printf(&b, "<p>No parameter of the fit ended on a bound of its range.</p>\n");
+  }
   if (r->timing)
     sb_printf(&b, "<p>Time: %.1f s in all (render %.1f s, gradient %.1f s, descriptor %.1f s, discrete search %.1f s, registration %.1f s).</p>\n",
               r->timing->total, r->timing->render, r->timing->gradient, r->timing->descriptor, r->timing->discrete,
               r->timing->registration);
   const wv_pattern_choice *pc = r->pattern_choice;
   if (pc) {
-    sb_printf(&b, "<p>Pattern chosen automatically: <b>%s</b>, the smallest texture (Gram) loss against the photo "
-                  "when the network's estimate is rendered with each built-in pattern (%d spp):</p>\n<table><tr>",
-              wv_net_pattern(pc->best), pc->spp);
-    for (int i = 0; i < WV_NET_PATTERNS; i++) sb_printf(&b, "<th>%s</th>", wv_net_pattern(i));
-    sb_printf(&b, "</tr>\n<tr>");
-    for (int i = 0; i < WV_NET_PATTERNS; i++)
-      sb_printf(&b, i == pc->best ? "<td><b>%.6f</b></td>" : "<td>%.6f</td>", pc->loss[i]);
-    sb_printf(&b, "</tr></table>\n");
+    const wv_lattice *l = &pc->lattice;
+    const char *chosen = wv_weave_builtin_name(pc->best);
+    sb_printf(&b, "<h2>Weave analysis and pattern choice</h2>\n");
+    if (l->found) {
+      const wv_lattice_fit *f = &l->fit[l->best];
+      sb_printf(&b, "<p>The photo's weave spectrum shows %d peaks. The built-in lattice that explains them best is "
+                    "<b>%s</b>: %.1f warp x %.1f weft yarns/inch (%.2f x %.2f pixels apart), turned by %.1f&deg;, "
+                    "%.1f&deg; out of square, a repeat of %d yarns moving %+d per row (score %.3f).</p>\n",
+                l->n_peaks, wv_weave_builtin_name(l->best), f->density[0], f->density[1], l->spacing_px[0],
+                l->spacing_px[1], f->angle_deg, f->skew_deg, l->repeat, l->shear, f->score);
+      sb_printf(&b, "<p>Pattern chosen: <b>%s</b> (%s family, %s). Each built-in was rendered with the network's "
+                    "estimate and its own lattice densities; the match of its spectral peaks with the photo's "
+                    "ranks it%s:</p>\n<table><tr><th>pattern</th><th>lattice score</th><th>densities</th>"
+                    "<th>render match</th><th>render WSC</th><th>fit loss</th></tr>\n",
+                chosen, wv_weave_family(chosen), pc->method,
+                strcmp(pc->method, "lattice+loss") ? "" : "; near ties were decided by the fit's loss");
+      for (int k = 0; k < wv_weave_builtin_count(); k++) {
+        int i = pc->ranking.order[k];
+        const char *fmt = i == pc->best ? "<tr><td><b>%s</b></td>" : "<tr><td>%s</td>";
+        sb_printf(&b, fmt, wv_weave_builtin_name(i));
+        sb_printf(&b, "<td>%.3f</td><td>%.1f / %.1f</td><td>%.3f</td><td>%.3f</td>", l->fit[i].score,
+                  l->fit[i].density[0], l->fit[i].density[1], pc->ranking.match[i], pc->ranking.wsc[i]);
+        if (pc->evaluated[i]) sb_printf(&b, "<td>%.6f</td></tr>\n", pc->loss[i]);
+        else sb_printf(&b, "<td></td></tr>\n");
+      }
+      sb_printf(&b, "</table>\n");
+    } else {
+      sb_printf(&b, "<p>The weave analysis found no weave lattice (%s). The pattern was chosen as the network "
+                    "would: <b>%s</b> (%s family), %s.</p>\n",
+                l->reason, chosen, wv_weave_family(chosen),
+                !strcmp(pc->method, "network") ? "its most probable class"
+                                               : "the smallest fit loss of its estimate rendered with each built-in");
+    }
   }
   if (r->drape_png || r->drape_note) {
     sb_printf(&b, "<h2>On a draped cloth</h2>\n");

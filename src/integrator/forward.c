@@ -50,7 +50,10 @@ wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts 
     rows_done++;
   }
   if (opt && opt->progress) opt->progress(opt->progress_user, 1.0);
-  wv_scene_response(s, &rad, capture);
+  if ((st = wv_scene_capture(s, &rad, capture, err))) {
+    wv_image_free(&rad), wv_image_free(capture);
+    return st;
+  }
   if (radiance) *radiance = rad;
   else wv_image_free(&rad);
   return WV_OK;

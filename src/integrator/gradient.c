@@ -8,7 +8,10 @@
  * response is per pixel, so its adjoint dL/dradiance is known as soon as the
  * pixel's radiance is: one pass, no stored image, no second render. When the
  * adjoint depends on the capture (wv_render_record), those per-pixel sums are
- * kept instead and wv_record_grad does the same accumulation afterwards. */
+ * kept instead and wv_record_grad does the same accumulation afterwards. A camera blur
+ * (the scene's psf_sigma) couples pixels: the response then waits for every pixel's
+ * radiance, the records are always kept, and the adjoint passes through the blur's
+ * transpose (wv_psf_apply). */
 #include "woven/grad.h"
 
 #include <math.h>
@@ -63,7 +66,8 @@ static void accumulate(const wv_grad_model *gm, const double JJ[2][WV_J_COUNT], 
 /* What the adjoint pass needs of a pixel once it is rendered. */
 typedef struct {
   double cap[3];   /* the capture (in double mode the unrounded double value) */
-  double slope[3]; /* d capture / d radiance, 0 where clipped */
+  double slope[3]; /* d capture / d radiance reaching the sensor (after the blur), 0 where clipped */
+  double rad[3];   /* the radiance, before the camera blur */
   double J[2][WV_J_COUNT]; /* the pixel's sums / spp */
 } pixel_rec;
 
@@ -73,12 +77,13 @@ typedef struct {
  * one fit iteration to the next instead of mapping fresh pages). */
 typedef struct {
   double slope[3];
-  float cap[3];
+  float cap[3], rad[3];
   float J[2][WV_J_COUNT]; /* the sums, before the division by spp */
 } pixel_rec_f;
 
 struct wv_grad_record {
   int w, h, dbl, spp;
+  double psf_sigma; /* the scene's camera blur (0: none) */
   wv_grad_model gm;
   pixel_rec *px;    /* double mode: w * h, row-major */
   pixel_rec_f *pxf; /* float mode */
@@ -86,40 +91,71 @@ struct wv_grad_record {
 
 /* Sensor response of one pixel and its slope; in float mode exactly
  * wv_scene_response's arithmetic, so the capture is wv_render's. */
-static void respond(const wv_scene *s, int dbl, int spp, int px, int py, const wv_grad_pixel *pix, float cap[3],
-                    pixel_rec *rec) {
+static void respond(const wv_scene *s, int dbl, int px, int py, const double rad[3], float cap[3], pixel_rec *rec) {
   double m = wv_response_mask(s, px, py);
   for (int c = 0; c < 3; c++) {
     if (dbl) {
-      rec->cap[c] = wv_respond_d(s, m, pix->rad[c], &rec->slope[c]);
+      rec->cap[c] = wv_respond_d(s, m, rad[c], &rec->slope[c]);
       cap[c] = (float)rec->cap[c];
     } else {
-      cap[c] = wv_respond_f(s, m, (float)pix->rad[c], &rec->slope[c]);
+      cap[c] = wv_respond_f(s, m, (float)rad[c], &rec->slope[c]);
       rec->cap[c] = cap[c];
     }
   }
+}
+
+/* The pixel's radiance and sums into its record. */
+static void keep(int spp, const wv_grad_pixel *pix, pixel_rec *rec) {
+  for (int c = 0; c < 3; c++) rec->rad[c] = pix->rad[c];
   for (int y = 0; y < 2; y++)
     for (int j = 0; j < WV_J_COUNT; j++) rec->J[y][j] = pix->J[y][j] / (double)spp;
 }
 
 /* A float-mode pixel stored, and read back exactly. */
 static void rec_store(pixel_rec_f *o, const pixel_rec *r, const wv_grad_pixel *pix) {
-  for (int c = 0; c < 3; c++) o->slope[c] = r->slope[c], o->cap[c] = (float)r->cap[c];
+  for (int c = 0; c < 3; c++) o->slope[c] = r->slope[c], o->cap[c] = (float)r->cap[c], o->rad[c] = (float)pix->rad[c];
   for (int y = 0; y < 2; y++)
     for (int j = 0; j < WV_J_COUNT; j++) o->J[y][j] = (float)pix->J[y][j];
 }
 static void rec_load(const pixel_rec_f *o, int spp, pixel_rec *r) {
-  for (int c = 0; c < 3; c++) r->slope[c] = o->slope[c], r->cap[c] = o->cap[c];
+  for (int c = 0; c < 3; c++) r->slope[c] = o->slope[c], r->cap[c] = o->cap[c], r->rad[c] = o->rad[c];
   for (int y = 0; y < 2; y++)
     for (int j = 0; j < WV_J_COUNT; j++) r->J[y][j] = (double)o->J[y][j] / (double)spp;
 }
 
-/* Add a pixel's contribution (and its dot term, in g[WV_P_COUNT]). */
-static void backward_pixel(const wv_grad_model *gm, const pixel_rec *rec, const float dc[3], double *g) {
+/* With a camera blur the response acts on the blurred radiance, which needs every
+ * pixel's radiance first: the records' captures and slopes are made here, after the
+ * render (wv_scene_capture's arithmetic through wv_psf_apply). */
+static wv_status respond_blurred(const wv_scene *s, int x0, int y0, wv_grad_record *rec, wv_image *capture_out,
+                                 wv_error *err) {
+  size_t np = (size_t)rec->w * rec->h, n = np * 3;
+  double *a = malloc(2 * n * sizeof *a);
+  if (!a) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur");
+  for (size_t i = 0; i < n; i++) a[i] = rec->dbl ? rec->px[i / 3].rad[i % 3] : rec->pxf[i / 3].rad[i % 3];
+  wv_status st = wv_psf_apply(rec->psf_sigma, rec->w, rec->h, 3, a, a + n, 0, err);
+  for (size_t k = 0; k < np && !st; k++) {
+    int i = (int)(k % (size_t)rec->w), r = (int)(k / (size_t)rec->w);
+    double b[3];
+    for (int c = 0; c < 3; c++) b[c] = rec->dbl ? a[n + 3 * k + c] : (double)(float)a[n + 3 * k + c];
+    float cap[3];
+    pixel_rec tmp, *pr = rec->dbl ? &rec->px[k] : &tmp;
+    respond(s, rec->dbl, x0 + i, y0 + r, b, cap, pr);
+    if (!rec->dbl)
+      for (int c = 0; c < 3; c++) rec->pxf[k].slope[c] = tmp.slope[c], rec->pxf[k].cap[c] = (float)tmp.cap[c];
+    if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);
+  }
+  free(a);
+  return st;
+}
+
+/* Add a pixel's contribution (and its dot term, in g[WV_P_COUNT]); with gb != NULL (a
+ * camera blur) gb holds dL/dradiance already, made by the blur's adjoint. */
+static void backward_pixel(const wv_grad_model *gm, const pixel_rec *rec, const float dc[3], const double *gb,
+                           double *g) {
   double gr[3];
   for (int c = 0; c < 3; c++) {
     g[WV_P_COUNT] += (double)dc[c] * rec->cap[c];
-    gr[c] = (double)dc[c] * rec->slope[c];
+    gr[c] = gb ? gb[c] : (double)dc[c] * rec->slope[c];
   }
   accumulate(gm, (const double(*)[WV_J_COUNT])rec->J, gr, g);
 }
@@ -142,6 +178,15 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
   if (capture_out) memset(capture_out, 0, sizeof *capture_out);
   if (rec_out) *rec_out = NULL;
   if (!s || !p) return wv_fail(err, WV_ERR_INVALID, "render_grad: a scene and parameters are required");
+  if (s->psf_sigma > 0 && !rec_out) {
+    /* the blur couples pixels: record every pixel, then run the adjoint over the records */
+    wv_grad_record *r = NULL;
+    wv_status st = run(s, p, opt, go, NULL, NULL, NULL, capture_out, &r, err);
+    if (!st) st = wv_record_grad(r, dcap, grad, dot, err);
+    wv_record_free(r);
+    if (st && capture_out) wv_image_free(capture_out);
+    return st;
+  }
   int x0 = 0, y0 = 0, W = s->width, H = s->height, dbl = go && go->double_precision;
   if (go && (go->width || go->height)) {
     x0 = go->x0, y0 = go->y0, W = go->width, H = go->height;
@@ -178,7 +223,7 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
       wv_record_free(rec);
       return wv_fail(err, WV_ERR_NOMEM, "out of memory for the derivatives of %d x %d pixels", W, H);
     }
-    rec->w = W, rec->h = H, rec->dbl = dbl, rec->spp = spp, rec->gm = gm;
+    rec->w = W, rec->h = H, rec->dbl = dbl, rec->spp = spp, rec->gm = gm, rec->psf_sigma = s->psf_sigma;
   } else if (!(rows = calloc((size_t)H * NG, sizeof *rows))) {
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for %d gradient rows", H);
   }
@@ -203,15 +248,23 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
       if (dbl) wv_grad_pixel_d(&rig, &fab, &Pd, x0 + i, y0 + r, spp, &pix[i % 8]);
       pixel_rec local, *pr = rec && dbl ? &rec->px[(size_t)r * W + i] : &local;
       float cap[3];
-      respond(s, dbl, spp, x0 + i, y0 + r, &pix[i % 8], cap, pr);
+      keep(spp, &pix[i % 8], pr);
+      /* with a camera blur the response comes after the loop, on the blurred radiance */
+      if (!(s->psf_sigma > 0)) respond(s, dbl, x0 + i, y0 + r, pr->rad, cap, pr);
       if (rec && !dbl) rec_store(&rec->pxf[(size_t)r * W + i], pr, &pix[i % 8]);
+      if (s->psf_sigma > 0) continue;
       if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);
-      if (rows) backward_pixel(&gm, pr, wv_image_px(dcap, i, r), rows + (size_t)r * NG);
+      if (rows) backward_pixel(&gm, pr, wv_image_px(dcap, i, r), NULL, rows + (size_t)r * NG);
     }
 #pragma omp atomic update
     rows_done++;
   }
   if (opt && opt->progress) opt->progress(opt->progress_user, 1.0);
+  if (rec && s->psf_sigma > 0 && (st = respond_blurred(s, x0, y0, rec, capture_out, err))) {
+    wv_record_free(rec);
+    if (capture_out) wv_image_free(capture_out);
+    return st;
+  }
   if (rows) { /* reduce in row order: the sum does not depend on the thread schedule */
     double total[NG];
     memset(total, 0, sizeof total);
@@ -243,7 +296,20 @@ wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcap, double
   if (!dcap || !dcap->data || dcap->w != rec->w || dcap->h != rec->h || dcap->c != 3)
     return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", rec->w,
                    rec->h, dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
-  double row[NG], total[NG];
+  double row[NG], total[NG], *gb = NULL;
+  size_t n = (size_t)rec->w * rec->h * 3;
+  if (rec->psf_sigma > 0) {
+    /* dL/dradiance = K^T (slope .* dL/dcapture), K the camera blur */
+    gb = malloc(2 * n * sizeof *gb);
+    if (!gb) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur's adjoint");
+    for (size_t i = 0; i < n; i++)
+      gb[i] = (double)dcap->data[i] * (rec->dbl ? rec->px[i / 3].slope[i % 3] : rec->pxf[i / 3].slope[i % 3]);
+    wv_status st = wv_psf_apply(rec->psf_sigma, rec->w, rec->h, 3, gb, gb + n, 1, err);
+    if (st) {
+      free(gb);
+      return st;
+    }
+  }
   memset(total, 0, sizeof total);
   for (int r = 0; r < rec->h; r++) {
     /* The same per-row partials as the fused pass: bitwise the same result. */
@@ -252,10 +318,12 @@ wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcap, double
       size_t k = (size_t)r * rec->w + i;
       pixel_rec pr;
       if (!rec->dbl) rec_load(&rec->pxf[k], rec->spp, &pr);
-      backward_pixel(&rec->gm, rec->dbl ? &rec->px[k] : &pr, wv_image_px(dcap, i, r), row);
+      backward_pixel(&rec->gm, rec->dbl ? &rec->px[k] : &pr, wv_image_px(dcap, i, r), gb ? gb + n + 3 * k : NULL,
+                     row);
     }
     for (int k = 0; k < NG; k++) total[k] += row[k];
   }
+  free(gb);
   output(total, grad, dot);
   return WV_OK;
 }

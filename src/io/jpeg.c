@@ -1,4 +1,5 @@
-/* woven: JPEG read with libjpeg(-turbo), 8-bit grey or colour.
+/* woven: JPEG read with libjpeg(-turbo), 8-bit grey or colour, and an in-memory
+ * compress/decompress round trip (what a camera's JPEG does to an image).
  * libjpeg's default error handler exits the process; ours longjmps back instead.
  * As with PNG, state that must survive the jump lives in a caller-owned struct. */
 #include <setjmp.h>
@@ -22,6 +23,8 @@ typedef struct {
 typedef struct {
   const char *path;
   FILE *fp;
+  const unsigned char *mem; /* the data to decode when fp is NULL */
+  unsigned long mem_len;
   struct jpeg_decompress_struct cinfo;
   jpeg_errors jerr;
   unsigned char *row;
@@ -91,7 +94,10 @@ static void row_to_float(const unsigned char *src, float *dst, int w, int n) {
 static wv_status jpeg_decode(jpeg_job *j) {
   struct jpeg_decompress_struct *ci = &j->cinfo;
   jpeg_create_decompress(ci);
-  jpeg_stdio_src(ci, j->fp);
+  if (j->fp)
+    jpeg_stdio_src(ci, j->fp);
+  else
+    jpeg_mem_src(ci, j->mem, j->mem_len);
   jpeg_read_header(ci, TRUE);
   wv_status s = wv_io_check_size(j->path, ci->image_width, ci->image_height, j->err);
   if (s == WV_OK) s = choose_colour(j);
@@ -122,12 +128,13 @@ static wv_status jpeg_decode_guarded(jpeg_job *j) {
   return jpeg_decode(j);
 }
 
-wv_status wv_io_read_jpeg(const char *path, FILE *fp, wv_image *img, wv_image_info *info,
-                          wv_error *err) {
+static wv_status read_jpeg(const char *path, FILE *fp, const unsigned char *mem, unsigned long mem_len,
+                           wv_image *img, wv_image_info *info, wv_error *err) {
   jpeg_job *j = calloc(1, sizeof *j); /* large (jmp_buf, libjpeg state): keep it off the stack */
   if (!j) return wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
   j->path = path;
   j->fp = fp;
+  j->mem = mem, j->mem_len = mem_len;
   j->err = err;
   j->cinfo.err = jpeg_std_error(&j->jerr.pub);
   j->jerr.pub.error_exit = on_jpeg_error;
@@ -144,5 +151,66 @@ wv_status wv_io_read_jpeg(const char *path, FILE *fp, wv_image *img, wv_image_in
     wv_image_free(&j->img);
   }
   free(j);
+  return s;
+}
+
+wv_status wv_io_read_jpeg(const char *path, FILE *fp, wv_image *img, wv_image_info *info,
+                          wv_error *err) {
+  return read_jpeg(path, fp, NULL, 0, img, info, err);
+}
+
+/* ---- in-memory round trip ---- */
+
+typedef struct {
+  struct jpeg_compress_struct cinfo;
+  jpeg_errors jerr;
+  unsigned char *buf; /* libjpeg's output buffer (malloc'ed by jpeg_mem_dest) */
+  unsigned long len;
+  unsigned char *row;
+} jpeg_enc;
+
+static wv_status jpeg_encode_guarded(jpeg_enc *e, const wv_image *in, int quality) {
+  if (setjmp(e->jerr.jump)) return e->jerr.code;
+  struct jpeg_compress_struct *ci = &e->cinfo;
+  jpeg_create_compress(ci);
+  jpeg_mem_dest(ci, &e->buf, &e->len);
+  ci->image_width = (JDIMENSION)in->w, ci->image_height = (JDIMENSION)in->h;
+  ci->input_components = 3, ci->in_color_space = JCS_RGB;
+  jpeg_set_defaults(ci);
+  jpeg_set_quality(ci, quality, TRUE);
+  jpeg_start_compress(ci, TRUE);
+  while (ci->next_scanline < ci->image_height) {
+    const float *src = wv_image_px(in, 0, (int)ci->next_scanline);
+    for (int x = 0; x < in->w; x++)
+      for (int c = 0; c < 3; c++) {
+        float v = src[(size_t)x * in->c + (in->c >= 3 ? c : 0)];
+        v = v < 0 ? 0 : v > 1 ? 1 : v;
+        e->row[3 * x + c] = (unsigned char)(v * 255.0f + 0.5f);
+      }
+    JSAMPROW rows[1] = {e->row};
+    jpeg_write_scanlines(ci, rows, 1);
+  }
+  jpeg_finish_compress(ci);
+  return WV_OK;
+}
+
+wv_status wv_image_jpeg_roundtrip(const wv_image *in, int quality, wv_image *out, wv_error *err) {
+  if (quality < 1 || quality > 100) return wv_fail(err, WV_ERR_INVALID, "JPEG quality %d is outside 1..100", quality);
+  if (!in->data || in->w < 1 || in->h < 1 || (in->c != 1 && in->c < 3))
+    return wv_fail(err, WV_ERR_INVALID, "JPEG round trip: not an image");
+  jpeg_enc *e = calloc(1, sizeof *e);
+  if (!e) return wv_fail(err, WV_ERR_NOMEM, "out of memory for JPEG compression");
+  e->row = malloc(3 * (size_t)in->w);
+  e->cinfo.err = jpeg_std_error(&e->jerr.pub);
+  e->jerr.pub.error_exit = on_jpeg_error;
+  e->jerr.pub.emit_message = on_jpeg_message;
+  e->jerr.path = "in-memory JPEG";
+  wv_status s = e->row ? jpeg_encode_guarded(e, in, quality) : (e->jerr.code = WV_ERR_NOMEM);
+  if (s != WV_OK) wv_fail(err, s, "%s", e->row ? e->jerr.msg : "out of memory for JPEG compression");
+  jpeg_destroy_compress(&e->cinfo);
+  if (s == WV_OK) s = read_jpeg("in-memory JPEG", NULL, e->buf, e->len, out, NULL, err);
+  free(e->buf); /* jpeg_mem_dest's buffer is the caller's to free */
+  free(e->row);
+  free(e);
   return s;
 }

@@ -1,4 +1,6 @@
-/* woven: FabricNet's synthetic dataset on disk (format in docs/fabricnet.md). */
+/* woven: FabricNet's synthetic dataset on disk (format in docs/fabricnet.md): which pattern
+ * and prior draw each sample is, and making one sample (render, camera augmentation,
+ * files). */
 #include <errno.h>
 #include <jansson.h>
 #include <math.h>
@@ -11,29 +13,44 @@
 #include "util/json.h"
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
+#include "woven/imgops.h"
 #include "woven/io.h"
 #include "woven/render.h"
+#include "woven/weave.h"
 
 static const char *PATTERNS[WV_NET_PATTERNS] = {"plain", "twill", "satin", "twill90", "satin90"};
 
 const char *wv_net_pattern(int i) { return i >= 0 && i < WV_NET_PATTERNS ? PATTERNS[i] : NULL; }
+
+/* Version 1 sets hold the five earlier patterns; version 2 every built-in of the library. */
+int wv_dataset_pattern_count(const wv_dataset_info *info) {
+  return info->version >= 2 ? wv_weave_builtin_count() : WV_NET_PATTERNS;
+}
+
+const char *wv_dataset_pattern(const wv_dataset_info *info, int i) {
+  return info->version >= 2 ? wv_weave_builtin_name(i) : wv_net_pattern(i);
+}
 
 wv_status wv_dataset_info_write(const char *dir, const wv_dataset_info *info, wv_error *err) {
   json_error_t je;
   json_t *scene = json_loads(info->scene_json, 0, &je);
   if (!scene) return wv_fail(err, WV_ERR_INTERNAL, "scene JSON does not parse: %s", je.text);
   json_t *pats = json_array();
-  for (int i = 0; i < WV_NET_PATTERNS; i++) json_array_append_new(pats, json_string(PATTERNS[i]));
+  int np = wv_dataset_pattern_count(info);
+  for (int i = 0; i < np; i++) json_array_append_new(pats, json_string(wv_dataset_pattern(info, i)));
   /* the seed is written as a string: JSON integers are signed 64-bit in jansson */
   char seed[32];
   snprintf(seed, sizeof seed, "%llu", (unsigned long long)info->seed);
-  json_t *o = json_pack("{s:s,s:i,s:i,s:s,s:i,s:o,s:i,s:{s:s,s:i,s:s},s:{s:i,s:i,s:s},s:o,s:s}", "kind",
-                        "woven-dataset", "version", WV_DATASET_VERSION, "renderer", info->renderer, "seed", seed,
+  char names[128];
+  snprintf(names, sizeof names, "samples/<pattern>_<i>.{json,png,feat}, sample k = pattern k%%%d, i = k/%d", np, np);
+  json_t *o = json_pack("{s:s,s:i,s:i,s:s,s:i,s:o,s:i,s:i,s:{s:s,s:i,s:s},s:{s:i,s:i,s:s},s:o,s:s}", "kind",
+                        "woven-dataset", "version", info->version, "renderer", info->renderer, "seed", seed,
                         "per_pattern",
-                        info->per_pattern, "patterns", pats, "spp", info->spp, "features", "descriptor",
+                        info->per_pattern, "patterns", pats, "spp", info->spp, "augment", info->augment,
+                        "features", "descriptor",
                         info->descriptor, "count", info->n_feat, "format", "f16le", "image", "width",
                         info->scene.width, "height", info->scene.height, "format", "png8", "scene", scene,
-                        "sample_names", "samples/<pattern>_<i>.{json,png,feat}, sample k = pattern k%5, i = k/5");
+                        "sample_names", names);
   if (!o) return wv_fail(err, WV_ERR_INTERNAL, "cannot build dataset.json");
   char *text = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
   json_decref(o);
@@ -61,8 +78,8 @@ wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error 
   long long version = json_is_integer(jv) ? json_integer_value(jv) : -1;
   if (json_unpack(o, "{s:s}", "kind", &kind) || strcmp(kind, "woven-dataset") || version < 0) {
     st = wv_fail(err, WV_ERR_FORMAT, "%s: not a woven dataset description", path);
-  } else if (version != WV_DATASET_VERSION) {
-    st = wv_fail(err, WV_ERR_FORMAT, "%s: dataset format version %lld; this program reads version %d (make the dataset again)",
+  } else if (version < 1 || version > WV_DATASET_VERSION) {
+    st = wv_fail(err, WV_ERR_FORMAT, "%s: dataset format version %lld; this program reads versions 1 to %d (make the dataset again)",
                  path, version, WV_DATASET_VERSION);
   } else if (json_unpack(o, "{s:s,s:{s:s,s:s},s:o}", "seed", &seed, "features", "descriptor", &desc, "format", &fmt,
                          "scene", &scene) ||
@@ -82,6 +99,9 @@ wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error 
     info->renderer = 1; /* datasets of the first renderer lack the key */
     if (!st && (st = wv_json_int(o, NULL, "renderer", 1, 1000000, 0, &info->renderer, err)))
       wv_error_prefix(err, "%s", path);
+    info->augment = 0; /* version 1 sets have none */
+    if (!st && (st = wv_json_int(o, NULL, "augment", 0, 1, 0, &info->augment, err)))
+      wv_error_prefix(err, "%s", path);
     snprintf(info->descriptor, sizeof info->descriptor, "%s", desc);
     char *sj = json_dumps(scene, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
     if (!st && (!sj || strlen(sj) >= sizeof info->scene_json))
@@ -94,29 +114,22 @@ wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error 
   return st;
 }
 
-void wv_dataset_sample_name(int k, char *buf, size_t cap) {
-  snprintf(buf, cap, "%s_%d", PATTERNS[k % WV_NET_PATTERNS], k / WV_NET_PATTERNS);
+void wv_dataset_sample_name(const wv_dataset_info *info, int k, char *buf, size_t cap) {
+  int np = wv_dataset_pattern_count(info);
+  snprintf(buf, cap, "%s_%d", wv_dataset_pattern(info, k % np), k / np);
 }
 
-void wv_dataset_path(const char *dir, int k, const char *ext, char *buf, size_t cap) {
+void wv_dataset_path(const char *dir, const wv_dataset_info *info, int k, const char *ext, char *buf, size_t cap) {
   char name[64];
-  wv_dataset_sample_name(k, name, sizeof name);
+  wv_dataset_sample_name(info, k, name, sizeof name);
   snprintf(buf, cap, "%s/samples/%s.%s", dir, name, ext);
 }
 
 wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params *p, wv_error *err) {
   /* one independent stream per sample: resuming or reordering reproduces every draw */
-  uint64_t s = wv_hash4(info->seed, (uint64_t)(k % WV_NET_PATTERNS), (uint64_t)(k / WV_NET_PATTERNS), 0x64617461ULL);
-  return wv_params_sample_prior(PATTERNS[k % WV_NET_PATTERNS], s, p, err);
-}
-
-/* 8-bit quantisation, as the PNG stores it and as a photo arrives. */
-static void quantise8(wv_image *img) {
-  size_t n = (size_t)img->w * img->h * img->c;
-  for (size_t i = 0; i < n; i++) {
-    float v = img->data[i] < 0 ? 0 : img->data[i] > 1 ? 1 : img->data[i];
-    img->data[i] = floorf(v * 255.0f + 0.5f) / 255.0f;
-  }
+  int np = wv_dataset_pattern_count(info);
+  uint64_t s = wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x64617461ULL);
+  return wv_params_sample_prior(wv_dataset_pattern(info, k % np), s, p, err);
 }
 
 wv_status wv_dataset_make_sample(const char *dir, const wv_dataset_info *info, int k, int render_threads,
@@ -125,17 +138,27 @@ wv_status wv_dataset_make_sample(const char *dir, const wv_dataset_info *info, i
   wv_status st = wv_dataset_sample_params(info, k, &p, err);
   if (st) return st;
   wv_render_opts ro = {info->spp, render_threads, NULL, NULL, fp};
-  wv_image img = {0};
-  if ((st = wv_render(&info->scene, &p, &ro, &img, NULL, err))) return st;
-  quantise8(&img);
+  wv_image img = {0}, rad = {0};
+  if ((st = wv_render(&info->scene, &p, &ro, &img, info->augment ? &rad : NULL, err))) return st;
+  if (info->augment) {
+    /* the camera's own stream, apart from the prior draw's */
+    int np = wv_dataset_pattern_count(info);
+    uint64_t s = wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x63616d65ULL);
+    wv_image_free(&img);
+    st = wv_camera_augment(&info->scene, &rad, s, &img, err);
+    wv_image_free(&rad);
+    if (st) return st;
+  } else {
+    wv_image_quantise8(&img);
+  }
   char path[4096];
-  wv_dataset_path(dir, k, "json", path, sizeof path);
+  wv_dataset_path(dir, info, k, "json", path, sizeof path);
   st = wv_params_write(path, &p, err);
-  wv_dataset_path(dir, k, "png", path, sizeof path);
+  wv_dataset_path(dir, info, k, "png", path, sizeof path);
   if (!st) st = wv_image_write_png(path, &img, 8, err);
   if (!st) st = wv_descriptor_forward(d, &img, feat, err);
   /* features last: their presence marks a finished sample */
-  wv_dataset_path(dir, k, "feat", path, sizeof path);
+  wv_dataset_path(dir, info, k, "feat", path, sizeof path);
   if (!st) st = wv_dataset_write_features(path, feat, info->n_feat, err);
   wv_image_free(&img);
   return st;
@@ -201,11 +224,11 @@ int wv_dataset_sample_done(const char *dir, const wv_dataset_info *info, int k) 
   wv_params prm;
   /* The parameters must read back as this sample's pattern, and the PNG must be whole
    * (its chunk checksums: cheap, no decoding). */
-  wv_dataset_path(dir, k, "json", p, sizeof p);
-  if (wv_params_read(p, &prm, &e) || strcmp(prm.pattern, PATTERNS[k % WV_NET_PATTERNS])) return 0;
-  wv_dataset_path(dir, k, "png", p, sizeof p);
+  wv_dataset_path(dir, info, k, "json", p, sizeof p);
+  if (wv_params_read(p, &prm, &e) || strcmp(prm.pattern, wv_dataset_pattern(info, k % wv_dataset_pattern_count(info)))) return 0;
+  wv_dataset_path(dir, info, k, "png", p, sizeof p);
   if (wv_png_check(p, &e)) return 0;
-  wv_dataset_path(dir, k, "feat", p, sizeof p);
+  wv_dataset_path(dir, info, k, "feat", p, sizeof p);
   if (stat(p, &sb) != 0 || sb.st_size != 16 + 2 * (off_t)info->n_feat) return 0;
   uint16_t *tmp = malloc(2 * (size_t)info->n_feat);
   if (!tmp) return 0;

@@ -1,4 +1,5 @@
-/* woven: FabricNet, the fully connected head of SPEC section 7, and its files. */
+/* woven: FabricNet, the fully connected head of SPEC section 7 with its pattern head,
+ * and its files (model and training checkpoint). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -8,6 +9,7 @@
 #include "woven/fabricnet.h"
 #include "woven/io.h"
 #include "woven/nn.h"
+#include "woven/weave.h"
 
 /* ---- outputs ---- */
 
@@ -88,26 +90,26 @@ uint32_t wv_crc32(uint32_t crc, const void *data, size_t n) {
 /* ---- the network ---- */
 
 static size_t tensor_len(const wv_fabricnet *n, int i) {
-  static const int outs[3] = {WV_NET_HIDDEN, WV_NET_HIDDEN, WV_NET_OUT};
+  const int outs[4] = {WV_NET_HIDDEN, WV_NET_HIDDEN, WV_NET_OUT, n->n_cls};
   int in = i / 2 == 0 ? n->n_in : WV_NET_HIDDEN;
   return i % 2 ? (size_t)outs[i / 2] : (size_t)outs[i / 2] * in;
 }
 
 size_t wv_fabricnet_param_count(const wv_fabricnet *n) {
   size_t s = 0;
-  for (int i = 0; i < 6; i++) s += tensor_len(n, i);
+  for (int i = 0; i < WV_NET_TENSORS; i++) s += tensor_len(n, i);
   return s;
 }
 
 void wv_fabricnet_tensors(wv_fabricnet *n, float **t, size_t *len) {
-  float *all[6] = {n->w1, n->b1, n->w2, n->b2, n->w3, n->b3};
-  for (int i = 0; i < 6; i++) t[i] = all[i], len[i] = tensor_len(n, i);
+  float *all[WV_NET_TENSORS] = {n->w1, n->b1, n->w2, n->b2, n->w3, n->b3, n->w4, n->b4};
+  for (int i = 0; i < WV_NET_TENSORS; i++) t[i] = all[i], len[i] = tensor_len(n, i);
 }
 
 void wv_fabricnet_free(wv_fabricnet *n) {
   if (!n) return;
   free(n->w1); /* one block holds every array (alloc_net) */
-  n->mean = n->std = n->w1 = n->b1 = n->w2 = n->b2 = n->w3 = n->b3 = NULL;
+  n->mean = n->std = n->w1 = n->b1 = n->w2 = n->b2 = n->w3 = n->b3 = n->w4 = n->b4 = NULL;
 }
 
 /* All arrays in one block: stats, then the six tensors in file order. */
@@ -122,7 +124,9 @@ static wv_status alloc_net(wv_fabricnet *n, wv_error *err) {
   n->b2 = n->w2 + tensor_len(n, 2);
   n->w3 = n->b2 + tensor_len(n, 3);
   n->b3 = n->w3 + tensor_len(n, 4);
-  n->mean = n->b3 + tensor_len(n, 5);
+  n->w4 = n->b3 + tensor_len(n, 5);
+  n->b4 = n->w4 + tensor_len(n, 6);
+  n->mean = n->b4 + tensor_len(n, 7);
   n->std = n->mean + n->n_in;
   return WV_OK;
 }
@@ -140,15 +144,19 @@ wv_status wv_fabricnet_init(wv_fabricnet *n, const char *descriptor, int n_in, c
   snprintf(n->descriptor, sizeof n->descriptor, "%s", descriptor);
   snprintf(n->scene, sizeof n->scene, "%s", s->name);
   n->n_in = n_in, n->scene_w = s->width, n->scene_h = s->height, n->scene_crc = scene_crc(s);
+  if (wv_weave_builtin_count() != WV_NET_CLASSES)
+    return wv_fail(err, WV_ERR_INTERNAL, "the weave library has %d built-ins, FabricNet's pattern head %d",
+                   wv_weave_builtin_count(), WV_NET_CLASSES);
+  n->n_cls = WV_NET_CLASSES;
   for (int k = 0; k < WV_NET_OUT; k++) wv_fabricnet_output_range(k, &n->range[k][0], &n->range[k][1]);
   wv_status st = alloc_net(n, err);
   if (st) return st;
   wv_rng r;
   wv_rng_seed(&r, seed);
-  float *t[6];
-  size_t len[6];
+  float *t[WV_NET_TENSORS];
+  size_t len[WV_NET_TENSORS];
   wv_fabricnet_tensors(n, t, len);
-  for (int i = 0; i < 6; i++) {
+  for (int i = 0; i < WV_NET_TENSORS; i++) {
     float b = 1.0f / sqrtf((float)(i / 2 == 0 ? n_in : WV_NET_HIDDEN));
     wv_rng_fill_uniform(&r, t[i], len[i], -b, b);
   }
@@ -169,13 +177,14 @@ void wv_fabricnet_preprocess(const wv_fabricnet *n, float *x, int batch) {
 }
 
 wv_status wv_fabricnet_acts_alloc(wv_fabricnet_acts *a, int batch, wv_error *err) {
-  size_t h = (size_t)batch * WV_NET_HIDDEN, o = (size_t)batch * WV_NET_OUT;
-  float *b = calloc(4 * h + 2 * o + 2 * h, sizeof(float));
+  size_t h = (size_t)batch * WV_NET_HIDDEN, o = (size_t)batch * WV_NET_OUT, k = (size_t)batch * WV_NET_CLASSES;
+  float *b = calloc(4 * h + 2 * o + 2 * h + 3 * k, sizeof(float));
   if (!b) return wv_fail(err, WV_ERR_NOMEM, "out of memory for activations");
   a->cap = batch;
   a->h1 = b, a->a1 = b + h, a->h2 = b + 2 * h, a->a2 = b + 3 * h, a->out = b + 4 * h;
   a->d_out = a->out + o, a->d_a2 = a->d_out + o, a->d_h2 = a->d_a2 + h;
   a->d_a1 = a->d_a2; /* d_a2 is dead once d_h2 is computed, so d_a1 reuses its slot */
+  a->logits = a->d_h2 + h, a->prob = a->logits + k, a->d_logits = a->prob + k;
   return WV_OK;
 }
 
@@ -192,19 +201,33 @@ void wv_fabricnet_forward(const wv_fabricnet *n, const float *x, int batch, wv_f
   wv_nn_leaky_relu_forward(a->a2, a->h2, WV_NET_SLOPE, h);
   wv_nn_fc_forward(a->out, a->a2, n->w3, n->b3, batch, WV_NET_HIDDEN, WV_NET_OUT);
   wv_nn_sigmoid_forward(a->out, a->out, (size_t)batch * WV_NET_OUT);
+  if (n->n_cls > 0) {
+    wv_nn_fc_forward(a->logits, a->a2, n->w4, n->b4, batch, WV_NET_HIDDEN, n->n_cls);
+    wv_nn_softmax_xent_forward(a->prob, a->logits, NULL, batch, n->n_cls);
+  }
 }
 
-float wv_fabricnet_backward(const wv_fabricnet *n, const float *x, const float *y, int batch,
-                            wv_fabricnet_acts *a, float *const *g) {
+float wv_fabricnet_backward(const wv_fabricnet *n, const float *x, const float *y, const int *labels,
+                            float ce_weight, int batch, wv_fabricnet_acts *a, float *const *g, float *l1_out,
+                            float *ce_out) {
   size_t h = (size_t)batch * WV_NET_HIDDEN, o = (size_t)batch * WV_NET_OUT;
   wv_fabricnet_forward(n, x, batch, a);
-  float loss = wv_nn_l1_forward(a->out, y, o);
+  float l1 = wv_nn_l1_forward(a->out, y, o), ce = 0;
+  int head = n->n_cls > 0 && labels;
+  if (head) ce = wv_nn_softmax_xent_forward(NULL, a->logits, labels, batch, n->n_cls);
+  if (l1_out) *l1_out = l1;
+  if (ce_out) *ce_out = ce;
   /* dL/dout, then through the sigmoid in place (backward accumulates: zero first) */
   memset(a->d_out, 0, o * sizeof(float));
   wv_nn_l1_backward(a->d_out, a->out, y, 1.0f, o);
   for (size_t i = 0; i < o; i++) a->d_out[i] *= a->out[i] * (1.0f - a->out[i]);
   memset(a->d_a2, 0, h * sizeof(float));
   wv_nn_fc_backward(a->d_a2, g[4], g[5], a->d_out, a->a2, n->w3, batch, WV_NET_HIDDEN, WV_NET_OUT);
+  if (head) { /* the pattern head adds its share to d_a2 */
+    memset(a->d_logits, 0, (size_t)batch * n->n_cls * sizeof(float));
+    wv_nn_softmax_xent_backward(a->d_logits, a->prob, labels, ce_weight, batch, n->n_cls);
+    wv_nn_fc_backward(a->d_a2, g[6], g[7], a->d_logits, a->a2, n->w4, batch, WV_NET_HIDDEN, n->n_cls);
+  }
   memset(a->d_h2, 0, h * sizeof(float));
   wv_nn_leaky_relu_backward(a->d_h2, a->h2, a->d_a2, WV_NET_SLOPE, h);
   memset(a->d_a1, 0, h * sizeof(float));
@@ -212,25 +235,29 @@ float wv_fabricnet_backward(const wv_fabricnet *n, const float *x, const float *
   memset(a->d_h2, 0, h * sizeof(float)); /* reused as d_h1 */
   wv_nn_leaky_relu_backward(a->d_h2, a->h1, a->d_a1, WV_NET_SLOPE, h);
   wv_nn_fc_backward(NULL, g[0], g[1], a->d_h2, x, n->w1, batch, n->n_in, WV_NET_HIDDEN);
-  return loss;
+  return l1 + ce_weight * ce;
 }
 
 wv_status wv_fabricnet_predict(const wv_fabricnet *n, wv_descriptor *d, const wv_image *img, float *feat, float *y,
-                               wv_error *err) {
+                               float *probs, wv_error *err) {
   if (wv_descriptor_size(d) != (size_t)n->n_in)
     return wv_fail(err, WV_ERR_INVALID, "descriptor gives %zu features, the model takes %d", wv_descriptor_size(d),
                    n->n_in);
   wv_status st = wv_descriptor_forward(d, img, feat, err);
-  return st ? st : wv_fabricnet_predict_features(n, feat, y, err);
+  return st ? st : wv_fabricnet_predict_features(n, feat, y, probs, err);
 }
 
-wv_status wv_fabricnet_predict_features(const wv_fabricnet *n, float *feat, float *y, wv_error *err) {
+wv_status wv_fabricnet_predict_features(const wv_fabricnet *n, float *feat, float *y, float *probs, wv_error *err) {
   wv_fabricnet_preprocess(n, feat, 1);
   wv_fabricnet_acts a;
   wv_status st = wv_fabricnet_acts_alloc(&a, 1, err);
   if (st) return st;
   wv_fabricnet_forward(n, feat, 1, &a);
   memcpy(y, a.out, WV_NET_OUT * sizeof(float));
+  if (probs) {
+    int nb = wv_weave_builtin_count();
+    for (int i = 0; i < nb; i++) probs[i] = n->n_cls == nb ? a.prob[i] : 1.0f / (float)nb;
+  }
   wv_fabricnet_acts_free(&a);
   return WV_OK;
 }
@@ -250,7 +277,13 @@ wv_status wv_fabricnet_check(const wv_fabricnet *n, const char *path, const char
 
 /* ---- files ---- */
 
-#define HDR 504
+/* Header sizes and the offsets that moved when version 2 added the pattern classes
+ * (docs/fabricnet.md): version 1 is 504 bytes, version 2 512. */
+typedef struct {
+  size_t hdr, cls, cls_crc, pl_size, pl_crc, hdr_crc;
+} layout;
+static const layout LAYOUT_V1 = {504, 0, 0, 488, 496, 500};
+static const layout LAYOUT_V2 = {512, 488, 492, 496, 504, 508};
 enum { KIND_MODEL = 1, KIND_CHECKPOINT = 2 };
 #define PREPROC_SLOG1P_STD 1
 #define TRAINSTATE_BYTES 32
@@ -281,13 +314,27 @@ static float getf(const unsigned char *b) {
  * a checkpoint adds the Adam moments and the trainer state. */
 static size_t payload_bytes(const wv_fabricnet *n, int kind) {
   size_t s = 8 * (size_t)n->n_in;
-  for (int i = 0; i < 6; i++) s += tensor_len(n, i) * (i % 2 == 0 && kind == KIND_MODEL ? 2 : 4);
+  for (int i = 0; i < WV_NET_TENSORS; i++) s += tensor_len(n, i) * (i % 2 == 0 && kind == KIND_MODEL ? 2 : 4);
   if (kind == KIND_CHECKPOINT) s += 8 * wv_fabricnet_param_count(n) + TRAINSTATE_BYTES;
   return s;
 }
 
+/* CRC-32 of the first k built-in names, each followed by a newline: a model's classes
+ * must be the library's. */
+static uint32_t classes_crc(int k) {
+  uint32_t c = 0;
+  for (int i = 0; i < k; i++) {
+    const char *name = wv_weave_builtin_name(i);
+    c = wv_crc32(c, name ? name : "", name ? strlen(name) : 0);
+    c = wv_crc32(c, "\n", 1);
+  }
+  return c;
+}
+
 static wv_status save(const char *path, const wv_fabricnet *n, int kind, const float *m, const float *v,
                       const wv_fabricnet_trainstate *ts, wv_error *err) {
+  const layout *L2 = &LAYOUT_V2;
+  const size_t HDR = L2->hdr;
   size_t pl = payload_bytes(n, kind), len = HDR + pl;
   unsigned char *b = calloc(len, 1);
   if (!b) return wv_fail(err, WV_ERR_NOMEM, "out of memory writing %s", path);
@@ -310,12 +357,14 @@ static wv_status save(const char *path, const wv_fabricnet *n, int kind, const f
       memcpy(&u, &n->range[k][j], 8);
       put64(b + 152 + 16 * k + 8 * j, u);
     }
-  put64(b + 488, pl);
+  put32(b + L2->cls, (uint32_t)n->n_cls);
+  put32(b + L2->cls_crc, classes_crc(n->n_cls));
+  put64(b + L2->pl_size, pl);
   unsigned char *p = b + HDR;
   for (int i = 0; i < n->n_in; i++, p += 4) putf(p, n->mean[i]);
   for (int i = 0; i < n->n_in; i++, p += 4) putf(p, n->std[i]);
-  const float *t[6] = {n->w1, n->b1, n->w2, n->b2, n->w3, n->b3};
-  for (int i = 0; i < 6; i++) {
+  const float *t[WV_NET_TENSORS] = {n->w1, n->b1, n->w2, n->b2, n->w3, n->b3, n->w4, n->b4};
+  for (int i = 0; i < WV_NET_TENSORS; i++) {
     size_t L = tensor_len(n, i);
     if (i % 2 == 0 && kind == KIND_MODEL) {
       for (size_t j = 0; j < L; j++, p += 2) {
@@ -337,8 +386,8 @@ static wv_status save(const char *path, const wv_fabricnet *n, int kind, const f
     putf(p + 24, ts->best_val);
     p += TRAINSTATE_BYTES;
   }
-  put32(b + 496, wv_crc32(0, b + HDR, pl));
-  put32(b + 500, wv_crc32(0, b, 500));
+  put32(b + L2->pl_crc, wv_crc32(0, b + HDR, pl));
+  put32(b + L2->hdr_crc, wv_crc32(0, b, L2->hdr_crc));
   wv_status st = wv_write_file_atomic(path, b, len, err);
   free(b);
   return st;
@@ -370,10 +419,14 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
   const char *what = kind == KIND_MODEL ? "FabricNet model" : "FabricNet training checkpoint";
 #define BAD(...) do { st = wv_fail(err, WV_ERR_FORMAT, __VA_ARGS__); goto done; } while (0)
   if (len < 8 || memcmp(b, WV_NET_MAGIC, 8)) BAD("%s: not a %s (bad magic)", path, what);
-  if (len < HDR) BAD("%s: truncated %s (%zu bytes, header is %d)", path, what, len, HDR);
-  if (get32(b + 8) != WV_NET_VERSION)
-    BAD("%s: %s format version %u; this program reads version %d", path, what, get32(b + 8), WV_NET_VERSION);
-  if (get32(b + 500) != wv_crc32(0, b, 500)) BAD("%s: header checksum mismatch (corrupt file)", path);
+  if (len < 12) BAD("%s: truncated %s (%zu bytes)", path, what, len);
+  uint32_t version = get32(b + 8);
+  if (version < 1 || version > WV_NET_VERSION)
+    BAD("%s: %s format version %u; this program reads versions 1 to %d", path, what, version, WV_NET_VERSION);
+  const layout *lay = version == 1 ? &LAYOUT_V1 : &LAYOUT_V2;
+  const size_t HDR = lay->hdr;
+  if (len < HDR) BAD("%s: truncated %s (%zu bytes, header is %zu)", path, what, len, HDR);
+  if (get32(b + lay->hdr_crc) != wv_crc32(0, b, lay->hdr_crc)) BAD("%s: header checksum mismatch (corrupt file)", path);
   if (get32(b + 12) != (uint32_t)kind) {
     if (get32(b + 12) != KIND_MODEL && get32(b + 12) != KIND_CHECKPOINT)
       BAD("%s: unknown FabricNet file kind %u (1 is a model, 2 a training checkpoint)", path, get32(b + 12));
@@ -390,6 +443,11 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
   if (get32(b + 144) != PREPROC_SLOG1P_STD) BAD("%s: unknown feature preprocessing %u", path, get32(b + 144));
   if (n->scene_w < 1 || n->scene_h < 1 || n->scene_w > WV_SCENE_MAX_SIDE || n->scene_h > WV_SCENE_MAX_SIDE)
     BAD("%s: invalid scene size %d x %d", path, n->scene_w, n->scene_h);
+  n->n_cls = version == 1 ? 0 : (int)get32(b + lay->cls);
+  if (n->n_cls != 0 && n->n_cls != WV_NET_CLASSES)
+    BAD("%s: pattern head of %d classes; this program's library has %d built-ins", path, n->n_cls, WV_NET_CLASSES);
+  if (n->n_cls && get32(b + lay->cls_crc) != classes_crc(n->n_cls))
+    BAD("%s: the model's pattern classes are not this program's built-in weave library (train it again)", path);
   for (int k = 0; k < WV_NET_OUT; k++) {
     uint64_t u0 = get64(b + 152 + 16 * k), u1 = get64(b + 160 + 16 * k);
     memcpy(&n->range[k][0], &u0, 8), memcpy(&n->range[k][1], &u1, 8);
@@ -397,19 +455,20 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
       BAD("%s: invalid range for output %d (%s)", path, k, wv_fabricnet_output_name(k));
   }
   size_t pl = payload_bytes(n, kind);
-  if (get64(b + 488) != pl) BAD("%s: payload size %llu does not match the header's layer sizes (%zu)", path,
-                                 (unsigned long long)get64(b + 488), pl);
+  if (get64(b + lay->pl_size) != pl)
+    BAD("%s: payload size %llu does not match the header's layer sizes (%zu)", path,
+        (unsigned long long)get64(b + lay->pl_size), pl);
   if (len < HDR + pl) BAD("%s: truncated (%zu of %zu bytes)", path, len, HDR + pl);
   if (len > HDR + pl) BAD("%s: %zu unexpected bytes after the payload", path, len - HDR - pl);
-  if (get32(b + 496) != wv_crc32(0, b + HDR, pl)) BAD("%s: payload checksum mismatch (corrupt file)", path);
+  if (get32(b + lay->pl_crc) != wv_crc32(0, b + HDR, pl)) BAD("%s: payload checksum mismatch (corrupt file)", path);
   if ((st = alloc_net(n, err))) goto done;
   const unsigned char *p = b + HDR;
   for (int i = 0; i < n->n_in; i++, p += 4) n->mean[i] = getf(p);
   for (int i = 0; i < n->n_in; i++, p += 4) n->std[i] = getf(p);
-  float *t[6];
-  size_t L[6];
+  float *t[WV_NET_TENSORS];
+  size_t L[WV_NET_TENSORS];
   wv_fabricnet_tensors(n, t, L);
-  for (int i = 0; i < 6; i++) {
+  for (int i = 0; i < WV_NET_TENSORS; i++) {
     if (i % 2 == 0 && kind == KIND_MODEL)
       for (size_t j = 0; j < L[i]; j++, p += 2) t[i][j] = wv_nn_f16_to_f32((uint16_t)(p[0] | p[1] << 8));
     else
@@ -417,9 +476,10 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
   }
   for (int i = 0; i < n->n_in; i++)
     if (!isfinite(n->mean[i]) || !(n->std[i] > 0) || !isfinite(n->std[i])) BAD("%s: invalid feature statistics", path);
-  static const char *tensor_names[6] = {"layer 1 weights", "layer 1 biases", "layer 2 weights",
-                                        "layer 2 biases",  "layer 3 weights", "layer 3 biases"};
-  for (int i = 0; i < 6; i++)
+  static const char *tensor_names[WV_NET_TENSORS] = {
+      "layer 1 weights", "layer 1 biases", "layer 2 weights",      "layer 2 biases",
+      "layer 3 weights", "layer 3 biases", "pattern head weights", "pattern head biases"};
+  for (int i = 0; i < WV_NET_TENSORS; i++)
     for (size_t j = 0; j < L[i]; j++)
       if (!isfinite(t[i][j])) BAD("%s: %s hold NaN or infinite values (corrupt %s)", path, tensor_names[i], what);
   if (kind == KIND_CHECKPOINT) {

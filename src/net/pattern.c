@@ -1,5 +1,7 @@
-/* woven: choosing the weave pattern FabricNet does not predict, by rendering each
- * built-in pattern with the network's estimate and comparing textures with the photo. */
+/* woven: choosing the weave pattern FabricNet does not predict, over the whole built-in
+ * library: the weave analysis of the photo ranks the built-ins by their own renders'
+ * spectral peaks, the fit's loss criterion breaks near ties and decides when the photo
+ * shows no weave lattice. */
 #include <jansson.h>
 #include <math.h>
 #include <omp.h>
@@ -10,12 +12,99 @@
 #include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/imgops.h"
+#include "woven/loss.h"
 #include "woven/render.h"
 
 void wv_pattern_opts_default(wv_pattern_opts *o) {
+  memset(o, 0, sizeof *o);
   o->spp = WV_PATTERN_SPP;
   o->threads = 0;
   o->w_pixel = WV_PATTERN_W_PIXEL;
+  o->lattice = 1;
+  o->tie = WV_PATTERN_TIE;
+  o->family_tie = WV_PATTERN_FAMILY_TIE;
+  o->prob = NULL;
+  o->w_prob = 0.25;
+  o->psf_sigma = -1;
+}
+
+/* The loss criterion of candidate i: its parameters rendered over the whole image at sc's
+ * spp, through the fit's image loss (Gram and pixel terms, the criterion's own pixel weight). */
+static wv_status loss_of(wv_image_loss *loss, const wv_scene *sc, const wv_pattern_opts *o, int i,
+                         wv_pattern_choice *out, wv_error *err) {
+  wv_render_opts ro = {sc->spp, o->threads, NULL, NULL, NULL};
+  wv_image img = {0};
+  /* the same render seed for every candidate: the losses then differ by the pattern, not the noise draw */
+  wv_status st = wv_render(sc, &out->params[i], &ro, &img, NULL, err);
+  wv_loss_terms t;
+  if (!st) st = wv_image_loss_eval(loss, &img, &t, NULL, err);
+  wv_image_free(&img);
+  if (st) return st;
+  out->gram[i] = t.gram, out->pixel[i] = t.pixel;
+  out->loss[i] = t.total;
+  out->evaluated[i] = 1;
+  return WV_OK;
+}
+
+static wv_status criterion_create(const wv_image *photo, wv_descriptor *d, const float *gram_photo,
+                                  const wv_pattern_opts *o, wv_image_loss **loss, wv_error *err) {
+  wv_loss_weights lw = {o->w_pixel, 0.0, WV_LOSS_DOWN_W, WV_LOSS_DOWN_H};
+  return wv_image_loss_create(photo, d, gram_photo, &lw, loss, err);
+}
+
+wv_status wv_pattern_loss(wv_descriptor *d, const wv_scene *s, const wv_image *photo, const float *gram_photo,
+                          const wv_pattern_opts *o, int i, wv_pattern_choice *c, wv_error *err) {
+  if (c->evaluated[i]) return WV_OK;
+  wv_scene sc = *s;
+  sc.spp = c->spp;
+  wv_image_loss *loss = NULL;
+  wv_status st = criterion_create(photo, d, gram_photo, o, &loss, err);
+  if (!st) st = loss_of(loss, &sc, o, i, c, err);
+  wv_image_loss_free(loss);
+  return st;
+}
+
+int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie, int *contenders) {
+  static const char *FAM[4] = {"plain", "basket", "twill", "satin"};
+  const wv_lattice *l = &c->lattice;
+  const wv_lattice_ranking *r = &c->ranking;
+  int nb = wv_weave_builtin_count();
+  /* 1. The family: the best by the mean of lattice score and render match (the lattice
+   * alone cannot tell a plain weave from a basket at twice its densities, whose lattice
+   * holds the same points; their renders differ), or the loss criterion among the
+   * contenders, each represented by its best-ranked pattern. */
+  double ff[4] = {-1, -1, -1, -1};
+  int rep[4] = {-1, -1, -1, -1}, fam = 0, n = 0;
+  for (int k = 0; k < nb; k++) {
+    int i = r->order[k], f = 0;
+    while (f < 3 && strcmp(wv_weave_family(wv_weave_builtin_name(i)), FAM[f])) f++;
+    double v = 0.5 * (l->fit[i].score + r->match[i]);
+    if (v > ff[f]) ff[f] = v;
+    if (rep[f] < 0) rep[f] = i;
+  }
+  for (int f = 1; f < 4; f++)
+    if (ff[f] > ff[fam]) fam = f;
+  int best_f = -1;
+  for (int f = 0; f < 4; f++)
+    if (rep[f] >= 0 && ff[f] >= ff[fam] - family_tie) {
+      n++;
+      if (best_f >= 0 && (!c->evaluated[rep[f]] || !c->evaluated[rep[best_f]]))
+        return -1 - (c->evaluated[rep[f]] ? rep[best_f] : rep[f]);
+      if (best_f < 0 || c->loss[rep[f]] < c->loss[rep[best_f]]) best_f = f;
+    }
+  if (contenders) *contenders = n;
+  if (n > 1) fam = best_f;
+  /* 2. The pattern within it: the best ranking score; near ties by the loss criterion. */
+  int best = rep[fam];
+  for (int k = 0; k < nb; k++) {
+    int i = r->order[k];
+    if (i == rep[fam] || strcmp(wv_weave_family(wv_weave_builtin_name(i)), FAM[fam]) ||
+        r->score[i] < r->score[rep[fam]] - tie)
+      continue;
+    if (!c->evaluated[i] || !c->evaluated[best]) return -1 - (c->evaluated[i] ? best : i);
+    if (c->loss[i] < c->loss[best]) best = i;
+  }
+  return best;
 }
 
 wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, const wv_scene *s,
@@ -32,34 +121,62 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
     return wv_fail(err, WV_ERR_INVALID, "the photo is %d x %d but the scene renders %d x %d", photo->w, photo->h,
                    s->width, s->height);
   double t0 = omp_get_wtime();
+  int nb = wv_weave_builtin_count();
   wv_scene sc = *s;
   sc.spp = o->spp > 0 ? o->spp : WV_PATTERN_SPP;
   out->spp = sc.spp, out->w_pixel = o->w_pixel;
-  wv_render_opts ro = {sc.spp, o->threads, NULL, NULL, NULL};
-  wv_fit_opts fo; /* the pixel loss's resolution */
-  wv_fit_opts_default(&fo);
-  float *gram = malloc(sizeof(float) * ng);
-  wv_image photo_down = {0};
-  wv_status st = gram ? wv_image_downsample(photo, fo.down_w, fo.down_h, &photo_down, err)
-                      : wv_fail(err, WV_ERR_NOMEM, "out of memory for a Gram vector");
-  for (int i = 0; i < WV_NET_PATTERNS && !st; i++) {
-    wv_image img = {0}, down = {0};
-    if ((st = wv_fabricnet_params(n, y, wv_net_pattern(i), &out->params[i], err))) break;
-    /* the same render seed for every candidate: the losses then differ by the pattern, not the noise draw */
-    if ((st = wv_render(&sc, &out->params[i], &ro, &img, NULL, err))) break;
-    st = wv_descriptor_forward(d, &img, gram, err);
-    if (!st) st = wv_image_downsample(&img, fo.down_w, fo.down_h, &down, err);
-    if (!st) out->pixel[i] = wv_image_l1(&down, &photo_down, NULL);
-    wv_image_free(&img), wv_image_free(&down);
-    if (st) break;
-    double l = 0;
-    for (size_t k = 0; k < ng; k++) l += fabsf(gram[k] - gram_photo[k]);
-    out->gram[i] = l / (double)ng;
-    out->loss[i] = out->gram[i] + o->w_pixel * out->pixel[i];
-    if (out->loss[i] < out->loss[out->best]) out->best = i;
+  if (o->prob) {
+    out->has_prob = 1;
+    for (int i = 0; i < nb; i++) out->prob[i] = o->prob[i];
   }
-  free(gram);
-  wv_image_free(&photo_down);
+  wv_status st = WV_OK;
+  for (int i = 0; i < nb && !st; i++) st = wv_fabricnet_params(n, y, wv_weave_builtin_name(i), &out->params[i], err);
+  out->lattice.best = -1;
+  /* the candidates are rendered through the camera's blur, as the fit will render them:
+   * without it a render's spectrum keeps a flat envelope the photo's does not have */
+  wv_scene sb = *s;
+  if (o->psf_sigma >= 0) sb.psf_sigma = o->psf_sigma;
+  else if (!st && !(s->psf_sigma > 0)) st = wv_psf_estimate(s, photo, &out->params[0], o->threads, &sb.psf_sigma, NULL, err);
+  sc.psf_sigma = out->psf_sigma = sb.psf_sigma;
+  s = &sb;
+  if (!st && o->lattice) st = wv_lattice_analyse(s, photo, &out->lattice, err);
+  wv_image_loss *loss = NULL;
+  if (!st) st = criterion_create(photo, d, gram_photo, o, &loss, err);
+#define LOSS(i) (out->evaluated[i] ? WV_OK : loss_of(loss, &sc, o, (i), out, err))
+  if (!st && out->lattice.found) {
+    const wv_lattice *l = &out->lattice;
+    wv_rank_opts ro;
+    wv_rank_opts_default(&ro);
+    ro.spp = sc.spp, ro.threads = o->threads, ro.prob = o->prob, ro.w_prob = o->w_prob;
+    /* the estimate's colours with pattern 0; wv_lattice_rank sets each candidate's pattern */
+    st = wv_lattice_rank(s, photo, l, &out->params[0], &ro, &out->ranking, err);
+    for (int i = 0; i < nb && !st; i++) { /* every candidate starts from its lattice densities */
+      wv_scene unused;
+      wv_params p = out->params[i];
+      wv_lattice_candidate(l, i, &p, s, 0, &out->params[i], &unused);
+    }
+    /* the decision asks for the losses it needs, one at a time */
+    int b = 0;
+    while (!st && (b = wv_pattern_decide(out, o->family_tie, o->tie, &out->family_contenders)) < 0) st = LOSS(-1 - b);
+    if (!st) {
+      out->best = b;
+      int used = 0;
+      for (int i = 0; i < nb; i++) used += out->evaluated[i];
+      out->method = used ? "lattice+loss" : "lattice";
+    }
+  } else if (!st && o->prob) {
+    for (int i = 1; i < nb; i++)
+      if (o->prob[i] > o->prob[out->best]) out->best = i;
+    out->method = "network";
+  } else if (!st) {
+    for (int i = 0; i < nb && !st; i++) {
+      st = LOSS(i);
+      if (!st && out->loss[i] < out->loss[out->best]) out->best = i;
+    }
+    out->method = "loss";
+  }
+#undef LOSS
+  wv_image_loss_free(loss);
   out->seconds = omp_get_wtime() - t0;
   return st;
 }
@@ -72,30 +189,54 @@ wv_status wv_fabricnet_predict_pattern(const wv_fabricnet *n, wv_descriptor *d, 
     return wv_fail(err, WV_ERR_INVALID, "descriptor gives %zu features, the model takes %d", ng, n->n_in);
   float *gram = malloc(sizeof(float) * ng * 2);
   if (!gram) return wv_fail(err, WV_ERR_NOMEM, "out of memory for Gram vectors");
-  float *feat = gram + ng;
+  float *feat = gram + ng, probs[WV_NET_CLASSES];
   wv_status st = wv_descriptor_forward(d, photo, gram, err);
   if (!st) {
     /* the network preprocesses its input in place; the choice needs the raw Gram */
     memcpy(feat, gram, sizeof(float) * ng);
-    st = wv_fabricnet_predict_features(n, feat, y, err);
+    st = wv_fabricnet_predict_features(n, feat, y, probs, err);
   }
-  if (!st) st = wv_fabricnet_choose_pattern(n, d, s, photo, gram, y, o, out, err);
+  /* the pattern head's probabilities join the choice unless the caller gave its own; a
+   * model without a head (format 1) gives none, and the loss decides in their place */
+  wv_pattern_opts oc;
+  if (o) oc = *o;
+  else wv_pattern_opts_default(&oc);
+  if (!oc.prob && n->n_cls == wv_weave_builtin_count()) oc.prob = probs;
+  if (!st) st = wv_fabricnet_choose_pattern(n, d, s, photo, gram, y, &oc, out, err);
   free(gram);
   return st;
 }
 
-static json_t *per_pattern(const double *v) {
+static json_t *per_candidate(const wv_pattern_choice *c, const double *v) {
   json_t *o = json_object();
-  for (int i = 0; i < WV_NET_PATTERNS; i++) json_object_set_new(o, wv_net_pattern(i), json_real(v[i]));
+  for (int i = 0; i < wv_weave_builtin_count(); i++)
+    if (c->evaluated[i]) json_object_set_new(o, wv_weave_builtin_name(i), json_real(v[i]));
   return o;
 }
 
 char *wv_pattern_choice_to_json(const wv_pattern_choice *c) {
-  json_t *o = json_pack("{s:s,s:s,s:i,s:f,s:f,s:o,s:o,s:o}", "chosen", wv_net_pattern(c->best), "criterion",
-                        "smallest gram + w_pixel * pixel loss of the network's estimate rendered with each built-in "
-                        "pattern",
-                        "spp", c->spp, "w_pixel", c->w_pixel, "seconds", c->seconds, "loss", per_pattern(c->loss),
-                        "gram_loss", per_pattern(c->gram), "pixel_loss", per_pattern(c->pixel));
+  static const char *CRITERION =
+      "the built-ins ranked by how well the spectral peaks of their render (the network's estimate with each "
+      "pattern's lattice densities) match the photo's, mixed with the network's pattern probabilities when it has "
+      "them; near ties decided by the smallest gram + w_pixel * pixel loss; a photo without a weave lattice by the "
+      "network's most probable pattern, or by that loss when the network gives no probabilities";
+  char *lj = wv_lattice_to_json(&c->lattice, c->lattice.found ? &c->ranking : NULL);
+  json_t *lat = lj ? json_loads(lj, 0, NULL) : NULL;
+  free(lj);
+  const char *name = wv_weave_builtin_name(c->best);
+  json_t *o = lat ? json_pack("{s:s,s:s,s:s,s:s,s:i,s:f,s:f,s:o,s:o,s:o,s:o}", "chosen", name, "family",
+                              wv_weave_family(name), "method", c->method ? c->method : "", "criterion", CRITERION,
+                              "spp", c->spp, "w_pixel", c->w_pixel, "seconds", c->seconds, "lattice", lat, "loss",
+                              per_candidate(c, c->loss), "gram_loss", per_candidate(c, c->gram), "pixel_loss",
+                              per_candidate(c, c->pixel))
+                  : NULL;
+  if (o) json_object_set_new(o, "camera_blur_px", json_real(c->psf_sigma));
+  if (o && c->has_prob) {
+    json_t *pr = json_object();
+    for (int i = 0; i < wv_weave_builtin_count(); i++)
+      json_object_set_new(pr, wv_weave_builtin_name(i), json_real(c->prob[i]));
+    json_object_set_new(o, "network_probability", pr);
+  }
   char *s = o ? json_dumps(o, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(6)) : NULL;
   json_decref(o);
   return s;

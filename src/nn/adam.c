@@ -1,4 +1,6 @@
-/* Adam (Kingma & Ba, ICLR 2015), bias-corrected; weight decay decoupled as in AdamW. */
+/* Adam (Kingma & Ba, ICLR 2015), bias-corrected; weight decay decoupled as in AdamW;
+ * optionally projected onto a box after each step. The one optimiser of the project:
+ * FabricNet's training and the fit (in normalised parameter coordinates, box [0, 1]). */
 #include <math.h>
 #include <stdlib.h>
 
@@ -21,7 +23,7 @@ wv_status wv_nn_adam_init(wv_nn_adam *a, size_t n, float lr, wv_error *err) {
   return WV_OK;
 }
 
-void wv_nn_adam_step(wv_nn_adam *a, float *params, const float *grads) {
+static void step(wv_nn_adam *a, float *params, const float *grads, int box, float lo, float hi) {
   a->t++;
   /* Bias corrections in double: beta^t underflows gracefully for long runs. */
   float c1 = (float)(1.0 - pow(a->beta1, (double)a->t));
@@ -35,8 +37,15 @@ void wv_nn_adam_step(wv_nn_adam *a, float *params, const float *grads) {
     m[i] = b1 * m[i] + (1.0f - b1) * g;
     v[i] = b2 * v[i] + (1.0f - b2) * g * g;
     float mh = m[i] / c1, vh = v[i] / c2;
-    params[i] -= lr * (mh / (sqrtf(vh) + eps) + wd * params[i]);
+    float p = params[i] - lr * (mh / (sqrtf(vh) + eps) + wd * params[i]);
+    params[i] = box ? (p < lo ? lo : p > hi ? hi : p) : p;
   }
+}
+
+void wv_nn_adam_step(wv_nn_adam *a, float *params, const float *grads) { step(a, params, grads, 0, 0, 0); }
+
+void wv_nn_adam_step_box(wv_nn_adam *a, float *params, const float *grads, float lo, float hi) {
+  step(a, params, grads, 1, lo, hi);
 }
 
 void wv_nn_adam_free(wv_nn_adam *a) {

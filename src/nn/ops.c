@@ -161,3 +161,26 @@ void wv_nn_l1_backward(float *dpred, const float *pred, const float *target, flo
     dpred[i] += d > 0.0f ? g : (d < 0.0f ? -g : 0.0f);
   }
 }
+
+float wv_nn_softmax_xent_forward(float *prob, const float *logits, const int *labels, int batch, int k) {
+  double loss = 0;
+  for (int b = 0; b < batch; b++) {
+    const float *z = logits + (size_t)b * k;
+    float mx = z[0];
+    for (int i = 1; i < k; i++) mx = z[i] > mx ? z[i] : mx;
+    double s = 0; /* shifted by the maximum: exp never overflows */
+    for (int i = 0; i < k; i++) s += exp((double)z[i] - mx);
+    if (labels) loss += log(s) - ((double)z[labels[b]] - mx);
+    if (prob)
+      for (int i = 0; i < k; i++) prob[(size_t)b * k + i] = (float)(exp((double)z[i] - mx) / s);
+  }
+  return batch ? (float)(loss / batch) : 0.0f;
+}
+
+void wv_nn_softmax_xent_backward(float *dlogits, const float *prob, const int *labels, float dloss, int batch, int k) {
+  if (!batch) return;
+  float g = dloss / (float)batch;
+  for (int b = 0; b < batch; b++)
+    for (int i = 0; i < k; i++)
+      dlogits[(size_t)b * k + i] += g * (prob[(size_t)b * k + i] - (i == labels[b] ? 1.0f : 0.0f));
+}

@@ -102,3 +102,13 @@ double wv_image_l1(const wv_image *a, const wv_image *b, wv_image *da) {
   }
   return sum * inv;
 }
+
+/* ---- 8-bit quantisation ---- */
+
+void wv_image_quantise8(wv_image *img) {
+  size_t n = (size_t)img->w * img->h * img->c;
+  for (size_t i = 0; i < n; i++) {
+    float v = img->data[i] < 0 ? 0 : img->data[i] > 1 ? 1 : img->data[i];
+    img->data[i] = floorf(v * 255.0f + 0.5f) / 255.0f;
+  }
+}

@@ -89,7 +89,7 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
   static const char *k_cam[] = {"position_mm", "look_at_mm", "up", "vfov_deg", NULL};
   static const char *k_smp[] = {"shape", "radius_mm", "warp", "rotation_deg", "offset_mm", "mm_per_unit", NULL};
   static const char *k_lig[] = {"position_mm", "intensity", NULL};
-  static const char *k_rsp[] = {"exposure", "clip", "encoding", "gamma", NULL};
+  static const char *k_rsp[] = {"exposure", "clip", "encoding", "gamma", "psf_sigma_px", NULL};
   static const char *k_fal[] = {"type", "sigma_px", NULL};
   wv_status st;
   memset(s, 0, sizeof *s);
@@ -153,6 +153,7 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
     if ((st = num(o, "response", "exposure", &s->exposure, 0, err))) return st;
     if ((st = num(o, "response", "clip", &s->clip, 0, err))) return st;
     if ((st = num(o, "response", "gamma", &s->gamma, 0, err))) return st;
+    if ((st = num(o, "response", "psf_sigma_px", &s->psf_sigma, 0, err))) return st;
     json_t *e = json_object_get(o, "encoding");
     if (e) {
       const char *es = json_is_string(e) ? json_string_value(e) : "";
@@ -230,6 +231,9 @@ wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
     return wv_fail(err, WV_ERR_INVALID, "'response.clip' = %s is outside -1000000..1000000", wv_num_str(s->clip, a));
   if (s->encoding == WV_ENC_GAMMA && !(s->gamma > 0.1 && s->gamma < 10))
     return wv_fail(err, WV_ERR_INVALID, "'response.gamma' = %s is outside (0.1, 10)", wv_num_str(s->gamma, a));
+  if (!(s->psf_sigma >= 0 && s->psf_sigma <= WV_PSF_MAX_SIGMA))
+    return wv_fail(err, WV_ERR_INVALID, "'response.psf_sigma_px' = %s is outside 0..%g", wv_num_str(s->psf_sigma, a),
+                   WV_PSF_MAX_SIGMA);
   if (s->falloff && !(s->falloff_sigma > 0 && s->falloff_sigma <= 1e9))
     return wv_fail(err, WV_ERR_INVALID, "'falloff.sigma_px' = %s must be in (0, 1e+09]",
                    wv_num_str(s->falloff_sigma, a));
@@ -290,6 +294,8 @@ char *wv_scene_to_json(const wv_scene *s) {
                                             s->light_pos[2], "intensity", s->light_intensity));
   json_object_set_new(o, "response", json_pack("{s:f,s:f,s:s,s:f}", "exposure", s->exposure, "clip", s->clip,
                                                "encoding", enc[s->encoding], "gamma", s->gamma));
+  if (s->psf_sigma > 0) /* written only when set: scenes without a blur keep their text */
+    json_object_set_new(json_object_get(o, "response"), "psf_sigma_px", json_real(s->psf_sigma));
   if (s->falloff)
     json_object_set_new(o, "falloff", json_pack("{s:s,s:f}", "type", "gaussian", "sigma_px", s->falloff_sigma));
   else

@@ -1,8 +1,11 @@
 /* The sensor response (what the camera does to radiance before we compare to a
- * photo): the adjoint's encoding slope, the falloff mask, the image response
- * and the public per-value encoding and its inverse. The per-value response
- * itself is sensor/response_impl.h. */
+ * photo): the camera blur (a Gaussian point-spread function on the radiance) and its
+ * adjoint, the adjoint's encoding slope, the falloff mask, the image response and the
+ * public per-value encoding and its inverse. The per-value response itself is
+ * sensor/response_impl.h. */
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "sensor/sensor.h"
 #include "woven/scene.h"
@@ -41,4 +44,66 @@ void wv_scene_response(const wv_scene *s, const wv_image *rad, wv_image *cap) {
       float *out = wv_image_px(cap, x, y);
       for (int c = 0; c < rad->c; c++) out[c] = wv_respond_f(s, m, in[c], NULL);
     }
+}
+
+/* One 1-D pass along x (dx = 1, stride c) or y: out += K in, or K^T in when adjoint. */
+static void psf_pass(const double *wk, int r, int w, int h, int c, int along_y, const double *in, double *out,
+                     int adjoint) {
+  int n = along_y ? h : w, m = along_y ? w : h;
+  for (int j = 0; j < m; j++)
+    for (int i = 0; i < n; i++) {
+      size_t at = along_y ? ((size_t)i * w + j) * c : ((size_t)j * w + i) * c;
+      for (int k = -r; k <= r; k++) {
+        int q = i + k < 0 ? 0 : i + k >= n ? n - 1 : i + k; /* clamped edge */
+        size_t qa = along_y ? ((size_t)q * w + j) * c : ((size_t)j * w + q) * c;
+        double wt = wk[k < 0 ? -k : k];
+        for (int ch = 0; ch < c; ch++) {
+          if (adjoint) out[qa + ch] += wt * in[at + ch];
+          else out[at + ch] += wt * in[qa + ch];
+        }
+      }
+    }
+}
+
+wv_status wv_psf_apply(double sigma, int w, int h, int c, const double *in, double *out, int adjoint,
+                       wv_error *err) {
+  size_t n = (size_t)w * h * c;
+  if (!(sigma > 0)) {
+    memcpy(out, in, n * sizeof *out);
+    return WV_OK;
+  }
+  if (!(sigma <= WV_PSF_MAX_SIGMA))
+    return wv_fail(err, WV_ERR_INVALID, "camera blur sigma %g px is outside 0..%g", sigma, WV_PSF_MAX_SIGMA);
+  int r = (int)ceil(3 * sigma);
+  double wk[3 * (int)WV_PSF_MAX_SIGMA + 2], sum = 0;
+  for (int k = 0; k <= r; k++) sum += (k ? 2 : 1) * (wk[k] = exp(-0.5 * k * k / (sigma * sigma)));
+  for (int k = 0; k <= r; k++) wk[k] /= sum;
+  double *tmp = calloc(n, sizeof *tmp);
+  if (!tmp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur");
+  memset(out, 0, n * sizeof *out);
+  /* K = Ky Kx, so K^T = Kx^T Ky^T: the passes in the other order */
+  psf_pass(wk, r, w, h, c, adjoint, in, tmp, adjoint);
+  psf_pass(wk, r, w, h, c, !adjoint, tmp, out, adjoint);
+  free(tmp);
+  return WV_OK;
+}
+
+wv_status wv_scene_capture(const wv_scene *s, const wv_image *rad, wv_image *cap, wv_error *err) {
+  if (!(s->psf_sigma > 0)) {
+    wv_scene_response(s, rad, cap);
+    return WV_OK;
+  }
+  size_t n = (size_t)rad->w * rad->h * rad->c;
+  double *a = malloc(2 * n * sizeof *a);
+  if (!a) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur");
+  for (size_t i = 0; i < n; i++) a[i] = rad->data[i];
+  wv_status st = wv_psf_apply(s->psf_sigma, rad->w, rad->h, rad->c, a, a + n, 0, err);
+  if (!st) {
+    wv_image b = *rad;
+    b.data = cap->data; /* the blurred radiance, then the response in place */
+    for (size_t i = 0; i < n; i++) cap->data[i] = (float)a[n + i];
+    wv_scene_response(s, &b, cap);
+  }
+  free(a);
+  return st;
 }

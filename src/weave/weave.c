@@ -34,7 +34,7 @@ static const builtin BUILTINS[] = {
     {"twill", FAM_TWILL, 3, 1, 1, 0},        {"satin", FAM_SATIN, 5, 2, 0, 0},
     {"twill90", FAM_TWILL, 3, 1, 1, 1},      {"satin90", FAM_SATIN, 5, 2, 0, 1},
 };
-enum { N_CANONICAL = 16 };
+enum { N_CANONICAL = WV_WEAVE_BUILTINS };
 
 int wv_weave_builtin_count(void) { return N_CANONICAL; }
 

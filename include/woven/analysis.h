@@ -1,0 +1,113 @@
+/* woven: weave analysis of a photo (classical textile image analysis). A woven fabric is
+ * a periodic texture: the power spectrum of its luminance detail (metrics.h) is a lattice
+ * of peaks, the reciprocal lattice of the weave's repeat, folded into the pixel grid's
+ * band where the yarns are finer than two pixels. This module
+ *   1. finds the photo's spectral peaks (wv_lattice_analyse),
+ *   2. explains them, for each built-in pattern, by the yarn densities (yarns per inch,
+ *      through the scene's scale at the image centre) and the weave's orientation whose
+ *      predicted peaks (the pattern's own Fourier coefficients, blurred by the pixel and
+ *      folded at the pixel grid) best match the photo's,
+ *   3. ranks the built-in patterns by how well their OWN render, with those densities in
+ *      the photo's scene, shows the photo's peaks (wv_lattice_rank).
+ * The best pattern's lattice gives the yarn spacings, the orientation and the repeat's
+ * shear (twill direction S or Z, satin step). A photo without periodic structure (a flat
+ * card, sand, noise) has no lattice: found = 0 and a reason. docs/analysis.md. */
+#ifndef WOVEN_ANALYSIS_H
+#define WOVEN_ANALYSIS_H
+
+#include "woven/error.h"
+#include "woven/image.h"
+#include "woven/params.h"
+#include "woven/scene.h"
+#include "woven/weave.h"
+
+#define WV_LATTICE_PEAKS 24     /* peaks kept, strongest first */
+#define WV_LATTICE_WINDOW 256   /* the centre window analysed (the WSC window) */
+#define WV_LATTICE_MIN_WINDOW 64
+
+/* One spectral peak, in the half plane v > 0 (or v = 0, u > 0): its mirror -(u, v) is
+ * the same peak. */
+typedef struct {
+  double u, v; /* cycles per pixel, v downward (image rows) */
+  double z;    /* prominence: robust standard deviations above its ring of the spectrum */
+} wv_spectral_peak;
+
+/* A pattern's lattice explaining the photo's peaks. */
+typedef struct {
+  double density[2];  /* yarns per inch, [WV_WARP], [WV_WEFT] */
+  double angle_deg;   /* the fabric's rotation, counter-clockwise, to add to the scene's */
+  double skew_deg;    /* how far the yarns are out of square: the warp turns by angle - skew / 2,
+                       * the weft by angle + skew / 2 (the renderer draws square cloth) */
+  double precision;   /* weighted share of the predicted peaks the photo shows */
+  double recall;      /* share of the photo's peak prominence the prediction explains */
+  double score;       /* 2 precision recall / (precision + recall), 0..1 */
+} wv_lattice_fit;
+
+typedef struct {
+  int window;         /* side of the analysed centre window (pixels) */
+  int found;          /* a weave lattice was found */
+  char reason[160];   /* why not, when found = 0 */
+  int n_peaks;
+  wv_spectral_peak peaks[WV_LATTICE_PEAKS];
+  double mm_per_px;   /* the scene's scale at the image centre (geometric mean of the axes) */
+  wv_lattice_fit fit[WV_WEAVE_BUILTINS]; /* per canonical built-in (wv_weave_builtin_name order) */
+  int best;           /* the built-in whose lattice explains the peaks best (-1: none) */
+  /* The best lattice's geometry: */
+  double spacing_px[2]; /* warp yarns' spacing across the image (x), weft yarns' (y), pixels */
+  int repeat;         /* the repeat's size in yarns */
+  int shear;          /* cells the pattern moves per row: twill +1 (S) or -1 (Z) (90-degree
+                       * variants: per column), satin its step, 0 for plain and basket */
+  double seconds;
+} wv_lattice;
+
+/* Analyses the centre window of photo (the scene's capture image; at least 64 x 64). A
+ * photo without a lattice is not an error: out->found = 0 with out->reason. */
+wv_status wv_lattice_analyse(const wv_scene *s, const wv_image *photo, wv_lattice *out, wv_error *err);
+
+/* The peaks of a weave spectrum (n x n, from wv_weave_spectrum) with prominence at least
+ * min_z, strongest first; returns how many (at most cap). */
+int wv_spectrum_peaks(const float *spectrum, int n, double min_z, wv_spectral_peak *peaks, int cap);
+
+/* ---- ranking the built-in patterns by their own renders ---- */
+#define WV_RANK_SPP 4
+typedef struct {
+  int spp;      /* samples per pixel of each candidate's render (WV_RANK_SPP) */
+  int threads;  /* 0: OpenMP default */
+  int rotate;   /* 1: render with the lattice's orientation added to a plane scene's */
+  /* Optional: a probability per canonical built-in (wv_weave_builtin_count() values, e.g.
+   * FabricNet's pattern head), NULL when there is none. Each candidate's score is then
+   * (1 - w_prob) match + w_prob probability. */
+  const float *prob;
+  double w_prob;
+} wv_rank_opts;
+void wv_rank_opts_default(wv_rank_opts *o);
+
+typedef struct {
+  double match[WV_WEAVE_BUILTINS]; /* peak match between the candidate's render and the photo, 0..1 */
+  double wsc[WV_WEAVE_BUILTINS];   /* WSC of the candidate's render against the photo */
+  double score[WV_WEAVE_BUILTINS]; /* the ranking criterion (match, or mixed with prob) */
+  int order[WV_WEAVE_BUILTINS];    /* candidates, best first */
+  int best;
+  double seconds;
+} wv_lattice_ranking;
+
+/* Renders each built-in with base's other parameters and its own lattice densities
+ * (lat->fit[i]) in the centre window of s at a low spp, and scores how well the render's
+ * spectral peaks match the photo's. lat must have found a lattice. */
+wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lattice *lat, const wv_params *base,
+                          const wv_rank_opts *o, wv_lattice_ranking *out, wv_error *err);
+
+/* The parameters base with built-in i and its lattice's densities (clamped to the
+ * density range), and the scene s with its orientation when rotate and s is a plane. */
+void wv_lattice_candidate(const wv_lattice *lat, int i, const wv_params *base, const wv_scene *s, int rotate,
+                          wv_params *p, wv_scene *ps);
+
+/* The analysis as a JSON object text (docs/analysis.md; malloc'ed, caller frees; NULL
+ * when out of memory); with a ranking (may be NULL) its scores too. */
+char *wv_lattice_to_json(const wv_lattice *l, const wv_lattice_ranking *r);
+
+/* A picture of k weave spectra side by side (n x n each, from wv_weave_spectrum), each
+ * scaled to its own range and enlarged `zoom` times, 4 white pixels apart; RGB. */
+wv_status wv_spectrum_picture(const float *const *spectra, int k, int n, int zoom, wv_image *out, wv_error *err);
+
+#endif

@@ -1,0 +1,229 @@
+/* The weave spectrum, WSC and the weave analysis (analysis.h) on synthetic renders of
+ * built-ins with known densities in the flat45 rig (yarns one to two and a half pixels
+ * apart, as in its photos), and on images without a weave (a grey card, white noise). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+#include "util/hash.h"
+#include "woven/analysis.h"
+#include "woven/metrics.h"
+#include "woven/render.h"
+
+#define SIDE 256
+
+/* A prior draw of pattern with the given densities, rendered in the centre window of flat45
+ * (optionally turned by rot degrees). */
+static void render(const char *pattern, double dw, double df, double rot, uint64_t seed, wv_scene *s, wv_image *img) {
+  wv_params p;
+  wv_error e = {0};
+  assert_int_equal(wv_params_sample_prior(pattern, seed, &p, &e), WV_OK);
+  p.density[WV_WARP] = dw, p.density[WV_WEFT] = df;
+  tu_centre_window(s, "flat45", SIDE, SIDE, 8);
+  s->rotation_deg = rot;
+  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  assert_int_equal(wv_render(s, &p, &ro, img, NULL, &e), WV_OK);
+  s->rotation_deg = 0; /* the analysis is told the scene as it was meant, the fabric turned in it */
+}
+
+static void noise_image(wv_image *img, int w, int h, uint64_t seed) {
+  assert_int_equal(wv_image_alloc(img, w, h, 3, NULL), WV_OK);
+  for (size_t i = 0; i < (size_t)w * h; i++) {
+    float v = wv_u01(wv_hash2(seed, i, 3));
+    for (int c = 0; c < 3; c++) img->data[i * 3 + c] = v;
+  }
+}
+
+static void crop(const wv_image *a, int x0, int y0, int w, int h, wv_image *out) {
+  assert_int_equal(wv_image_alloc(out, w, h, 3, NULL), WV_OK);
+  for (int y = 0; y < h; y++)
+    memcpy(wv_image_px(out, 0, y), wv_image_px(a, x0, y0 + y), sizeof(float) * 3 * (size_t)w);
+}
+
+/* Two crops of one render hold the same weave: WSC well above zero, whatever their offset
+ * (about 0.24: a render's spectrum between its peaks is a flat floor whose bins fluctuate
+ * independently in each crop; photos, with a smooth envelope, score 0.4 to 0.7); white
+ * noise holds nothing in common; the same weave turned by 20 degrees scores far lower. */
+static void test_wsc(void **state) {
+  (void)state;
+  wv_scene s;
+  wv_image img, a, b, noise, turned, ta;
+  wv_error e = {0};
+  wv_params p;
+  assert_int_equal(wv_params_sample_prior("twill31s", 11, &p, &e), WV_OK);
+  p.density[0] = 150, p.density[1] = 85;
+  tu_centre_window(&s, "flat45", 320, 320, 8);
+  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  assert_int_equal(wv_render(&s, &p, &ro, &img, NULL, &e), WV_OK);
+  s.rotation_deg = 20;
+  assert_int_equal(wv_render(&s, &p, &ro, &turned, NULL, &e), WV_OK);
+  crop(&img, 0, 0, SIDE, SIDE, &a);
+  crop(&img, 64, 57, SIDE, SIDE, &b);
+  crop(&turned, 0, 0, SIDE, SIDE, &ta);
+  noise_image(&noise, SIDE, SIDE, 5);
+  double same, vs_noise, vs_turned, self;
+  assert_int_equal(wv_wsc(&a, &b, &same, &e), WV_OK);
+  assert_int_equal(wv_wsc(&a, &noise, &vs_noise, &e), WV_OK);
+  assert_int_equal(wv_wsc(&a, &ta, &vs_turned, &e), WV_OK);
+  assert_int_equal(wv_wsc(&a, &a, &self, &e), WV_OK);
+  fprintf(stderr, "WSC: two crops %.3f, vs noise %.3f, vs turned 20 deg %.3f\n", same, vs_noise, vs_turned);
+  assert_true(fabs(self - 1) < 1e-9);
+  assert_true(same > 0.18);
+  assert_true(fabs(vs_noise) < 0.05);
+  assert_true(vs_turned < 0.5 * same);
+  /* too small for a spectrum: a clear error */
+  wv_image tiny;
+  assert_int_equal(wv_image_alloc(&tiny, 20, 20, 3, NULL), WV_OK);
+  assert_int_equal(wv_wsc(&tiny, &tiny, &same, &e), WV_ERR_INVALID);
+  assert_non_null(strstr(e.msg, "too small"));
+  /* a flat image has no detail: zero spectrum, WSC 0, no NaN */
+  wv_image grey;
+  assert_int_equal(wv_image_alloc(&grey, SIDE, SIDE, 3, NULL), WV_OK);
+  assert_int_equal(wv_wsc(&grey, &a, &same, &e), WV_OK);
+  assert_true(same == 0);
+  wv_image_free(&img), wv_image_free(&a), wv_image_free(&b), wv_image_free(&noise), wv_image_free(&turned);
+  wv_image_free(&ta), wv_image_free(&tiny), wv_image_free(&grey);
+}
+
+/* The Gaussian blur keeps a constant and conserves the mean of a smooth image. */
+static void test_gaussian(void **state) {
+  (void)state;
+  wv_image a, b;
+  assert_int_equal(wv_image_alloc(&a, 40, 30, 3, NULL), WV_OK);
+  for (int y = 0; y < 30; y++)
+    for (int x = 0; x < 40; x++)
+      for (int c = 0; c < 3; c++) wv_image_px(&a, x, y)[c] = (x == 20 && y == 15) ? 1.0f : 0.25f;
+  assert_int_equal(wv_image_gaussian(&a, 2.0, &b, NULL), WV_OK);
+  /* the impulse spreads as a normalised Gaussian: centre 1/(2 pi sigma^2) above the floor */
+  double peak = wv_image_px(&b, 20, 15)[0] - 0.25;
+  assert_true(fabs(peak - 0.75 / (2 * 3.14159265358979 * 4)) < 0.002);
+  assert_true(fabs(wv_image_px(&b, 0, 0)[1] - 0.25) < 1e-6);
+  assert_int_equal(wv_image_gaussian(&a, 0, &b, NULL), WV_ERR_INVALID);
+  wv_image_free(&a), wv_image_free(&b);
+}
+
+typedef struct {
+  const char *pattern;
+  double dw, df, rot;
+} target;
+
+/* Built-ins with known densities: the true pattern's lattice recovers the densities within
+ * 3%, the best lattice has the right family and, for twills, the right direction (S or Z);
+ * a turned fabric gives its angle. */
+static void test_lattice_recovers(void **state) {
+  (void)state;
+  static const target T[] = {
+      {"twill31s", 150, 85, 0},   {"twill31z", 140, 80, 0},   {"twill21s", 120, 70, 0},
+      {"twill22z", 100, 60, 0},   {"satin5", 185, 100, 0},    {"satin8", 200, 110, 0},
+      {"twill31s_90", 80, 150, 0}, {"satin5_90", 100, 185, 0}, {"twill31s", 150, 85, 4},
+  };
+  for (size_t k = 0; k < sizeof T / sizeof T[0]; k++) {
+    wv_scene s;
+    wv_image img;
+    render(T[k].pattern, T[k].dw, T[k].df, T[k].rot, 100 + k, &s, &img);
+    wv_lattice l;
+    wv_error e = {0};
+    assert_int_equal(wv_lattice_analyse(&s, &img, &l, &e), WV_OK);
+    int t = -1;
+    for (int i = 0; i < wv_weave_builtin_count(); i++)
+      if (!strcmp(wv_weave_builtin_name(i), T[k].pattern)) t = i;
+    const wv_lattice_fit *f = &l.fit[t];
+    fprintf(stderr, "%-12s %.0f/%.0f rot %.0f: found %d, best %s, own lattice %.1f/%.1f angle %.2f score %.3f\n",
+            T[k].pattern, T[k].dw, T[k].df, T[k].rot, l.found, l.found ? wv_weave_builtin_name(l.best) : "-",
+            f->density[0], f->density[1], f->angle_deg, f->score);
+    assert_true(l.found);
+    assert_true(fabs(f->density[0] / T[k].dw - 1) < 0.03);
+    assert_true(fabs(f->density[1] / T[k].df - 1) < 0.03);
+    assert_true(fabs(f->angle_deg - T[k].rot) < 1.0);
+    const char *best = wv_weave_builtin_name(l.best);
+    assert_string_equal(wv_weave_family(best), wv_weave_family(T[k].pattern));
+    if (!strcmp(wv_weave_family(best), "twill")) {
+      /* the direction: the library's S twills move +1 column per row, Z twills -1 */
+      wv_weave w;
+      assert_int_equal(wv_weave_builtin(T[k].pattern, &w, NULL), WV_OK);
+      assert_int_equal(l.shear, strchr(wv_weave_canonical(T[k].pattern), 'z') ? -1 : 1);
+    }
+    assert_true(l.spacing_px[0] > 0.8 && l.spacing_px[0] < 3);
+    wv_image_free(&img);
+  }
+}
+
+/* No periodic structure: a flat grey card, white noise and smooth "sand" (blurred noise)
+ * give no lattice and a reason, never a crash. */
+static void test_no_lattice(void **state) {
+  (void)state;
+  wv_scene s;
+  tu_centre_window(&s, "flat45", SIDE, SIDE, 8);
+  wv_image grey, noise, sand;
+  assert_int_equal(wv_image_alloc(&grey, SIDE, SIDE, 3, NULL), WV_OK);
+  for (size_t i = 0; i < (size_t)SIDE * SIDE * 3; i++) grey.data[i] = 0.45f;
+  noise_image(&noise, SIDE, SIDE, 9);
+  assert_int_equal(wv_image_gaussian(&noise, 1.2, &sand, NULL), WV_OK);
+  const wv_image *imgs[3] = {&grey, &noise, &sand};
+  for (int i = 0; i < 3; i++) {
+    wv_lattice l;
+    wv_error e = {0};
+    assert_int_equal(wv_lattice_analyse(&s, imgs[i], &l, &e), WV_OK);
+    fprintf(stderr, "image %d: %s\n", i, l.reason);
+    assert_false(l.found);
+    assert_int_equal(l.best, -1);
+    assert_non_null(strstr(l.reason, "no weave lattice"));
+    char *js = wv_lattice_to_json(&l, NULL);
+    assert_non_null(js);
+    free(js);
+  }
+  /* too small for the analysis: no lattice, said so */
+  wv_image tiny;
+  assert_int_equal(wv_image_alloc(&tiny, 40, 40, 3, NULL), WV_OK);
+  wv_lattice l;
+  assert_int_equal(wv_lattice_analyse(&s, &tiny, &l, NULL), WV_OK);
+  assert_false(l.found);
+  assert_non_null(strstr(l.reason, "too small"));
+  wv_image_free(&grey), wv_image_free(&noise), wv_image_free(&sand), wv_image_free(&tiny);
+}
+
+/* Ranking by the candidates' own renders: with the target's other parameters, the true
+ * family comes first; class probabilities, when given, move the scores. */
+static void test_rank(void **state) {
+  (void)state;
+  static const target T[] = {{"twill21z", 130, 75, 0}, {"satin8_90", 110, 200, 0}};
+  for (size_t k = 0; k < sizeof T / sizeof T[0]; k++) {
+    wv_scene s;
+    wv_image img;
+    render(T[k].pattern, T[k].dw, T[k].df, 0, 300 + k, &s, &img);
+    wv_lattice l;
+    wv_error e = {0};
+    assert_int_equal(wv_lattice_analyse(&s, &img, &l, &e), WV_OK);
+    assert_true(l.found);
+    wv_params base;
+    assert_int_equal(wv_params_sample_prior(T[k].pattern, 300 + k, &base, &e), WV_OK);
+    base.seed += 1; /* another noise draw than the target's */
+    wv_lattice_ranking r;
+    assert_int_equal(wv_lattice_rank(&s, &img, &l, &base, NULL, &r, &e), WV_OK);
+    fprintf(stderr, "%s: ranked first %s (match %.3f)\n", T[k].pattern, wv_weave_builtin_name(r.best),
+            r.match[r.best]);
+    assert_string_equal(wv_weave_family(wv_weave_builtin_name(r.best)), wv_weave_family(T[k].pattern));
+    for (int i = 1; i < wv_weave_builtin_count(); i++) assert_true(r.score[r.order[i]] <= r.score[r.order[i - 1]]);
+    /* a certain network moves its class to the top */
+    float prob[WV_WEAVE_BUILTINS] = {0};
+    int other = r.order[wv_weave_builtin_count() - 1];
+    prob[other] = 1.0f;
+    wv_rank_opts o;
+    wv_rank_opts_default(&o);
+    o.prob = prob, o.w_prob = 0.9;
+    wv_lattice_ranking r2;
+    assert_int_equal(wv_lattice_rank(&s, &img, &l, &base, &o, &r2, &e), WV_OK);
+    assert_int_equal(r2.best, other);
+    wv_image_free(&img);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_wsc),         cmocka_unit_test(test_gaussian), cmocka_unit_test(test_lattice_recovers),
+      cmocka_unit_test(test_no_lattice),  cmocka_unit_test(test_rank),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
