@@ -101,6 +101,7 @@ typedef struct {
 /* The figures of a finished fit, for a caller that runs it (woven capture-batch). */
 typedef struct fit_result {
   double ssim_start, ssim_fit;
+  double wsc; /* weave-spectrum correlation of the fit against the photo */
   int iterations;
   char pattern[32];
 } fit_result;

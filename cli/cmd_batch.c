@@ -20,7 +20,7 @@ static const char *HELP =
     "--descriptor, --vgg19-weights, --drape) mean what 'woven capture --help' says and apply to every photo.\n"
     "Writes DIR/<name>/ per photo (name: the file name without its extension; the files of\n"
     "'woven capture'), each appearing whole when its capture is done, and DIR/summary.json and\n"
-    "DIR/summary.html: every photo with its status, pattern, SSIM, WSC where reported, time.\n"
+    "DIR/summary.html: every photo with its status, pattern, SSIM, WSC, time.\n"
     "A photo that fails (unreadable, wrong size) is recorded and the others go on; the exit\n"
     "code is then 2. Run the same command again to resume: finished photos are not redone.\n"
     "Under 'mpirun -n N' the processes share the photos (docs/mpi.md). One job at a time per DIR.\n";
@@ -60,7 +60,7 @@ static int capture_one(void *user, const char *photo, const char *dir, wv_batch_
     snprintf(res->error, sizeof res->error, "woven capture failed (exit %d; its message is in the log)", rc);
     return rc;
   }
-  res->ssim_start = fr.ssim_start, res->ssim_fit = fr.ssim_fit, res->iterations = fr.iterations;
+  res->ssim_start = fr.ssim_start, res->ssim_fit = fr.ssim_fit, res->wsc = fr.wsc, res->iterations = fr.iterations;
   snprintf(res->pattern, sizeof res->pattern, "%s", fr.pattern);
   return 0;
 }

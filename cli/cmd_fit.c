@@ -478,6 +478,7 @@ int fit_pipeline(cli_ctx *c, const fit_job *job) {
   }
   if (job->result) {
     job->result->ssim_start = ssim_start, job->result->ssim_fit = ssim_fit, job->result->iterations = st.iter;
+    job->result->wsc = wv.wsc[1];
     snprintf(job->result->pattern, sizeof job->result->pattern, "%s", st.params.pattern);
   }
   wv_fit_state_free(&st);

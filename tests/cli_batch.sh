@@ -17,8 +17,8 @@ echo "$scene" >"$T/tiny.json"
 OPTS=(--scene "$T/tiny.json" --model "$T/m.bin" --pattern twill --iters 1 --iter-scale 1 --iter-spp 1 --align-radius 0
   --register-radius 0 --threads 1 --drape none)
 mkdir "$T/photos"
-cp "$T/ds/samples/twill_0.png" "$T/photos/a.png"
-cp "$T/ds/samples/satin_0.png" "$T/photos/b.png"
+cp "$T/ds/samples/twill31s_0.png" "$T/photos/a.png"
+cp "$T/ds/samples/satin5_0.png" "$T/photos/b.png"
 echo "not an image" >"$T/photos/c.png"
 
 check "batch with an unreadable photo" 2 '"failed": 1' -- "${RUN[@]}" "$WOVEN" capture-batch "$T/photos" -o "$T/bout" \

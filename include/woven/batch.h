@@ -30,7 +30,7 @@ typedef struct {
   char error[1024]; /* why it failed */
   char pattern[32];
   double ssim_start, ssim_fit; /* SSIM of the start (network) and of the fit against the photo */
-  double wsc;                  /* weave structure consistency; NaN when the capture does not report it */
+  double wsc;                  /* weave-spectrum correlation of the fit; NaN when the capture does not report it */
   int iterations;
 } wv_batch_result;
 

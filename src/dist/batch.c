@@ -217,7 +217,7 @@ static wv_status write_summary(const char *dir, const char *list, const wv_batch
           f);
     html_text(f, list);
     fprintf(f, ": %d photos, %d captured, %d failed, %d not done. SSIM is the luma SSIM of the render against the "
-               "photo (network estimate &rarr; fit); WSC is shown where the capture reports it.</p>\n<table>\n"
+               "photo (network estimate &rarr; fit); WSC: the weave-spectrum correlation of the fit with the photo.</p>\n<table>\n"
                "<tr><th>photo</th><th>status</th><th>pattern</th><th>SSIM network</th><th>SSIM fit</th><th>WSC</th>"
                "<th>iterations</th><th>time (s)</th><th>result</th></tr>\n",
             n, ok, failed, n - ok - failed);
