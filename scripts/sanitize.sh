@@ -3,8 +3,9 @@
 # UndefinedBehaviorSanitizer (WOVEN_SANITIZE=ON, gcc) into build-asan/ and runs ctest
 # there. Any sanitizer report fails the test that triggered it: UBSan aborts
 # (-fno-sanitize-recover), ASan aborts on errors and, at exit, on leaks. The only
-# suppressions are the MPI runtime's own allocations (scripts/lsan-mpi.supp): the suite
-# runs clean with OpenMP, OpenBLAS and the image libraries as they are.
+# suppressions are the MPI runtime's own allocations (scripts/lsan-mpi.supp), and the
+# tests' mpirun-launched ranks skip the leak check (the runtime unloads its plug-ins
+# first); the suite runs clean with OpenMP, OpenBLAS and the image libraries as they are.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
