@@ -18,11 +18,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   fuzz_check_refusal(s, &err, d.dir);
   if (s == WV_OK) {
     if (wv_scene_validate(&info.scene, &err) != WV_OK) fuzz_fail("accepted dataset with a bad scene: %s", err.msg);
-    long long last = 5LL * info.per_pattern - 1;
+    long long last = (long long)wv_dataset_pattern_count(&info) * info.per_pattern - 1;
     int ks[2] = {0, last > 2147483646 ? 2147483646 : (int)last};
     for (int i = 0; i < 2; i++) {
       char path[4096];
-      wv_dataset_path(d.dir, ks[i], "json", path, sizeof path);
+      wv_dataset_path(d.dir, &info, ks[i], "json", path, sizeof path);
       wv_params p;
       if (wv_dataset_sample_params(&info, ks[i], &p, &err) != WV_OK) fuzz_fail("prior draw failed: %s", err.msg);
     }

@@ -8,6 +8,7 @@
 
 #include "fuzz_util.h"
 #include "woven/fabricnet.h"
+#include "woven/weave.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -35,8 +36,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   if (s == WV_OK) {
     float *feat = calloc((size_t)n.n_in, sizeof(float)), y[WV_NET_OUT];
     if (!feat) fuzz_fail("out of memory");
-    s = wv_fabricnet_predict_features(&n, feat, y, &err);
+    float probs[WV_WEAVE_BUILTINS];
+    s = wv_fabricnet_predict_features(&n, feat, y, probs, &err);
     fuzz_check_refusal(s, &err, NULL);
+    double psum = 0;
+    for (int k = 0; s == WV_OK && k < wv_weave_builtin_count(); k++) psum += probs[k];
+    if (s == WV_OK && psum == psum && !(psum > 0.999 && psum < 1.001)) fuzz_fail("pattern probabilities sum to %g", psum);
     for (int k = 0; s == WV_OK && k < WV_NET_OUT; k++)
       if (!(y[k] >= 0.0f && y[k] <= 1.0f) && y[k] == y[k]) fuzz_fail("output %d = %g outside [0, 1]", k, (double)y[k]);
     free(feat);
