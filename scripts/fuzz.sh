@@ -39,7 +39,9 @@ else
   harnesses=()
   for f in "$B"/fuzz/fuzz_*; do
     n=${f##*/fuzz_}
-    [[ -x $f && $n != make_seeds ]] && harnesses+=("$n")
+    # mesh runs only when named: under ASan assimp's readers take seconds an input and
+    # leak or stall on malformed files inside assimp, so 20 s show assimp, not woven.
+    [[ -x $f && $n != make_seeds && $n != mesh ]] && harnesses+=("$n")
   done
 fi
 
@@ -53,6 +55,10 @@ for h in "${harnesses[@]}"; do
   exe="$B/fuzz/fuzz_$h"
   [[ -x $exe ]] || { echo "scripts/fuzz.sh: no harness '$h'" >&2; exit 1; }
   corpus="$B/corpus/$h" findings="$B/findings/$h" log="$B/logs/$h.log"
+  # mesh: leaks inside assimp's readers are assimp's (fuzz/lsan-assimp.supp); full stacks
+  # let the suppression see them.
+  lsan=() && [[ $h == mesh ]] && lsan=(env "LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan-assimp.supp"
+    "ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}fast_unwind_on_malloc=0")
   mkdir -p "$corpus" "$findings" "$B/logs" "$B/seeds/$h"
   rm -f "$findings"/*
   dirs=("$corpus" "$B/seeds/$h")
@@ -61,7 +67,7 @@ for h in "${harnesses[@]}"; do
   if [[ -d fuzz/regress/$h ]] && compgen -G "fuzz/regress/$h/*" >/dev/null; then
     regress=$(find "fuzz/regress/$h" -type f | wc -l)
     dirs+=("fuzz/regress/$h")
-    if ! "$exe" fuzz/regress/"$h"/* >"$B/logs/$h.regress.log" 2>&1; then
+    if ! "${lsan[@]}" "$exe" fuzz/regress/"$h"/* >"$B/logs/$h.regress.log" 2>&1; then
       echo "scripts/fuzz.sh: $h: a regression input fails (see $B/logs/$h.regress.log)" >&2
       tail -n 30 "$B/logs/$h.regress.log" >&2
       failed=1
@@ -74,7 +80,7 @@ for h in "${harnesses[@]}"; do
         -artifact_prefix="$findings/")
   case $h in params | scene | scene3d | safetensors | dataset | fit_checkpoint) opts+=(-dict=fuzz/json.dict) ;; esac
   set +e
-  "$exe" "${opts[@]}" "${dirs[@]}" >"$log" 2>&1
+  "${lsan[@]}" "$exe" "${opts[@]}" "${dirs[@]}" >"$log" 2>&1
   rc=$?
   set -e
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -n 1)
