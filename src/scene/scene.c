@@ -96,6 +96,13 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
   if ((st = only_keys(r, "", top, err))) return st;
   json_t *nm = json_object_get(r, "name");
   snprintf(s->name, sizeof s->name, "%s", json_is_string(nm) ? json_string_value(nm) : "custom");
+  /* a name cut to fit ends on a whole UTF-8 character, so that it can be written back */
+  size_t nl = strlen(s->name);
+  if (nl == sizeof s->name - 1) {
+    while (nl > 0 && ((unsigned char)s->name[nl - 1] & 0xC0) == 0x80) nl--;
+    if (nl > 0 && (unsigned char)s->name[nl - 1] >= 0xC0) nl--;
+    s->name[nl] = '\0';
+  }
 
   json_t *o = json_object_get(r, "image");
   if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'image'");
