@@ -1,15 +1,22 @@
 // woven's browser test (run by ctest): in Debian's headless Chromium (software
-// GL), per weave pattern on the flat45 capture scene,
-//   1. the viewer (`woven view`) renders the capture view; its screenshot is
-//      compared with `woven render` of the same scene: SSIM of 4-px Gaussian
-//      blurs of both (`woven compare --blur 4`) must reach 0.9;
+// GL), per weave pattern,
+//   1. on the flat45 capture scene, the viewer (`woven view`) renders the
+//      capture view; its screenshot is compared with `woven render` of the same
+//      scene: SSIM of 4-px Gaussian blurs of both (`woven compare --blur 4`)
+//      must reach 0.9;
 //   2. the glTF export (`woven export`) passes the Khronos validator with no
 //      error, and three.js's own loader and physical material render it in the
 //      same scene: its SSIM against woven's render is reported;
+//   3. on the flat swatch and on the draped sheet, the viewer's studio view with
+//      its key light alone is written as a `woven scene` file (camera, light,
+//      the page's own mesh, uv scale, response) and rendered by woven's path
+//      tracer: viewer vs that render must reach SSIM 0.9 (4-px blur); the glTF
+//      of the same mesh in three.js, same view, is reported against it;
 // and the viewer refuses out-of-range parameters visibly. Nothing is fetched:
 // the viewer is a file, the glTF page is served from web/ by request
 // interception, and any other request fails the test.
 // Usage: node browser.test.mjs WOVEN SOURCE_DIR [--patterns a,b,..] [--keep DIR] [--spp N]
+//        [--scene-spp N] [--size WxH]
 import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, writeFileSync, mkdirSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -22,6 +29,8 @@ const opt = (name, dflt) => { const i = args.indexOf(name); return i >= 0 ? args
 const [WOVEN, SRC] = args.map((a) => resolve(a));
 const patterns = opt('--patterns', 'plain,twill,satin').split(',');
 const spp = Number(opt('--spp', '16'));
+const cspp = Number(opt('--scene-spp', '16')); // woven scene's camera rays per pixel (x 4 yarn samples)
+const studioSize = opt('--size', '384x288').split('x').map(Number);
 const keep = opt('--keep', null);
 const work = keep ? resolve(keep) : mkdtempSync(join(tmpdir(), 'woven-browser-'));
 mkdirSync(work, { recursive: true });
@@ -59,7 +68,93 @@ await browser.route('**/*', (route) => {
   return route.fulfill({ status: 200, contentType: MIME[extname(file)] || 'application/octet-stream', body: readFileSync(file) });
 });
 
-const rows = [];
+// A float32 array from base64 (the page's meshes) or from a .glb's accessor.
+const f32 = (buf) => new Float32Array(buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.byteLength));
+function glbPositions(file) {
+  const b = readFileSync(file), jlen = b.readUInt32LE(12);
+  const j = JSON.parse(b.subarray(20, 20 + jlen).toString('utf8'));
+  const bin = b.subarray(20 + jlen + 8);
+  const acc = j.accessors[j.meshes[0].primitives[0].attributes.POSITION], bv = j.bufferViews[acc.bufferView];
+  const off = (bv.byteOffset || 0) + (acc.byteOffset || 0);
+  return f32(bin.subarray(off, off + 12 * acc.count));
+}
+
+// The page's mesh as an OBJ with exactly its float vertices (printed in full:
+// they read back bit for bit), normals and UVs. The viewer takes fabric y = -v
+// (its bitangent points along -dP/dv); woven scene takes fabric y = +v, so the
+// file carries -v: the same fabric point at every vertex, the same frame.
+function writeObj(mesh, file) {
+  const p = f32(Buffer.from(mesh.positions, 'base64')), n = f32(Buffer.from(mesh.normals, 'base64'));
+  const uv = f32(Buffer.from(mesh.uvs, 'base64')), ib = Buffer.from(mesh.indices, 'base64');
+  const idx = new Uint32Array(ib.buffer.slice(ib.byteOffset, ib.byteOffset + ib.byteLength));
+  const out = ['# woven viewer mesh (metres)'];
+  for (let i = 0; i < p.length; i += 3) out.push(`v ${p[i]} ${p[i + 1]} ${p[i + 2]}`);
+  for (let i = 0; i < n.length; i += 3) out.push(`vn ${n[i]} ${n[i + 1]} ${n[i + 2]}`);
+  for (let i = 0; i < uv.length; i += 2) out.push(`vt ${uv[i]} ${-uv[i + 1]}`);
+  for (let i = 0; i < idx.length; i += 3) {
+    const [a, b, c] = [idx[i] + 1, idx[i + 1] + 1, idx[i + 2] + 1];
+    out.push(`f ${a}/${a}/${a} ${b}/${b}/${b} ${c}/${c}/${c}`);
+  }
+  writeFileSync(file, out.join('\n') + '\n');
+  return p;
+}
+
+// woven scene's file for the viewer's studio view v (woven.view() with
+// ?lights=point): its camera, its key light, its mesh and uv scale, direct light
+// only, the studio display (exposure, clip at 1, sRGB). The page works in
+// metres, scenes in millimetres: positions x 1000, intensity x 1000^2 (I / r^2).
+function studioScene(v, params, obj, uvMm, cspp) {
+  const mm = (a) => a.map((x) => 1000 * x);
+  return {
+    name: `viewer-${v.mode}`,
+    image: { width: v.size[0], height: v.size[1], spp: cspp },
+    camera: { position_mm: mm(v.camera.position), look_at_mm: mm(v.camera.target), up: v.camera.up, vfov_deg: v.camera.fov },
+    lights: [{ type: 'point', position_mm: mm(v.light.position), intensity: v.light.intensity * 1e6 }],
+    materials: { fabric: { fabric: params, uv_mm: [uvMm, uvMm] } },
+    objects: [{ mesh: obj, material: 'fabric', transform: { scale: 1000 } }],
+    render: { max_bounces: 0, yarn_samples: 4, seed: 1 },
+    response: { exposure: v.exposure, clip: 1, encoding: 'srgb' },
+    falloff: { type: 'none' },
+  };
+}
+
+// One studio view (swatch or drape) of one pattern, key light alone: the viewer,
+// woven scene of the same view, and the glTF of the same mesh in three.js.
+async function studioCompare(pat, params, html, mode) {
+  const base = join(work, `${pat}_${mode}`), glb = `${base}.glb`;
+  woven('export', params, '--gltf', glb, '--texture', '32', '-q',
+        ...(mode === 'drape' ? ['--mesh', 'drape'] : ['--mesh', 'quad', '--size-mm', '20']));
+  const page = await browser.newPage();
+  page.on('pageerror', (e) => fail(`${pat} ${mode} viewer: ${e.message}`));
+  await page.goto(`file://${html}?mode=${mode}&lights=point&w=${studioSize[0]}&h=${studioSize[1]}`);
+  await page.waitForFunction(() => window.woven !== undefined, null, { timeout: 60000 });
+  const t1 = Date.now();
+  await page.evaluate((s) => window.woven.render({ frames: 1, spp: s }), spp);
+  const ms = Date.now() - t1;
+  const v = `${base}_viewer.png`, t = `${base}_gltf.png`, c = `${base}_c.png`;
+  png(await page.evaluate(() => window.woven.snapshot()), v);
+  const view = await page.evaluate(() => window.woven.view());
+  const mesh = await page.evaluate((m) => JSON.parse(document.getElementById('woven-data').textContent).meshes[m], mode);
+  await page.close();
+  if (view.backdrop || Math.abs(view.camera.aspect - view.size[0] / view.size[1]) > 1e-12)
+    fail(`${pat} ${mode}: the view is not the key light alone at the canvas's aspect`);
+  // The mesh woven scene renders is the page's, and the page's is the export's.
+  const pos = writeObj(mesh, `${base}.obj`), gpos = glbPositions(glb);
+  if (pos.length !== gpos.length || pos.some((x, i) => x !== gpos[i]))
+    fail(`${pat} ${mode}: the viewer's mesh differs from woven export's`);
+  writeFileSync(`${base}_scene.json`, JSON.stringify(studioScene(view, params, `${base}.obj`, mesh.uv_mm, cspp), null, 1));
+  const t2 = Date.now();
+  woven('scene', `${base}_scene.json`, '-o', c, '-q');
+  const cms = Date.now() - t2;
+  png(await gpage.evaluate(([u, vw]) => window.renderGltfView(u, vw), [`http://woven.test/work/${pat}_${mode}.glb`, view]), t);
+  const sv = compare(c, v), sg = compare(c, t), rv = compare(c, v, 0), rg = compare(c, t, 0), gv = compare(v, t);
+  if (!(sv.ssim >= 0.9)) fail(`${pat} ${mode}: viewer vs woven scene SSIM ${sv.ssim.toFixed(4)} < 0.9`);
+  return { pattern: pat, mode, viewer_ssim_blur4: sv.ssim, viewer_mae_blur4: sv.mae, viewer_ssim: rv.ssim, viewer_mae: rv.mae,
+           gltf_ssim_blur4: sg.ssim, gltf_mae_blur4: sg.mae, gltf_ssim: rg.ssim, gltf_mae: rg.mae,
+           gltf_vs_viewer_ssim_blur4: gv.ssim, viewer_ms: ms, scene_ms: cms, vertices: pos.length / 3 };
+}
+
+const rows = [], studio = [];
 const flat45 = JSON.parse(readFileSync(join(SRC, 'scenes/flat45.json'), 'utf8'));
 const gpage = await browser.newPage();
 gpage.on('pageerror', (e) => fail(`glTF page: ${e.message}`));
@@ -106,30 +201,9 @@ for (const pat of patterns) {
               gltf_ssim_blur4: sg.ssim, gltf_mae_blur4: sg.mae, gltf_ssim: rg.ssim, bake_relative_residual: exp.fit.relative,
               validator_errors: report.issues.numErrors, validator_warnings: report.issues.numWarnings });
   if (!(sv.ssim >= 0.9)) fail(`${pat}: viewer vs woven render SSIM ${sv.ssim.toFixed(4)} < 0.9`);
+  for (const mode of ['swatch', 'drape']) studio.push(await studioCompare(pat, params, html, mode));
 }
 
-// The draped sheet (first pattern): the viewer's true model against the glTF of
-// the same mesh in three.js, one point light, the viewer's camera. No woven
-// render of a mesh exists yet to compare both with; this says how far the
-// baked approximation is from the true model there.
-const drape = {};
-{
-  const pat = patterns[0], html = join(work, `${pat}.html`), glb = join(work, `${pat}_drape.glb`);
-  woven('export', join(SRC, 'examples', `${pat}.json`), '--gltf', glb, '--mesh', 'drape', '--texture', '32', '-q');
-  const page = await browser.newPage();
-  page.on('pageerror', (e) => fail(`${pat} drape viewer: ${e.message}`));
-  await page.goto(`file://${html}?mode=drape&lights=point&w=384&h=288`);
-  await page.waitForFunction(() => window.woven !== undefined, null, { timeout: 60000 });
-  await page.evaluate((s) => window.woven.render({ frames: 1, spp: s }), spp);
-  const v = join(work, `${pat}_drape_viewer.png`), t = join(work, `${pat}_drape_gltf.png`);
-  png(await page.evaluate(() => window.woven.snapshot()), v);
-  const view = await page.evaluate(() => window.woven.view());
-  await page.close();
-  png(await gpage.evaluate(([u, vw]) => window.renderGltfView(u, vw), [`http://woven.test/work/${pat}_drape.glb`, view]), t);
-  const s = compare(v, t);
-  Object.assign(drape, { pattern: pat, gltf_vs_viewer_ssim_blur4: s.ssim, gltf_vs_viewer_mae_blur4: s.mae });
-  writeFileSync(join(work, 'drape_pattern.txt'), pat);
-}
 await browser.close();
 rmSync(profile, { recursive: true, force: true });
 if (!keep) rmSync(work, { recursive: true, force: true });
@@ -141,7 +215,11 @@ for (const r of rows)
   console.log(`${r.pattern.padEnd(9)} ${f(r.viewer_ssim_blur4)} ${f(r.viewer_mae_blur4)} ${f(r.viewer_ssim)}   ` +
               `${f(r.gltf_ssim_blur4)} ${f(r.gltf_mae_blur4)} ${f(r.gltf_ssim)}   ${(100 * r.bake_relative_residual).toFixed(1).padStart(9)} %` +
               `   ${String(r.viewer_ms).padStart(8)}`);
-console.log(`draped sheet (${drape.pattern}): glTF in three.js vs the viewer, SSIM ${drape.gltf_vs_viewer_ssim_blur4.toFixed(4)} (4-px blur)`);
-console.log(JSON.stringify({ renderer: rendererName, spp, seconds: (Date.now() - t0) / 1000, results: rows, drape }));
+console.log(`studio views (${studioSize.join(' x ')}, key light alone) against woven scene of the same view:`);
+console.log('pattern   view     viewer: SSIM    MAE   SSIM raw  MAE raw | glTF: SSIM    MAE   SSIM raw  MAE raw | viewer ms | scene ms');
+for (const r of studio)
+  console.log(`${r.pattern.padEnd(9)} ${r.mode.padEnd(7)} ${f(r.viewer_ssim_blur4)} ${f(r.viewer_mae_blur4)} ${f(r.viewer_ssim)} ${f(r.viewer_mae)}   ` +
+              `${f(r.gltf_ssim_blur4)} ${f(r.gltf_mae_blur4)} ${f(r.gltf_ssim)} ${f(r.gltf_mae)}   ${String(r.viewer_ms).padStart(8)}   ${String(r.scene_ms).padStart(7)}`);
+console.log(JSON.stringify({ renderer: rendererName, spp, seconds: (Date.now() - t0) / 1000, scene_spp: cspp, results: rows, studio }));
 console.log(failures ? `${failures} failed` : 'all passed');
 process.exit(failures ? 1 : 0);

@@ -1,7 +1,8 @@
 // Makes the docs' pictures (docs/figures/) in Debian's headless Chromium:
 //   flat45_<pattern>.png  centre crops, 3x: woven render | viewer | glTF in three.js
 //                         (from the images `web/test/browser.test.mjs --keep DIR` leaves)
-//   drape_<pattern>.png   the draped sheet: viewer | glTF in three.js, one point light
+//   drape_<pattern>.png   the draped sheet (the first pattern), key light alone:
+//                         woven scene | viewer | glTF in three.js
 //   viewer_ui.png         the viewer's page: the draped sheet under the studio lights
 // Usage: node web/tools/figures.mjs WOVEN SOURCE_DIR KEEP_DIR [patterns...]
 import { execFileSync } from 'node:child_process';
@@ -49,9 +50,10 @@ for (const p of patterns) {
   await panel(join(out, `flat45_${p}.png`), ['c', 'viewer', 'gltf'].map((s) => join(KEEP, `${p}_${s}.png`)),
               ['woven render (C, 64 spp)', 'viewer (WebGL, 4 spp)', 'glTF in three.js'], [208, 208, 96, 96], 3);
 }
-const dp = readFileSync(join(KEEP, 'drape_pattern.txt'), 'utf8').trim();
-await panel(join(out, `drape_${dp}.png`), [join(KEEP, `${dp}_drape_viewer.png`), join(KEEP, `${dp}_drape_gltf.png`)],
-            ['viewer: the true model', 'glTF in three.js: the baked approximation'], [0, 0, 384, 288], 1);
+const dp = patterns[0];
+await panel(join(out, `drape_${dp}.png`), ['c', 'viewer', 'gltf'].map((s) => join(KEEP, `${dp}_drape_${s}.png`)),
+            ['woven scene (C path tracer)', 'viewer: the true model', 'glTF in three.js: the baked approximation'],
+            [0, 0, 384, 288], 1);
 
 const html = join(work, 'satin.html');
 if (process.env.WOVEN_FIGURES_NO_UI) { // the panels only

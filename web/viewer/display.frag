@@ -1,7 +1,8 @@
 // woven viewer: from accumulated radiance to the screen. In the capture rig it
 // is the scene's sensor response, mirrored from src/scene/response.c (exposure,
 // clip, encoding, Gaussian falloff mask about the image centre); in the studio
-// an exposure, a clip at 1 and sRGB encoding over a grey backdrop. The left part
+// an exposure, a clip at 1 and sRGB encoding over a grey backdrop (black with the
+// key light alone, as woven scene shows nothing where no light is). The left part
 // of the picture (uSplit) may show the photo instead.
 precision highp float;
 in vec2 vUv;
@@ -12,6 +13,7 @@ uniform bool uRig;
 uniform float uExposure, uClip, uGamma, uSigma;
 uniform int uEncoding;        // 0 linear, 1 sRGB, 2 gamma (wv_encoding)
 uniform bool uFalloff;
+uniform bool uBackdrop;       // studio: the grey backdrop behind the fabric
 uniform vec2 uSize;           // image size in pixels
 uniform sampler2D uPhoto;
 uniform float uSplit;         // fraction of the width showing the photo
@@ -39,7 +41,7 @@ void main() {
   } else {
     vec3 v = min(a.rgb * uExposure, vec3(1.0));
     vec3 fab = vec3(encode(v.r), encode(v.g), encode(v.b));
-    vec3 bg = mix(vec3(0.16), vec3(0.30), vUv.y);
+    vec3 bg = uBackdrop ? mix(vec3(0.16), vec3(0.30), vUv.y) : vec3(0.0);
     c = mix(bg, fab, clamp(a.a, 0.0, 1.0));
   }
   if (vUv.x < uSplit) c = texture(uPhoto, vec2(vUv.x, 1.0 - vUv.y)).rgb;

@@ -12,6 +12,7 @@
 precision highp float;
 precision highp int;
 precision highp usampler2D;
+precision highp sampler2D;
 
 in vec3 vWorld;     // world position
 in vec3 vNormal;    // mesh: interpolated normal
@@ -49,6 +50,11 @@ uniform int uBoxes;
 uniform vec3 uBoxC[3], uBoxU[3], uBoxV[3];
 uniform float uBoxL[3];
 uniform float uAmbient;
+// The key light's shadow map (studio; see renderShadows in viewer.js).
+uniform bool uShadows;
+uniform sampler2D uShadowMap;   // distance from the light / far
+uniform mat4 uShadowMatrix;
+uniform float uShadowInvFar, uShadowBias;
 
 uniform int uSpp;               // samples this frame
 uniform int uFrame;             // frame index of the progressive accumulation
@@ -198,6 +204,15 @@ vec3 shadeLight(int ty, vec3 n, vec3 t, float us, vec3 wi, vec3 wo, float light)
   return light * (uKs[ty] * spec + uKd[ty] * diff);
 }
 
+// 0 where the shadow map has a surface nearer the key light than P, else 1.
+float keyVisible(vec3 P) {
+  if (!uShadows) return 1.0;
+  vec4 q = uShadowMatrix * vec4(P, 1.0);
+  vec2 uv = q.xy / q.w * 0.5 + 0.5;
+  if (q.w <= 0.0 || any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
+  return distance(P, uLightPos) * uShadowInvFar > texture(uShadowMap, uv).r + uShadowBias ? 0.0 : 1.0;
+}
+
 // A per-pixel random rotation of the sample sequence (a 32-bit integer hash).
 uint pcg(uint v) {
   uint s = v * 747796405u + 2891336453u;
@@ -244,7 +259,7 @@ void main() {
   vec3 V = normalize(uCamPos - P);
   vec3 wi = vec3(dot(l, T), dot(l, B), dot(l, N));
   vec3 wo = vec3(dot(V, T), dot(V, B), dot(V, N));
-  float light = uLightI / r2;
+  float light = uLightI / r2 * keyVisible(P);
 
   // Samples: the R2 low-discrepancy sequence (Roberts 2018) continued across
   // frames, rotated per pixel (Cranley-Patterson).

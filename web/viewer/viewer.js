@@ -137,6 +137,8 @@ const fabricUniforms = {
   uBoxes: { value: 0 }, uBoxC: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
   uBoxU: { value: [0, 1, 2].map(() => new THREE.Vector3()) }, uBoxV: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
   uBoxL: { value: [0, 0, 0] }, uAmbient: { value: 0 }, uSpp: { value: 4 }, uFrame: { value: 0 },
+  uShadows: { value: false }, uShadowMap: { value: null }, uShadowMatrix: { value: new THREE.Matrix4() },
+  uShadowInvFar: { value: 1 }, uShadowBias: { value: 0 },
 };
 for (const [k, v] of Object.entries(prepareFabric(params, seedWords))) fabricUniforms[k] = { value: v };
 const fabricMaterial = new THREE.RawShaderMaterial({
@@ -148,6 +150,57 @@ const fabricMesh = new THREE.Mesh(new THREE.BufferGeometry(), fabricMaterial);
 fabricMesh.frustumCulled = false;
 scene.add(fabricMesh);
 const camera = new THREE.PerspectiveCamera(35, 1, 0.01, 100);
+
+// The key light's shadows in the studio: the distance from the light to the
+// nearest surface, over the mesh's bounding sphere as the light sees it (both
+// sides of the cloth cast), stored as a fraction of the far plane; fabric.frag
+// darkens a point farther than that (plus a bias of 1% of the mesh's radius:
+// the map's texels are flat where the surface slopes). woven scene traces a
+// shadow ray to the point light; without this the viewer lit folds that the
+// cloth hides from the light. The soft boxes and the sky cast none.
+const SHADOW_SIZE = 1024;
+const shadowTarget = new THREE.WebGLRenderTarget(SHADOW_SIZE, SHADOW_SIZE, {
+  type: THREE.FloatType, format: THREE.RGBAFormat, minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
+  generateMipmaps: false, depthBuffer: true });
+const shadowMaterial = new THREE.RawShaderMaterial({
+  glslVersion: THREE.GLSL3, vertexShader: shader('woven-fabric-vert'), side: THREE.DoubleSide,
+  fragmentShader: `precision highp float;
+in vec3 vWorld;
+uniform vec3 uLightPos;
+uniform float uInvFar;
+out vec4 outColor;
+void main() { outColor = vec4(distance(vWorld, uLightPos) * uInvFar, 0.0, 0.0, 1.0); }`,
+  uniforms: { uLightPos: fabricUniforms.uLightPos, uInvFar: fabricUniforms.uShadowInvFar },
+});
+const shadowCamera = new THREE.PerspectiveCamera(30, 1, 0.01, 100);
+let shadowStale = true;
+function renderShadows() {
+  shadowStale = false;
+  const u = fabricUniforms, bs = fabricMesh.geometry.boundingSphere;
+  u.uShadows.value = false;
+  if (state.mode === 'rig' || !bs) return; // a plane or a cylinder seen from its light shadows nothing
+  const L = u.uLightPos.value, d = L.distanceTo(bs.center), R = bs.radius;
+  if (!(d > 1.02 * R)) return; // the light inside the mesh's sphere: no shadows
+  shadowCamera.position.copy(L);
+  shadowCamera.up.set(0, 1, 0);
+  if (Math.abs(new THREE.Vector3().subVectors(bs.center, L).normalize().y) > 0.99) shadowCamera.up.set(1, 0, 0);
+  shadowCamera.lookAt(bs.center);
+  shadowCamera.fov = 2 * Math.asin(Math.min(1, 1.02 * R / d)) * 180 / Math.PI;
+  shadowCamera.near = Math.max(d - 1.1 * R, 1e-3 * d), shadowCamera.far = d + 1.1 * R;
+  shadowCamera.updateProjectionMatrix();
+  shadowCamera.updateMatrixWorld();
+  u.uShadowMatrix.value.multiplyMatrices(shadowCamera.projectionMatrix, shadowCamera.matrixWorldInverse);
+  u.uShadowInvFar.value = 1 / shadowCamera.far;
+  u.uShadowBias.value = 0.01 * R / shadowCamera.far;
+  renderer.setRenderTarget(shadowTarget);
+  renderer.setClearColor(0xffffff, 1); // nothing in front: the far plane
+  renderer.clear(true, true, false);
+  scene.overrideMaterial = shadowMaterial;
+  renderer.render(scene, shadowCamera);
+  scene.overrideMaterial = null;
+  u.uShadowMap.value = shadowTarget.texture;
+  u.uShadows.value = true;
+}
 
 function screenPass(fragmentShader, uniforms) {
   const m = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), new THREE.RawShaderMaterial({
@@ -166,7 +219,7 @@ const photoTex = new THREE.Texture();
 const display = screenPass(shader('woven-display-frag'), {
   uAcc: { value: null }, uInvFrames: { value: 1 }, uRig: { value: true }, uExposure: { value: 1 }, uClip: { value: 1 },
   uGamma: { value: 2.2 }, uSigma: { value: 450 }, uEncoding: { value: 1 }, uFalloff: { value: false },
-  uSize: { value: new THREE.Vector2(1, 1) }, uPhoto: { value: photoTex }, uSplit: { value: 0 },
+  uSize: { value: new THREE.Vector2(1, 1) }, uBackdrop: { value: true }, uPhoto: { value: photoTex }, uSplit: { value: 0 },
 });
 const quadCamera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
 
@@ -263,6 +316,7 @@ function setMode(mode) {
       u.uBoxL.value[i] = b.L;
     });
     u.uAmbient.value = pointOnly ? 0 : 0.08;
+    display.uniforms.uBackdrop.value = !pointOnly; // the key light alone: nothing else, black behind
     renderer.setPixelRatio(url.get('w') ? 1 : Math.min(2, window.devicePixelRatio || 1));
     state.controls = new OrbitControls(camera, renderer.domElement);
     state.controls.target.copy(c);
@@ -292,6 +346,7 @@ function applyLight() {
   const L = state.light;
   fabricUniforms.uLightPos.value.copy(L.moved ? lightPosition(L, L.upZ) : L.pos);
   fabricUniforms.uLightI.value = L.intensity;
+  shadowStale = true;
   restart();
 }
 
@@ -301,6 +356,7 @@ function restart() { state.frame = 0; }
 function renderFrame() {
   const [cur, a, b] = targets;
   const prev = state.frame % 2 ? b : a, next = state.frame % 2 ? a : b;
+  if (shadowStale) renderShadows();
   fabricUniforms.uCamPos.value.copy(camera.position);
   fabricUniforms.uSpp.value = state.spp;
   fabricUniforms.uFrame.value = state.frame;
@@ -520,6 +576,7 @@ window.woven = {
               up: camera.up.toArray(), fov: camera.fov, aspect: camera.aspect },
     light: { position: fabricUniforms.uLightPos.value.toArray(), intensity: fabricUniforms.uLightI.value },
     exposure: display.uniforms.uExposure.value, size: state.size, mode: state.mode,
+    backdrop: display.uniforms.uBackdrop.value,
   }),
   setParam(key, value) { setP(params, key, value); applyParams(); return problems(params); },
   setMode,
