@@ -55,6 +55,7 @@ uniform bool uShadows;
 uniform sampler2D uShadowMap;   // distance from the light / far
 uniform mat4 uShadowMatrix;
 uniform float uShadowInvFar, uShadowBias;
+uniform float uShadowTexel;     // a texel's width per unit distance from the light
 
 uniform int uSpp;               // samples this frame
 uniform int uFrame;             // frame index of the progressive accumulation
@@ -205,8 +206,11 @@ vec3 shadeLight(int ty, vec3 n, vec3 t, float us, vec3 wi, vec3 wo, float light)
 }
 
 // 0 where the shadow map has a surface nearer the key light than P, else 1.
-float keyVisible(vec3 P) {
+// P moves off the surface along N by 1.5 texels: a texel is flat where the
+// surface slopes away from the light, and would shadow the surface itself.
+float keyVisible(vec3 P, vec3 N) {
   if (!uShadows) return 1.0;
+  P += N * (1.5 * uShadowTexel * distance(P, uLightPos));
   vec4 q = uShadowMatrix * vec4(P, 1.0);
   vec2 uv = q.xy / q.w * 0.5 + 0.5;
   if (q.w <= 0.0 || any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
@@ -259,7 +263,7 @@ void main() {
   vec3 V = normalize(uCamPos - P);
   vec3 wi = vec3(dot(l, T), dot(l, B), dot(l, N));
   vec3 wo = vec3(dot(V, T), dot(V, B), dot(V, N));
-  float light = uLightI / r2 * keyVisible(P);
+  float light = uLightI / r2 * keyVisible(P, N);
 
   // Samples: the R2 low-discrepancy sequence (Roberts 2018) continued across
   // frames, rotated per pixel (Cranley-Patterson).

@@ -138,7 +138,7 @@ const fabricUniforms = {
   uBoxU: { value: [0, 1, 2].map(() => new THREE.Vector3()) }, uBoxV: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
   uBoxL: { value: [0, 0, 0] }, uAmbient: { value: 0 }, uSpp: { value: 4 }, uFrame: { value: 0 },
   uShadows: { value: false }, uShadowMap: { value: null }, uShadowMatrix: { value: new THREE.Matrix4() },
-  uShadowInvFar: { value: 1 }, uShadowBias: { value: 0 },
+  uShadowInvFar: { value: 1 }, uShadowBias: { value: 0 }, uShadowTexel: { value: 0 },
 };
 for (const [k, v] of Object.entries(prepareFabric(params, seedWords))) fabricUniforms[k] = { value: v };
 const fabricMaterial = new THREE.RawShaderMaterial({
@@ -154,8 +154,8 @@ const camera = new THREE.PerspectiveCamera(35, 1, 0.01, 100);
 // The key light's shadows in the studio: the distance from the light to the
 // nearest surface, over the mesh's bounding sphere as the light sees it (both
 // sides of the cloth cast), stored as a fraction of the far plane; fabric.frag
-// darkens a point farther than that (plus a bias of 1% of the mesh's radius:
-// the map's texels are flat where the surface slopes). woven scene traces a
+// darkens a point farther than that (the point lifted off the surface by 1.5
+// texels, plus 0.2% of the mesh's radius). woven scene traces a
 // shadow ray to the point light; without this the viewer lit folds that the
 // cloth hides from the light. The soft boxes and the sky cast none.
 const SHADOW_SIZE = 1024;
@@ -191,7 +191,8 @@ function renderShadows() {
   shadowCamera.updateMatrixWorld();
   u.uShadowMatrix.value.multiplyMatrices(shadowCamera.projectionMatrix, shadowCamera.matrixWorldInverse);
   u.uShadowInvFar.value = 1 / shadowCamera.far;
-  u.uShadowBias.value = 0.01 * R / shadowCamera.far;
+  u.uShadowBias.value = 0.002 * R / shadowCamera.far;
+  u.uShadowTexel.value = 2 * Math.tan(shadowCamera.fov * Math.PI / 360) / SHADOW_SIZE;
   renderer.setRenderTarget(shadowTarget);
   renderer.setClearColor(0xffffff, 1); // nothing in front: the far plane
   renderer.clear(true, true, false);
