@@ -36,7 +36,7 @@ static void camera(wv_image *img, double blur, double noise, uint64_t seed) {
   wv_error e = {0};
   if (blur > 0) {
     wv_image b;
-    if (wv_image_gaussian(img, blur, &b, &e)) die(&e);
+    if (wv_image_blur(img, blur, &b, &e)) die(&e);
     wv_image_free(img);
     *img = b;
   }

@@ -50,6 +50,7 @@ typedef struct {
 /* What one capture gave. */
 typedef struct {
   char chosen[16];
+  char lattice_choice[16]; /* the family's best pattern by the lattice and render match alone */
   const char *method;
   wv_params start, fit;
   wv_scene fit_scene; /* the scene with the registration's offset */
@@ -72,6 +73,9 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
     if (wv_fabricnet_predict_pattern(st->net, st->d, st->s, photo, NULL, y, pc, &err)) die(&err);
     c->start = pc->params[pc->best];
     c->method = pc->method;
+    /* no family tie and no pattern tie: the lattice and render match decide alone */
+    int lb = pc->lattice.found ? wv_pattern_decide(pc, 0.0, -1.0, NULL) : pc->best;
+    snprintf(c->lattice_choice, sizeof c->lattice_choice, "%s", wv_weave_builtin_name(lb >= 0 ? lb : pc->best));
     c->choice_seconds = pc->seconds;
     free(pc);
   }
@@ -85,19 +89,20 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
   c->seconds = bench_now() - t0;
 }
 
-/* SSIM (RGB and luminance) and WSC of a full-quality render of p in s against ref; with
- * blur > 0 also both of the render blurred by that sigma (blurred[0] SSIM, [1] WSC). */
+/* SSIM (RGB and luminance), WSC and whitened WSC (wsc[0], wsc[1]) of a full-quality render
+ * of p in s against ref; with blur > 0 also SSIM and WSC of the render blurred by that
+ * sigma (blurred[0] SSIM, [1] WSC). */
 static void measure(const wv_scene *s, const wv_params *p, const wv_image *ref, int threads, double *ssim_rgb,
-                    double *ssim_luma, double *wsc, double blur, double blurred[2]) {
+                    double *ssim_luma, double wsc[2], double blur, double blurred[2]) {
   wv_render_opts ro = {0, threads, NULL, NULL, NULL};
   wv_image img, b;
   wv_error err = {0};
   if (wv_render(s, p, &ro, &img, NULL, &err)) die(&err);
   if (wv_ssim(ref, &img, WV_SSIM_RGB, ssim_rgb, &err) || (ssim_luma && wv_ssim(ref, &img, WV_SSIM_LUMA, ssim_luma, &err)) ||
-      wv_wsc(ref, &img, wsc, &err))
+      wv_wsc(ref, &img, &wsc[0], &err) || wv_wsc_whitened(ref, &img, &wsc[1], &err))
     die(&err);
   if (blur > 0) {
-    if (wv_image_gaussian(&img, blur, &b, &err) || wv_ssim(ref, &b, WV_SSIM_RGB, &blurred[0], &err) ||
+    if (wv_image_blur(&img, blur, &b, &err) || wv_ssim(ref, &b, WV_SSIM_RGB, &blurred[0], &err) ||
         wv_wsc(ref, &b, &blurred[1], &err))
       die(&err);
     wv_image_free(&b);
@@ -105,8 +110,8 @@ static void measure(const wv_scene *s, const wv_params *p, const wv_image *ref, 
   wv_image_free(&img);
 }
 
-/* WSC of the four quadrants of img against each other: the mean of the six pairs. */
-static double wsc_quadrants(const wv_image *img) {
+/* WSC (whitened: 1) of the four quadrants of img against each other: the mean of the six pairs. */
+static double wsc_quadrants(const wv_image *img, int whitened) {
   int h = img->w < img->h ? img->w / 2 : img->h / 2;
   wv_image q[4];
   wv_error err = {0};
@@ -118,7 +123,7 @@ static double wsc_quadrants(const wv_image *img) {
   double sum = 0, v;
   for (int a = 0; a < 4; a++)
     for (int b = a + 1; b < 4; b++) {
-      if (wv_wsc(&q[a], &q[b], &v, &err)) die(&err);
+      if ((whitened ? wv_wsc_whitened : wv_wsc)(&q[a], &q[b], &v, &err)) die(&err);
       sum += v;
     }
   for (int k = 0; k < 4; k++) wv_image_free(&q[k]);
@@ -152,8 +157,9 @@ static int synthetic(const study *st, int per, const char **pats, int np, uint64
   wv_error err = {0};
   const wv_scene *s = st->s;
   double sum_fit = 0, sum_start = 0, sum_ceil = 0, sum_ratio = 0, sum_wsc = 0, sum_wsc_ceil = 0, sum_t = 0;
+  double sum_wscw = 0, sum_wscw_ceil = 0;
   double pat_fit[MAXP] = {0}, pat_ceil[MAXP] = {0}, pat_wsc[MAXP] = {0};
-  int pat_fam[MAXP] = {0}, fam_right = 0, n = 0, two = 0;
+  int pat_fam[MAXP] = {0}, fam_right = 0, lat_right = 0, n = 0, two = 0;
   double two_fit = 0, two_ceil = 0;
   for (int k = 0; k < np; k++)
     for (int i = 0; i < per; i++) {
@@ -169,23 +175,26 @@ static int synthetic(const study *st, int per, const char **pats, int np, uint64
       capture c;
       if (prior_start && wv_params_default(pats[k], &prior, &err)) die(&err);
       run_capture(st, &photo, prior_start ? &prior : NULL, &c);
-      double s0, s1, sc, w0, w1, wc;
-      measure(s, &c.start, &photo, st->o.threads, &s0, NULL, &w0, 0, NULL);
-      measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &s1, NULL, &w1, 0, NULL);
+      double s0, s1, sc, w0[2], w1[2], wc[2];
+      measure(s, &c.start, &photo, st->o.threads, &s0, NULL, w0, 0, NULL);
+      measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &s1, NULL, w1, 0, NULL);
       /* the ceiling: the truth with the fit's noise seed */
       wv_params oracle = target;
       oracle.seed = c.fit.seed;
-      measure(s, &oracle, &photo, st->o.threads, &sc, NULL, &wc, 0, NULL);
+      measure(s, &oracle, &photo, st->o.threads, &sc, NULL, wc, 0, NULL);
       int fam_ok = !strcmp(family(c.chosen), family(pats[k]));
-      fam_right += fam_ok, pat_fam[k] += fam_ok;
-      sum_fit += s1, sum_start += s0, sum_ceil += sc, sum_ratio += s1 / sc, sum_wsc += w1, sum_wsc_ceil += wc;
+      int lat_ok = !prior_start && !strcmp(family(c.lattice_choice), family(pats[k]));
+      fam_right += fam_ok, pat_fam[k] += fam_ok, lat_right += lat_ok;
+      sum_fit += s1, sum_start += s0, sum_ceil += sc, sum_ratio += s1 / sc, sum_wsc += w1[0], sum_wsc_ceil += wc[0];
+      sum_wscw += w1[1], sum_wscw_ceil += wc[1];
       sum_t += c.seconds;
-      pat_fit[k] += s1, pat_ceil[k] += sc, pat_wsc[k] += w1;
+      pat_fit[k] += s1, pat_ceil[k] += sc, pat_wsc[k] += w1[0];
       if (denim) two++, two_fit += s1, two_ceil += sc;
       n++;
-      printf("%-12s %d%s -> %-12s %-5s SSIM start %.4f fit %.4f ceiling %.4f (%.3f)  WSC fit %.3f ceiling %.3f  "
+      printf("%-12s %d%s -> %-12s %-5s (lattice alone %-12s %-5s) SSIM start %.4f fit %.4f ceiling %.4f (%.3f)  WSC fit %.3f ceiling %.3f  whitened %.3f / %.3f  "
              "density %.1f/%.1f (truth %.0f/%.0f)  %.1f s\n",
-             pats[k], i, denim ? " two-colour" : "", c.chosen, fam_ok ? "ok" : "WRONG", s0, s1, sc, s1 / sc, w1, wc,
+             pats[k], i, denim ? " two-colour" : "", c.chosen, fam_ok ? "ok" : "WRONG", c.lattice_choice,
+             lat_ok ? "ok" : "WRONG", s0, s1, sc, s1 / sc, w1[0], wc[0], w1[1], wc[1],
              c.fit.density[0], c.fit.density[1], target.density[0], target.density[1], c.seconds);
       fflush(stdout);
       wv_image_free(&photo);
@@ -194,10 +203,12 @@ static int synthetic(const study *st, int per, const char **pats, int np, uint64
          "\"iters\": %d, \"iter_spp\": %d, \"iter_scale\": %d, \"ssim\": \"rgb\", \"ssim_start_mean\": %.4f, "
          "\"ssim_fit_mean\": %.4f, \"ssim_ceiling_mean\": %.4f, \"fit_over_ceiling\": %.4f, "
          "\"mean_fit_over_ceiling\": %.4f, \"two_colour_fit_over_ceiling\": %.4f, \"wsc_fit_mean\": %.4f, "
-         "\"wsc_ceiling_mean\": %.4f, \"family_right\": %.4f, \"capture_s_mean\": %.1f, \"per_pattern_results\": {",
+         "\"wsc_ceiling_mean\": %.4f, \"wsc_whitened_fit_mean\": %.4f, \"wsc_whitened_ceiling_mean\": %.4f, "
+         "\"family_right\": %.4f, \"family_right_lattice_alone\": %.4f, \"capture_s_mean\": %.1f, "
+         "\"per_pattern_results\": {",
          s->name, prior_start ? "prior" : "network", n, per, st->o.iters, st->o.iter_spp, st->o.iter_scale,
          sum_start / n, sum_fit / n, sum_ceil / n, sum_fit / sum_ceil, sum_ratio / n, two ? two_fit / two_ceil : 0.0,
-         sum_wsc / n, sum_wsc_ceil / n, (double)fam_right / n, sum_t / n);
+         sum_wsc / n, sum_wsc_ceil / n, sum_wscw / n, sum_wscw_ceil / n, (double)fam_right / n, (double)lat_right / n, sum_t / n);
   for (int k = 0; k < np; k++)
     printf("%s\"%s\": {\"ssim_fit\": %.4f, \"ceiling\": %.4f, \"wsc_fit\": %.4f, \"family_right\": %d}", k ? ", " : "",
            pats[k], pat_fit[k] / per, pat_ceil[k] / per, pat_wsc[k] / per, pat_fam[k]);
@@ -214,7 +225,7 @@ static int real(const study *st, const char *dir) {
   }
   char json[16384] = "";
   size_t jl = 0;
-  double sum[5] = {0};
+  double sum[7] = {0};
   int fam_right = 0, counted = 0;
   for (int i = 0; i < n; i++) {
     char named[32] = ""; /* the weave the file name gives: its family is the truth */
@@ -226,37 +237,41 @@ static int real(const study *st, const char *dir) {
     wv_error err = {0};
     if (wv_photo_load(path, st->s, NULL, &photo, NULL, &err)) die(&err);
     double base;
-    if (wv_image_gaussian(&photo, 4.0, &blurred, &err) || wv_ssim(&photo, &blurred, WV_SSIM_RGB, &base, &err)) die(&err);
+    if (wv_image_blur(&photo, 4.0, &blurred, &err) || wv_ssim(&photo, &blurred, WV_SSIM_RGB, &base, &err)) die(&err);
     wv_image_free(&blurred);
     capture c;
     run_capture(st, &photo, NULL, &c);
-    double s0, s1, l0, l1, w0, w1, bl[2], quads = wsc_quadrants(&photo);
-    measure(st->s, &c.start, &photo, st->o.threads, &s0, &l0, &w0, 0, NULL);
-    measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &s1, &l1, &w1, 0.8, bl);
+    double s0, s1, l0, l1, w0[2], w1[2], bl[2], quads = wsc_quadrants(&photo, 0), quadsw = wsc_quadrants(&photo, 1);
+    measure(st->s, &c.start, &photo, st->o.threads, &s0, &l0, w0, 0, NULL);
+    measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &s1, &l1, w1, 0.8, bl);
     int known = wv_weave_is_builtin(named), ok = known && !strcmp(family(named), family(c.chosen));
     fam_right += ok, counted += known;
-    sum[0] += base, sum[1] += s0, sum[2] += s1, sum[3] += w0, sum[4] += w1;
-    printf("%-14s -> %-12s (%s, family %s)  blurred copy SSIM %.4f, quadrants WSC %.3f | SSIM start %.4f fit %.4f "
-           "(luminance %.4f -> %.4f) | WSC start %.3f fit %.3f | fit blurred 0.8 px: SSIM %.4f WSC %.3f | %.1f s\n",
-           names[i], c.chosen, c.method, !known ? "?" : ok ? "right" : "WRONG", base, quads, s0, s1, l0, l1, w0, w1,
-           bl[0], bl[1], c.seconds);
+    sum[0] += base, sum[1] += s0, sum[2] += s1, sum[3] += w0[0], sum[4] += w1[0], sum[5] += w0[1], sum[6] += w1[1];
+    printf("%-14s -> %-12s (%s, family %s; lattice alone %s)  blurred copy SSIM %.4f, quadrants WSC %.3f "
+           "(whitened %.3f) | SSIM start %.4f fit %.4f (luminance %.4f -> %.4f) | WSC start %.3f fit %.3f | "
+           "whitened WSC start %.3f fit %.3f | fit blurred 0.8 px: SSIM %.4f WSC %.3f | %.1f s\n",
+           names[i], c.chosen, c.method, !known ? "?" : ok ? "right" : "WRONG", c.lattice_choice, base, quads, quadsw,
+           s0, s1, l0, l1, w0[0], w1[0], w0[1], w1[1], bl[0], bl[1], c.seconds);
     fflush(stdout);
     jl += (size_t)snprintf(json + jl, sizeof json - jl,
                            "%s{\"file\": \"%s\", \"chosen\": \"%s\", \"family_right\": %s, \"method\": \"%s\", "
-                           "\"blurred_copy_ssim\": %.4f, \"wsc_quadrants\": %.4f, \"ssim_start\": %.4f, "
-                           "\"ssim_fit\": %.4f, \"fit_blurred_0.8px\": {\"ssim\": %.4f, \"wsc\": %.4f}, "
-                           "\"ssim_luma_start\": %.4f, \"ssim_luma_fit\": %.4f, \"wsc_start\": %.4f, \"wsc_fit\": %.4f, "
-                           "\"density\": [%.1f, %.1f], \"capture_s\": %.1f, \"choice_s\": %.1f}",
-                           i ? ", " : "", names[i], c.chosen, !known ? "null" : ok ? "true" : "false", c.method, base,
-                           quads, s0, s1, bl[0], bl[1], l0, l1, w0, w1, c.fit.density[0], c.fit.density[1], c.seconds,
-                           c.choice_seconds);
+                           "\"lattice_alone\": \"%s\", \"blurred_copy_ssim\": %.4f, \"wsc_quadrants\": %.4f, "
+                           "\"wsc_whitened_quadrants\": %.4f, \"ssim_start\": %.4f, \"ssim_fit\": %.4f, "
+                           "\"fit_blurred_0.8px\": {\"ssim\": %.4f, \"wsc\": %.4f}, \"ssim_luma_start\": %.4f, "
+                           "\"ssim_luma_fit\": %.4f, \"wsc_start\": %.4f, \"wsc_fit\": %.4f, \"wsc_whitened_start\": %.4f, "
+                           "\"wsc_whitened_fit\": %.4f, \"density\": [%.1f, %.1f], \"capture_s\": %.1f, \"choice_s\": %.1f}",
+                           i ? ", " : "", names[i], c.chosen, !known ? "null" : ok ? "true" : "false", c.method,
+                           c.lattice_choice, base, quads, quadsw, s0, s1, bl[0], bl[1], l0, l1, w0[0], w1[0], w0[1], w1[1],
+                           c.fit.density[0], c.fit.density[1], c.seconds, c.choice_seconds);
     if (jl >= sizeof json) jl = sizeof json - 1;
     wv_image_free(&photo);
   }
   printf("{\"mode\": \"real\", \"scene\": \"%s\", \"iters\": %d, \"ssim\": \"rgb\", \"photos\": [%s], "
          "\"blurred_copy_ssim_mean\": %.4f, \"ssim_start_mean\": %.4f, \"ssim_fit_mean\": %.4f, \"wsc_start_mean\": %.4f, "
-         "\"wsc_fit_mean\": %.4f, \"family_right\": %d, \"count\": %d}\n",
-         st->s->name, st->o.iters, json, sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n, sum[4] / n, fam_right, counted);
+         "\"wsc_fit_mean\": %.4f, \"wsc_whitened_start_mean\": %.4f, \"wsc_whitened_fit_mean\": %.4f, "
+         "\"family_right\": %d, \"count\": %d}\n",
+         st->s->name, st->o.iters, json, sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n, sum[4] / n, sum[5] / n,
+         sum[6] / n, fam_right, counted);
   return 0;
 }
 

@@ -62,7 +62,7 @@ int cmd_compare(int argc, char **argv) {
       wv_image_free(&im[0]);
       return cli_fail(&c, &err);
     }
-  double ssim = 0, mae = 0, wsc = 0;
+  double ssim = 0, mae = 0, wsc = 0, wscw = 0;
   wv_status st = WV_OK;
   for (int i = 0; i < 2 && blur > 0 && !st; i++) {
     wv_image b;
@@ -75,6 +75,7 @@ int cmd_compare(int argc, char **argv) {
   if (!st) st = wv_mae(&im[0], &im[1], &mae, &err);
   int has_wsc = im[0].w >= 32 && im[0].h >= 32;
   if (!st && has_wsc) st = wv_wsc(&im[0], &im[1], &wsc, &err);
+  if (!st && has_wsc) st = wv_wsc_whitened(&im[0], &im[1], &wscw, &err);
   wv_image_free(&im[0]);
   wv_image_free(&im[1]);
   if (st) {
@@ -82,11 +83,13 @@ int cmd_compare(int argc, char **argv) {
     return cli_fail(&c, &err);
   }
   if (c.json)
-    cli_print_json(json_pack("{s:o,s:o,s:o,s:s,s:o,s:o,s:o}", "a", cli_str(files[0]), "b", cli_str(files[1]), "ssim", cli_real(ssim, 6),
+    cli_print_json(json_pack("{s:o,s:o,s:o,s:s,s:o,s:o,s:o,s:o}", "a", cli_str(files[0]), "b", cli_str(files[1]), "ssim", cli_real(ssim, 6),
                              "ssim_channels", mode == WV_SSIM_LUMA ? "luma" : "rgb", "wsc",
-                             has_wsc ? cli_real(wsc, 6) : json_null(), "mae", cli_real(mae, 6), "blur", cli_real(blur, 6)));
+                             has_wsc ? cli_real(wsc, 6) : json_null(), "wsc_whitened",
+                             has_wsc ? cli_real(wscw, 6) : json_null(), "mae", cli_real(mae, 6), "blur", cli_real(blur, 6)));
   else if (!c.quiet && has_wsc)
-    printf("SSIM (%s) %.4f  WSC %.4f  MAE %.5f\n", mode == WV_SSIM_LUMA ? "luma" : "rgb", ssim, wsc, mae);
+    printf("SSIM (%s) %.4f  WSC %.4f  whitened WSC %.4f  MAE %.5f\n", mode == WV_SSIM_LUMA ? "luma" : "rgb", ssim, wsc,
+           wscw, mae);
   else if (!c.quiet)
     printf("SSIM (%s) %.4f  MAE %.5f\n", mode == WV_SSIM_LUMA ? "luma" : "rgb", ssim, mae);
   return 0;

@@ -87,6 +87,49 @@ static void test_wsc(void **state) {
   wv_image_free(&ta), wv_image_free(&tiny), wv_image_free(&grey);
 }
 
+/* Whitened WSC looks at the peaks alone: two crops of one weave score high, and still
+ * high when one is blurred (a radial envelope is divided out), where plain WSC falls;
+ * white noise and the weave turned by 20 degrees score far lower. */
+static void test_wsc_whitened(void **state) {
+  (void)state;
+  wv_scene s;
+  wv_image img, a, b, bb, noise, turned, ta;
+  wv_error e = {0};
+  wv_params p;
+  assert_int_equal(wv_params_sample_prior("satin5", 12, &p, &e), WV_OK);
+  p.density[0] = 120, p.density[1] = 90;
+  tu_centre_window(&s, "flat45", 320, 320, 8);
+  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  assert_int_equal(wv_render(&s, &p, &ro, &img, NULL, &e), WV_OK);
+  s.rotation_deg = 20;
+  assert_int_equal(wv_render(&s, &p, &ro, &turned, NULL, &e), WV_OK);
+  crop(&img, 0, 0, SIDE, SIDE, &a);
+  crop(&img, 64, 57, SIDE, SIDE, &b);
+  crop(&turned, 0, 0, SIDE, SIDE, &ta);
+  assert_int_equal(wv_image_blur(&b, 1.0, &bb, &e), WV_OK);
+  noise_image(&noise, SIDE, SIDE, 5);
+  double same, blurred, vs_noise, vs_turned, self, plain_same, plain_blurred;
+  assert_int_equal(wv_wsc_whitened(&a, &b, &same, &e), WV_OK);
+  assert_int_equal(wv_wsc_whitened(&a, &bb, &blurred, &e), WV_OK);
+  assert_int_equal(wv_wsc_whitened(&a, &noise, &vs_noise, &e), WV_OK);
+  assert_int_equal(wv_wsc_whitened(&a, &ta, &vs_turned, &e), WV_OK);
+  assert_int_equal(wv_wsc_whitened(&a, &a, &self, &e), WV_OK);
+  assert_int_equal(wv_wsc(&a, &b, &plain_same, &e), WV_OK);
+  assert_int_equal(wv_wsc(&a, &bb, &plain_blurred, &e), WV_OK);
+  fprintf(stderr, "whitened WSC: two crops %.3f, one blurred 1 px %.3f (plain WSC %.3f -> %.3f), vs noise %.3f, "
+                  "vs turned 20 deg %.3f\n", same, blurred, plain_same, plain_blurred, vs_noise, vs_turned);
+  assert_true(fabs(self - 1) < 1e-9);
+  assert_true(same > 0.5);
+  assert_true(blurred > 0.8 * same);
+  assert_true(fabs(vs_noise) < 0.1);
+  assert_true(vs_turned < 0.5 * same);
+  wv_image tiny;
+  assert_int_equal(wv_image_alloc(&tiny, 20, 20, 3, NULL), WV_OK);
+  assert_int_equal(wv_wsc_whitened(&tiny, &tiny, &same, &e), WV_ERR_INVALID);
+  wv_image_free(&img), wv_image_free(&a), wv_image_free(&b), wv_image_free(&bb), wv_image_free(&noise);
+  wv_image_free(&turned), wv_image_free(&ta), wv_image_free(&tiny);
+}
+
 /* The Gaussian blur keeps a constant and conserves the mean of a smooth image. */
 static void test_gaussian(void **state) {
   (void)state;
@@ -95,12 +138,12 @@ static void test_gaussian(void **state) {
   for (int y = 0; y < 30; y++)
     for (int x = 0; x < 40; x++)
       for (int c = 0; c < 3; c++) wv_image_px(&a, x, y)[c] = (x == 20 && y == 15) ? 1.0f : 0.25f;
-  assert_int_equal(wv_image_gaussian(&a, 2.0, &b, NULL), WV_OK);
+  assert_int_equal(wv_image_blur(&a, 2.0, &b, NULL), WV_OK);
   /* the impulse spreads as a normalised Gaussian: centre 1/(2 pi sigma^2) above the floor */
   double peak = wv_image_px(&b, 20, 15)[0] - 0.25;
   assert_true(fabs(peak - 0.75 / (2 * 3.14159265358979 * 4)) < 0.002);
   assert_true(fabs(wv_image_px(&b, 0, 0)[1] - 0.25) < 1e-6);
-  assert_int_equal(wv_image_gaussian(&a, 0, &b, NULL), WV_ERR_INVALID);
+  assert_int_equal(wv_image_blur(&a, -1, &b, NULL), WV_ERR_INVALID);
   wv_image_free(&a), wv_image_free(&b);
 }
 
@@ -160,7 +203,7 @@ static void test_no_lattice(void **state) {
   assert_int_equal(wv_image_alloc(&grey, SIDE, SIDE, 3, NULL), WV_OK);
   for (size_t i = 0; i < (size_t)SIDE * SIDE * 3; i++) grey.data[i] = 0.45f;
   noise_image(&noise, SIDE, SIDE, 9);
-  assert_int_equal(wv_image_gaussian(&noise, 1.2, &sand, NULL), WV_OK);
+  assert_int_equal(wv_image_blur(&noise, 1.2, &sand, NULL), WV_OK);
   const wv_image *imgs[3] = {&grey, &noise, &sand};
   for (int i = 0; i < 3; i++) {
     wv_lattice l;
@@ -222,7 +265,7 @@ static void test_rank(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_wsc),         cmocka_unit_test(test_gaussian), cmocka_unit_test(test_lattice_recovers),
+      cmocka_unit_test(test_wsc),         cmocka_unit_test(test_wsc_whitened), cmocka_unit_test(test_gaussian), cmocka_unit_test(test_lattice_recovers),
       cmocka_unit_test(test_no_lattice),  cmocka_unit_test(test_rank),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -11,31 +11,24 @@
 #include "woven/imgops.h"
 #include "woven/render.h"
 
-typedef struct {
-  uint64_t s;
-} rng;
-static double rnd(rng *r) {
-  r->s = r->s * 6364136223846793005ULL + 1442695040888963407ULL;
-  return (double)(r->s >> 11) * (1.0 / 9007199254740992.0);
-}
 
-static void fill_random(wv_image *im, rng *r) {
-  for (size_t i = 0; i < (size_t)im->w * im->h * im->c; i++) im->data[i] = (float)(2.0 * rnd(r) - 1.0);
+static void fill_random(wv_image *im, tu_rng *r) {
+  for (size_t i = 0; i < (size_t)im->w * im->h * im->c; i++) im->data[i] = (float)(2.0 * tu_rnd(r) - 1.0);
 }
 
 /* A random point of the parameter space: every continuous parameter uniform
  * inside its range (2% away from the edges, so central differences fit). */
-static void random_params(const char *pattern, rng *r, wv_params *p) {
+static void random_params(const char *pattern, tu_rng *r, wv_params *p) {
   wv_error err;
   assert_int_equal(wv_params_default(pattern, p, &err), WV_OK);
   for (int i = 0; i < WV_P_COUNT; i++) {
     double lo, hi;
     wv_param_range(i, &lo, &hi);
-    wv_param_set(p, i, lo + (hi - lo) * (0.02 + 0.96 * rnd(r)));
+    wv_param_set(p, i, lo + (hi - lo) * (0.02 + 0.96 * tu_rnd(r)));
   }
-  p->density[0] = 60 + 100 * rnd(r);
-  p->density[1] = 60 + 100 * rnd(r);
-  p->seed = (int64_t)(rnd(r) * 1000);
+  p->density[0] = 60 + 100 * tu_rnd(r);
+  p->density[1] = 60 + 100 * tu_rnd(r);
+  p->seed = (int64_t)(tu_rnd(r) * 1000);
 }
 
 static wv_scene preset(const char *name) {
@@ -51,7 +44,7 @@ typedef struct {
   int checks;
 } fd_stats;
 
-static void fd_check(const wv_scene *s, const wv_params *p, int x0, int y0, int w, int h, int spp, rng *r,
+static void fd_check(const wv_scene *s, const wv_params *p, int x0, int y0, int w, int h, int spp, tu_rng *r,
                      fd_stats *stats) {
   wv_grad_opts g = {x0, y0, w, h, 1};
   wv_render_opts o = {0};
@@ -81,7 +74,7 @@ static void test_finite_differences(void **state) {
   (void)state;
   static const char *patterns[] = {"twill", "satin", "plain", "satin90"};
   static const char *scenes[] = {"cylinder", "flat45"};
-  rng r = {42};
+  tu_rng r = {42};
   fd_stats st;
   memset(&st, 0, sizeof st);
   for (int k = 0; k < 2; k++) {
@@ -107,7 +100,7 @@ static void test_finite_differences(void **state) {
 /* The float kernel (production) computes the same gradient as the double one. */
 static void test_float_matches_double(void **state) {
   (void)state;
-  rng r = {7};
+  tu_rng r = {7};
   static const char *scenes[] = {"cylinder", "flat45"};
   for (int k = 0; k < 2; k++) {
     wv_scene s = preset(scenes[k]);
@@ -151,7 +144,7 @@ static wv_scene small_scene(const char *name, int w, int h, int spp) {
 static void test_capture_and_windows(void **state) {
   (void)state;
   static const char *scenes[] = {"cylinder", "flat45"};
-  rng r = {99};
+  tu_rng r = {99};
   for (int k = 0; k < 2; k++) {
     wv_scene s = small_scene(scenes[k], 96, k ? 96 : 36, 8);
     wv_params p;
@@ -211,7 +204,7 @@ static void grad_window(const wv_scene *s, const wv_params *p, const wv_image *d
 /* Parameters the loss does not depend on get exactly zero. */
 static void test_exact_zeros(void **state) {
   (void)state;
-  rng r = {5};
+  tu_rng r = {5};
   wv_scene s = preset("cylinder");
   wv_params p;
   random_params("twill", &r, &p);
@@ -265,7 +258,7 @@ static void test_exact_zeros(void **state) {
 /* Gradients stay finite at both ends of every range (in float and double). */
 static void test_range_edges(void **state) {
   (void)state;
-  rng r = {11};
+  tu_rng r = {11};
   static const char *scenes[] = {"cylinder", "flat45"};
   wv_image dc;
   wv_error err;
@@ -311,7 +304,7 @@ static void test_range_edges(void **state) {
  * reduced in row order). */
 static void test_deterministic(void **state) {
   (void)state;
-  rng r = {3};
+  tu_rng r = {3};
   wv_scene s = small_scene("cylinder", 64, 40, 4);
   wv_params p;
   random_params("satin", &r, &p);
@@ -332,7 +325,7 @@ static void test_deterministic(void **state) {
  * through the downsampling adjoint, against finite differences. */
 static void test_chain_with_downsampling(void **state) {
   (void)state;
-  rng r = {21};
+  tu_rng r = {21};
   wv_scene s = small_scene("cylinder", 80, 30, 4);
   s.vfov_deg = 16.89; /* the preset's: the whole cylinder in 30 rows */
   wv_params p;
@@ -352,7 +345,7 @@ static void test_chain_with_downsampling(void **state) {
 /* Render, then differentiate with several adjoints: the same as the fused call. */
 static void test_record(void **state) {
   (void)state;
-  rng r = {17};
+  tu_rng r = {17};
   wv_scene s = small_scene("flat45", 48, 40, 4);
   wv_params p;
   random_params("satin", &r, &p);
@@ -389,11 +382,11 @@ static void test_record(void **state) {
  * through it matches finite differences; the capture equals wv_render's. */
 static void test_camera_blur(void **state) {
   (void)state;
-  rng r = {31};
+  tu_rng r = {31};
   wv_error err;
   int w = 13, h = 9;
   double x[13 * 9 * 3], y[13 * 9 * 3], kx[13 * 9 * 3], kty[13 * 9 * 3];
-  for (int i = 0; i < w * h * 3; i++) x[i] = rnd(&r), y[i] = rnd(&r) - 0.5;
+  for (int i = 0; i < w * h * 3; i++) x[i] = tu_rnd(&r), y[i] = tu_rnd(&r) - 0.5;
   assert_int_equal(wv_psf_apply(1.3, w, h, 3, x, kx, 0, &err), WV_OK);
   assert_int_equal(wv_psf_apply(1.3, w, h, 3, y, kty, 1, &err), WV_OK);
   double a = 0, b = 0, sx = 0, skx = 0;

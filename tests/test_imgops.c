@@ -6,14 +6,9 @@
 #include "testutil.h"
 #include "woven/imgops.h"
 
-static uint64_t next(uint64_t *s) {
-  *s = *s * 6364136223846793005ULL + 1442695040888963407ULL;
-  return *s;
-}
-static double rnd(uint64_t *s) { return (double)(next(s) >> 11) * (1.0 / 9007199254740992.0); }
 
-static void fill(wv_image *im, uint64_t *s, double lo, double hi) {
-  for (size_t i = 0; i < (size_t)im->w * im->h * im->c; i++) im->data[i] = (float)(lo + (hi - lo) * rnd(s));
+static void fill(wv_image *im, tu_rng *s, double lo, double hi) {
+  for (size_t i = 0; i < (size_t)im->w * im->h * im->c; i++) im->data[i] = (float)(lo + (hi - lo) * tu_rnd(s));
 }
 
 static double dot(const wv_image *a, const wv_image *b) {
@@ -42,7 +37,7 @@ static void test_downsample_values(void **state) {
   wv_image_free(&out), wv_image_free(&in);
   /* The fit's 16 x 8 of an 800 x 300 render (300 / 8 = 37.5): a constant stays
    * constant and the mean is kept. */
-  uint64_t s = 1;
+  tu_rng s = {1};
   assert_int_equal(wv_image_alloc(&in, 800, 300, 3, &err), WV_OK);
   for (size_t i = 0; i < 800 * 300 * 3; i++) in.data[i] = 0.25f;
   assert_int_equal(wv_image_downsample(&in, 16, 8, &out, &err), WV_OK);
@@ -63,7 +58,7 @@ static void test_downsample_values(void **state) {
 static void test_downsample_adjoint(void **state) {
   (void)state;
   static const int shapes[][4] = {{800, 300, 16, 8}, {97, 61, 16, 8}, {64, 64, 64, 64}, {10, 7, 3, 2}, {5, 4, 12, 9}};
-  uint64_t s = 9;
+  tu_rng s = {9};
   for (size_t k = 0; k < sizeof shapes / sizeof shapes[0]; k++) {
     wv_error err;
     wv_image x, y, dy, dx;

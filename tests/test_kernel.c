@@ -9,18 +9,11 @@
 #include "kernel/kernel.h"
 #include "testutil.h"
 
-typedef struct {
-  uint64_t s;
-} rng;
-static double rnd(rng *r) {
-  r->s = r->s * 6364136223846793005ULL + 1442695040888963407ULL;
-  return (double)(r->s >> 11) * (1.0 / 9007199254740992.0);
-}
 
 /* A random unit vector above the surface (z > 0.05). */
-static void above(rng *r, float w[3]) {
+static void above(tu_rng *r, float w[3]) {
   do {
-    for (int k = 0; k < 3; k++) w[k] = (float)(2 * rnd(r) - 1);
+    for (int k = 0; k < 3; k++) w[k] = (float)(2 * tu_rnd(r) - 1);
   } while (w[0] * w[0] + w[1] * w[1] + w[2] * w[2] > 1 || w[2] < 0.05f);
   float l = sqrtf(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
   for (int k = 0; k < 3; k++) w[k] /= l;
@@ -40,7 +33,7 @@ static void fabric(int k, wv_params *p, wv_fabric *f) {
 
 static void test_scalar_equals_8wide(void **state) {
   (void)state;
-  rng r = {3};
+  tu_rng r = {3};
   static wv_fabric f;
   wv_params p;
   int fallbacks = 0, gaps = 0;
@@ -53,12 +46,12 @@ static void test_scalar_equals_8wide(void **state) {
       for (int i = 0; i < 8; i++) {
         float wi[3], wo[3];
         above(&r, wi), above(&r, wo);
-        wv_dirs_make_f(wi, wo, (float)(0.5 + rnd(&r)), &d1[i]);
+        wv_dirs_make_f(wi, wo, (float)(0.5 + tu_rnd(&r)), &d1[i]);
         for (int c = 0; c < 3; c++) d8.wi[c][i] = d1[i].wi[c], d8.wo[c][i] = d1[i].wo[c], d8.h[c][i] = d1[i].h[c];
         d8.mi[i] = d1[i].mi, d8.mo[i] = d1[i].mo, d8.light[i] = d1[i].light;
         /* mostly near the origin; some far away, past the 8-wide cell range */
         double scale = rep % 17 == 0 && i == 3 ? 3e6 : 40.0;
-        x[i] = (float)(scale * (2 * rnd(&r) - 1)), y[i] = (float)(scale * (2 * rnd(&r) - 1));
+        x[i] = (float)(scale * (2 * tu_rnd(&r) - 1)), y[i] = (float)(scale * (2 * tu_rnd(&r) - 1));
       }
       wv_f8 rad8[3];
       wv_shade_grad_8 g8;
@@ -87,7 +80,7 @@ static void test_scalar_equals_8wide(void **state) {
 /* The public entry points agree with each other and with the directions' horizon rule. */
 static void test_entry_points(void **state) {
   (void)state;
-  rng r = {8};
+  tu_rng r = {8};
   static wv_fabric f;
   wv_params p;
   fabric(3, &p, &f);
@@ -97,7 +90,7 @@ static void test_entry_points(void **state) {
     above(&r, a), above(&r, b);
     if (i == 5) a[2] = -a[2]; /* light below the surface */
     for (int c = 0; c < 3; c++) wi[c][i] = a[c], wo[c][i] = b[c];
-    x[i] = (float)(10 * rnd(&r)), y[i] = (float)(-10 * rnd(&r));
+    x[i] = (float)(10 * tu_rnd(&r)), y[i] = (float)(-10 * tu_rnd(&r));
   }
   wv_kernel_shade8(&f, x, y, (const float(*)[8])wi, (const float(*)[8])wo, out8);
   int lit = 0;
@@ -115,7 +108,7 @@ static void test_entry_points(void **state) {
  * differences of its own S and DF, for every non-linear parameter. */
 static void test_sample_derivatives(void **state) {
   (void)state;
-  rng r = {21};
+  tu_rng r = {21};
   static wv_fabric f;
   wv_params p;
   int checked = 0;
@@ -129,7 +122,7 @@ static void test_sample_derivatives(void **state) {
       wv_dirs_d d;
       for (int c = 0; c < 3; c++) d.wi[c] = df.wi[c], d.wo[c] = df.wo[c], d.h[c] = df.h[c];
       d.mi = df.mi, d.mo = df.mo, d.light = 1.0;
-      float x = (float)(20 * rnd(&r)), y = (float)(-20 * rnd(&r));
+      float x = (float)(20 * tu_rnd(&r)), y = (float)(-20 * tu_rnd(&r));
       wv_shade_params_d P;
       wv_shade_params_double(&p, &P);
       double rad[3];

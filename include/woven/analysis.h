@@ -85,6 +85,7 @@ void wv_rank_opts_default(wv_rank_opts *o);
 typedef struct {
   double match[WV_WEAVE_BUILTINS]; /* peak match between the candidate's render and the photo, 0..1 */
   double wsc[WV_WEAVE_BUILTINS];   /* WSC of the candidate's render against the photo */
+  double wsc_whitened[WV_WEAVE_BUILTINS]; /* ... and its whitened WSC (metrics.h) */
   double score[WV_WEAVE_BUILTINS]; /* the ranking criterion (match, or mixed with prob) */
   int order[WV_WEAVE_BUILTINS];    /* candidates, best first */
   int best;

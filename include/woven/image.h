@@ -24,5 +24,8 @@ double wv_image_mean(const wv_image *a);
 /* Gaussian blur of standard deviation sigma pixels (kernel radius ceil(3 sigma),
  * edges clamped), every channel; out is allocated here. */
 wv_status wv_image_blur(const wv_image *in, double sigma, wv_image *out, wv_error *err);
+/* The same blur of one plane of w x h floats whose pixels are `stride` floats apart (a
+ * channel of an interleaved image), in to out (distinct). */
+wv_status wv_blur_plane(const float *in, float *out, int w, int h, int stride, double sigma, wv_error *err);
 
 #endif

@@ -27,10 +27,8 @@ wv_status wv_mae(const wv_image *a, const wv_image *b, double *out, wv_error *er
 #define WV_DETAIL_SIGMA 4.0   /* pixels: keeps the yarn and rib frequencies, drops shading and falloff */
 #define WV_WSC_SIZE 256       /* WSC compares the centre 256 x 256 pixels */
 #define WV_WSC_DC_RADIUS 4.0  /* bins around DC left out of the correlation */
-
-/* Gaussian blur (sigma in pixels, kernel radius ceil(3 sigma), edges clamped) of every
- * channel of in into out (allocated here, in's shape). */
-wv_status wv_image_gaussian(const wv_image *in, double sigma, wv_image *out, wv_error *err);
+#define WV_WSC_Z_FLOOR 2.0    /* whitened WSC: robust deviations a bin must stand above its ring */
+#define WV_WSC_Z_CAP 10.0     /* ... counted up to here */
 
 /* Luminance detail of the w x h window of img at (x0, y0): Y (Rec. 709 weights of the
  * stored values) minus its Gaussian blur of sigma WV_DETAIL_SIGMA, standardised to zero
@@ -54,5 +52,24 @@ wv_status wv_weave_spectrum(const wv_image *img, int x0, int y0, int n, float *o
 wv_status wv_wsc(const wv_image *a, const wv_image *b, double *out, wv_error *err);
 /* The same from two spectra of n x n (from wv_weave_spectrum). */
 double wv_wsc_spectra(const float *sa, const float *sb, int n);
+
+/* The whitened weave spectrum z of a weave spectrum S (n x n, from wv_weave_spectrum): with
+ * L = log P, P = |FFT|^2 = exp(S) - 1, q = (L - median of L over its ring) / (1.4826 MAD
+ * over the ring), rings one bin wide around DC, and z = q - floor_z clipped to
+ * [0, cap_z - floor_z] (floor 0, cap 10: the weave analysis's peak prominence). It divides out the radial envelope (the
+ * camera's and the renderer's blur, the yarns' shading fall-off), which dominates the
+ * log spectrum, and keeps what stands out of it: the weave's lattice of peaks. Rings with
+ * almost no power (a millionth of the window's median power) and bins within
+ * WV_WSC_DC_RADIUS of DC get 0. z: n * n floats. */
+wv_status wv_spectrum_whiten(const float *spec, int n, double floor_z, double cap_z, float *z, wv_error *err);
+
+/* Whitened WSC: the Pearson correlation of the whitened weave spectra (wv_spectrum_whiten,
+ * floor WV_WSC_Z_FLOOR, cap WV_WSC_Z_CAP: what stands out of the noise, a strong peak not
+ * deciding alone) of the centre windows of a and b, chosen as wv_wsc chooses them. WSC is dominated by the
+ * spectra's radial envelope, so any render with the photo's blur scores close to the
+ * photo's own WSC whatever its weave; the whitened correlation asks only whether the peaks
+ * (yarn spacings, ribs, floats) are where the photo has them. Invariant to a radial blur of
+ * either image; white noise scores about 0. */
+wv_status wv_wsc_whitened(const wv_image *a, const wv_image *b, double *out, wv_error *err);
 
 #endif

@@ -30,7 +30,7 @@ int wv_params_at_bounds(const wv_params *p, char (*lines)[96], int cap);
  * image is too small); wsc -2: not measured. */
 #define WV_WEAVE_ZOOM 4
 typedef struct {
-  double ssim_rgb[2], wsc[2]; /* [0] start, [1] fit */
+  double ssim_rgb[2], wsc[2], wsc_whitened[2]; /* [0] start, [1] fit */
   char zoom_png[4096], spectra_png[4096];
   int zoom_side, zoom_factor;
 } wv_weave_views;

@@ -35,64 +35,9 @@ static int cmp_float(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-/* z = (L - median of its ring) / (1.4826 MAD of its ring), clipped to [0, Z_CAP], on
- * L = log P, P = |FFT|^2 = exp(S) - 1. The logarithm of a noise spectrum's power has the
- * same spread at every level, so z means the same where a blur left little power; log(1 + P)
- * would not (it is P itself where P is small, and its fluctuations would look like peaks).
- * Rings are one bin wide; rings with almost no power (a millionth of the window's median)
- * and bins within WV_WSC_DC_RADIUS of DC get 0. */
+/* z: the whitened weave spectrum (wv_spectrum_whiten) clipped to [0, Z_CAP]. */
 static wv_status prominence(const float *spec, int n, float *z, wv_error *err) {
-  int nr = (int)(n * 0.7072) + 2;
-  int *count = calloc((size_t)nr + 1, sizeof(int));
-  float *vals = malloc(sizeof(float) * (size_t)n * n), *lg = malloc(sizeof(float) * (size_t)n * n);
-  float *med = malloc(sizeof(float) * (size_t)nr * 2), *mad = med ? med + nr : NULL;
-  int *start = malloc(sizeof(int) * ((size_t)nr + 1));
-  if (!count || !vals || !lg || !med || !start) {
-    free(count), free(vals), free(lg), free(med), free(start);
-    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a %d x %d prominence map", n, n);
-  }
-  size_t nn = (size_t)n * n;
-  for (size_t i = 0; i < nn; i++) vals[i] = spec[i];
-  qsort(vals, nn, sizeof(float), cmp_float);
-  double dead = 1e-6 * expm1((double)vals[nn / 2]);
-  for (size_t i = 0; i < nn; i++) lg[i] = (float)log(expm1((double)spec[i]) + 1e-30);
-  spec = lg;
-#define RING(u, v) ((int)(sqrt((double)(u) * (u) + (double)(v) * (v)) + 0.5))
-  for (int v = -n / 2; v < n / 2; v++)
-    for (int u = -n / 2; u < n / 2; u++) count[RING(u, v)]++;
-  start[0] = 0;
-  for (int r = 0; r < nr; r++) start[r + 1] = start[r] + count[r];
-  memset(count, 0, sizeof(int) * (size_t)nr);
-  for (int v = -n / 2; v < n / 2; v++)
-    for (int u = -n / 2; u < n / 2; u++) {
-      int r = RING(u, v);
-      vals[start[r] + count[r]++] = spec[(size_t)(v + n / 2) * n + (u + n / 2)];
-    }
-  for (int r = 0; r < nr; r++) {
-    float *a = vals + start[r];
-    int c = count[r];
-    med[r] = mad[r] = 0;
-    if (c < 1) continue;
-    qsort(a, (size_t)c, sizeof(float), cmp_float);
-    med[r] = a[c / 2];
-    if (!(exp((double)med[r]) > dead)) continue; /* no power here: no peaks either (mad stays 0) */
-    for (int i = 0; i < c; i++) a[i] = fabsf(a[i] - med[r]);
-    qsort(a, (size_t)c, sizeof(float), cmp_float);
-    mad[r] = 1.4826f * a[c / 2];
-  }
-  for (int v = -n / 2; v < n / 2; v++)
-    for (int u = -n / 2; u < n / 2; u++) {
-      int r = RING(u, v);
-      size_t i = (size_t)(v + n / 2) * n + (u + n / 2);
-      double q = 0;
-      /* a flat spectrum (a flat image) has no prominence anywhere */
-      if ((double)u * u + (double)v * v > WV_WSC_DC_RADIUS * WV_WSC_DC_RADIUS && mad[r] > 1e-6f)
-        q = (spec[i] - med[r]) / mad[r];
-      z[i] = (float)(q < 0 ? 0 : q > Z_CAP ? Z_CAP : q);
-    }
-#undef RING
-  free(count), free(vals), free(lg), free(med), free(start);
-  return WV_OK;
+  return wv_spectrum_whiten(spec, n, 0.0, Z_CAP, z, err);
 }
 
 static inline size_t bin(int n, int u, int v) {
@@ -634,9 +579,12 @@ wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lat
   double mmpp;
   if (!centre_frame(s, &fr, &mmpp))
     return wv_fail(err, WV_ERR_INVALID, "the scene's image centre does not see the sample");
-  float *sp = malloc(sizeof(float) * (size_t)n * n * 2), *sr = sp ? sp + (size_t)n * n : NULL;
+  size_t nn = (size_t)n * n;
+  float *sp = malloc(sizeof(float) * nn * 4), *sr = sp ? sp + nn : NULL, *zp = sp ? sp + 2 * nn : NULL,
+        *zr = sp ? sp + 3 * nn : NULL;
   if (!sp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the pattern ranking");
   wv_status st = wv_weave_spectrum(photo, (photo->w - n) / 2, (photo->h - n) / 2, n, sp, err);
+  if (!st) st = wv_spectrum_whiten(sp, n, WV_WSC_Z_FLOOR, WV_WSC_Z_CAP, zp, err);
   for (int i = 0; i < nb && !st; i++) {
     wv_params p;
     wv_scene ps, win;
@@ -647,6 +595,7 @@ wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lat
     wv_image img = {0};
     if ((st = wv_render(&win, &p, &ro, &img, NULL, err))) break;
     st = wv_weave_spectrum(&img, 0, 0, n, sr, err);
+    if (!st) st = wv_spectrum_whiten(sr, n, WV_WSC_Z_FLOOR, WV_WSC_Z_CAP, zr, err);
     wv_image_free(&img);
     if (st) break;
     wv_spectral_peak pk[WV_LATTICE_PEAKS];
@@ -655,6 +604,7 @@ wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lat
     deskew_peaks(lat, i, &fr, square);
     out->match[i] = peak_match(square, lat->n_peaks, pk, np, n);
     out->wsc[i] = wv_wsc_spectra(sp, sr, n);
+    out->wsc_whitened[i] = wv_wsc_spectra(zp, zr, n);
     out->score[i] = out->match[i];
     if (o->prob) out->score[i] = (1 - o->w_prob) * out->score[i] + o->w_prob * o->prob[i];
   }
@@ -710,7 +660,8 @@ char *wv_lattice_to_json(const wv_lattice *l, const wv_lattice_ranking *r) {
     for (int k = 0; k < wv_weave_builtin_count(); k++) {
       int i = r->order[k];
       json_object_set_new(rk, wv_weave_builtin_name(i),
-                          json_pack("{s:f,s:f,s:f}", "match", r->match[i], "wsc", r->wsc[i], "score", r->score[i]));
+                          json_pack("{s:f,s:f,s:f,s:f}", "match", r->match[i], "wsc", r->wsc[i], "wsc_whitened",
+                                    r->wsc_whitened[i], "score", r->score[i]));
     }
     json_object_set_new(o, "ranking", rk);
     json_object_set_new(o, "ranking_seconds", json_real(r->seconds));

@@ -91,62 +91,15 @@ wv_status wv_mae(const wv_image *a, const wv_image *b, double *out, wv_error *er
 
 static const double PI = 3.14159265358979323846;
 
-/* Normalised Gaussian taps g[0..2r], r = ceil(3 sigma) (at most cap). */
-static int gauss_taps(double sigma, double *g, int cap) {
-  int r = (int)ceil(3 * sigma);
-  if (r > cap) r = cap;
-  double gs = 0;
-  for (int k = -r; k <= r; k++) gs += g[k + r] = exp(-0.5 * k * k / (sigma * sigma));
-  for (int k = 0; k <= 2 * r; k++) g[k] /= gs;
-  return r;
-}
-
-#define GAUSS_CAP 64
-
-/* One pass of a separable blur along x (vertical 0) or y (1) of a plane with stride
- * `stride` floats between pixels, edges clamped; sums in double. */
-static void blur_pass(const float *in, float *out, int w, int h, int stride, int vertical, const double *g, int r) {
-  for (int y = 0; y < h; y++)
-    for (int x = 0; x < w; x++) {
-      double s = 0;
-      for (int k = -r; k <= r; k++) {
-        int xx = vertical ? x : x + k < 0 ? 0 : x + k >= w ? w - 1 : x + k;
-        int yy = !vertical ? y : y + k < 0 ? 0 : y + k >= h ? h - 1 : y + k;
-        s += g[k + r] * in[((size_t)yy * w + xx) * stride];
-      }
-      out[((size_t)y * w + x) * stride] = (float)s;
-    }
-}
-
-wv_status wv_image_gaussian(const wv_image *in, double sigma, wv_image *out, wv_error *err) {
-  if (!(sigma > 0) || sigma > GAUSS_CAP / 3.0)
-    return wv_fail(err, WV_ERR_INVALID, "Gaussian blur: sigma %g outside (0, %g]", sigma, GAUSS_CAP / 3.0);
-  wv_status st = wv_image_alloc(out, in->w, in->h, in->c, err);
-  if (st) return st;
-  float *tmp = malloc(sizeof(float) * (size_t)in->w * in->h * in->c);
-  if (!tmp) {
-    wv_image_free(out);
-    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a Gaussian blur");
-  }
-  double g[2 * GAUSS_CAP + 1];
-  int r = gauss_taps(sigma, g, GAUSS_CAP);
-  for (int c = 0; c < in->c; c++) {
-    blur_pass(in->data + c, tmp + c, in->w, in->h, in->c, 0, g, r);
-    blur_pass(tmp + c, out->data + c, in->w, in->h, in->c, 1, g, r);
-  }
-  free(tmp);
-  return WV_OK;
-}
-
 wv_status wv_image_detail(const wv_image *img, int x0, int y0, int w, int h, float *out, wv_error *err) {
   if (w < 1 || h < 1 || x0 < 0 || y0 < 0 || x0 + w > img->w || y0 + h > img->h)
     return wv_fail(err, WV_ERR_INVALID, "detail window %d x %d at (%d, %d) is not inside the %d x %d image", w, h, x0,
                    y0, img->w, img->h);
   size_t n = (size_t)w * h;
-  float *tmp = malloc(sizeof(float) * n * 2), *blur = tmp + n;
+  float *blur = malloc(sizeof(float) * n);
   double *hx = malloc(sizeof(double) * (size_t)(w + h)), *hy = hx + w;
-  if (!tmp || !hx) {
-    free(tmp), free(hx);
+  if (!blur || !hx) {
+    free(blur), free(hx);
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for a %d x %d detail image", w, h);
   }
   for (int y = 0; y < h; y++)
@@ -154,10 +107,10 @@ wv_status wv_image_detail(const wv_image *img, int x0, int y0, int w, int h, flo
       const float *c = wv_image_px(img, x0 + x, y0 + y);
       out[(size_t)y * w + x] = img->c >= 3 ? 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2] : c[0];
     }
-  double g[2 * GAUSS_CAP + 1];
-  int r = gauss_taps(WV_DETAIL_SIGMA, g, GAUSS_CAP);
-  blur_pass(out, tmp, w, h, 1, 0, g, r);
-  blur_pass(tmp, blur, w, h, 1, 1, g, r);
+  if (wv_blur_plane(out, blur, w, h, 1, WV_DETAIL_SIGMA, err)) {
+    free(blur), free(hx);
+    return WV_ERR_NOMEM;
+  }
   double m = 0, v = 0;
   for (size_t i = 0; i < n; i++) m += out[i] -= blur[i];
   m /= (double)n;
@@ -170,7 +123,7 @@ wv_status wv_image_detail(const wv_image *img, int x0, int y0, int w, int h, flo
       size_t i = (size_t)y * w + x;
       out[i] = (float)((out[i] - m) * is) * (float)(hx[x] * hy[y]);
     }
-  free(tmp), free(hx);
+  free(blur), free(hx);
   return WV_OK;
 }
 
@@ -213,6 +166,70 @@ wv_status wv_weave_spectrum(const wv_image *img, int x0, int y0, int n, float *o
   return st;
 }
 
+static int cmp_float(const void *a, const void *b) {
+  float x = *(const float *)a, y = *(const float *)b;
+  return (x > y) - (x < y);
+}
+
+/* The logarithm of a noise spectrum's power has the same spread at every level, so z means
+ * the same where a blur left little power; log(1 + P) would not (it is P itself where P is
+ * small, and its fluctuations would look like peaks). */
+wv_status wv_spectrum_whiten(const float *spec, int n, double floor_z, double cap_z, float *z, wv_error *err) {
+  int nr = (int)(n * 0.7072) + 2;
+  int *count = calloc((size_t)nr + 1, sizeof(int));
+  float *vals = malloc(sizeof(float) * (size_t)n * n), *lg = malloc(sizeof(float) * (size_t)n * n);
+  float *med = malloc(sizeof(float) * (size_t)nr * 2), *mad = med ? med + nr : NULL;
+  int *start = malloc(sizeof(int) * ((size_t)nr + 1));
+  if (!count || !vals || !lg || !med || !start) {
+    free(count), free(vals), free(lg), free(med), free(start);
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a %d x %d prominence map", n, n);
+  }
+  size_t nn = (size_t)n * n;
+  for (size_t i = 0; i < nn; i++) vals[i] = spec[i];
+  qsort(vals, nn, sizeof(float), cmp_float);
+  double dead = 1e-6 * expm1((double)vals[nn / 2]);
+  for (size_t i = 0; i < nn; i++) lg[i] = (float)log(expm1((double)spec[i]) + 1e-30);
+  spec = lg;
+#define RING(u, v) ((int)(sqrt((double)(u) * (u) + (double)(v) * (v)) + 0.5))
+  for (int v = -n / 2; v < n / 2; v++)
+    for (int u = -n / 2; u < n / 2; u++) count[RING(u, v)]++;
+  start[0] = 0;
+  for (int r = 0; r < nr; r++) start[r + 1] = start[r] + count[r];
+  memset(count, 0, sizeof(int) * (size_t)nr);
+  for (int v = -n / 2; v < n / 2; v++)
+    for (int u = -n / 2; u < n / 2; u++) {
+      int r = RING(u, v);
+      vals[start[r] + count[r]++] = spec[(size_t)(v + n / 2) * n + (u + n / 2)];
+    }
+  for (int r = 0; r < nr; r++) {
+    float *a = vals + start[r];
+    int c = count[r];
+    med[r] = mad[r] = 0;
+    if (c < 1) continue;
+    qsort(a, (size_t)c, sizeof(float), cmp_float);
+    med[r] = a[c / 2];
+    if (!(exp((double)med[r]) > dead)) continue; /* no power here: no peaks either (mad stays 0) */
+    for (int i = 0; i < c; i++) a[i] = fabsf(a[i] - med[r]);
+    qsort(a, (size_t)c, sizeof(float), cmp_float);
+    mad[r] = 1.4826f * a[c / 2];
+  }
+  for (int v = -n / 2; v < n / 2; v++)
+    for (int u = -n / 2; u < n / 2; u++) {
+      int r = RING(u, v);
+      size_t i = (size_t)(v + n / 2) * n + (u + n / 2);
+      double q = 0;
+      /* a flat spectrum (a flat image) has no prominence anywhere */
+      if ((double)u * u + (double)v * v > WV_WSC_DC_RADIUS * WV_WSC_DC_RADIUS && mad[r] > 1e-6f)
+        q = (spec[i] - med[r]) / mad[r];
+      q -= floor_z;
+      z[i] = (float)(q < 0 ? 0 : q > cap_z - floor_z ? cap_z - floor_z : q);
+    }
+#undef RING
+  free(count), free(vals), free(lg), free(med), free(start);
+  return WV_OK;
+}
+
+
 double wv_wsc_spectra(const float *sa, const float *sb, int n) {
   double ma = 0, mb = 0;
   long cnt = 0;
@@ -240,7 +257,8 @@ double wv_wsc_spectra(const float *sa, const float *sb, int n) {
   return 0;
 }
 
-wv_status wv_wsc(const wv_image *a, const wv_image *b, double *out, wv_error *err) {
+/* The side of the centred window WSC compares: WV_WSC_SIZE, or the largest even square both hold. */
+static wv_status wsc_side(const wv_image *a, const wv_image *b, int *out, wv_error *err) {
   int n = WV_WSC_SIZE;
   int side = a->w < a->h ? a->w : a->h;
   if (b->w < side) side = b->w;
@@ -249,11 +267,34 @@ wv_status wv_wsc(const wv_image *a, const wv_image *b, double *out, wv_error *er
   if (n < 32)
     return wv_fail(err, WV_ERR_INVALID, "images of %d x %d and %d x %d are too small for WSC (at least 32 x 32)", a->w,
                    a->h, b->w, b->h);
+  *out = n;
+  return WV_OK;
+}
+
+wv_status wv_wsc(const wv_image *a, const wv_image *b, double *out, wv_error *err) {
+  int n;
+  if (wsc_side(a, b, &n, err)) return WV_ERR_INVALID;
   float *sa = malloc(sizeof(float) * (size_t)n * n * 2), *sb = sa ? sa + (size_t)n * n : NULL;
   if (!sa) return wv_fail(err, WV_ERR_NOMEM, "out of memory for WSC");
   wv_status st = wv_weave_spectrum(a, (a->w - n) / 2, (a->h - n) / 2, n, sa, err);
   if (!st) st = wv_weave_spectrum(b, (b->w - n) / 2, (b->h - n) / 2, n, sb, err);
   if (!st) *out = wv_wsc_spectra(sa, sb, n);
+  free(sa);
+  return st;
+}
+
+wv_status wv_wsc_whitened(const wv_image *a, const wv_image *b, double *out, wv_error *err) {
+  int n;
+  if (wsc_side(a, b, &n, err)) return WV_ERR_INVALID;
+  size_t nn = (size_t)n * n;
+  float *sa = malloc(sizeof(float) * nn * 4), *sb = sa ? sa + nn : NULL, *za = sa ? sa + 2 * nn : NULL,
+        *zb = sa ? sa + 3 * nn : NULL;
+  if (!sa) return wv_fail(err, WV_ERR_NOMEM, "out of memory for WSC");
+  wv_status st = wv_weave_spectrum(a, (a->w - n) / 2, (a->h - n) / 2, n, sa, err);
+  if (!st) st = wv_weave_spectrum(b, (b->w - n) / 2, (b->h - n) / 2, n, sb, err);
+  if (!st) st = wv_spectrum_whiten(sa, n, WV_WSC_Z_FLOOR, WV_WSC_Z_CAP, za, err);
+  if (!st) st = wv_spectrum_whiten(sb, n, WV_WSC_Z_FLOOR, WV_WSC_Z_CAP, zb, err);
+  if (!st) *out = wv_wsc_spectra(za, zb, n);
   free(sa);
   return st;
 }

@@ -51,7 +51,7 @@ wv_status wv_image_centre_zoom(const wv_image *img, int side, int factor, wv_ima
 wv_status wv_weave_views_write(const char *dir, const wv_image *photo, const wv_image *start, const wv_image *fit,
                                wv_weave_views *v, wv_error *err) {
   const wv_image *img[3] = {photo, start, fit};
-  v->wsc[0] = v->wsc[1] = -2;
+  v->wsc[0] = v->wsc[1] = v->wsc_whitened[0] = v->wsc_whitened[1] = -2;
   v->zoom_png[0] = v->spectra_png[0] = 0;
   v->zoom_factor = WV_WEAVE_ZOOM;
   wv_status st = WV_OK;
@@ -69,6 +69,11 @@ wv_status wv_weave_views_write(const char *dir, const wv_image *photo, const wv_
       v->wsc[0] = wv_wsc_spectra(spec[0], spec[1], n), v->wsc[1] = wv_wsc_spectra(spec[0], spec[2], n);
       st = wv_spectrum_picture(spec, 3, n, 1, &pic, err);
     }
+    /* whitened in place once the picture of the plain spectra is made */
+    for (int i = 0; i < 3 && !st; i++) st = wv_spectrum_whiten(spec[i], n, WV_WSC_Z_FLOOR, WV_WSC_Z_CAP, (float *)spec[i], err);
+    if (!st)
+      v->wsc_whitened[0] = wv_wsc_spectra(spec[0], spec[1], n),
+      v->wsc_whitened[1] = wv_wsc_spectra(spec[0], spec[2], n);
     snprintf(v->spectra_png, sizeof v->spectra_png, "%s/spectra.png", dir);
     if (!st) st = wv_image_write_png(v->spectra_png, &pic, 8, err);
     wv_image_free(&pic);
@@ -248,12 +253,16 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
   if (r->weave && r->weave->wsc[0] > -2)
     sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td><td>%.4f</td></tr>\n",
               r->weave->wsc[0], r->weave->wsc[1]);
+  if (r->weave && r->weave->wsc_whitened[0] > -2)
+    sb_printf(&b, "<tr><td>whitened WSC (the weave's peaks alone)</td><td>%.4f</td><td>%.4f</td></tr>\n",
+              r->weave->wsc_whitened[0], r->weave->wsc_whitened[1]);
   sb_printf(&b, "</table>\n<p>Both renders pass through the camera blur: a Gaussian of sigma %.2f px on the "
                 "radiance (measured from the photo's spectrum unless given; docs/fit.md).</p>\n",
             r->camera_blur);
   sb_printf(&b, "<p>SSIM: Wang et al. 2004, 11x11 Gaussian window. WSC: Pearson correlation of the log "
                 "power spectra of the luminance detail of the centre 256 x 256 pixels, DC left out; 1 for the same "
-                "periodic structure, about 0 for none in common. %d iterations, descriptor <code>%s</code>.</p>\n",
+                "periodic structure, about 0 for none in common. Whitened WSC: the same after each ring of the spectrum is "
+                "standardised by its median and spread, which removes the blur's envelope that dominates WSC. %d iterations, descriptor <code>%s</code>.</p>\n",
             r->iters, r->descriptor);
   char bounds[WV_P_COUNT + 3][96];
   int nbounds = wv_params_at_bounds(r->fit, bounds, WV_P_COUNT + 3);

@@ -41,41 +41,46 @@ double wv_image_mean(const wv_image *a) {
   return n ? s / n : 0.0;
 }
 
+/* One pass of the separable blur along x (vertical 0) or y (1) of a plane whose pixels are
+ * `stride` floats apart; taps g[0..2r]; edges clamped; sums in double. */
+static void blur_pass(const float *in, float *out, int w, int h, int stride, int vertical, const double *g, int r) {
+  for (int y = 0; y < h; y++)
+    for (int x = 0; x < w; x++) {
+      double s = 0;
+      for (int k = -r; k <= r; k++) {
+        int xx = vertical ? x : x + k < 0 ? 0 : x + k >= w ? w - 1 : x + k;
+        int yy = !vertical ? y : y + k < 0 ? 0 : y + k >= h ? h - 1 : y + k;
+        s += g[k + r] * in[((size_t)yy * w + xx) * stride];
+      }
+      out[((size_t)y * w + x) * stride] = (float)s;
+    }
+}
+
+wv_status wv_blur_plane(const float *in, float *out, int w, int h, int stride, double sigma, wv_error *err) {
+  if (!(sigma >= 0.0 && sigma <= 1000.0))
+    return wv_fail(err, WV_ERR_INVALID, "blur sigma %g is outside 0..1000 pixels", sigma);
+  int r = (int)ceil(3.0 * sigma);
+  float *tmp = malloc(sizeof(float) * (size_t)w * h * stride);
+  double *g = malloc(sizeof(double) * (size_t)(2 * r + 1));
+  if (!tmp || !g) {
+    free(tmp), free(g);
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a blur of %d x %d", w, h);
+  }
+  double gs = 0;
+  for (int k = -r; k <= r; k++) gs += g[k + r] = sigma > 0 ? exp(-0.5 * k * k / (sigma * sigma)) : 1.0;
+  for (int k = 0; k <= 2 * r; k++) g[k] /= gs;
+  blur_pass(in, tmp, w, h, stride, 0, g, r);
+  blur_pass(tmp, out, w, h, stride, 1, g, r);
+  free(tmp), free(g);
+  return WV_OK;
+}
+
 wv_status wv_image_blur(const wv_image *in, double sigma, wv_image *out, wv_error *err) {
   out->data = NULL;
   if (!(sigma >= 0.0 && sigma <= 1000.0))
     return wv_fail(err, WV_ERR_INVALID, "blur sigma %g is outside 0..1000 pixels", sigma);
   wv_status st = wv_image_alloc(out, in->w, in->h, in->c, err);
-  if (st) return st;
-  size_t n = (size_t)in->w * in->h * in->c;
-  int rad = (int)ceil(3.0 * sigma);
-  float *tmp = malloc(n * sizeof(float));
-  double *g = malloc(sizeof(double) * (size_t)(2 * rad + 1));
-  if (!tmp || !g) {
-    free(tmp), free(g);
-    wv_image_free(out);
-    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a blur of %d x %d", in->w, in->h);
-  }
-  double gs = 0;
-  for (int k = -rad; k <= rad; k++) gs += g[k + rad] = sigma > 0 ? exp(-0.5 * k * k / (sigma * sigma)) : 1.0;
-  for (int k = 0; k <= 2 * rad; k++) g[k] /= gs;
-  /* Separable: along x into tmp, then along y into out; edges clamped. */
-  for (int pass = 0; pass < 2; pass++) {
-    const float *src = pass ? tmp : in->data;
-    float *dst = pass ? out->data : tmp;
-    for (int y = 0; y < in->h; y++)
-      for (int x = 0; x < in->w; x++)
-        for (int c = 0; c < in->c; c++) {
-          double s = 0;
-          for (int k = -rad; k <= rad; k++) {
-            int xx = pass ? x : x + k, yy = pass ? y + k : y;
-            xx = xx < 0 ? 0 : xx >= in->w ? in->w - 1 : xx;
-            yy = yy < 0 ? 0 : yy >= in->h ? in->h - 1 : yy;
-            s += g[k + rad] * src[((size_t)yy * in->w + xx) * in->c + c];
-          }
-          dst[((size_t)y * in->w + x) * in->c + c] = (float)s;
-        }
-  }
-  free(tmp), free(g);
-  return WV_OK;
+  for (int c = 0; c < in->c && !st; c++) st = wv_blur_plane(in->data + c, out->data + c, in->w, in->h, in->c, sigma, err);
+  if (st) wv_image_free(out);
+  return st;
 }
