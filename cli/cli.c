@@ -1,4 +1,4 @@
-/* Helpers shared by the woven subcommands: argument parsing, messages, --json
+/* Helpers shared by the woven subcommands: messages, --json
  * output, output checks, progress bars. */
 #include "cli.h"
 
@@ -13,55 +13,6 @@
 #include <unistd.h>
 
 #include "woven/io.h"
-
-void cli_args_init(cli_args *a, int argc, char **argv, const char *cmd) {
-  a->argc = argc, a->argv = argv, a->i = 0, a->cmd = cmd, a->inline_value = NULL;
-}
-
-const char *cli_next(cli_args *a) {
-  a->inline_value = NULL;
-  if (++a->i >= a->argc) return NULL;
-  return a->argv[a->i];
-}
-
-int cli_is(cli_args *a, const char *arg, const char *name) {
-  size_t n = strlen(name);
-  if (strncmp(arg, name, n)) return 0;
-  if (arg[n] == '\0') return 1;
-  if (arg[n] == '=') {
-    a->inline_value = arg + n + 1;
-    return 1;
-  }
-  return 0;
-}
-
-const char *cli_value(cli_args *a, const char *name) {
-  if (a->inline_value) return a->inline_value;
-  if (a->i + 1 >= a->argc) {
-    cli_usage_error(a->cmd, "option %s needs a value", name);
-    return NULL;
-  }
-  return a->argv[++a->i];
-}
-
-int cli_int(cli_args *a, const char *name, long lo, long hi, long *out) {
-  const char *v = cli_value(a, name);
-  if (!v) return 0;
-  char *end;
-  long x = strtol(v, &end, 10);
-  if (*v == '\0' || *end != '\0' || x < lo || x > hi) {
-    cli_usage_error(a->cmd, "%s: '%s' is not an integer in %ld..%ld", name, v, lo, hi);
-    return 0;
-  }
-  *out = x;
-  return 1;
-}
-
-int cli_common_flag(cli_ctx *c, const char *s) {
-  if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) return c->quiet = 1;
-  if (!strcmp(s, "--json")) return c->json = 1;
-  return 0;
-}
 
 int cli_fail(const cli_ctx *c, const wv_error *err) {
   fprintf(stderr, "woven %s: error: %s\n", c->cmd, err->msg);

@@ -1,5 +1,6 @@
 /* woven dataset: FabricNet's synthetic training set (SPEC section 7), resumable. */
 #include <errno.h>
+#include <limits.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,7 +14,26 @@
 #include "woven/io.h"
 #include "woven/render.h"
 
-static const char *HELP =
+typedef struct {
+  const char *scene, *dir, *descriptor, *weights;
+  int per, seed, spp, no_augment, jobs;
+} dataset_args;
+
+static const cli_opt OPTS[] = {
+    CLI_O_STR("--scene", NULL, dataset_args, scene, "S", "a scene file, cylinder or flat45"),
+    CLI_O_INT("--per-pattern", NULL, dataset_args, per, 1, WV_DATASET_MAX_PER_PATTERN, "N", "samples per pattern"),
+    CLI_O_STR("--output", "-o", dataset_args, dir, "DIR", "the dataset's directory"),
+    CLI_O_INT("--seed", NULL, dataset_args, seed, 0, INT_MAX, "N",
+              "dataset seed (default 1); sample parameters are a function of\n(seed, pattern, i)"),
+    CLI_O_INT("--spp", NULL, dataset_args, spp, 1, WV_SCENE_MAX_SPP, "N", "samples per pixel (default: the scene's)"),
+    CLI_O_FLAG("--no-augment", dataset_args, no_augment, "store the renders as they are (8-bit), without the camera"),
+    CLI_O_INT("--jobs", NULL, dataset_args, jobs, 1, 1024, "N", "samples rendered at once, one thread each (default: all cores)"),
+    CLI_O_STR("--descriptor", NULL, dataset_args, descriptor, "default|vgg19", "the texture descriptor (default: default)"),
+    CLI_O_STR("--vgg19-weights", NULL, dataset_args, weights, "FILE", "the VGG-19 weights (--descriptor vgg19)"),
+    CLI_O_END};
+
+static const cli_cmd CMD = {
+    "dataset",
     "usage: woven dataset --scene S.json|cylinder|flat45 --per-pattern N -o DIR [--seed N] [--spp N]\n"
     "                     [--no-augment] [--jobs N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                     [--quiet] [--json]\n"
@@ -21,16 +41,13 @@ static const char *HELP =
     "Renders N samples for each built-in weave pattern (plain, basket, the twills, the satins and\n"
     "their 90-degree variants), parameters drawn from the SPEC section 5 priors, passes each\n"
     "through a camera (glints, defocus, exposure and white balance, sensor noise, JPEG), and\n"
-    "caches their descriptor features.\n"
-    "  --seed N      dataset seed (default 1); sample parameters are a function of (seed, pattern, i)\n"
-    "  --spp N       samples per pixel (default: the scene's)\n"
-    "  --no-augment  store the renders as they are (8-bit), without the camera\n"
-    "  --jobs N      samples rendered at once, one thread each (default: all cores)\n"
+    "caches their descriptor features.\n",
     "Writes DIR/dataset.json and DIR/samples/<pattern>_<i>.{json,png,feat} (docs/fabricnet.md).\n"
     "Run the same command again to resume after an interruption: finished samples are kept,\n"
     "a larger --per-pattern extends the set; a DIR made with other settings is refused.\n"
     "Under 'mpirun -n N' the processes share the samples (docs/mpi.md); the directory is the same\n"
-    "as one process makes. One job at a time per DIR (DIR/woven.lock).\n";
+    "as one process makes. One job at a time per DIR (DIR/woven.lock).\n",
+    {{OPTS, 0}}, 0, {0}};
 
 static int mkdir_p(const char *dir) {
   struct stat sb;
@@ -50,39 +67,11 @@ static int sample_done(void *user, int k) {
 
 int cmd_dataset(int argc, char **argv) {
   cli_ctx c = {0, 0, "dataset"};
-  cli_args a;
-  cli_args_init(&a, argc, argv, c.cmd);
-  const char *scene_name = NULL, *dir = NULL, *desc_name = "default", *weights = NULL;
-  long per = 0, seed = 1, spp = 0, jobs = 0;
-  int augment = 1;
-  for (const char *s; (s = cli_next(&a));) {
-    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-      fputs(HELP, stdout);
-      return 0;
-    } else if (cli_is(&a, s, "--scene")) {
-      if (!(scene_name = cli_value(&a, "--scene"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "-o") || cli_is(&a, s, "--output")) {
-      if (!(dir = cli_value(&a, "-o"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--per-pattern")) {
-      if (!cli_int(&a, "--per-pattern", 1, WV_DATASET_MAX_PER_PATTERN, &per)) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--seed")) {
-      if (!cli_int(&a, "--seed", 0, 2147483647L, &seed)) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--spp")) {
-      if (!cli_int(&a, "--spp", 1, WV_SCENE_MAX_SPP, &spp)) return EXIT_USAGE;
-    } else if (!strcmp(s, "--no-augment")) {
-      augment = 0;
-    } else if (cli_is(&a, s, "--jobs")) {
-      if (!cli_int(&a, "--jobs", 1, 1024, &jobs)) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--descriptor")) {
-      if (!(desc_name = cli_value(&a, "--descriptor"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--vgg19-weights")) {
-      if (!(weights = cli_value(&a, "--vgg19-weights"))) return EXIT_USAGE;
-    } else if (cli_common_flag(&c, s)) {
-      /* --quiet, -q, --json */
-    } else {
-      return cli_usage_error(c.cmd, "unexpected argument '%s'", s);
-    }
-  }
+  dataset_args da = {NULL, NULL, "default", NULL, 0, 1, 0, 0, 0};
+  CLI_PARSE(&CMD, argc, argv, &da, &c);
+  const char *scene_name = da.scene, *dir = da.dir, *desc_name = da.descriptor, *weights = da.weights;
+  long per = da.per, seed = da.seed, spp = da.spp, jobs = da.jobs;
+  int augment = !da.no_augment;
   if (!scene_name) return cli_usage_error(c.cmd, "--scene is required");
   if (!dir) return cli_usage_error(c.cmd, "-o DIR is required");
   if (!per) return cli_usage_error(c.cmd, "--per-pattern N is required");

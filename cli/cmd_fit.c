@@ -1,6 +1,7 @@
 /* woven fit: refine parameters from a photo; also the back half of woven capture. */
 #define _DEFAULT_SOURCE /* realpath */
 #include <errno.h>
+#include <limits.h>
 #include <jansson.h>
 #include <math.h>
 #include <stdlib.h>
@@ -21,7 +22,114 @@
 #include "woven/scene3d.h"
 #include "woven/view.h"
 
-static const char *HELP =
+/* strtol-based: sscanf's %d has undefined behaviour on overflow. */
+static int parse_nonneg_int(const char *s, char **end, int *out) {
+  if (*s < '0' || *s > '9') return 0;
+  errno = 0;
+  long v = strtol(s, end, 10);
+  if (errno == ERANGE || v > 2147483647L) return 0;
+  *out = (int)v;
+  return 1;
+}
+
+/* x,y,w,h: non-negative integers, w and h positive. */
+static int parse_crop(const char *cmd, const cli_opt *o, const char *s, void *base) {
+  wv_crop *c = (wv_crop *)((char *)base + o->off);
+  int v[4];
+  char *end = (char *)s;
+  for (int i = 0; i < 4; i++) {
+    if (!parse_nonneg_int(end, &end, &v[i]) || *end != (i < 3 ? ',' : '\0') || (i >= 2 && v[i] < 1))
+      return cli_usage_error(cmd, "--crop must be x,y,w,h (non-negative integers)");
+    if (i < 3) end++;
+  }
+  c->x = v[0], c->y = v[1], c->w = v[2], c->h = v[3];
+  return 0;
+}
+
+static int parse_iters(const char *cmd, const cli_opt *o, const char *v, void *base) {
+  capture_args *a = base;
+  a->iters_given = 1;
+  return cli_opt_int(cmd, o, v, &a->fit.iters);
+}
+
+static int parse_seed(const char *cmd, const cli_opt *o, const char *v, void *base) {
+  capture_args *a = base;
+  int seed;
+  int rc = cli_opt_int(cmd, o, v, &seed);
+  if (!rc) a->fit.seed = (uint64_t)seed;
+  return rc;
+}
+
+static int parse_blur(const char *cmd, const cli_opt *o, const char *v, void *base) {
+  capture_args *a = base;
+  if (!strcmp(v, "auto")) {
+    a->fit.psf_sigma = WV_FIT_PSF_AUTO;
+    return 0;
+  }
+  return cli_opt_real(cmd, o, v, &a->fit.psf_sigma);
+}
+
+void cli_capture_args_init(capture_args *a) {
+  memset(a, 0, sizeof *a);
+  a->descriptor = "default";
+  wv_fit_opts_default(&a->fit);
+}
+
+const cli_opt CLI_PHOTO_OPTS[] = {
+    CLI_O_STR("--scene", NULL, capture_args, scene, "S", "the capture scene: a scene file, cylinder or flat45"),
+    CLI_O_STR("--pattern", NULL, capture_args, pattern, "NAME",
+              "a built-in pattern (plain, basket, twill21s ... twill31z, satin5,\nsatin8, the _90 variants; "
+              "docs/model.md)"),
+    CLI_O_STR("--output", "-o", capture_args, out, "OUT", "the output"),
+    CLI_O_CUSTOM("--crop", capture_args, crop, 0, 0, parse_crop, "x,y,w,h",
+                 "use this rectangle of the photo (default: centred, the scene's\naspect)"),
+    CLI_O_STR("--descriptor", NULL, capture_args, descriptor, "default|vgg19", "the texture descriptor (default: default)"),
+    CLI_O_STR("--vgg19-weights", NULL, capture_args, weights, "FILE", "the VGG-19 weights (--descriptor vgg19)"),
+    CLI_O_FLAG("--force", capture_args, force, "replace an earlier output (a model for another scene: use it)"),
+    CLI_O_END};
+
+const cli_opt CLI_MODEL_OPTS[] = {
+    CLI_O_STR("--model", NULL, capture_args, model, "M",
+              "a model from 'woven train' (default: models/fabricnet-<scene\nname>.bin; the directory can be "
+              "changed with WOVEN_MODEL_DIR)"),
+    CLI_O_END};
+
+const cli_opt CLI_FIT_OPTS[] = {
+    CLI_O_CUSTOM("--iters", capture_args, fit.iters, 0, WV_FIT_MAX_ITERS, parse_iters, "N", "iterations (default 200)"),
+    CLI_O_INT("--iter-spp", NULL, capture_args, fit.iter_spp, 1, WV_SCENE_MAX_SPP, "N",
+              "samples per pixel while iterating (default 4)"),
+    CLI_O_INT("--iter-scale", NULL, capture_args, fit.iter_scale, 1, WV_FIT_MAX_ITER_SCALE, "N",
+              "iterate on the image downscaled N times (default 1); the final\nrender and SSIM use the scene's full "
+              "resolution and spp"),
+    CLI_O_CUSTOM("--seed", capture_args, seed, 0, INT_MAX, parse_seed, "N", "the seed of the discrete steps"),
+    CLI_O_INT("--align-radius", NULL, capture_args, fit.align_radius, 0, WV_FIT_MAX_ALIGN_RADIUS, "N",
+              "after the iterations, search each density +-N yarns/inch for the\nbest SSIM in a centre window "
+              "(default 230: the whole range;\n0 = off)"),
+    CLI_O_INT("--register-radius", NULL, capture_args, fit.register_radius, 0, WV_FIT_MAX_REGISTER_RADIUS, "N",
+              "then register the weave to the photo: densities on a 2-D grid\n+-N yarns/inch refined to 0.1, and "
+              "the weave's offset, by phase\ncorrelation; kept if the SSIM rises (default 6; 0 = off)"),
+    CLI_O_REAL("--w-struct", capture_args, fit.w_struct, 0, 100, 0, "X",
+               "weight of the structure term, the weave's log power spectrum\n(default 0.002; 0 = off)"),
+    CLI_O_CLEAR("--no-colour-split", capture_args, fit.colour_split,
+                "do not try starts that split the warp and weft diffuse colours"),
+    CLI_O_CUSTOM("--camera-blur", capture_args, fit.psf_sigma, 0, WV_PSF_MAX_SIGMA, parse_blur, "auto|S",
+                 "the camera's blur, a Gaussian of sigma S pixels on the radiance in\nevery render; auto (default): "
+                 "the scene's, else measured from the\nphoto's spectrum"),
+    CLI_O_INT("--threads", NULL, capture_args, fit.threads, 1, 1024, "N", "worker threads (default: all cores)"),
+    CLI_O_STR("--drape", NULL, capture_args, drape, "S.json|none",
+              "the mesh scene the report shows the fit on (default: the bundled\ndraped cloth, "
+              "scenes/drape-studio.json, at 512 x 384; 'none': no\ndrape)"),
+    CLI_O_END};
+
+static const cli_opt FIT_ONLY_OPTS[] = {
+    CLI_O_STR("--init", NULL, capture_args, init, "P.json", "start here; --pattern NAME starts from the pattern's prior mean"),
+    CLI_O_STR("--resume", NULL, capture_args, resume, "DIR",
+              "continue a fit that was stopped (checkpoints at the start and every\n10 iterations), or add "
+              "iterations to a finished one"),
+    CLI_O_END};
+
+static const cli_cmd CMD = {
+    "fit",
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
@@ -33,109 +141,15 @@ static const char *HELP =
     "Refines fabric parameters so that a render of the scene matches the photo (paper 4.3):\n"
     "Gram-matrix loss + 16x8 pixel loss + heightfield prior + the weave's spectrum (structure),\n"
     "Adam (lr 0.01) on the continuous\n"
-    "parameters, random steps of noise level and densities every 5 iterations.\n"
-    "  --init P.json     start here; --pattern NAME starts from the pattern's prior mean\n"
-    "  --iters N         iterations (default 200)\n"
-    "  --crop x,y,w,h    use this rectangle of the photo (default: centred, the scene's aspect)\n"
-    "  --iter-spp N      samples per pixel while iterating (default 4)\n"
-    "  --align-radius N  after the iterations, search each density +-N yarns/inch for the\n"
-    "                    best SSIM in a centre window (default 230: the whole range; 0 = off)\n"
-    "  --register-radius N  then register the weave to the photo: densities on a 2-D grid\n"
-    "                    +-N yarns/inch refined to 0.1, and the weave's offset, by phase\n"
-    "                    correlation; kept if the SSIM rises (default 6; 0 = off)\n"
-    "  --w-struct X      weight of the structure term, the weave's log power spectrum (default 0.002;\n"
-    "                    0 = off)\n"
-    "  --no-colour-split do not try starts that split the warp and weft diffuse colours\n"
-    "  --camera-blur auto|S  the camera's blur, a Gaussian of sigma S pixels on the radiance in every\n"
-    "                    render; auto (default): the scene's, else measured from the photo's spectrum\n"
-    "  --iter-scale N    iterate on the image downscaled N times (default 1); the final render\n"
-    "                    and SSIM use the scene's full resolution and spp\n"
-    "  --drape S.json    the mesh scene the report shows the fit on (default: the bundled\n"
-    "                    draped cloth, scenes/drape-studio.json, at 512 x 384; 'none': no drape)\n"
-    "  --force           replace an earlier fit in DIR (it stays whole until the new one is done)\n"
-    "  --resume DIR      continue a fit that was stopped (checkpoints at the start and every 10\n"
-    "                    iterations), or add iterations to a finished one\n"
+    "parameters, random steps of noise level and densities every 5 iterations.\n",
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), zoom.png (their\n"
     "centre crop enlarged 4x), spectra.png (their weave spectra), loss.svg, report.html (with\n"
     "SSIM and WSC, the weave-spectrum correlation, of start and fit), viewer.html (woven view),\n"
     "drape.png (the fit on a draped cloth), maps/, and fit.json +\n"
     "checkpoint.json (for --resume). DIR is replaced whole at the end; it may not hold other\n"
-    "files, nor any input.\n";
-
-int cli_parse_fit_opt(cli_args *a, const char *s, fit_job *job, int *iters_given, int *handled) {
-  wv_fit_opts *o = &job->opts;
-  long v;
-  *handled = 1;
-  if (cli_is(a, s, "--drape")) {
-    if (!(job->drape = cli_value(a, "--drape"))) return EXIT_USAGE;
-    return 0;
-  }
-  if (cli_is(a, s, "--iters")) {
-    if (!cli_int(a, "--iters", 0, WV_FIT_MAX_ITERS, &v)) return EXIT_USAGE;
-    o->iters = (int)v, *iters_given = 1;
-  } else if (cli_is(a, s, "--iter-spp")) {
-    if (!cli_int(a, "--iter-spp", 1, WV_SCENE_MAX_SPP, &v)) return EXIT_USAGE;
-    o->iter_spp = (int)v;
-  } else if (cli_is(a, s, "--iter-scale")) {
-    if (!cli_int(a, "--iter-scale", 1, WV_FIT_MAX_ITER_SCALE, &v)) return EXIT_USAGE;
-    o->iter_scale = (int)v;
-  } else if (cli_is(a, s, "--seed")) {
-    if (!cli_int(a, "--seed", 0, 2147483647L, &v)) return EXIT_USAGE;
-    o->seed = (uint64_t)v;
-  } else if (cli_is(a, s, "--align-radius")) {
-    if (!cli_int(a, "--align-radius", 0, WV_FIT_MAX_ALIGN_RADIUS, &v)) return EXIT_USAGE;
-    o->align_radius = (int)v;
-  } else if (cli_is(a, s, "--register-radius")) {
-    if (!cli_int(a, "--register-radius", 0, WV_FIT_MAX_REGISTER_RADIUS, &v)) return EXIT_USAGE;
-    o->register_radius = (int)v;
-  } else if (cli_is(a, s, "--w-struct")) {
-    const char *t = cli_value(a, "--w-struct");
-    char *end;
-    if (!t) return EXIT_USAGE;
-    double w = strtod(t, &end);
-    if (*end || !(w >= 0 && w <= 100)) return cli_usage_error(a->cmd, "--w-struct must be a number in [0, 100]");
-    o->w_struct = w;
-  } else if (cli_is(a, s, "--camera-blur")) {
-    const char *t = cli_value(a, "--camera-blur");
-    char *end;
-    if (!t) return EXIT_USAGE;
-    double b = strcmp(t, "auto") ? strtod(t, &end) : WV_FIT_PSF_AUTO;
-    if (strcmp(t, "auto") && (*end || !(b >= 0 && b <= WV_PSF_MAX_SIGMA)))
-      return cli_usage_error(a->cmd, "--camera-blur must be 'auto' or a sigma in pixels in [0, %g]", WV_PSF_MAX_SIGMA);
-    o->psf_sigma = b;
-  } else if (!strcmp(s, "--no-colour-split")) {
-    o->colour_split = 0;
-  } else if (cli_is(a, s, "--threads")) {
-    if (!cli_int(a, "--threads", 1, 1024, &v)) return EXIT_USAGE;
-    o->threads = (int)v;
-  } else {
-    *handled = 0;
-  }
-  return 0;
-}
-
-/* strtol-based: sscanf's %d has undefined behaviour on overflow. */
-static int parse_nonneg_int(const char *s, char **end, int *out) {
-  if (*s < '0' || *s > '9') return 0;
-  errno = 0;
-  long v = strtol(s, end, 10);
-  if (errno == ERANGE || v > 2147483647L) return 0;
-  *out = (int)v;
-  return 1;
-}
-
-int cli_parse_crop(const char *s, wv_crop *c) {
-  int v[4];
-  char *end = (char *)s;
-  for (int i = 0; i < 4; i++) {
-    if (!parse_nonneg_int(end, &end, &v[i])) return 0;
-    if (*end != (i < 3 ? ',' : '\0')) return 0;
-    if (i < 3) end++;
-  }
-  if (v[2] < 1 || v[3] < 1) return 0;
-  c->x = v[0], c->y = v[1], c->w = v[2], c->h = v[3];
-  return 1;
-}
+    "files, nor any input; --force replaces an earlier fit in DIR (it stays whole until the new\n"
+    "one is done).\n",
+    {{FIT_ONLY_OPTS, 0}, {CLI_PHOTO_OPTS, 0}, {CLI_FIT_OPTS, 0}}, 1, {offsetof(capture_args, photo)}};
 
 typedef struct {
   cli_ctx *c;
@@ -539,52 +553,16 @@ static wv_status read_job(const char *dir, char *photo, size_t pcap, wv_crop *cr
 
 int cmd_fit(int argc, char **argv) {
   cli_ctx c = {0, 0, "fit"};
-  cli_args a;
-  cli_args_init(&a, argc, argv, c.cmd);
-  const char *photo = NULL, *scene_name = NULL, *init = NULL, *pattern = NULL, *dir = NULL, *resume = NULL;
-  const char *desc_name = "default", *weights = NULL;
-  wv_crop crop = {0, 0, 0, 0};
-  int force = 0, iters_given = 0;
+  capture_args ca;
+  cli_capture_args_init(&ca);
+  CLI_PARSE(&CMD, argc, argv, &ca, &c);
+  const char *photo = ca.photo, *scene_name = ca.scene, *init = ca.init, *pattern = ca.pattern, *dir = ca.out;
+  const char *resume = ca.resume, *desc_name = ca.descriptor, *weights = ca.weights;
+  wv_crop crop = ca.crop;
+  int force = ca.force, iters_given = ca.iters_given;
   fit_job job;
   memset(&job, 0, sizeof job);
-  wv_fit_opts_default(&job.opts);
-  for (const char *s; (s = cli_next(&a));) {
-    int handled;
-    if (cli_parse_fit_opt(&a, s, &job, &iters_given, &handled)) return EXIT_USAGE;
-    if (handled) continue;
-    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-      fputs(HELP, stdout);
-      return 0;
-    } else if (cli_is(&a, s, "--scene")) {
-      if (!(scene_name = cli_value(&a, "--scene"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--init")) {
-      if (!(init = cli_value(&a, "--init"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--pattern")) {
-      if (!(pattern = cli_value(&a, "--pattern"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "-o") || cli_is(&a, s, "--output")) {
-      if (!(dir = cli_value(&a, "-o"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--resume")) {
-      if (!(resume = cli_value(&a, "--resume"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--descriptor")) {
-      if (!(desc_name = cli_value(&a, "--descriptor"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--vgg19-weights")) {
-      if (!(weights = cli_value(&a, "--vgg19-weights"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--crop")) {
-      const char *cv = cli_value(&a, "--crop");
-      if (!cv) return EXIT_USAGE;
-      if (!cli_parse_crop(cv, &crop)) return cli_usage_error(c.cmd, "--crop must be x,y,w,h (non-negative integers)");
-    } else if (!strcmp(s, "--force")) {
-      force = 1;
-    } else if (cli_common_flag(&c, s)) {
-      /* --quiet, -q, --json */
-    } else if (s[0] == '-' && s[1]) {
-      return cli_usage_error(c.cmd, "unknown option '%s'", s);
-    } else if (!photo) {
-      photo = s;
-    } else {
-      return cli_usage_error(c.cmd, "unexpected argument '%s'", s);
-    }
-  }
+  job.opts = ca.fit, job.drape = ca.drape;
   wv_error err = {0};
   wv_scene scene;
   char photo_buf[4096], desc_buf[64], weights_buf[4096], label_buf[32];
