@@ -12,6 +12,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "util/json.h"
 #include "woven/io.h"
 
 int cli_fail(const cli_ctx *c, const wv_error *err) {
@@ -83,35 +84,9 @@ json_t *cli_real(double v, int decimals) {
   return json_real(round(v * k) / k);
 }
 
-json_t *cli_str(const char *s) {
-  if (!s) return json_null();
-  json_t *v = json_string(s);
-  if (v) return v;
-  /* Not UTF-8: each byte of an invalid sequence becomes U+FFFD. */
-  size_t n = strlen(s), k = 0;
-  char *b = malloc(3 * n + 1);
-  if (!b) return json_null();
-  for (size_t i = 0; i < n;) {
-    unsigned char ch = (unsigned char)s[i];
-    size_t len = ch < 0x80 ? 1 : (ch >> 5) == 6 ? 2 : (ch >> 4) == 14 ? 3 : (ch >> 3) == 30 ? 4 : 0;
-    json_t *probe = len && i + len <= n ? json_stringn(s + i, len) : NULL; /* checks the sequence */
-    if (probe) {
-      json_decref(probe);
-      memcpy(b + k, s + i, len), k += len, i += len;
-    } else {
-      memcpy(b + k, "\xef\xbf\xbd", 3), k += 3, i++;
-    }
-  }
-  v = json_stringn(b, k);
-  free(b);
-  return v ? v : json_null();
-}
+json_t *cli_str(const char *s) { return wv_json_str_lossy(s); }
 
-json_t *cli_json_text(char *text) {
-  json_t *v = text ? json_loads(text, 0, NULL) : NULL;
-  free(text);
-  return v ? v : json_null();
-}
+json_t *cli_json_text(char *text) { return wv_json_from_text(text); }
 
 int cli_check_not_input(const cli_ctx *c, const char *out, int out_is_dir, const char *const *inputs, int n) {
   wv_error err = {0};

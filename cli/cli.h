@@ -115,50 +115,17 @@ int cli_check_writable(const char *cmd, const char *path);
  * or the exit code after printing why not. */
 int cli_check_output(const char *cmd, const char *path, const char *ext);
 
-/* A fit to run (woven fit and woven capture). */
-#include "woven/descriptor.h"
-#include "woven/fabricnet.h"
-#include "woven/fit.h"
-#include "woven/params.h"
-#include "woven/photo.h"
-#include "woven/scene.h"
+/* The fit's progress and summary (woven fit and woven capture). */
+#include "woven/capture.h"
 typedef struct {
-  const wv_scene *scene;
-  const wv_image *photo;
-  wv_descriptor *desc;
-  const wv_params *start; /* NULL when resuming */
-  wv_fit_opts opts;
-  const char *dir, *photo_path, *start_label, *title;
-  int resume, iters_given, force;
-  const wv_pattern_choice *pattern_choice; /* capture without --pattern: how the start's pattern was chosen */
-  /* For fit.json (a new fit): the crop used and the descriptor's weights file. */
-  wv_crop crop;
-  const char *weights;
-  /* A file written with fit.json (capture: network.json), or NULL. */
-  const char *extra_name, *extra_text;
-  /* Files read by the command: none may lie inside the directory, which is replaced whole. */
-  const char *inputs[6];
-  /* The mesh scene the report shows the fit on (NULL: the bundled draped cloth; "none": no drape). */
-  const char *drape;
-  struct fit_result *result; /* filled when not NULL (woven capture-batch) */
-} fit_job;
-/* The figures of a finished fit, for a caller that runs it (woven capture-batch). */
-typedef struct fit_result {
-  double ssim_start, ssim_fit;
-  double wsc; /* weave-spectrum correlation of the fit against the photo */
-  int iterations;
-  char pattern[32];
-} fit_result;
-/* The output directory check, before any slow step: refuses a file, a directory
- * holding files that are not a fit's, an input inside it, and (unless --force or
- * resuming) an earlier fit, finished or not. Returns the exit code (0: fine). */
-int fit_check_dir(const cli_ctx *c, const fit_job *job);
-/* Runs the fit and writes every output. The directory's life: fit.json and a
- * checkpoint at iteration 0 appear first (one rename), checkpoints follow while
- * fitting, and the results replace the directory whole at the end. When it holds
- * a finished fit (--force, or --resume adding iterations) all of that happens in a
- * temporary directory beside it, so the earlier fit stays whole until then. */
-int fit_pipeline(cli_ctx *c, const fit_job *job);
+  cli_ctx *c;
+  cli_progress bar;
+} cli_fit_ui;
+/* The progress callbacks of a fit job: messages, and a progress line on a terminal. */
+wv_capture_progress cli_fit_progress(cli_fit_ui *u, cli_ctx *c);
+/* Prints the finished fit (a line, and the --json summary) and frees r's state; returns 0. */
+int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv_fit_outcome *r);
+
 /* The options of woven fit, predict, capture and capture-batch, parsed by the tables
  * below (each command takes the tables that apply to it). */
 typedef struct {
@@ -175,8 +142,8 @@ extern const cli_opt CLI_MODEL_OPTS[];
 /* The fit's tuning: --iters, --iter-spp, --iter-scale, --seed, --align-radius,
  * --register-radius, --w-struct, --camera-blur, --no-colour-split, --threads, --drape. */
 extern const cli_opt CLI_FIT_OPTS[];
-/* Runs woven capture with the parsed options; result as in fit_job (NULL: none). */
-int cli_capture_run(cli_ctx *c, const capture_args *a, fit_result *result);
+/* The capture's options from the parsed ones (photo, directory and all). */
+void cli_capture_opts(const capture_args *a, wv_capture_opts *o);
 
 int cmd_render(int argc, char **argv);
 int cmd_fit(int argc, char **argv);

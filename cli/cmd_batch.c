@@ -1,6 +1,6 @@
 /* woven capture-batch: woven capture over a list of photos, shared over the processes
  * of an MPI job, resumable, with a summary table. The batch is the library's
- * (wv_batch_run); each photo goes through woven capture's own code path. */
+ * (wv_batch_run); each photo is the library's capture (wv_capture_run). */
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -53,16 +53,21 @@ static int capture_one(void *user, const char *photo, const char *dir, wv_batch_
   }
   wv_image_free(&img);
   b->cap.photo = photo, b->cap.out = dir;
-  fit_result fr;
-  memset(&fr, 0, sizeof fr);
-  cli_ctx cc = {1, 0, "capture"};
-  int rc = cli_capture_run(&cc, &b->cap, &fr);
-  if (rc) {
+  wv_capture_opts co;
+  cli_capture_opts(&b->cap, &co);
+  wv_estimate est;
+  wv_fit_outcome out;
+  if (wv_capture_run(&co, &est, &out, &e)) {
+    int rc = e.code ? (int)e.code : WV_ERR_INVALID;
+    fprintf(stderr, "woven capture: error: %s\n", e.msg); /* the log keeps each photo's message */
     snprintf(res->error, sizeof res->error, "woven capture failed (exit %d; its message is in the log)", rc);
     return rc;
   }
-  res->ssim_start = fr.ssim_start, res->ssim_fit = fr.ssim_fit, res->wsc = fr.wsc, res->iterations = fr.iterations;
-  snprintf(res->pattern, sizeof res->pattern, "%s", fr.pattern);
+  res->ssim_start = out.ssim_start, res->ssim_fit = out.ssim_fit, res->wsc = out.views.wsc[1];
+  res->iterations = out.state.iter;
+  snprintf(res->pattern, sizeof res->pattern, "%s", out.state.params.pattern);
+  wv_fit_state_free(&out.state);
+  wv_estimate_free(&est);
   return 0;
 }
 
