@@ -52,7 +52,7 @@ static void on_note(void *user, const char *text) {
   cli_info(u->c, "%s\n", text);
 }
 
-static void on_progress(void *user, int done, int todo, double el) {
+static int on_progress(void *user, int done, int todo, double el) {
   dataset_ui *u = user;
   double f = (double)done / todo;
   cli_progress_update(&u->bar, f);
@@ -61,6 +61,7 @@ static void on_progress(void *user, int done, int todo, double el) {
     u->last_report = (int)(f * 20);
     fprintf(stderr, "dataset %d/%d  %.2f samples/s  %.0fs, %.0fs left\n", done, todo, done / el, el, el * (1 - f) / f);
   }
+  return 0;
 }
 
 int cmd_dataset(int argc, char **argv) {

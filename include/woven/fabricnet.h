@@ -349,9 +349,10 @@ typedef struct {
   const char *descriptor;  /* "default" */
   const char *weights;     /* the descriptor's weights file, or NULL */
   /* Optional, called on rank 0 only: a line for the user (no newline), and progress
-   * after each sample (samples done of todo, seconds since rendering began). */
+   * after each sample (samples done of todo, seconds since rendering began); a non-zero
+   * return stops the build once the samples in flight are done (res->stopped). */
   void (*on_note)(void *user, const char *text);
-  void (*on_progress)(void *user, int done, int todo, double seconds);
+  int (*on_progress)(void *user, int done, int todo, double seconds);
   void *user;
 } wv_dataset_build_opts;
 void wv_dataset_build_opts_default(wv_dataset_build_opts *o);
@@ -359,6 +360,7 @@ typedef struct {
   int samples, done_before, rendered; /* rendered: by every rank */
   int spp, width, height, jobs;
   int per_pattern; /* as recorded: a larger earlier size is kept */
+  int stopped;     /* on_progress stopped the build: run it again to finish */
   double seconds;
 } wv_dataset_build_result;
 /* Renders the samples of dir that are not done (the dataset grows in place: inputs may

@@ -1,14 +1,15 @@
 /* woven: building FabricNet's dataset (woven dataset): the directory's lock and record,
  * the check that an existing dataset was made with the same settings, and the samples
- * not yet done rendered in parallel and shared over the ranks of an MPI job. */
+ * not yet done rendered in parallel and shared over the ranks of an MPI job. Notes and
+ * progress come from rank 0 only. */
 #include <errno.h>
 #include <omp.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
+#include "util/note.h"
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
 #include "woven/io.h"
@@ -23,18 +24,6 @@ static wv_status mkdir_p(const char *dir, wv_error *err) {
   struct stat sb;
   if (stat(dir, &sb) == 0 ? S_ISDIR(sb.st_mode) : mkdir(dir, 0777) == 0) return WV_OK;
   return wv_fail(err, WV_ERR_IO, "%s: cannot create directory: %s", dir, strerror(errno));
-}
-
-static void note(const wv_dataset_build_opts *o, const wv_dist *dist, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static void note(const wv_dataset_build_opts *o, const wv_dist *dist, const char *fmt, ...) {
-  if (!o->on_note || dist->rank > 0) return;
-  char text[4600];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(text, sizeof text, fmt, ap);
-  va_end(ap);
-  o->on_note(o->user, text);
 }
 
 /* A sample is done when its files are whole (wv_dataset_sample_done). */
@@ -56,9 +45,9 @@ static wv_status check_existing(const wv_dataset_build_opts *o, const wv_dist *d
   wv_scene hs = have.scene;
   char *hj = wv_scene_to_json(&hs);
   char *wj = wv_scene_to_json(&want->scene);
-  const char *why = have.version != want->version                                              ? "format version"
-                    : have.seed != want->seed                                                  ? "seed"
-                    : have.augment != want->augment                                            ? "camera augmentation setting"
+  const char *why = have.version != want->version   ? "format version"
+                    : have.seed != want->seed       ? "seed"
+                    : have.augment != want->augment ? "camera augmentation setting"
                     : strcmp(have.descriptor, want->descriptor) || have.n_feat != want->n_feat ? "descriptor"
                     : have.spp != want->spp                                                    ? "spp"
                     : have.renderer != want->renderer                                          ? "renderer version"
@@ -72,15 +61,16 @@ static wv_status check_existing(const wv_dataset_build_opts *o, const wv_dist *d
                    o->dir, why, (unsigned long long)have.seed, have.spp, have.descriptor, have.scene.name);
   if (have.per_pattern > want->per_pattern) {
     want->per_pattern = have.per_pattern; /* never shrink the recorded size */
-    note(o, dist, "%s records %d per pattern; completing all of them", o->dir, have.per_pattern);
+    wv_note(dist->rank ? NULL : o->on_note, o->user, "%s records %d per pattern; completing all of them", o->dir,
+            have.per_pattern);
   }
   return WV_OK;
 }
 
 /* Rank 0's preparation: the inputs are not the dataset's files, the lock, an existing
  * dataset's settings, samples/ and dataset.json. */
-static wv_status prepare(const wv_dataset_build_opts *o, const wv_dist *dist, wv_dataset_info *want,
-                         wv_dir_lock *lock, wv_error *err) {
+static wv_status prepare(const wv_dataset_build_opts *o, const wv_dist *dist, wv_dataset_info *want, wv_dir_lock *lock,
+                         wv_error *err) {
   const char *dir = o->dir;
   char own[2][4096], path[4096];
   snprintf(own[0], sizeof own[0], "%s/dataset.json", dir);
@@ -91,7 +81,7 @@ static wv_status prepare(const wv_dataset_build_opts *o, const wv_dist *dist, wv
   if (!st) st = mkdir_p(dir, err);
   char lnote[4400];
   if (!st && !(st = wv_dir_lock_acquire(dir, lock, lnote, sizeof lnote, err)) && lnote[0])
-    note(o, dist, "%s", lnote);
+    wv_note(dist->rank ? NULL : o->on_note, o->user, "%s", lnote);
   struct stat sb;
   if (!st && stat(own[0], &sb) == 0) st = check_existing(o, dist, want, err);
   snprintf(path, sizeof path, "%s/samples", dir);
@@ -106,11 +96,12 @@ static wv_status prepare(const wv_dataset_build_opts *o, const wv_dist *dist, wv
 }
 
 /* The samples in todo, jobs at a time with one descriptor each (descriptors keep scratch
- * and are not thread-safe). Returns the number done; *first_err the first failure. */
-static int render_samples(const wv_dataset_build_opts *o, const wv_dist *dist, const wv_dataset_info *want,
+ * and are not thread-safe). Returns the number done, or -1 - done after a failure
+ * (*first_err the first); *stopped when on_progress asked to stop. */
+static int render_samples(const wv_dataset_build_opts *o, const wv_dist *dist, const wv_dataset_info *want, int *stopped,
                           const int *todo, int ntodo, int jobs, wv_descriptor **desc, const struct wv_footprints *fp,
                           double t0, wv_error *first_err) {
-  int done = 0, failed = 0;
+  int done = 0, failed = 0; /* failed: 1 a sample failed, 2 on_progress asked to stop */
   int nj = jobs < ntodo ? jobs : ntodo;
   /* Samples in parallel with one render thread each beat one sample at a time with
    * all threads (less synchronisation, the descriptor overlaps with rendering). */
@@ -131,17 +122,20 @@ static int render_samples(const wv_dataset_build_opts *o, const wv_dist *dist, c
 #pragma omp critical(dataset_progress)
       {
         if (st) {
-          if (!failed) *first_err = e;
+          if (failed != 1) *first_err = e;
           failed = 1;
         } else {
           done++;
-          if (o->on_progress && dist->rank == 0) o->on_progress(o->user, done, ntodo, omp_get_wtime() - t0);
+          /* a stop leaves the samples in flight to finish: the directory stays resumable */
+          if (o->on_progress && dist->rank == 0 && o->on_progress(o->user, done, ntodo, omp_get_wtime() - t0))
+            failed = failed ? failed : 2;
         }
       }
     }
     free(feat);
   }
-  return failed ? -1 - done : done;
+  *stopped = failed == 2;
+  return failed == 1 ? -1 - done : done;
 }
 
 wv_status wv_dataset_build(const wv_dist *dist, const wv_dataset_build_opts *o, wv_dataset_build_result *res,
@@ -182,15 +176,15 @@ wv_status wv_dataset_build(const wv_dist *dist, const wv_dataset_build_opts *o, 
 
   int total = wv_dataset_pattern_count(&want) * want.per_pattern, ntodo = 0, nleft = 0;
   int *todo = NULL;
-  if (!rc && (st = wv_dist_share(dist, total, sample_done, &(sample_check){o->dir, &want}, &todo, &ntodo, &nleft,
-                                 err)))
+  if (!rc && (st = wv_dist_share(dist, total, sample_done, &(sample_check){o->dir, &want}, &todo, &ntodo, &nleft, err)))
     rc = (int)st;
   if (!rc) {
     res->done_before = total - nleft;
-    note(o, dist, "%s: %d samples (%d per pattern), %d done, %d to render at %d x %d, %d spp, %d job(s)%s", o->dir,
-         total, want.per_pattern, res->done_before, nleft, want.scene.width, want.scene.height, want.spp, jobs,
-         dist->size > 1 ? " per process" : "");
-    if (dist->size > 1) note(o, dist, "%d processes share them (MPI)", dist->size);
+    wv_note(dist->rank ? NULL : o->on_note, o->user,
+            "%s: %d samples (%d per pattern), %d done, %d to render at %d x %d, %d spp, %d job(s)%s", o->dir, total,
+            want.per_pattern, res->done_before, nleft, want.scene.width, want.scene.height, want.spp, jobs,
+            dist->size > 1 ? " per process" : "");
+    if (dist->size > 1) wv_note(dist->rank ? NULL : o->on_note, o->user, "%d processes share them (MPI)", dist->size);
   }
   double t0 = omp_get_wtime();
   int done = 0;
@@ -199,7 +193,7 @@ wv_status wv_dataset_build(const wv_dist *dist, const wv_dataset_build_opts *o, 
   if (!rc && ntodo > 0 && (st = wv_footprints_create(&want.scene, jobs, &fp, err))) rc = (int)st;
   if (!rc && ntodo > 0) {
     wv_error first = {0};
-    done = render_samples(o, dist, &want, todo, ntodo, jobs, desc, fp, t0, &first);
+    done = render_samples(o, dist, &want, &res->stopped, todo, ntodo, jobs, desc, fp, t0, &first);
     if (done < 0) {
       done = -1 - done;
       *err = first;
