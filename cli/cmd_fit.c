@@ -91,7 +91,7 @@ const cli_opt CLI_FIT_OPTS[] = {
     CLI_O_INT("--iter-scale", NULL, capture_args, fit.iter_scale, 1, WV_FIT_MAX_ITER_SCALE, "N",
               "iterate on the image downscaled N times (default 1); the final\nrender and SSIM use the scene's full "
               "resolution and spp"),
-    CLI_O_CUSTOM("--seed", capture_args, seed, 0, INT_MAX, parse_seed, "N", "the seed of the discrete steps"),
+    CLI_O_CUSTOM("--seed", capture_args, fit.seed, 0, INT_MAX, parse_seed, "N", "the seed of the discrete steps"),
     CLI_O_INT("--align-radius", NULL, capture_args, fit.align_radius, 0, WV_FIT_MAX_ALIGN_RADIUS, "N",
               "after the iterations, search each density +-N yarns/inch for the\nbest SSIM in a centre window "
               "(default 230: the whole range;\n0 = off)"),
