@@ -94,15 +94,7 @@ int cli_check_not_input(const cli_ctx *c, const char *out, int out_is_dir, const
   return 0;
 }
 
-void cli_clean_temps_beside(const char *path) {
-  const char *slash = strrchr(path, '/');
-  char dir[4096];
-  if (!slash)
-    snprintf(dir, sizeof dir, ".");
-  else
-    snprintf(dir, sizeof dir, "%.*s", slash == path ? 1 : (int)(slash - path), path);
-  wv_remove_stale_temps(dir, slash ? slash + 1 : path);
-}
+void cli_clean_temps_beside(const char *path) { wv_remove_stale_temps_beside(path); }
 
 /* Refuse early, before minutes of work, when the output cannot be written. */
 int cli_check_writable(const char *cmd, const char *path) {

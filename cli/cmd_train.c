@@ -5,7 +5,6 @@
 
 #include "cli.h"
 #include "woven/fabricnet.h"
-#include "woven/io.h"
 
 typedef struct {
   const char *dir, *model, *init;
@@ -93,23 +92,6 @@ int cmd_train(int argc, char **argv) {
   o.checkpoint_every = ta.ck_every, o.resume = resume, o.force = force, o.partial = ta.partial, o.init = init;
   if (init && resume) return cli_usage_error(c.cmd, "--init and --resume exclude each other");
   if (ta.ce >= 0) o.ce_weight = ta.ce;
-  { /* MODEL and MODEL.train/ must not land on the dataset's files */
-    char ds[2][4096], work[4096];
-    snprintf(work, sizeof work, "%s.train", model);
-    snprintf(ds[0], sizeof ds[0], "%s/dataset.json", dir);
-    snprintf(ds[1], sizeof ds[1], "%s/samples", dir);
-    const char *outs[2] = {model, work};
-    for (int i = 0; i < 2; i++) {
-      const char *in = ds[0];
-      if (wv_check_not_input(outs[i], 0, &in, 1, &err) ||
-          (wv_path_within(outs[i], ds[1]) &&
-           wv_fail(&err, WV_ERR_INVALID, "%s lies inside the dataset's samples directory %s; write the model elsewhere",
-                   outs[i], ds[1])))
-        return cli_fail(&c, &err);
-    }
-    cli_clean_temps_beside(model);
-    wv_remove_stale_temps(work, NULL);
-  }
   cli_progress bar;
   cli_progress_start(&bar, &c, "train");
   train_ui ui = {&c, &bar, epochs};

@@ -277,7 +277,8 @@ void wv_train_opts_default(wv_train_opts *o);
  * the lowest validation loss (written atomically whenever it improves); model.train/
  * holds checkpoint.bin, loss.csv, loss.svg and train.json. A resumed run gives the same
  * weights as an uninterrupted one: each epoch's shuffle is a function of (seed, epoch)
- * and the checkpoint holds the weights, Adam's moments and step and the best so far. */
+ * and the checkpoint holds the weights, Adam's moments and step and the best so far.
+ * model and model.train/ may not be the dataset's files nor lie among its samples. */
 wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, wv_train_result *res, wv_error *err);
 
 /* ---- synthetic dataset (docs/fabricnet.md) ----
