@@ -1,4 +1,4 @@
-/* Helpers shared by the woven subcommands: argument parsing, messages, --json
+/* Helpers shared by the woven subcommands: messages, --json
  * output, output checks, progress bars. */
 #include "cli.h"
 
@@ -12,56 +12,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "util/json.h"
 #include "woven/io.h"
-
-void cli_args_init(cli_args *a, int argc, char **argv, const char *cmd) {
-  a->argc = argc, a->argv = argv, a->i = 0, a->cmd = cmd, a->inline_value = NULL;
-}
-
-const char *cli_next(cli_args *a) {
-  a->inline_value = NULL;
-  if (++a->i >= a->argc) return NULL;
-  return a->argv[a->i];
-}
-
-int cli_is(cli_args *a, const char *arg, const char *name) {
-  size_t n = strlen(name);
-  if (strncmp(arg, name, n)) return 0;
-  if (arg[n] == '\0') return 1;
-  if (arg[n] == '=') {
-    a->inline_value = arg + n + 1;
-    return 1;
-  }
-  return 0;
-}
-
-const char *cli_value(cli_args *a, const char *name) {
-  if (a->inline_value) return a->inline_value;
-  if (a->i + 1 >= a->argc) {
-    cli_usage_error(a->cmd, "option %s needs a value", name);
-    return NULL;
-  }
-  return a->argv[++a->i];
-}
-
-int cli_int(cli_args *a, const char *name, long lo, long hi, long *out) {
-  const char *v = cli_value(a, name);
-  if (!v) return 0;
-  char *end;
-  long x = strtol(v, &end, 10);
-  if (*v == '\0' || *end != '\0' || x < lo || x > hi) {
-    cli_usage_error(a->cmd, "%s: '%s' is not an integer in %ld..%ld", name, v, lo, hi);
-    return 0;
-  }
-  *out = x;
-  return 1;
-}
-
-int cli_common_flag(cli_ctx *c, const char *s) {
-  if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) return c->quiet = 1;
-  if (!strcmp(s, "--json")) return c->json = 1;
-  return 0;
-}
 
 int cli_fail(const cli_ctx *c, const wv_error *err) {
   fprintf(stderr, "woven %s: error: %s\n", c->cmd, err->msg);
@@ -132,35 +84,9 @@ json_t *cli_real(double v, int decimals) {
   return json_real(round(v * k) / k);
 }
 
-json_t *cli_str(const char *s) {
-  if (!s) return json_null();
-  json_t *v = json_string(s);
-  if (v) return v;
-  /* Not UTF-8: each byte of an invalid sequence becomes U+FFFD. */
-  size_t n = strlen(s), k = 0;
-  char *b = malloc(3 * n + 1);
-  if (!b) return json_null();
-  for (size_t i = 0; i < n;) {
-    unsigned char ch = (unsigned char)s[i];
-    size_t len = ch < 0x80 ? 1 : (ch >> 5) == 6 ? 2 : (ch >> 4) == 14 ? 3 : (ch >> 3) == 30 ? 4 : 0;
-    json_t *probe = len && i + len <= n ? json_stringn(s + i, len) : NULL; /* checks the sequence */
-    if (probe) {
-      json_decref(probe);
-      memcpy(b + k, s + i, len), k += len, i += len;
-    } else {
-      memcpy(b + k, "\xef\xbf\xbd", 3), k += 3, i++;
-    }
-  }
-  v = json_stringn(b, k);
-  free(b);
-  return v ? v : json_null();
-}
+json_t *cli_str(const char *s) { return wv_json_str_lossy(s); }
 
-json_t *cli_json_text(char *text) {
-  json_t *v = text ? json_loads(text, 0, NULL) : NULL;
-  free(text);
-  return v ? v : json_null();
-}
+json_t *cli_json_text(char *text) { return wv_json_from_text(text); }
 
 int cli_check_not_input(const cli_ctx *c, const char *out, int out_is_dir, const char *const *inputs, int n) {
   wv_error err = {0};
@@ -168,15 +94,7 @@ int cli_check_not_input(const cli_ctx *c, const char *out, int out_is_dir, const
   return 0;
 }
 
-void cli_clean_temps_beside(const char *path) {
-  const char *slash = strrchr(path, '/');
-  char dir[4096];
-  if (!slash)
-    snprintf(dir, sizeof dir, ".");
-  else
-    snprintf(dir, sizeof dir, "%.*s", slash == path ? 1 : (int)(slash - path), path);
-  wv_remove_stale_temps(dir, slash ? slash + 1 : path);
-}
+void cli_clean_temps_beside(const char *path) { wv_remove_stale_temps_beside(path); }
 
 /* Refuse early, before minutes of work, when the output cannot be written. */
 int cli_check_writable(const char *cmd, const char *path) {

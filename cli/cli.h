@@ -1,8 +1,9 @@
-/* Helpers shared by the woven subcommands: argument parsing, messages,
+/* Helpers shared by the woven subcommands: the option parser, messages,
  * progress bars, exit codes. */
 #ifndef WOVEN_CLI_H
 #define WOVEN_CLI_H
 
+#include <stddef.h>
 #include <stdio.h>
 #include "woven/error.h"
 
@@ -15,25 +16,68 @@ typedef struct {
   const char *cmd; /* subcommand name for messages */
 } cli_ctx;
 
-/* Argument cursor: "--key value" and "--key=value" both work. */
+/* The option parser (cli/opts.c). A command lists its options in tables of cli_opt,
+ * each field at an offset in the command's argument struct (plus the table's base),
+ * and its positional arguments (const char * fields). "--key value" and "--key=value"
+ * both work; --quiet (-q), --json and --help (-h) are every command's. */
+typedef enum {
+  CLI_FLAG,   /* int field set to 1 */
+  CLI_CLEAR,  /* int field set to 0 (--no-...) */
+  CLI_INT,    /* int field, in lo..hi */
+  CLI_REAL,   /* double field, in lo..hi (open bounds: CLI_OPEN_LO/HI) */
+  CLI_STR,    /* const char * field */
+  CLI_ENUM,   /* int field: the index of the value in meta, "a|b|c" */
+  CLI_CUSTOM, /* parse() */
+} cli_opt_kind;
+enum { CLI_OPEN_LO = 1, CLI_OPEN_HI = 2 };
+typedef struct cli_opt cli_opt;
+struct cli_opt {
+  const char *name, *alias; /* "--output", "-o" (or NULL) */
+  cli_opt_kind kind;
+  size_t off;
+  double lo, hi;
+  const char *meta; /* the value's name in the help (N, FILE), or an enum's choices */
+  const char *help; /* NULL: not listed by --help */
+  /* CLI_CUSTOM: reads v into the struct at base; 0, or the exit code after printing why not */
+  int (*parse)(const char *cmd, const cli_opt *o, const char *v, void *base);
+  int open;
+};
+/* Table entries: T is the argument struct, f its field. */
+#define CLI_O_STR(n, a, T, f, meta, help) {n, a, CLI_STR, offsetof(T, f), 0, 0, meta, help, NULL, 0}
+#define CLI_O_INT(n, a, T, f, lo, hi, meta, help) {n, a, CLI_INT, offsetof(T, f), lo, hi, meta, help, NULL, 0}
+#define CLI_O_REAL(n, T, f, lo, hi, open, meta, help) {n, NULL, CLI_REAL, offsetof(T, f), lo, hi, meta, help, NULL, open}
+#define CLI_O_FLAG(n, T, f, help) {n, NULL, CLI_FLAG, offsetof(T, f), 0, 0, NULL, help, NULL, 0}
+#define CLI_O_CLEAR(n, T, f, help) {n, NULL, CLI_CLEAR, offsetof(T, f), 0, 0, NULL, help, NULL, 0}
+#define CLI_O_ENUM(n, T, f, choices, help) {n, NULL, CLI_ENUM, offsetof(T, f), 0, 0, choices, help, NULL, 0}
+#define CLI_O_CUSTOM(n, T, f, lo, hi, fn, meta, help) {n, NULL, CLI_CUSTOM, offsetof(T, f), lo, hi, meta, help, fn, 0}
+#define CLI_O_END {NULL, NULL, CLI_FLAG, 0, 0, 0, NULL, NULL, NULL, 0}
+#define CLI_MAX_TABLES 4
 typedef struct {
-  int argc, i;
-  char **argv;
-  const char *cmd;
-  const char *inline_value;
-} cli_args;
+  const char *name;   /* the subcommand, for messages */
+  const char *usage;  /* usage lines and description, before the options */
+  const char *epilog; /* after the options, or NULL */
+  struct {
+    const cli_opt *opts; /* ends with an entry whose name is NULL */
+    size_t base;         /* where the table's fields start in the argument struct */
+  } tables[CLI_MAX_TABLES];
+  int npos;
+  size_t pos[3]; /* offsets of the positional arguments' fields */
+} cli_cmd;
+#define CLI_HELP (-1)
+/* Parses argv[1..] into args and c: 0, CLI_HELP after printing the help (exit 0), or
+ * the exit code after printing why not. */
+int cli_parse(const cli_cmd *cmd, int argc, char **argv, void *args, cli_ctx *c);
+void cli_print_help(const cli_cmd *cmd, FILE *f);
+/* For CLI_CUSTOM parsers: a number in o's range, or the exit code after printing why not. */
+int cli_opt_int(const char *cmd, const cli_opt *o, const char *v, int *out);
+int cli_opt_real(const char *cmd, const cli_opt *o, const char *v, double *out);
+/* Runs cli_parse and turns CLI_HELP into *done = 1 with exit code 0. */
+#define CLI_PARSE(cmd, argc, argv, args, c)                 \
+  do {                                                      \
+    int rc_ = cli_parse(cmd, argc, argv, args, c);          \
+    if (rc_) return rc_ == CLI_HELP ? 0 : rc_;              \
+  } while (0)
 
-void cli_args_init(cli_args *a, int argc, char **argv, const char *cmd);
-/* Next argument, or NULL at the end. */
-const char *cli_next(cli_args *a);
-/* Is the current argument the option 'name' (e.g. "--spp")? */
-int cli_is(cli_args *a, const char *arg, const char *name);
-/* Value of the current option; prints an error and returns NULL when missing. */
-const char *cli_value(cli_args *a, const char *name);
-int cli_int(cli_args *a, const char *name, long lo, long hi, long *out);
-
-/* The flags every command takes: --quiet (-q) and --json. Returns 1 if s was one. */
-int cli_common_flag(cli_ctx *c, const char *s);
 int cli_fail(const cli_ctx *c, const wv_error *err);       /* prints "woven CMD: msg", returns exit code */
 int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void cli_info(const cli_ctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
@@ -71,56 +115,35 @@ int cli_check_writable(const char *cmd, const char *path);
  * or the exit code after printing why not. */
 int cli_check_output(const char *cmd, const char *path, const char *ext);
 
-/* A fit to run (woven fit and woven capture). */
-#include "woven/descriptor.h"
-#include "woven/fabricnet.h"
-#include "woven/fit.h"
-#include "woven/params.h"
-#include "woven/photo.h"
-#include "woven/scene.h"
+/* The fit's progress and summary (woven fit and woven capture). */
+#include "woven/capture.h"
 typedef struct {
-  const wv_scene *scene;
-  const wv_image *photo;
-  wv_descriptor *desc;
-  const wv_params *start; /* NULL when resuming */
-  wv_fit_opts opts;
-  const char *dir, *photo_path, *start_label, *title;
-  int resume, iters_given, force;
-  const wv_pattern_choice *pattern_choice; /* capture without --pattern: how the start's pattern was chosen */
-  /* For fit.json (a new fit): the crop used and the descriptor's weights file. */
+  cli_ctx *c;
+  cli_progress bar;
+} cli_fit_ui;
+/* The progress callbacks of a fit job: messages, and a progress line on a terminal. */
+wv_capture_progress cli_fit_progress(cli_fit_ui *u, cli_ctx *c);
+/* Prints the finished fit (a line, and the --json summary) and frees r's state; returns 0. */
+int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv_fit_outcome *r);
+
+/* The options of woven fit, predict, capture and capture-batch, parsed by the tables
+ * below (each command takes the tables that apply to it). */
+typedef struct {
+  const char *photo, *scene, *pattern, *model, *descriptor, *weights, *out, *init, *resume, *drape;
   wv_crop crop;
-  const char *weights;
-  /* A file written with fit.json (capture: network.json), or NULL. */
-  const char *extra_name, *extra_text;
-  /* Files read by the command: none may lie inside the directory, which is replaced whole. */
-  const char *inputs[6];
-  /* The mesh scene the report shows the fit on (NULL: the bundled draped cloth; "none": no drape). */
-  const char *drape;
-  struct fit_result *result; /* filled when not NULL (woven capture-batch) */
-} fit_job;
-/* The figures of a finished fit, for a caller that runs it (woven capture-batch). */
-typedef struct fit_result {
-  double ssim_start, ssim_fit;
-  double wsc; /* weave-spectrum correlation of the fit against the photo */
-  int iterations;
-  char pattern[32];
-} fit_result;
-/* The output directory check, before any slow step: refuses a file, a directory
- * holding files that are not a fit's, an input inside it, and (unless --force or
- * resuming) an earlier fit, finished or not. Returns the exit code (0: fine). */
-int fit_check_dir(const cli_ctx *c, const fit_job *job);
-/* Runs the fit and writes every output. The directory's life: fit.json and a
- * checkpoint at iteration 0 appear first (one rename), checkpoints follow while
- * fitting, and the results replace the directory whole at the end. When it holds
- * a finished fit (--force, or --resume adding iterations) all of that happens in a
- * temporary directory beside it, so the earlier fit stays whole until then. */
-int fit_pipeline(cli_ctx *c, const fit_job *job);
-/* The fit's tuning options, shared by woven fit and woven capture: --iters,
- * --iter-spp, --iter-scale, --seed, --align-radius, --threads. Sets *handled;
- * returns EXIT_USAGE after printing a message for a bad value. */
-int cli_parse_fit_opt(cli_args *a, const char *s, fit_job *job, int *iters_given, int *handled);
-/* x,y,w,h: non-negative integers, w and h positive. */
-int cli_parse_crop(const char *s, wv_crop *c);
+  int force, iters_given;
+  wv_fit_opts fit;
+} capture_args;
+void cli_capture_args_init(capture_args *a);
+/* --scene, --pattern, --descriptor, --vgg19-weights, --crop, -o, --force */
+extern const cli_opt CLI_PHOTO_OPTS[];
+/* --model */
+extern const cli_opt CLI_MODEL_OPTS[];
+/* The fit's tuning: --iters, --iter-spp, --iter-scale, --seed, --align-radius,
+ * --register-radius, --w-struct, --camera-blur, --no-colour-split, --threads, --drape. */
+extern const cli_opt CLI_FIT_OPTS[];
+/* The capture's options from the parsed ones (photo, directory and all). */
+void cli_capture_opts(const capture_args *a, wv_capture_opts *o);
 
 int cmd_render(int argc, char **argv);
 int cmd_fit(int argc, char **argv);
@@ -130,8 +153,6 @@ int cmd_dataset(int argc, char **argv);
 int cmd_train(int argc, char **argv);
 int cmd_predict(int argc, char **argv);
 int cmd_capture(int argc, char **argv);
-/* woven capture with its arguments (argv[0] the command name); result as in fit_job. */
-int cli_capture(int argc, char **argv, fit_result *result);
 int cmd_capture_batch(int argc, char **argv);
 int cmd_scene(int argc, char **argv);
 int cmd_cloth(int argc, char **argv);

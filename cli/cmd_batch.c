@@ -1,6 +1,7 @@
 /* woven capture-batch: woven capture over a list of photos, shared over the processes
  * of an MPI job, resumable, with a summary table. The batch is the library's
- * (wv_batch_run); each photo goes through woven capture's own code path. */
+ * (wv_batch_run); each photo is the library's capture (wv_capture_run). */
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -10,34 +11,34 @@
 #include "woven/photo.h"
 #include "woven/scene.h"
 
-static const char *HELP =
+/* The list is the positional argument; -o names the batch's directory, and --force is
+ * implied (an unfinished capture is redone). */
+typedef struct {
+  capture_args cap;
+  const char *list;
+} batch_args;
+
+static const cli_cmd CMD = {
+    "capture-batch",
     "usage: woven capture-batch LIST -o DIR --scene S.json|cylinder|flat45 [capture options] [--quiet] [--json]\n"
     "\n"
     "Runs 'woven capture' on every photo of LIST: a directory (its .png, .jpg, .jpeg and .exr\n"
     "files) or a text file of photo paths, one a line (# starts a comment; relative paths are\n"
-    "relative to the list file). The capture options (--scene, --pattern, --model, --iters,\n"
-    "--crop, --iter-spp, --iter-scale, --align-radius, --register-radius, --seed, --threads,\n"
-    "--descriptor, --vgg19-weights, --drape) mean what 'woven capture --help' says and apply to every photo.\n"
+    "relative to the list file). The capture options mean what 'woven capture --help' says and\n"
+    "apply to every photo.\n",
     "Writes DIR/<name>/ per photo (name: the file name without its extension; the files of\n"
     "'woven capture'), each appearing whole when its capture is done, and DIR/summary.json and\n"
     "DIR/summary.html: every photo with its status, pattern, SSIM, WSC, time.\n"
     "A photo that fails (unreadable, wrong size) is recorded and the others go on; the exit\n"
     "code is then 2. Run the same command again to resume: finished photos are not redone.\n"
-    "Under 'mpirun -n N' the processes share the photos (docs/mpi.md). One job at a time per DIR.\n";
-
-/* Capture options that take a value; --force is implied (an unfinished capture is redone). */
-static const char *const VALUE_OPTS[] = {"--scene",     "--pattern",  "--model",        "--descriptor",
-                                         "--vgg19-weights", "--crop", "--iters",        "--iter-spp",
-                                         "--iter-scale", "--align-radius", "--register-radius", "--seed",
-                                         "--threads",   "--drape",   NULL};
+    "Under 'mpirun -n N' the processes share the photos (docs/mpi.md). One job at a time per DIR.\n",
+    {{CLI_PHOTO_OPTS, 0}, {CLI_MODEL_OPTS, 0}, {CLI_FIT_OPTS, 0}}, 1, {offsetof(batch_args, list)}};
 
 typedef struct {
   cli_ctx *c;
   int quiet, rank, size;
   wv_scene scene;
-  wv_crop crop;
-  int argc;
-  char **argv; /* "capture" PHOTO options... -o DIR --force --quiet */
+  capture_args cap; /* the capture's options, photo and directory set per photo */
 } batch_ctx;
 
 static int capture_one(void *user, const char *photo, const char *dir, wv_batch_result *res) {
@@ -46,22 +47,27 @@ static int capture_one(void *user, const char *photo, const char *dir, wv_batch_
   wv_image img = {0};
   wv_photo_info info;
   wv_error e = {0};
-  if (wv_photo_load(photo, &b->scene, &b->crop, &img, &info, &e)) {
+  if (wv_photo_load(photo, &b->scene, &b->cap.crop, &img, &info, &e)) {
     snprintf(res->error, sizeof res->error, "%s", e.msg);
     return e.code ? (int)e.code : WV_ERR_INVALID;
   }
   wv_image_free(&img);
-  b->argv[1] = (char *)photo;
-  b->argv[b->argc - 3] = (char *)dir;
-  fit_result fr;
-  memset(&fr, 0, sizeof fr);
-  int rc = cli_capture(b->argc, b->argv, &fr);
-  if (rc) {
+  b->cap.photo = photo, b->cap.out = dir;
+  wv_capture_opts co;
+  cli_capture_opts(&b->cap, &co);
+  wv_estimate est;
+  wv_fit_outcome out;
+  if (wv_capture_run(&co, &est, &out, &e)) {
+    int rc = e.code ? (int)e.code : WV_ERR_INVALID;
+    fprintf(stderr, "woven capture: error: %s\n", e.msg); /* the log keeps each photo's message */
     snprintf(res->error, sizeof res->error, "woven capture failed (exit %d; its message is in the log)", rc);
     return rc;
   }
-  res->ssim_start = fr.ssim_start, res->ssim_fit = fr.ssim_fit, res->wsc = fr.wsc, res->iterations = fr.iterations;
-  snprintf(res->pattern, sizeof res->pattern, "%s", fr.pattern);
+  res->ssim_start = out.ssim_start, res->ssim_fit = out.ssim_fit, res->wsc = out.views.wsc[1];
+  res->iterations = out.state.iter;
+  snprintf(res->pattern, sizeof res->pattern, "%s", out.state.params.pattern);
+  wv_fit_state_free(&out.state);
+  wv_estimate_free(&est);
   return 0;
 }
 
@@ -79,61 +85,24 @@ static void on_photo(void *user, const wv_batch_item *it, const wv_batch_result 
 
 int cmd_capture_batch(int argc, char **argv) {
   cli_ctx c = {0, 0, "capture-batch"};
-  cli_args a;
-  cli_args_init(&a, argc, argv, c.cmd);
-  const char *list = NULL, *dir = NULL, *scene_name = NULL, *crop = NULL;
-  /* the capture's command line: room for every argument plus the 6 added */
-  char **cargv = calloc((size_t)argc + 8, sizeof *cargv);
-  if (!cargv) return cli_usage_error(c.cmd, "out of memory");
-  int cargc = 2, rc = 0;
-  cargv[0] = "capture";
-  for (const char *s; !rc && (s = cli_next(&a));) {
-    int vi = -1;
-    for (int i = 0; VALUE_OPTS[i] && vi < 0; i++)
-      if (cli_is(&a, s, VALUE_OPTS[i])) vi = i;
-    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-      fputs(HELP, stdout);
-      free(cargv);
-      return 0;
-    } else if (cli_is(&a, s, "-o") || cli_is(&a, s, "--output")) {
-      if (!(dir = cli_value(&a, "-o"))) rc = EXIT_USAGE;
-    } else if (vi >= 0) {
-      const char *v = cli_value(&a, VALUE_OPTS[vi]);
-      if (!v) {
-        rc = EXIT_USAGE;
-        break;
-      }
-      if (!strcmp(VALUE_OPTS[vi], "--scene")) scene_name = v;
-      if (!strcmp(VALUE_OPTS[vi], "--crop")) crop = v;
-      cargv[cargc++] = (char *)VALUE_OPTS[vi];
-      cargv[cargc++] = (char *)v;
-    } else if (!strcmp(s, "--force")) {
-      /* implied */
-    } else if (cli_common_flag(&c, s)) {
-      /* --quiet, -q, --json */
-    } else if (s[0] == '-' && s[1]) {
-      rc = cli_usage_error(c.cmd, "unknown option '%s'", s);
-    } else if (!list) {
-      list = s;
-    } else {
-      rc = cli_usage_error(c.cmd, "unexpected argument '%s'", s);
-    }
-  }
-  if (!rc && !list) rc = cli_usage_error(c.cmd, "a LIST of photos (a file or a directory) is required");
+  batch_args ba;
+  cli_capture_args_init(&ba.cap);
+  ba.list = NULL;
+  CLI_PARSE(&CMD, argc, argv, &ba, &c);
+  const char *list = ba.list, *dir = ba.cap.out, *scene_name = ba.cap.scene;
+  int rc = 0;
+  if (!list) rc = cli_usage_error(c.cmd, "a LIST of photos (a file or a directory) is required");
   if (!rc && !dir) rc = cli_usage_error(c.cmd, "-o DIR is required");
   if (!rc && !scene_name) rc = cli_usage_error(c.cmd, "--scene is required");
   batch_ctx b;
   memset(&b, 0, sizeof b);
-  b.c = &c, b.quiet = c.quiet;
+  b.c = &c, b.quiet = c.quiet, b.cap = ba.cap, b.cap.force = 1;
   wv_error err = {0};
-  if (!rc && crop && !cli_parse_crop(crop, &b.crop))
-    rc = cli_usage_error(c.cmd, "--crop must be x,y,w,h (non-negative integers)");
   if (!rc && wv_scene_load(scene_name, &b.scene, &err)) rc = cli_fail(&c, &err);
   wv_dist dist;
   if (!rc && wv_dist_begin(&dist, &err)) rc = cli_fail(&c, &err);
   if (!rc) {
-    cargv[cargc++] = "-o", cargv[cargc++] = NULL, cargv[cargc++] = "--force", cargv[cargc++] = "--quiet";
-    b.argc = cargc, b.argv = cargv, b.rank = dist.rank, b.size = dist.size;
+    b.rank = dist.rank, b.size = dist.size;
     if (dist.rank > 0) c.quiet = 1, c.json = 0;
     wv_batch_opts bo = {list, dir, capture_one, &b, on_photo};
     wv_batch_summary sum;
@@ -155,6 +124,5 @@ int cmd_capture_batch(int argc, char **argv) {
     }
     wv_dist_end(&dist);
   }
-  free(cargv);
   return rc;
 }

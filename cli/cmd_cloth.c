@@ -1,5 +1,6 @@
 /* woven cloth: drapes a UV-mapped square with the cloth simulation (woven/cloth.h)
  * and writes it as OBJ. */
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -7,77 +8,47 @@
 #include "cli.h"
 #include "woven/cloth.h"
 
-static const char *CLOTH_HELP =
+typedef struct {
+  wv_cloth_opts o;
+  const char *out;
+  int obstacle, seed;
+  double radius;
+} cloth_args;
+
+static const cli_opt OPTS[] = {
+    CLI_O_STR("--output", "-o", cloth_args, out, "OUT.obj", "the draped mesh"),
+    CLI_O_INT("--res", NULL, cloth_args, o.res, 2, 512, "N", "cells per side (default 64: 4,225 vertices, 8,192 triangles)"),
+    CLI_O_REAL("--size-mm", cloth_args, o.size_mm, 1, 1e5, 0, "S", "side of the square (default 300)"),
+    CLI_O_ENUM("--obstacle", cloth_args, obstacle, "sphere|box|none",
+               "sphere (default; radius 80 mm, centre 80 mm up), box (a table whose\nedge the cloth falls over) or "
+               "none (the cloth lands on the floor)"),
+    CLI_O_REAL("--radius-mm", cloth_args, radius, 1, 1e5, 0, "R", "sphere radius (its centre is R above the floor)"),
+    CLI_O_REAL("--seconds", cloth_args, o.seconds, 0, 60, 0, "T", "simulated time (default 3)"),
+    CLI_O_INT("--steps-per-second", NULL, cloth_args, o.steps_per_second, 10, 100000, "N", "time steps (default 600)"),
+    CLI_O_INT("--seed", NULL, cloth_args, seed, 0, INT_MAX, "N", "the seed of the simulation"),
+    CLI_O_END};
+
+static const cli_cmd CMD = {
+    "cloth",
     "usage: woven cloth -o OUT.obj [--res N] [--size-mm S] [--obstacle sphere|box|none] [--radius-mm R]\n"
     "                   [--seconds T] [--steps-per-second N] [--seed N] [--quiet] [--json]\n"
     "\n"
     "Drops a square of cloth (UVs 0..1 over it) onto an obstacle resting on the floor y = 0 and\n"
     "writes the draped mesh. Position-based dynamics: stretch, shear and bending constraints,\n"
-    "collisions with friction, self-distance. Deterministic: the same options give the same file.\n"
-    "  --res N          cells per side (default 64: 4,225 vertices, 8,192 triangles)\n"
-    "  --size-mm S      side of the square (default 300)\n"
-    "  --obstacle O     sphere (default; radius 80 mm, centre 80 mm up), box (a table whose edge\n"
-    "                   the cloth falls over) or none (the cloth lands on the floor)\n"
-    "  --radius-mm R    sphere radius (its centre is R above the floor)\n"
-    "  --seconds T      simulated time (default 3)\n"
-    "  --steps-per-second N  time steps (default 600)\n";
-
-static int parse_double(cli_args *a, const char *name, double lo, double hi, double *out) {
-  const char *v = cli_value(a, name);
-  if (!v) return 0;
-  char *end;
-  double x = strtod(v, &end);
-  if (!*v || *end || !(x >= lo && x <= hi)) {
-    cli_usage_error(a->cmd, "%s: '%s' is not a number in %g..%g", name, v, lo, hi);
-    return 0;
-  }
-  *out = x;
-  return 1;
-}
+    "collisions with friction, self-distance. Deterministic: the same options give the same file.\n",
+    NULL, {{OPTS, 0}}, 0, {0}};
 
 int cmd_cloth(int argc, char **argv) {
   cli_ctx c = {0, 0, "cloth"};
-  cli_args a;
-  cli_args_init(&a, argc, argv, c.cmd);
-  wv_cloth_opts o;
-  wv_cloth_defaults(&o);
-  const char *out = NULL;
-  long v;
-  double r = -1;
-  for (const char *s; (s = cli_next(&a));) {
-    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-      fputs(CLOTH_HELP, stdout);
-      return 0;
-    } else if (cli_is(&a, s, "-o") || cli_is(&a, s, "--output")) {
-      if (!(out = cli_value(&a, "-o"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--res")) {
-      if (!cli_int(&a, "--res", 2, 512, &v)) return EXIT_USAGE;
-      o.res = (int)v;
-    } else if (cli_is(&a, s, "--size-mm")) {
-      if (!parse_double(&a, "--size-mm", 1, 1e5, &o.size_mm)) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--radius-mm")) {
-      if (!parse_double(&a, "--radius-mm", 1, 1e5, &r)) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--seconds")) {
-      if (!parse_double(&a, "--seconds", 0, 60, &o.seconds)) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--steps-per-second")) {
-      if (!cli_int(&a, "--steps-per-second", 10, 100000, &v)) return EXIT_USAGE;
-      o.steps_per_second = (int)v;
-    } else if (cli_is(&a, s, "--seed")) {
-      if (!cli_int(&a, "--seed", 0, 2147483647L, &v)) return EXIT_USAGE;
-      o.seed = (uint64_t)v;
-    } else if (cli_is(&a, s, "--obstacle")) {
-      const char *ob = cli_value(&a, "--obstacle");
-      if (!ob) return EXIT_USAGE;
-      if (!strcmp(ob, "sphere")) o.obstacle = WV_OBSTACLE_SPHERE;
-      else if (!strcmp(ob, "box")) o.obstacle = WV_OBSTACLE_BOX;
-      else if (!strcmp(ob, "none")) o.obstacle = WV_OBSTACLE_NONE;
-      else return cli_usage_error(c.cmd, "--obstacle must be sphere, box or none");
-    } else if (cli_common_flag(&c, s)) {
-      /* --quiet, -q, --json */
-    } else {
-      return cli_usage_error(c.cmd, "unknown argument '%s'", s);
-    }
-  }
+  cloth_args ca = {.out = NULL, .obstacle = -1, .seed = -1, .radius = -1};
+  wv_cloth_defaults(&ca.o);
+  CLI_PARSE(&CMD, argc, argv, &ca, &c);
+  static const wv_obstacle OBSTACLES[] = {WV_OBSTACLE_SPHERE, WV_OBSTACLE_BOX, WV_OBSTACLE_NONE};
+  wv_cloth_opts o = ca.o;
+  if (ca.obstacle >= 0) o.obstacle = OBSTACLES[ca.obstacle];
+  if (ca.seed >= 0) o.seed = (uint64_t)ca.seed;
+  const char *out = ca.out;
+  double r = ca.radius;
   if (!out) return cli_usage_error(c.cmd, "-o OUT.obj is required");
   size_t n = strlen(out);
   if (n < 5 || strcasecmp(out + n - 4, ".obj")) return cli_usage_error(c.cmd, "output '%s' must end in .obj", out);

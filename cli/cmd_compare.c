@@ -6,7 +6,20 @@
 #include "woven/io.h"
 #include "woven/metrics.h"
 
-static const char *HELP =
+typedef struct {
+  const char *files[2];
+  int channels;
+  double blur;
+} compare_args;
+
+static const cli_opt OPTS[] = {
+    CLI_O_ENUM("--channels", compare_args, channels, "luma|rgb", "SSIM on luminance (default) or per channel"),
+    CLI_O_REAL("--blur", compare_args, blur, 0, 100, 0, "SIGMA",
+               "compare Gaussian blurs of both (sigma in pixels): the shading\nwithout the pixel-scale weave and its noise"),
+    CLI_O_END};
+
+static const cli_cmd CMD = {
+    "compare",
     "usage: woven compare A B [--channels luma|rgb] [--blur SIGMA] [--json]\n"
     "\n"
     "Compares two images of the same size: SSIM (Wang et al. 2004, 11x11 Gaussian window,\n"
@@ -15,45 +28,17 @@ static const char *HELP =
     "the log power spectra of the luminance detail of the centre 256 x 256 pixels, DC left\n"
     "out: 1 for the same periodic structure wherever its yarns lie, about 0 against noise;\n"
     "docs/fit.md; omitted below 32 x 32 pixels), and the mean absolute difference. Values\n"
-    "are compared as stored (8/16-bit scaled to [0,1], EXR as is).\n"
-    "  --blur SIGMA  compare Gaussian blurs of both (sigma in pixels): the shading without\n"
-    "                the pixel-scale weave and its noise\n";
+    "are compared as stored (8/16-bit scaled to [0,1], EXR as is).\n",
+    NULL, {{OPTS, 0}}, 2, {offsetof(compare_args, files[0]), offsetof(compare_args, files[1])}};
 
 int cmd_compare(int argc, char **argv) {
   cli_ctx c = {0, 0, "compare"};
-  cli_args a;
-  cli_args_init(&a, argc, argv, c.cmd);
-  const char *files[2] = {NULL, NULL};
-  int nfiles = 0;
-  wv_ssim_mode mode = WV_SSIM_LUMA;
-  double blur = 0;
-  for (const char *s; (s = cli_next(&a));) {
-    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-      fputs(HELP, stdout);
-      return 0;
-    } else if (cli_is(&a, s, "--channels")) {
-      const char *v = cli_value(&a, "--channels");
-      if (!v) return EXIT_USAGE;
-      if (!strcmp(v, "luma")) mode = WV_SSIM_LUMA;
-      else if (!strcmp(v, "rgb")) mode = WV_SSIM_RGB;
-      else return cli_usage_error(c.cmd, "--channels must be luma or rgb");
-    } else if (cli_is(&a, s, "--blur")) {
-      const char *v = cli_value(&a, "--blur");
-      if (!v) return EXIT_USAGE;
-      char *end;
-      blur = strtod(v, &end);
-      if (*v == '\0' || *end != '\0' || !(blur >= 0 && blur <= 100))
-        return cli_usage_error(c.cmd, "--blur: '%s' is not a number in 0..100", v);
-    } else if (cli_common_flag(&c, s)) {
-      /* --quiet, -q, --json */
-    } else if (s[0] == '-' && s[1]) {
-      return cli_usage_error(c.cmd, "unknown option '%s'", s);
-    } else if (nfiles < 2) {
-      files[nfiles++] = s;
-    } else {
-      return cli_usage_error(c.cmd, "expected two images, got a third: '%s'", s);
-    }
-  }
+  compare_args ca = {{NULL, NULL}, 0, 0};
+  CLI_PARSE(&CMD, argc, argv, &ca, &c);
+  const char **files = ca.files;
+  int nfiles = !!files[0] + !!files[1];
+  wv_ssim_mode mode = ca.channels ? WV_SSIM_RGB : WV_SSIM_LUMA;
+  double blur = ca.blur;
   if (nfiles != 2) return cli_usage_error(c.cmd, "expected two images");
   wv_error err = {0};
   wv_image im[2] = {{0}, {0}};

@@ -5,7 +5,27 @@
 #include "cli.h"
 #include "woven/export.h"
 
-static const char *HELP =
+typedef struct {
+  const char *in, *out;
+  int mesh, size_mm;
+  wv_bake_opts bo;
+} export_args;
+
+static const cli_opt OPTS[] = {
+    CLI_O_STR("--gltf", "-o", export_args, out, "OUT.glb", "the glTF binary"),
+    CLI_O_ENUM("--mesh", export_args, mesh, "quad|drape",
+               "quad (default): a flat square; drape: a sheet draped over a sphere"),
+    CLI_O_INT("--size-mm", NULL, export_args, size_mm, 1, 100000, "N",
+              "the quad's side or the sheet's side (default 100 quad, 600 drape)"),
+    CLI_O_INT("--texture", NULL, export_args, bo.texture_size, 8, 1024, "N", "texels per tile side, 8..1024 (default 64)"),
+    CLI_O_INT("--samples", NULL, export_args, bo.samples, 1, 8, "N", "woven samples per texel side, 1..8 (default 3)"),
+    CLI_O_INT("--directions", NULL, export_args, bo.directions, 8, 256, "N",
+              "light/view direction pairs of the fit, 8..256 (default 48)"),
+    CLI_O_INT("--threads", NULL, export_args, bo.threads, 1, 1024, "N", "worker threads (default: all cores)"),
+    CLI_O_END};
+
+static const cli_cmd CMD = {
+    "export",
     "usage: woven export DIR|P.json --gltf OUT.glb [--mesh quad|drape] [--size-mm N]\n"
     "                    [--texture N] [--samples N] [--directions N] [--threads N] [--quiet] [--json]\n"
     "\n"
@@ -14,56 +34,17 @@ static const char *HELP =
     "KHR_materials_sheen), tiled by KHR_texture_transform at the tile's physical size. Each\n"
     "texel is a least-squares fit of that material to the woven BRDF over light/view direction\n"
     "pairs; the residual is printed and stored in the material's extras (docs/export.md).\n"
-    "  DIR            a finished fit's directory (its params.json), or P.json a parameter file\n"
-    "  --mesh M       quad (default): a flat square; drape: a sheet draped over a sphere\n"
-    "  --size-mm N    the quad's side or the sheet's side (default 100 quad, 600 drape)\n"
-    "  --texture N    texels per tile side, 8..1024 (default 64)\n"
-    "  --samples N    woven samples per texel side, 1..8 (default 3)\n"
-    "  --directions N light/view direction pairs of the fit, 8..256 (default 48)\n"
-    "  --threads N    worker threads (default: all cores)\n";
+    "  DIR            a finished fit's directory (its params.json), or P.json a parameter file\n",
+    NULL, {{OPTS, 0}}, 1, {offsetof(export_args, in)}};
 
 int cmd_export(int argc, char **argv) {
   cli_ctx c = {0, 0, "export"};
-  cli_args a;
-  cli_args_init(&a, argc, argv, c.cmd);
-  const char *in = NULL, *out = NULL, *mesh_name = "quad";
-  wv_bake_opts bo;
-  wv_bake_opts_default(&bo);
-  long v, size_mm = 0;
-  for (const char *s; (s = cli_next(&a));) {
-    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-      fputs(HELP, stdout);
-      return 0;
-    } else if (cli_is(&a, s, "--gltf") || cli_is(&a, s, "-o")) {
-      if (!(out = cli_value(&a, "--gltf"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--mesh")) {
-      if (!(mesh_name = cli_value(&a, "--mesh"))) return EXIT_USAGE;
-      if (strcmp(mesh_name, "quad") && strcmp(mesh_name, "drape"))
-        return cli_usage_error(c.cmd, "--mesh must be quad or drape, not '%s'", mesh_name);
-    } else if (cli_is(&a, s, "--size-mm")) {
-      if (!cli_int(&a, "--size-mm", 1, 100000, &size_mm)) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--texture")) {
-      if (!cli_int(&a, "--texture", 8, 1024, &v)) return EXIT_USAGE;
-      bo.texture_size = (int)v;
-    } else if (cli_is(&a, s, "--samples")) {
-      if (!cli_int(&a, "--samples", 1, 8, &v)) return EXIT_USAGE;
-      bo.samples = (int)v;
-    } else if (cli_is(&a, s, "--directions")) {
-      if (!cli_int(&a, "--directions", 8, 256, &v)) return EXIT_USAGE;
-      bo.directions = (int)v;
-    } else if (cli_is(&a, s, "--threads")) {
-      if (!cli_int(&a, "--threads", 1, 1024, &v)) return EXIT_USAGE;
-      bo.threads = (int)v;
-    } else if (cli_common_flag(&c, s)) {
-      /* --quiet, -q, --json */
-    } else if (s[0] == '-' && s[1]) {
-      return cli_usage_error(c.cmd, "unknown option '%s'", s);
-    } else if (!in) {
-      in = s;
-    } else {
-      return cli_usage_error(c.cmd, "unexpected argument '%s'", s);
-    }
-  }
+  export_args ea = {NULL, NULL, 0, 0, {0}};
+  wv_bake_opts_default(&ea.bo);
+  CLI_PARSE(&CMD, argc, argv, &ea, &c);
+  const char *in = ea.in, *out = ea.out, *mesh_name = ea.mesh ? "drape" : "quad";
+  wv_bake_opts bo = ea.bo;
+  long size_mm = ea.size_mm;
   if (!in) return cli_usage_error(c.cmd, "a fit directory or a parameter file is required");
   if (!out) return cli_usage_error(c.cmd, "--gltf OUT.glb is required");
   int rc = cli_check_output(c.cmd, out, ".glb");

@@ -1,37 +1,30 @@
 /* woven predict and woven capture: FabricNet's estimate of a photo's parameters, and
- * the whole pipeline (estimate, then the fit from it, then every output of the fit). */
-#include <stdlib.h>
+ * the whole pipeline (estimate, then the fit from it, then every output of the fit); the
+ * jobs are the library's (woven/capture.h), this file parses and prints. */
 #include <string.h>
-#include <sys/stat.h>
 
 #include "cli.h"
-#include "woven/descriptor.h"
 #include "woven/fabricnet.h"
-#include "woven/io.h"
-#include "woven/photo.h"
 
-static const char *PREDICT_HELP =
+static const cli_cmd PREDICT_CMD = {
+    "predict",
     "usage: woven predict PHOTO --scene S.json|cylinder|flat45 -o P.json [--pattern NAME]\n"
     "                     [--model M] [--crop x,y,w,h] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                     [--force] [--quiet] [--json]\n"
     "\n"
     "FabricNet's estimate of the fabric parameters of PHOTO taken in the scene.\n"
-    "  --pattern NAME  a built-in pattern (plain, basket, twill21s ... twill31z, satin5, satin8,\n"
-    "                  the _90 variants; docs/model.md). Without it the pattern is chosen over the\n"
-    "                  whole library (the network does not predict it): the weave analysis finds\n"
-    "                  the lattice of the photo's spectral peaks, explains it for each built-in by\n"
-    "                  densities and an orientation, and ranks the built-ins by how well their own\n"
-    "                  render (4 spp, centre 256 x 256) shows the photo's peaks; near ties go to the\n"
-    "                  fit's loss (Gram + 0.2 pixel), which also decides alone when the photo shows\n"
-    "                  no weave lattice. The chosen pattern starts from its lattice densities;\n"
-    "                  --json gives the analysis (docs/analysis.md). The noise level Q is the\n"
-    "                  pattern's prior value\n"
-    "  --model M       a model from 'woven train' (default: models/fabricnet-<scene name>.bin;\n"
-    "                  the directory can be changed with WOVEN_MODEL_DIR)\n"
-    "  --descriptor    the texture descriptor (default: default); the model must match it\n"
-    "  --force         use a model trained for another scene\n";
+    "Without --pattern the pattern is chosen over the whole library (the network does not\n"
+    "predict it): the weave analysis finds the lattice of the photo's spectral peaks, explains\n"
+    "it for each built-in by densities and an orientation, and ranks the built-ins by how well\n"
+    "their own render (4 spp, centre 256 x 256) shows the photo's peaks; near ties go to the\n"
+    "fit's loss (Gram + 0.2 pixel), which also decides alone when the photo shows no weave\n"
+    "lattice. The chosen pattern starts from its lattice densities; --json gives the analysis\n"
+    "(docs/analysis.md). The noise level Q is the pattern's prior value. The model must match\n"
+    "the descriptor; --force uses a model trained for another scene.\n",
+    NULL, {{CLI_PHOTO_OPTS, 0}, {CLI_MODEL_OPTS, 0}}, 1, {offsetof(capture_args, photo)}};
 
-static const char *CAPTURE_HELP =
+static const cli_cmd CAPTURE_CMD = {
+    "capture",
     "usage: woven capture PHOTO --scene S.json|cylinder|flat45 -o DIR [--pattern NAME]\n"
     "                     [--model M] [--iters N] [--crop x,y,w,h] [--iter-spp N] [--iter-scale N]\n"
     "                     [--align-radius N] [--register-radius N] [--seed N] [--threads N] [--descriptor default|vgg19]\n"
@@ -41,30 +34,15 @@ static const char *CAPTURE_HELP =
     "The whole capture: FabricNet's estimate (as 'woven predict'), then the fit from it (as\n"
     "'woven fit', 200 iterations by default; the fit options mean what 'woven fit --help' says).\n"
     "Without --pattern the pattern is chosen as 'woven predict --help' describes; the choice and\n"
-    "its losses go to fit.json, report.html and the --json summary (the fit keeps the pattern).\n"
+    "its losses go to fit.json, report.html and the --json summary (the fit keeps the pattern).\n",
     "Writes to DIR: network.json (the estimate), params.json (the fit), render.png, start.png\n"
     "(the network's estimate rendered), compare.png (photo | network | fit), loss.svg,\n"
     "report.html, viewer.html, drape.png (the fit on the bundled draped cloth, --drape), maps/,\n"
-    "fit.json and checkpoint.json ('woven fit --resume DIR' continues).\n";
-
-#ifndef WOVEN_MODEL_DIR
-#define WOVEN_MODEL_DIR "models"
-#endif
-
-/* models/fabricnet-<scene>.bin, in $WOVEN_MODEL_DIR or the source tree's models/. */
-static void default_model(const wv_scene *s, char *buf, size_t cap) {
-  const char *d = getenv("WOVEN_MODEL_DIR");
-  snprintf(buf, cap, "%s/fabricnet-%s.bin", d && *d ? d : WOVEN_MODEL_DIR, s->name);
-}
-
-typedef struct {
-  const char *photo, *scene_name, *pattern, *model, *descriptor, *weights, *out;
-  wv_crop crop;
-  int force;
-} predict_args;
+    "fit.json and checkpoint.json ('woven fit --resume DIR' continues).\n",
+    {{CLI_PHOTO_OPTS, 0}, {CLI_MODEL_OPTS, 0}, {CLI_FIT_OPTS, 0}}, 1, {offsetof(capture_args, photo)}};
 
 /* Why the pattern was chosen: the weave analysis and the deciding scores, on stderr. */
-static void cli_print_choice(cli_ctx *c, const wv_pattern_choice *pc) {
+static void print_choice(cli_ctx *c, const wv_pattern_choice *pc) {
   const wv_lattice *l = &pc->lattice;
   const char *name = wv_weave_builtin_name(pc->best);
   if (l->found) {
@@ -93,142 +71,36 @@ static void cli_print_choice(cli_ctx *c, const wv_pattern_choice *pc) {
   }
 }
 
-/* What run_predict found: the estimate, and how its pattern was chosen when not given. */
-typedef struct {
-  wv_params params;
-  int chosen; /* the pattern was chosen (pa->pattern was NULL): choice is filled */
-  wv_pattern_choice choice;
-  double seconds;
-} predict_result;
-
-/* Loads what a prediction needs and runs it. On success the caller frees img and desc. */
-static int run_predict(cli_ctx *c, const predict_args *pa, wv_scene *scene, wv_image *img, wv_photo_info *info,
-                       wv_descriptor **desc, predict_result *res) {
-  double t0 = cli_now();
-  wv_error err = {0};
-  memset(res, 0, sizeof *res);
-  if (wv_scene_load(pa->scene_name, scene, &err)) return cli_fail(c, &err);
-  wv_params probe; /* the pattern is checked before the slow steps */
-  if (pa->pattern && wv_params_default(pa->pattern, &probe, &err)) return cli_fail(c, &err);
-  if (pa->pattern && !strcmp(pa->pattern, "custom"))
-    return cli_usage_error(c->cmd, "--pattern must be a built-in pattern");
-  char mpath[4096];
-  if (pa->model)
-    snprintf(mpath, sizeof mpath, "%s", pa->model);
-  else
-    default_model(scene, mpath, sizeof mpath);
-  struct stat sb;
-  if (!pa->model && stat(mpath, &sb) != 0) {
-    fprintf(stderr, "woven %s: error: no default model for scene '%s' (%s); train one with 'woven dataset' and "
-                    "'woven train' (docs/fabricnet.md) and pass --model\n", c->cmd, scene->name, mpath);
-    return WV_ERR_IO;
-  }
-  wv_fabricnet net;
-  if (wv_fabricnet_load(mpath, &net, &err)) return cli_fail(c, &err);
-  int rc = 0;
-  if (wv_descriptor_create(pa->descriptor ? pa->descriptor : "default", pa->weights, desc, &err)) {
-    rc = cli_fail(c, &err);
-  } else if (wv_fabricnet_check(&net, mpath, wv_descriptor_name(*desc), wv_descriptor_size(*desc),
-                                pa->force ? NULL : scene, &err)) {
-    rc = cli_fail(c, &err);
-  } else if (wv_photo_load(pa->photo, scene, &pa->crop, img, info, &err)) {
-    rc = cli_fail(c, &err);
-  }
-  float y[WV_NET_OUT];
-  if (!rc && !pa->pattern) {
-    res->chosen = 1;
-    if (wv_fabricnet_predict_pattern(&net, *desc, scene, img, NULL, y, &res->choice, &err))
-      rc = cli_fail(c, &err);
-    else
-      res->params = res->choice.params[res->choice.best];
-  } else if (!rc) {
-    float *feat = malloc(sizeof(float) * (size_t)net.n_in);
-    if (!feat) rc = cli_usage_error(c->cmd, "out of memory");
-    else if (wv_fabricnet_predict(&net, *desc, img, feat, y, NULL, &err) ||
-             wv_fabricnet_params(&net, y, pa->pattern, &res->params, &err))
-      rc = cli_fail(c, &err);
-    free(feat);
-  }
-  wv_fabricnet_free(&net);
-  if (rc) {
-    wv_image_free(img);
-    wv_descriptor_free(*desc);
-    *desc = NULL;
-  }
-  res->seconds = cli_now() - t0;
-  if (!rc && res->chosen) cli_print_choice(c, &res->choice);
-  return rc;
+void cli_capture_opts(const capture_args *a, wv_capture_opts *o) {
+  memset(o, 0, sizeof *o);
+  o->estimate = (wv_estimate_opts){a->photo, a->scene, a->model, a->pattern, a->descriptor, a->weights, a->crop,
+                                   a->force};
+  o->fit = a->fit, o->iters_given = a->iters_given, o->dir = a->out, o->drape = a->drape, o->force = a->force;
 }
 
-static int parse_common(cli_args *a, const char *s, predict_args *pa, int *handled) {
-  *handled = 1;
-  if (cli_is(a, s, "--scene")) {
-    if (!(pa->scene_name = cli_value(a, "--scene"))) return EXIT_USAGE;
-  } else if (cli_is(a, s, "--pattern")) {
-    if (!(pa->pattern = cli_value(a, "--pattern"))) return EXIT_USAGE;
-  } else if (cli_is(a, s, "--model")) {
-    if (!(pa->model = cli_value(a, "--model"))) return EXIT_USAGE;
-  } else if (cli_is(a, s, "--descriptor")) {
-    if (!(pa->descriptor = cli_value(a, "--descriptor"))) return EXIT_USAGE;
-  } else if (cli_is(a, s, "--vgg19-weights")) {
-    if (!(pa->weights = cli_value(a, "--vgg19-weights"))) return EXIT_USAGE;
-  } else if (cli_is(a, s, "-o") || cli_is(a, s, "--output")) {
-    if (!(pa->out = cli_value(a, "-o"))) return EXIT_USAGE;
-  } else if (cli_is(a, s, "--crop")) {
-    const char *cv = cli_value(a, "--crop");
-    if (!cv) return EXIT_USAGE;
-    if (!cli_parse_crop(cv, &pa->crop)) return cli_usage_error(a->cmd, "--crop must be x,y,w,h (non-negative integers)");
-  } else if (!strcmp(s, "--force")) {
-    pa->force = 1;
-  } else {
-    *handled = 0;
-  }
-  return 0;
-}
-
-static int check_required(const char *cmd, const predict_args *pa) {
+static int check_required(const char *cmd, const capture_args *pa) {
   if (!pa->photo) return cli_usage_error(cmd, "a PHOTO is required");
-  if (!pa->scene_name) return cli_usage_error(cmd, "--scene is required");
+  if (!pa->scene) return cli_usage_error(cmd, "--scene is required");
   if (!pa->out) return cli_usage_error(cmd, "-o is required");
   return 0;
 }
 
 int cmd_predict(int argc, char **argv) {
   cli_ctx c = {0, 0, "predict"};
-  cli_args a;
-  cli_args_init(&a, argc, argv, c.cmd);
-  predict_args pa;
-  memset(&pa, 0, sizeof pa);
-  for (const char *s; (s = cli_next(&a));) {
-    int handled, rc;
-    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-      fputs(PREDICT_HELP, stdout);
-      return 0;
-    }
-    if ((rc = parse_common(&a, s, &pa, &handled))) return rc;
-    if (handled) continue;
-    if (cli_common_flag(&c, s)) {
-      /* --quiet, -q, --json */
-    } else if (s[0] == '-' && s[1]) {
-      return cli_usage_error(c.cmd, "unknown option '%s'", s);
-    } else if (!pa.photo) {
-      pa.photo = s;
-    } else {
-      return cli_usage_error(c.cmd, "unexpected argument '%s'", s);
-    }
-  }
+  capture_args pa;
+  cli_capture_args_init(&pa);
+  CLI_PARSE(&PREDICT_CMD, argc, argv, &pa, &c);
   int rc = check_required(c.cmd, &pa);
   if (rc) return rc;
-  const char *inputs[] = {pa.photo, pa.scene_name, pa.model, pa.weights};
+  const char *inputs[] = {pa.photo, pa.scene, pa.model, pa.weights};
   if ((rc = cli_check_not_input(&c, pa.out, 0, inputs, 4))) return rc;
   cli_clean_temps_beside(pa.out);
-  wv_scene scene;
-  wv_image img = {0};
-  wv_photo_info info;
-  wv_descriptor *desc = NULL;
-  predict_result res;
-  if ((rc = run_predict(&c, &pa, &scene, &img, &info, &desc, &res))) return rc;
+  wv_capture_opts co;
+  cli_capture_opts(&pa, &co);
+  wv_estimate res;
   wv_error err = {0};
+  if (wv_estimate_run(&co.estimate, &res, &err)) return cli_fail(&c, &err);
+  if (res.chosen) print_choice(&c, &res.choice);
   if (wv_params_write(pa.out, &res.params, &err)) rc = cli_fail(&c, &err);
   if (!rc) {
     cli_info(&c, "%s: network estimate written to %s in %.2f s\n", pa.photo, pa.out, res.seconds);
@@ -238,81 +110,38 @@ int cmd_predict(int argc, char **argv) {
                                res.chosen ? cli_json_text(wv_pattern_choice_to_json(&res.choice)) : json_null(),
                                "params", cli_json_text(wv_params_to_json(&res.params))));
   }
-  wv_image_free(&img);
-  wv_descriptor_free(desc);
+  wv_estimate_free(&res);
   return rc;
 }
 
-int cmd_capture(int argc, char **argv) { return cli_capture(argc, argv, NULL); }
+static void on_estimate(void *user, const wv_estimate *e) {
+  cli_fit_ui *u = user;
+  if (e->chosen) print_choice(u->c, &e->choice);
+  cli_info(u->c, "network estimate in %.2f s\n", e->seconds);
+  cli_progress_start(&u->bar, u->c, "fit"); /* the fit's time left counts from here */
+}
 
-int cli_capture(int argc, char **argv, fit_result *result) {
+int cmd_capture(int argc, char **argv) {
   cli_ctx c = {0, 0, "capture"};
-  cli_args a;
-  cli_args_init(&a, argc, argv, c.cmd);
-  predict_args pa;
-  memset(&pa, 0, sizeof pa);
-  fit_job job;
-  memset(&job, 0, sizeof job);
-  wv_fit_opts_default(&job.opts);
-  int iters_given = 0;
-  for (const char *s; (s = cli_next(&a));) {
-    int handled, rc;
-    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-      fputs(CAPTURE_HELP, stdout);
-      return 0;
-    }
-    if ((rc = parse_common(&a, s, &pa, &handled))) return rc;
-    if (handled) continue;
-    if (cli_parse_fit_opt(&a, s, &job, &iters_given, &handled)) return EXIT_USAGE;
-    if (handled) continue;
-    if (cli_common_flag(&c, s)) {
-      /* --quiet, -q, --json */
-    } else if (s[0] == '-' && s[1]) {
-      return cli_usage_error(c.cmd, "unknown option '%s'", s);
-    } else if (!pa.photo) {
-      pa.photo = s;
-    } else {
-      return cli_usage_error(c.cmd, "unexpected argument '%s'", s);
-    }
-  }
+  capture_args pa;
+  cli_capture_args_init(&pa);
+  CLI_PARSE(&CAPTURE_CMD, argc, argv, &pa, &c);
   int rc = check_required(c.cmd, &pa);
   if (rc) return rc;
-  /* Everything is checked before anything is written; the directory first (cheap). */
-  job.dir = pa.out, job.resume = 0, job.force = pa.force;
-  const char *inputs[] = {pa.photo, pa.scene_name, pa.model, pa.weights};
-  memcpy(job.inputs, inputs, sizeof inputs);
-  if ((rc = fit_check_dir(&c, &job))) return rc;
-  wv_scene scene;
-  wv_image img = {0};
-  wv_photo_info info;
-  wv_descriptor *desc = NULL;
-  predict_result res;
+  wv_capture_opts co;
+  cli_capture_opts(&pa, &co);
+  cli_fit_ui ui;
+  co.progress = cli_fit_progress(&ui, &c);
+  co.on_estimate = on_estimate;
+  wv_estimate est;
+  wv_fit_outcome out;
   wv_error err = {0};
-  wv_scene probe; /* the fit's size limits, before the network runs */
-  if (wv_scene_load(pa.scene_name, &probe, &err)) return cli_fail(&c, &err);
-  if (wv_fit_check_sizes(&probe, NULL, &job.opts, &err)) return cli_fail(&c, &err);
-  if ((rc = run_predict(&c, &pa, &scene, &img, &info, &desc, &res))) return rc;
-  cli_info(&c, "network estimate in %.2f s\n", res.seconds);
-  char *network = wv_params_to_json(&res.params), *nl = network ? realloc(network, strlen(network) + 2) : NULL;
-  if (nl) strcat(nl, "\n"), network = nl; /* as wv_params_write writes it */
-  if (wv_fit_check_sizes(&scene, desc, &job.opts, &err)) {
+  if (wv_capture_run(&co, &est, &out, &err)) {
     rc = cli_fail(&c, &err);
-  } else if (!network) {
-    rc = cli_fail(&c, &(wv_error){WV_ERR_NOMEM, "out of memory"});
   } else {
-    job.crop = (wv_crop){info.crop[0], info.crop[1], info.crop[2], info.crop[3]};
-    job.weights = pa.weights;
-    job.extra_name = "network.json", job.extra_text = network;
-    job.scene = &scene, job.photo = &img, job.desc = desc, job.start = &res.params;
-    job.pattern_choice = res.chosen ? &res.choice : NULL;
-    job.photo_path = pa.photo, job.iters_given = iters_given;
-    job.start_label = "network";
-    job.title = "woven capture";
-    job.result = result;
-    rc = fit_pipeline(&c, &job);
+    rc = cli_fit_summary(&c, pa.out, est.chosen ? &est.choice : NULL, &out);
+    wv_estimate_free(&est);
   }
-  free(network);
-  wv_descriptor_free(desc);
-  wv_image_free(&img);
+  cli_progress_end(&ui.bar);
   return rc;
 }

@@ -1,4 +1,5 @@
 /* woven scene: renders a mesh scene file (woven/scene3d.h) to PNG or EXR. */
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -8,21 +9,44 @@
 #include "woven/io.h"
 #include "woven/scene3d.h"
 
-static const char *SCENE_HELP =
+typedef struct {
+  const char *scene, *out, *params;
+  int spp, threads, seed, limit_mb, size[2];
+} scene_args;
+
+/* WIDTHxHEIGHT */
+static int parse_size(const char *cmd, const cli_opt *o, const char *v, void *base) {
+  int *wh = (int *)((char *)base + o->off), w, h;
+  char x = 0, end = 0;
+  if (sscanf(v, "%d%c%d%c", &w, &x, &h, &end) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1 ||
+      w > WV_SCENE_MAX_SIDE || h > WV_SCENE_MAX_SIDE)
+    return cli_usage_error(cmd, "--size: '%s' is not WIDTHxHEIGHT with sides in 1..%d", v, WV_SCENE_MAX_SIDE);
+  wh[0] = w, wh[1] = h;
+  return 0;
+}
+
+static const cli_opt OPTS[] = {
+    CLI_O_STR("--output", "-o", scene_args, out, "OUT",
+              "OUT.png: the image after the scene's camera response (exposure,\nclip, encoding), 8-bit; OUT.exr: "
+              "linear radiance times the exposure\n(32-bit float)"),
+    CLI_O_STR("--params", NULL, scene_args, params, "P.json", "replaces the parameters of every fabric material in the scene"),
+    CLI_O_INT("--spp", NULL, scene_args, spp, 1, WV_SCENE_MAX_SPP, "N", "camera rays per pixel (default: the scene's image.spp)"),
+    CLI_O_INT("--threads", NULL, scene_args, threads, 1, 1024, "N", "worker threads (default: all cores)"),
+    CLI_O_CUSTOM("--size", scene_args, size, 0, 0, parse_size, "WxH",
+                 "image size instead of the scene's (same camera and field of view:\na preview)"),
+    CLI_O_INT("--seed", NULL, scene_args, seed, 0, INT_MAX, "N", "overrides the scene's render.seed"),
+    CLI_O_INT("--mesh-limit-mb", NULL, scene_args, limit_mb, 1, 1 << 20, "N",
+              "memory limit for the meshes and the ray tracer (default: the\nscene's, else 2048)"),
+    CLI_O_END};
+
+static const cli_cmd CMD = {
+    "scene",
     "usage: woven scene SCENE.json -o OUT.png|OUT.exr [--params P.json] [--spp N] [--threads N]\n"
     "                   [--size WxH] [--seed N] [--mesh-limit-mb N] [--quiet] [--json]\n"
     "\n"
     "Renders a scene of meshes (the fabric on a draped cloth, under an environment and lights)\n"
-    "with a path tracer; the scene format is in docs/scene.md.\n"
-    "  OUT.png  the image after the scene's camera response (exposure, clip, encoding), 8-bit\n"
-    "  OUT.exr  linear radiance times the exposure (32-bit float)\n"
-    "  --params P.json    replaces the parameters of every fabric material in the scene\n"
-    "  --spp N            camera rays per pixel (default: the scene's image.spp)\n"
-    "  --threads N        worker threads (default: all cores)\n"
-    "  --size WxH         image size instead of the scene's (same camera and field of view: a preview)\n"
-    "  --seed N           overrides the scene's render.seed\n"
-    "  --mesh-limit-mb N  memory limit for the meshes and the ray tracer (default: the scene's, else 2048)\n"
-    "  --json             print a JSON summary on stdout\n";
+    "with a path tracer; the scene format is in docs/scene.md.\n",
+    NULL, {{OPTS, 0}}, 1, {offsetof(scene_args, scene)}};
 
 static int ends_with(const char *s, const char *ext) {
   size_t n = strlen(s), e = strlen(ext);
@@ -31,44 +55,11 @@ static int ends_with(const char *s, const char *ext) {
 
 int cmd_scene(int argc, char **argv) {
   cli_ctx c = {0, 0, "scene"};
-  cli_args a;
-  cli_args_init(&a, argc, argv, c.cmd);
-  const char *scene_path = NULL, *out = NULL, *params_path = NULL;
-  long spp = 0, threads = 0, seed = -1, limit_mb = 0;
-  int width = 0, height = 0;
-  for (const char *s; (s = cli_next(&a));) {
-    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-      fputs(SCENE_HELP, stdout);
-      return 0;
-    } else if (cli_is(&a, s, "-o") || cli_is(&a, s, "--output")) {
-      if (!(out = cli_value(&a, "-o"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--params")) {
-      if (!(params_path = cli_value(&a, "--params"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--spp")) {
-      if (!cli_int(&a, "--spp", 1, WV_SCENE_MAX_SPP, &spp)) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--threads")) {
-      if (!cli_int(&a, "--threads", 1, 1024, &threads)) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--size")) {
-      const char *v = cli_value(&a, "--size");
-      char x = 0, end = 0;
-      if (!v) return EXIT_USAGE;
-      if (sscanf(v, "%d%c%d%c", &width, &x, &height, &end) != 3 || (x != 'x' && x != 'X') || width < 1 ||
-          height < 1 || width > WV_SCENE_MAX_SIDE || height > WV_SCENE_MAX_SIDE)
-        return cli_usage_error(c.cmd, "--size: '%s' is not WIDTHxHEIGHT with sides in 1..%d", v, WV_SCENE_MAX_SIDE);
-    } else if (cli_is(&a, s, "--seed")) {
-      if (!cli_int(&a, "--seed", 0, 2147483647L, &seed)) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--mesh-limit-mb")) {
-      if (!cli_int(&a, "--mesh-limit-mb", 1, 1L << 20, &limit_mb)) return EXIT_USAGE;
-    } else if (cli_common_flag(&c, s)) {
-      /* --quiet, -q, --json */
-    } else if (s[0] == '-' && s[1]) {
-      return cli_usage_error(c.cmd, "unknown option '%s'", s);
-    } else if (!scene_path) {
-      scene_path = s;
-    } else {
-      return cli_usage_error(c.cmd, "unexpected argument '%s'", s);
-    }
-  }
+  scene_args sa = {NULL, NULL, NULL, 0, 0, -1, 0, {0, 0}};
+  CLI_PARSE(&CMD, argc, argv, &sa, &c);
+  const char *scene_path = sa.scene, *out = sa.out, *params_path = sa.params;
+  long spp = sa.spp, threads = sa.threads, seed = sa.seed, limit_mb = sa.limit_mb;
+  int width = sa.size[0], height = sa.size[1];
   if (!scene_path) return cli_usage_error(c.cmd, "a scene file is required");
   if (!out) return cli_usage_error(c.cmd, "-o OUT.png or OUT.exr is required");
   int exr = ends_with(out, ".exr");

@@ -6,7 +6,18 @@
 #include "woven/export.h"
 #include "woven/view.h"
 
-static const char *HELP =
+typedef struct {
+  const char *in, *out, *scene, *photo;
+} view_args;
+
+static const cli_opt OPTS[] = {
+    CLI_O_STR("--output", "-o", view_args, out, "VIEWER.html", "the viewer"),
+    CLI_O_STR("--scene", NULL, view_args, scene, "S", "the capture rig (overrides the fit's scene)"),
+    CLI_O_STR("--photo", NULL, view_args, photo, "PHOTO", "a photo taken in that rig, for the before/after toggle"),
+    CLI_O_END};
+
+static const cli_cmd CMD = {
+    "view",
     "usage: woven view DIR|P.json -o VIEWER.html [--scene S.json|cylinder|flat45] [--photo PHOTO]\n"
     "                  [--quiet] [--json]\n"
     "\n"
@@ -15,36 +26,15 @@ static const char *HELP =
     "swatch and a draped sheet under studio light, with an orbit camera, a movable light,\n"
     "sliders for the parameters and a before/after toggle against the photo. See docs/viewer.md.\n"
     "  DIR            a finished fit's directory: its parameters, scene.json and photo.png\n"
-    "  P.json         a parameter file (the rig: --scene, default flat45)\n"
-    "  --scene S      the capture rig (overrides the fit's scene)\n"
-    "  --photo PHOTO  a photo taken in that rig, for the before/after toggle\n"
-    "Page options (append to the file's URL): ?mode=rig|swatch|drape&spp=N&frames=N&w=W&h=H\n";
+    "  P.json         a parameter file (the rig: --scene, default flat45)\n",
+    "Page options (append to the file's URL): ?mode=rig|swatch|drape&spp=N&frames=N&w=W&h=H\n",
+    {{OPTS, 0}}, 1, {offsetof(view_args, in)}};
 
 int cmd_view(int argc, char **argv) {
   cli_ctx c = {0, 0, "view"};
-  cli_args a;
-  cli_args_init(&a, argc, argv, c.cmd);
-  const char *in = NULL, *out = NULL, *scene_name = NULL, *photo = NULL;
-  for (const char *s; (s = cli_next(&a));) {
-    if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-      fputs(HELP, stdout);
-      return 0;
-    } else if (cli_is(&a, s, "-o") || cli_is(&a, s, "--output")) {
-      if (!(out = cli_value(&a, "-o"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--scene")) {
-      if (!(scene_name = cli_value(&a, "--scene"))) return EXIT_USAGE;
-    } else if (cli_is(&a, s, "--photo")) {
-      if (!(photo = cli_value(&a, "--photo"))) return EXIT_USAGE;
-    } else if (cli_common_flag(&c, s)) {
-      /* --quiet, -q, --json */
-    } else if (s[0] == '-' && s[1]) {
-      return cli_usage_error(c.cmd, "unknown option '%s'", s);
-    } else if (!in) {
-      in = s;
-    } else {
-      return cli_usage_error(c.cmd, "unexpected argument '%s'", s);
-    }
-  }
+  view_args va = {NULL, NULL, NULL, NULL};
+  CLI_PARSE(&CMD, argc, argv, &va, &c);
+  const char *in = va.in, *out = va.out, *scene_name = va.scene, *photo = va.photo;
   if (!in) return cli_usage_error(c.cmd, "a fit directory or a parameter file is required");
   if (!out) return cli_usage_error(c.cmd, "-o VIEWER.html is required");
   int rc = cli_check_output(c.cmd, out, ".html");

@@ -450,6 +450,79 @@ static void make_dataset(const char *dir) {
   wv_descriptor_free(d);
 }
 
+/* Stops a build once it has made stop_after samples. */
+static int stop_at(void *user, int done, int todo, double seconds) {
+  (void)todo, (void)seconds;
+  return done >= *(const int *)user;
+}
+
+static void assert_same_file(const char *a, const char *b) {
+  char *da, *db;
+  size_t na, nb;
+  wv_error e;
+  assert_int_equal(wv_read_file_max(a, 1 << 24, &da, &na, &e), WV_OK);
+  assert_int_equal(wv_read_file_max(b, 1 << 24, &db, &nb, &e), WV_OK);
+  assert_int_equal(na, nb);
+  assert_memory_equal(da, db, na);
+  free(da), free(db);
+}
+
+/* A build stopped after k samples and run again makes the same files as one run. */
+static void test_dataset_build_resumes(void **state) {
+  (void)state;
+  wv_scene s;
+  tu_centre_window(&s, "flat45", 64, 48, 1);
+  snprintf(s.name, sizeof s.name, "tiny");
+  char scene[512], whole[512], resumed[512];
+  snprintf(scene, sizeof scene, "%s/tiny.json", tu_tmpdir("ds_scene"));
+  snprintf(whole, sizeof whole, "%s", tu_tmpdir("ds_whole"));
+  snprintf(resumed, sizeof resumed, "%s", tu_tmpdir("ds_resumed"));
+  char *sj = wv_scene_to_json(&s);
+  wv_error e;
+  assert_non_null(sj);
+  assert_int_equal(wv_write_file_atomic(scene, sj, strlen(sj), &e), WV_OK);
+  free(sj);
+  wv_dist one = {0, 1, 0};
+  wv_dataset_build_opts o;
+  wv_dataset_build_opts_default(&o);
+  o.scene = scene, o.dir = whole, o.per_pattern = 1, o.seed = 9, o.jobs = 1;
+  wv_dataset_build_result r;
+  wv_status st = wv_dataset_build(&one, &o, &r, &e);
+  if (st) print_message("%s\n", e.msg);
+  assert_int_equal(st, WV_OK);
+  int total = r.samples, k = 3;
+  assert_true(total > k);
+  assert_int_equal(r.rendered, total);
+  assert_false(r.stopped);
+  /* interrupted after k samples: those are whole, the others not begun */
+  o.dir = resumed, o.on_progress = stop_at, o.user = &k;
+  assert_int_equal(wv_dataset_build(&one, &o, &r, &e), WV_OK);
+  assert_true(r.stopped);
+  assert_int_equal(r.rendered, k);
+  wv_dataset_info info;
+  assert_int_equal(wv_dataset_info_read(resumed, &info, &e), WV_OK);
+  int done = 0;
+  for (int i = 0; i < total; i++) done += wv_dataset_sample_done(resumed, &info, i);
+  assert_int_equal(done, k);
+  /* resumed: only the rest is rendered, and every file equals the uninterrupted build's */
+  o.on_progress = NULL;
+  assert_int_equal(wv_dataset_build(&one, &o, &r, &e), WV_OK);
+  assert_int_equal(r.done_before, k);
+  assert_int_equal(r.rendered, total - k);
+  static const char *const EXT[] = {"json", "png", "feat"};
+  for (int i = 0; i < total; i++)
+    for (int x = 0; x < 3; x++) {
+      char pa[1024], pb[1024];
+      wv_dataset_path(whole, &info, i, EXT[x], pa, sizeof pa);
+      wv_dataset_path(resumed, &info, i, EXT[x], pb, sizeof pb);
+      assert_same_file(pa, pb);
+    }
+  char ja[600], jb[600];
+  snprintf(ja, sizeof ja, "%s/dataset.json", whole);
+  snprintf(jb, sizeof jb, "%s/dataset.json", resumed);
+  assert_same_file(ja, jb);
+}
+
 typedef struct {
   double first, last;
   int n;
@@ -515,7 +588,7 @@ int main(void) {
       cmocka_unit_test(test_param_mapping), cmocka_unit_test(test_f16_crc),
       cmocka_unit_test(test_files),      cmocka_unit_test(test_features_file),
       cmocka_unit_test(test_v1_model),   cmocka_unit_test(test_augment),
-      cmocka_unit_test(test_train),
+      cmocka_unit_test(test_train),      cmocka_unit_test(test_dataset_build_resumes),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -22,6 +22,7 @@
 #include <stdint.h>
 
 #include "woven/analysis.h"
+#include "woven/dist.h"
 #include "woven/error.h"
 #include "woven/image.h"
 #include "woven/params.h"
@@ -278,7 +279,8 @@ void wv_train_opts_default(wv_train_opts *o);
  * the lowest validation loss (written atomically whenever it improves); model.train/
  * holds checkpoint.bin, loss.csv, loss.svg and train.json. A resumed run gives the same
  * weights as an uninterrupted one: each epoch's shuffle is a function of (seed, epoch)
- * and the checkpoint holds the weights, Adam's moments and step and the best so far. */
+ * and the checkpoint holds the weights, Adam's moments and step and the best so far.
+ * model and model.train/ may not be the dataset's files nor lie among its samples. */
 wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, wv_train_result *res, wv_error *err);
 
 /* ---- synthetic dataset (docs/fabricnet.md) ----
@@ -337,6 +339,39 @@ wv_status wv_dataset_make_sample(const char *dir, const wv_dataset_info *info, i
  * (the scene's image, 8-bit values). The same seed gives the same image. */
 wv_status wv_camera_augment(const wv_scene *s, const wv_image *radiance, uint64_t seed, wv_image *capture,
                             wv_error *err);
+
+/* Building a dataset (woven dataset): resumable, shared over the ranks of dist. */
+typedef struct {
+  const char *scene;       /* a scene file or preset name */
+  const char *dir;         /* DIR: dataset.json and samples/ */
+  int per_pattern;         /* samples per pattern (1..WV_DATASET_MAX_PER_PATTERN) */
+  uint64_t seed;           /* 1 */
+  int spp;                 /* 0: the scene's */
+  int augment;             /* 1: the camera augmentation */
+  int jobs;                /* samples rendered at once, one thread each (0: all cores) */
+  const char *descriptor;  /* "default" */
+  const char *weights;     /* the descriptor's weights file, or NULL */
+  /* Optional, called on rank 0 only: a line for the user (no newline), and progress
+   * after each sample (samples done of todo, seconds since rendering began); a non-zero
+   * return stops the build once the samples in flight are done (res->stopped). */
+  void (*on_note)(void *user, const char *text);
+  int (*on_progress)(void *user, int done, int todo, double seconds);
+  void *user;
+} wv_dataset_build_opts;
+void wv_dataset_build_opts_default(wv_dataset_build_opts *o);
+typedef struct {
+  int samples, done_before, rendered; /* rendered: by every rank */
+  int spp, width, height, jobs;
+  int per_pattern; /* as recorded: a larger earlier size is kept */
+  int stopped;     /* on_progress stopped the build: run it again to finish */
+  double seconds;
+} wv_dataset_build_result;
+/* Renders the samples of dir that are not done (the dataset grows in place: inputs may
+ * not be its files). Rank 0 holds the directory's lock and writes dataset.json before
+ * any sample; a directory made with other settings is refused. Every rank calls it;
+ * a rank whose own step succeeded returns the failure of another with an empty message. */
+wv_status wv_dataset_build(const wv_dist *dist, const wv_dataset_build_opts *o, wv_dataset_build_result *res,
+                           wv_error *err);
 
 /* Features as f16 (n_feat values) with a header (magic, count, CRC). */
 wv_status wv_dataset_write_features(const char *path, const float *x, int n, wv_error *err);

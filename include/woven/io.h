@@ -90,6 +90,8 @@ wv_status wv_check_not_input(const char *output, int output_is_dir, const char *
  * directories are removed; nothing else is touched. Returns how many. */
 #define WV_TMP_STALE_SECONDS 10
 int wv_remove_stale_temps(const char *dir, const char *prefix);
+/* The same for the temporary files of one output file path, in its directory. */
+int wv_remove_stale_temps_beside(const char *path);
 /* 1 when name has the form of a temporary name. */
 int wv_is_temp_name(const char *name);
 

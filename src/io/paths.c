@@ -128,3 +128,13 @@ int wv_remove_stale_temps(const char *dir, const char *prefix) {
   closedir(d);
   return removed;
 }
+
+int wv_remove_stale_temps_beside(const char *path) {
+  const char *slash = strrchr(path, '/');
+  char dir[4096];
+  if (!slash)
+    snprintf(dir, sizeof dir, ".");
+  else
+    snprintf(dir, sizeof dir, "%.*s", slash == path ? 1 : (int)(slash - path), path);
+  return wv_remove_stale_temps(dir, slash ? slash + 1 : path);
+}

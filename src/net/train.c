@@ -178,11 +178,26 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
     return wv_fail(err, WV_ERR_INVALID, "training options out of range (epochs >= 1, batch 1..4096, lr in (0, 1), "
                                         "validation fraction in (0, 0.9), checkpoint interval >= 1, CE weight >= 0)");
   if (o->resume && o->force) return wv_fail(err, WV_ERR_INVALID, "resume and force exclude each other");
+  char work[4096], ckpt[4096], path[4096];
+  snprintf(work, sizeof work, "%s.train", model);
+  { /* model and model.train/ must not land on the dataset's files */
+    char ds[2][4096];
+    snprintf(ds[0], sizeof ds[0], "%s/dataset.json", dir);
+    snprintf(ds[1], sizeof ds[1], "%s/samples", dir);
+    const char *outs[2] = {model, work}, *in = ds[0];
+    for (int i = 0; i < 2; i++) {
+      wv_status cs = wv_check_not_input(outs[i], 0, &in, 1, err);
+      if (cs) return cs;
+      if (wv_path_within(outs[i], ds[1]))
+        return wv_fail(err, WV_ERR_INVALID, "%s lies inside the dataset's samples directory %s; write the model elsewhere",
+                       outs[i], ds[1]);
+    }
+    wv_remove_stale_temps_beside(model);
+    wv_remove_stale_temps(work, NULL);
+  }
   wv_dataset_info info;
   wv_status st = wv_dataset_info_read(dir, &info, err);
   if (st) return st;
-  char work[4096], ckpt[4096], path[4096];
-  snprintf(work, sizeof work, "%s.train", model);
   snprintf(ckpt, sizeof ckpt, "%s/checkpoint.bin", work);
   struct stat sb;
   if (!o->resume && !o->force && stat(ckpt, &sb) == 0)

@@ -106,3 +106,33 @@ wv_status wv_json_int(json_t *o, const char *obj, const char *key, int lo, int h
   if (!st) *out = (int)x;
   return st;
 }
+
+json_t *wv_json_str_lossy(const char *s) {
+  if (!s) return json_null();
+  json_t *v = json_string(s);
+  if (v) return v;
+  /* Not UTF-8: each byte of an invalid sequence becomes U+FFFD. */
+  size_t n = strlen(s), k = 0;
+  char *b = malloc(3 * n + 1);
+  if (!b) return json_null();
+  for (size_t i = 0; i < n;) {
+    unsigned char ch = (unsigned char)s[i];
+    size_t len = ch < 0x80 ? 1 : (ch >> 5) == 6 ? 2 : (ch >> 4) == 14 ? 3 : (ch >> 3) == 30 ? 4 : 0;
+    json_t *probe = len && i + len <= n ? json_stringn(s + i, len) : NULL; /* checks the sequence */
+    if (probe) {
+      json_decref(probe);
+      memcpy(b + k, s + i, len), k += len, i += len;
+    } else {
+      memcpy(b + k, "\xef\xbf\xbd", 3), k += 3, i++;
+    }
+  }
+  v = json_stringn(b, k);
+  free(b);
+  return v ? v : json_null();
+}
+
+json_t *wv_json_from_text(char *text) {
+  json_t *v = text ? json_loads(text, 0, NULL) : NULL;
+  free(text);
+  return v ? v : json_null();
+}

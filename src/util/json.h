@@ -33,4 +33,11 @@ wv_status wv_json_number_value(json_t *v, const char *name, double lo, double hi
 wv_status wv_json_integer_value(json_t *v, const char *name, long long lo, long long hi, long long *out,
                                 wv_error *err);
 
+/* s as a JSON string (each byte of a sequence that is not UTF-8 becomes U+FFFD); null
+ * when s is NULL or memory runs out. */
+json_t *wv_json_str_lossy(const char *s);
+
+/* A JSON text as a value (null when text is NULL or not JSON); frees text. */
+json_t *wv_json_from_text(char *text);
+
 #endif

@@ -1,0 +1,132 @@
+/* woven: the capture jobs behind woven fit, predict, capture and capture-batch:
+ * FabricNet's estimate of a photo (with the choice of its pattern), and a fit run to
+ * the end with every output written into a directory that appears whole or not at all
+ * (params.json, renders, report, viewer, drape, maps, fit.json and its checkpoint). */
+#ifndef WOVEN_CAPTURE_H
+#define WOVEN_CAPTURE_H
+
+#include "woven/descriptor.h"
+#include "woven/error.h"
+#include "woven/fabricnet.h"
+#include "woven/fit.h"
+#include "woven/image.h"
+#include "woven/params.h"
+#include "woven/photo.h"
+#include "woven/report.h"
+#include "woven/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Optional progress, all from the calling thread: a line for the user (no newline), and
+ * each finished fit iteration. */
+typedef struct {
+  void (*on_note)(void *user, const char *text);
+  void (*on_iter)(void *user, const wv_fit_state *st, const wv_fit_opts *o);
+  void *user;
+} wv_capture_progress;
+
+/* A fit to run and write (woven fit, and the back half of woven capture). */
+typedef struct {
+  const wv_scene *scene;
+  const wv_image *photo;
+  wv_descriptor *desc;
+  const wv_params *start; /* NULL when resuming */
+  wv_fit_opts opts;
+  const char *dir, *photo_path, *start_label, *title;
+  int resume, iters_given, force;
+  const wv_pattern_choice *pattern_choice; /* how the start's pattern was chosen, or NULL */
+  /* For fit.json (a new fit): the crop used and the descriptor's weights file. */
+  wv_crop crop;
+  const char *weights;
+  /* A file written with fit.json (capture: network.json), or NULL. */
+  const char *extra_name, *extra_text;
+  /* Files read by the job: none may lie inside the directory, which is replaced whole. */
+  const char *inputs[6];
+  /* The mesh scene the report shows the fit on (NULL: the bundled draped cloth; "none": no drape). */
+  const char *drape;
+  wv_capture_progress progress;
+} wv_fit_job;
+
+/* What a finished fit wrote, for the caller's summary. */
+typedef struct {
+  wv_fit_state state; /* the fit (wv_fit_state_free) */
+  wv_scene fit_scene; /* the scene with the registration's fabric offset and the camera blur */
+  double ssim_start, ssim_fit;
+  wv_weave_views views; /* SSIM per channel and WSC of start and fit (wsc -2: not measured) */
+  char start_label[32]; /* what the start was: prior, start (a parameter file), network */
+} wv_fit_outcome;
+
+/* The output directory check, before any slow step: refuses a file, a directory holding
+ * files that are not a fit's, an input inside it, and (unless force or resuming) an
+ * earlier fit, finished or not. */
+wv_status wv_fit_job_check_dir(const wv_fit_job *job, wv_error *err);
+/* Runs the fit and writes every output. The directory's life: fit.json and a checkpoint
+ * at iteration 0 appear first (one rename), checkpoints follow while fitting, and the
+ * results replace the directory whole at the end. When it holds a finished fit (force,
+ * or a resume adding iterations) all of that happens in a temporary directory beside it,
+ * so the earlier fit stays whole until then. On success out holds the fit. */
+wv_status wv_fit_job_run(const wv_fit_job *job, wv_fit_outcome *out, wv_error *err);
+
+/* What a fit directory's fit.json records for a resume (woven fit --resume DIR). */
+typedef struct {
+  char photo[4096], descriptor[64], weights[4096], start_label[32]; /* weights "": none */
+  wv_crop crop;
+  wv_scene scene;
+} wv_fit_record_job;
+wv_status wv_fit_job_read(const char *dir, wv_fit_record_job *rec, wv_error *err);
+
+/* A fit of a photo into a directory (woven fit): a new one from a parameter file (init)
+ * or a pattern's prior mean, or the continuation of the one recorded by resume. */
+typedef struct {
+  const char *photo, *scene, *init, *pattern, *dir; /* with resume: only photo, NULL or the recorded one */
+  const char *descriptor, *weights, *drape;         /* NULL descriptor: "default" */
+  wv_crop crop;
+  const wv_fit_record_job *resume; /* from wv_fit_job_read of dir, or NULL */
+  wv_fit_opts fit;
+  int iters_given, force;
+  wv_capture_progress progress;
+} wv_fit_dir_opts;
+wv_status wv_fit_dir_run(const wv_fit_dir_opts *o, wv_fit_outcome *out, wv_error *err);
+
+/* FabricNet's estimate of a photo's parameters (woven predict). */
+typedef struct {
+  const char *photo, *scene, *model; /* model NULL: models/fabricnet-<scene name>.bin ($WOVEN_MODEL_DIR) */
+  const char *pattern;               /* a built-in; NULL: chosen over the library (wv_fabricnet_predict_pattern) */
+  const char *descriptor, *weights;  /* NULL descriptor: "default" */
+  wv_crop crop;
+  int any_scene; /* use a model trained for another scene */
+} wv_estimate_opts;
+typedef struct {
+  wv_params params;
+  int chosen; /* the pattern was chosen: choice is filled */
+  wv_pattern_choice choice;
+  double seconds;
+  /* What the fit from the estimate needs (wv_estimate_free releases them). */
+  wv_scene scene;
+  wv_image photo;
+  wv_photo_info info;
+  wv_descriptor *desc;
+} wv_estimate;
+wv_status wv_estimate_run(const wv_estimate_opts *o, wv_estimate *e, wv_error *err);
+void wv_estimate_free(wv_estimate *e);
+
+/* The whole capture (woven capture): the estimate, then the fit from it with every output
+ * in dir (fit.json, network.json, ...). on_estimate (optional) is called between them. */
+typedef struct {
+  wv_estimate_opts estimate;
+  wv_fit_opts fit;
+  int iters_given;
+  const char *dir, *drape;
+  int force;
+  void (*on_estimate)(void *user, const wv_estimate *e);
+  wv_capture_progress progress; /* its user is on_estimate's too */
+} wv_capture_opts;
+/* On success est holds the estimate (wv_estimate_free) and out the fit. */
+wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outcome *out, wv_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,536 @@
+/* woven: the capture jobs (woven/capture.h): FabricNet's estimate of a photo, and a fit
+ * run with every output written into a directory that appears whole or not at all. */
+#define _DEFAULT_SOURCE /* realpath */
+#include "woven/capture.h"
+
+#include <jansson.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "util/json.h"
+#include "util/note.h"
+#include "woven/analysis.h"
+#include "woven/io.h"
+#include "woven/maps.h"
+#include "woven/metrics.h"
+#include "woven/render.h"
+#include "woven/scene3d.h"
+#include "woven/view.h"
+
+/* What a fit directory may hold (woven capture adds network.json). */
+static const char *const FIT_FILES[] = {
+    "fit.json",    "checkpoint.json", "params.json", "render.png",  "start.png", "photo.png",
+    "compare.png", "loss.svg",        "report.html", "viewer.html", "drape.png", "maps",
+    "scene.json",  "network.json",    "zoom.png",    "spectra.png", NULL};
+
+typedef enum { FIT_DIR_NONE, FIT_DIR_UNFINISHED, FIT_DIR_FINISHED } fit_dir_state;
+
+/* params.json, written last, marks a finished fit; fit.json alone one in progress. */
+static fit_dir_state dir_state(const char *dir) {
+  char p[4096];
+  struct stat sb;
+  snprintf(p, sizeof p, "%s/params.json", dir);
+  if (stat(p, &sb) == 0) return FIT_DIR_FINISHED;
+  snprintf(p, sizeof p, "%s/fit.json", dir);
+  if (stat(p, &sb) == 0) return FIT_DIR_UNFINISHED;
+  return FIT_DIR_NONE;
+}
+
+wv_status wv_fit_job_check_dir(const wv_fit_job *job, wv_error *err) {
+  wv_status rc = wv_outdir_check(job->dir, FIT_FILES, err);
+  if (!rc) rc = wv_check_not_input(job->dir, 1, job->inputs, (int)(sizeof job->inputs / sizeof job->inputs[0]), err);
+  if (rc || job->resume || job->force) return rc;
+  fit_dir_state ds = dir_state(job->dir);
+  if (ds == FIT_DIR_FINISHED)
+    return wv_fail(err, WV_ERR_IO, "%s already holds a fit (params.json); use --force to replace it", job->dir);
+  if (ds == FIT_DIR_UNFINISHED)
+    return wv_fail(err, WV_ERR_IO,
+                   "%s holds an unfinished fit (fit.json, no params.json); continue it with 'woven fit --resume %s' "
+                   "or replace it with --force",
+                   job->dir, job->dir);
+  return WV_OK;
+}
+
+/* dir/name -> into/name; a missing optional file is skipped. */
+static wv_status copy_into(const char *dir, const char *name, const char *into, int optional, wv_error *err) {
+  char from[4096], to[4096];
+  struct stat sb;
+  snprintf(from, sizeof from, "%s/%s", dir, name);
+  snprintf(to, sizeof to, "%s/%s", into, name);
+  if (optional && stat(from, &sb) != 0) return WV_OK;
+  char *data;
+  size_t len;
+  wv_status st = wv_read_file_max(from, WV_JSON_MAX_BYTES, &data, &len, err);
+  if (st) return st;
+  st = wv_write_file_atomic(to, data, len, err);
+  free(data);
+  return st;
+}
+
+static wv_status write_text(const char *dir, const char *name, const char *text, wv_error *err) {
+  char path[4096];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  if (!text) return wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
+  return wv_write_file_atomic(path, text, strlen(text), err);
+}
+
+/* fit.json records what a resume needs: the photo (absolute, so a resume works from any
+ * directory), crop, scene and descriptor; also the start's label for the report. */
+static char *job_json(const wv_fit_job *job) {
+  char *photo = realpath(job->photo_path, NULL), *weights = job->weights ? realpath(job->weights, NULL) : NULL;
+  char *sj = wv_scene_to_json(job->scene);
+  json_t *scene = sj ? json_loads(sj, 0, NULL) : NULL;
+  free(sj);
+  json_t *o = json_pack("{s:s,s:i,s:o,s:[i,i,i,i],s:o,s:s,s:s}", "kind", "woven-fit", "version", 1, "photo",
+                        wv_json_str_lossy(photo ? photo : job->photo_path), "crop", job->crop.x, job->crop.y,
+                        job->crop.w, job->crop.h, "scene", scene ? scene : json_null(), "descriptor",
+                        wv_descriptor_name(job->desc), "start_label", job->start_label);
+  if (o && job->weights) json_object_set_new(o, "vgg19_weights", wv_json_str_lossy(weights ? weights : job->weights));
+  free(photo), free(weights);
+  if (o && job->pattern_choice) /* informative: a resume does not need it */
+    json_object_set_new(o, "pattern_choice", wv_json_from_text(wv_pattern_choice_to_json(job->pattern_choice)));
+  char *text = o ? json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17)) : NULL;
+  json_decref(o);
+  return text;
+}
+
+/* The results of a finished fit, written into dir (a temporary directory). */
+#ifndef WOVEN_SCENE_DIR
+#define WOVEN_SCENE_DIR "scenes"
+#endif
+
+/* drape.png: the fit on a mesh scene (--drape, default the bundled draped cloth in
+ * $WOVEN_SCENE_DIR or the source tree's scenes/), at 512 x 384 and 16 spp. A missing
+ * default scene (woven run away from its tree) is noted in the report, not an error;
+ * a scene the user named must render. Returns 1 when drape.png was written. */
+static int render_drape(const wv_fit_job *job, const char *dir, const wv_params *p, int threads, char *out, size_t cap,
+                        char *note, size_t ncap, wv_error *err, wv_status *rc) {
+  if (job->drape && !strcmp(job->drape, "none")) return 0;
+  char scene[4096];
+  const char *d = getenv("WOVEN_SCENE_DIR");
+  if (job->drape)
+    snprintf(scene, sizeof scene, "%s", job->drape);
+  else
+    snprintf(scene, sizeof scene, "%s/drape-studio.json", d && *d ? d : WOVEN_SCENE_DIR);
+  struct stat sb;
+  if (!job->drape && stat(scene, &sb) != 0) {
+    snprintf(note, ncap, "No drape: the bundled scene %s was not found (set WOVEN_SCENE_DIR).", scene);
+    return 0;
+  }
+  wv_scene3d_preview po = {512, 384, 16, threads};
+  wv_image img = {0};
+  snprintf(out, cap, "%s/drape.png", dir);
+  *rc = wv_scene3d_render_file(scene, p, &po, &img, err);
+  if (!*rc) *rc = wv_image_write_png(out, &img, 8, err);
+  wv_image_free(&img);
+  if (*rc) return 0;
+  snprintf(note, ncap,
+           "The fit on %s under its lights, 512 x 384, 16 samples per pixel "
+           "(<code>woven scene %s --params params.json</code> renders it in full).",
+           job->drape ? "the scene given" : "the bundled draped cloth",
+           job->drape ? "S.json" : "scenes/drape-studio.json");
+  return 1;
+}
+
+static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_fit_state *st, const wv_fit_opts *o,
+                               const wv_scene *fit_scene, double *ssim_start, double *ssim_fit, wv_weave_views *wv,
+                               wv_error *err) {
+  wv_render_opts ro = {0, o->threads, NULL, NULL, NULL};
+  wv_image r_start = {0}, r_fit = {0}, cmp = {0};
+  char path[4096], pphoto[4096], pstart[4096], pfit[4096];
+  wv_scene start_scene = *job->scene; /* the start seen through the same camera blur as the fit */
+  start_scene.psf_sigma = fit_scene->psf_sigma;
+  wv_status rc = wv_render(&start_scene, &st->start, &ro, &r_start, NULL, err);
+  if (!rc) rc = wv_render(fit_scene, &st->params, &ro, &r_fit, NULL, err);
+  if (!rc) rc = wv_ssim(job->photo, &r_start, WV_SSIM_LUMA, ssim_start, err);
+  if (!rc) rc = wv_ssim(job->photo, &r_fit, WV_SSIM_LUMA, ssim_fit, err);
+  if (!rc) rc = wv_weave_views_write(dir, job->photo, &r_start, &r_fit, wv, err);
+  const wv_image *side[3] = {job->photo, &r_start, &r_fit};
+  if (!rc) rc = wv_image_hconcat(side, 3, 4, &cmp, err);
+  snprintf(pphoto, sizeof pphoto, "%s/photo.png", dir);
+  snprintf(pstart, sizeof pstart, "%s/start.png", dir);
+  snprintf(pfit, sizeof pfit, "%s/render.png", dir);
+  if (!rc) rc = wv_image_write_png(pphoto, job->photo, 8, err);
+  if (!rc) rc = wv_image_write_png(pstart, &r_start, 8, err);
+  if (!rc) rc = wv_image_write_png(pfit, &r_fit, 8, err);
+  snprintf(path, sizeof path, "%s/compare.png", dir);
+  if (!rc) rc = wv_image_write_png(path, &cmp, 8, err);
+  wv_image_free(&r_start), wv_image_free(&r_fit), wv_image_free(&cmp);
+  char pdrape[4096], note[1024] = "";
+  int drape = 0;
+  if (!rc) drape = render_drape(job, dir, &st->params, o->threads, pdrape, sizeof pdrape, note, sizeof note, err, &rc);
+  char *svg = rc ? NULL : wv_loss_svg(st->log, st->iter, o);
+  if (!rc) rc = write_text(dir, "loss.svg", svg, err);
+  wv_report rep = {.title = job->title,
+                   .photo_png = pphoto,
+                   .start_png = pstart,
+                   .fit_png = pfit,
+                   .start_label = job->start_label,
+                   .ssim_start = *ssim_start,
+                   .ssim_fit = *ssim_fit,
+                   .start = &st->start,
+                   .fit = &st->params,
+                   .loss_svg = svg,
+                   .timing = &st->timing,
+                   .iters = st->iter,
+                   .descriptor = wv_descriptor_name(job->desc),
+                   .pattern_choice = job->pattern_choice,
+                   .weave = wv,
+                   .camera_blur = fit_scene->psf_sigma,
+                   .viewer_html = "viewer.html",
+                   .drape_png = drape ? pdrape : NULL,
+                   .drape_note = note[0] ? note : NULL};
+  /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
+  wv_view_opts vo = {&st->params, fit_scene, pphoto, job->title};
+  snprintf(path, sizeof path, "%s/viewer.html", dir);
+  if (!rc) rc = wv_view_write(path, &vo, err);
+  snprintf(path, sizeof path, "%s/report.html", dir);
+  if (!rc) rc = wv_report_write_html(path, &rep, err);
+  free(svg);
+  wv_maps maps = {0};
+  snprintf(path, sizeof path, "%s/maps", dir);
+  if (!rc) rc = wv_maps_generate(&st->params, 1024, &maps, err);
+  if (!rc) rc = wv_maps_write(&maps, path, "png", err);
+  wv_maps_free(&maps);
+  /* scene.json: the scene with the registered offset, to re-render exactly this fit */
+  char *scene_text = rc ? NULL : wv_scene_to_json(fit_scene);
+  if (!rc) rc = write_text(dir, "scene.json", scene_text, err);
+  free(scene_text);
+  /* params.json last: its presence marks a finished fit */
+  snprintf(path, sizeof path, "%s/params.json", dir);
+  if (!rc) rc = wv_params_write(path, &st->params, err);
+  return rc;
+}
+
+/* The state a run starts from and the directory its checkpoints go to (work): the
+ * fit directory itself while it holds no finished fit, otherwise od's temporary
+ * directory (*staged), so the finished fit stays whole until the new one replaces it. */
+static wv_status open_state(const wv_fit_job *job, wv_fit_state *st, wv_fit_opts *o, wv_outdir *od, int *staged,
+                            char *work, size_t wcap, wv_error *err) {
+  fit_dir_state ds = dir_state(job->dir);
+  char ckpt[4096];
+  wv_status rc;
+  *staged = ds == FIT_DIR_FINISHED;
+  if (job->resume) {
+    if (*staged) {
+      if ((rc = wv_outdir_begin(od, job->dir, FIT_FILES, err))) return rc;
+      if ((rc = copy_into(job->dir, "fit.json", od->tmp, 0, err)) ||
+          (rc = copy_into(job->dir, "checkpoint.json", od->tmp, 0, err)) ||
+          (rc = copy_into(job->dir, "network.json", od->tmp, 1, err)))
+        return rc;
+      snprintf(work, wcap, "%s", od->tmp);
+    } else {
+      snprintf(work, wcap, "%s", job->dir);
+      wv_remove_stale_temps(job->dir, NULL); /* left by a run that was killed while writing */
+    }
+    char dname[64];
+    snprintf(ckpt, sizeof ckpt, "%s/checkpoint.json", job->dir); /* the copy in work is the same */
+    struct stat sb;
+    if (stat(ckpt, &sb) != 0)
+      return wv_fail(err, WV_ERR_IO,
+                     "%s holds no checkpoint.json (stopped before its first checkpoint by an older "
+                     "woven): start the fit again with --force",
+                     job->dir);
+    if ((rc = wv_fit_checkpoint_read(ckpt, st, o, dname, sizeof dname, err))) return rc;
+    if (strcmp(dname, wv_descriptor_name(job->desc))) {
+      wv_fit_state_free(st);
+      return wv_fail(err, WV_ERR_INVALID, "%s/checkpoint.json was made with descriptor '%s', not '%s'", job->dir, dname,
+                     wv_descriptor_name(job->desc));
+    }
+    if (job->opts.iters > 0 && job->iters_given) o->iters = job->opts.iters;
+    if (st->iter > o->iters) o->iters = st->iter;
+    return WV_OK;
+  }
+  /* A new fit: fit.json and the iteration-0 checkpoint appear together, so a fit
+   * stopped at any point can be resumed. */
+  if ((rc = wv_fit_state_init(st, job->start, o, err))) return rc;
+  char *text = job_json(job);
+  if (!(rc = wv_outdir_begin(od, job->dir, FIT_FILES, err))) {
+    snprintf(ckpt, sizeof ckpt, "%s/checkpoint.json", od->tmp);
+    rc = write_text(od->tmp, "fit.json", text, err);
+    if (!rc && job->extra_name) rc = write_text(od->tmp, job->extra_name, job->extra_text, err);
+    if (!rc) rc = wv_fit_checkpoint_write(ckpt, st, o, wv_descriptor_name(job->desc), err);
+    if (!rc && !*staged) rc = wv_outdir_commit(od, err);
+  }
+  free(text);
+  if (rc) {
+    wv_fit_state_free(st);
+    return rc;
+  }
+  snprintf(work, wcap, "%s", *staged ? od->tmp : job->dir);
+  return WV_OK;
+}
+
+/* Writes each checkpoint while fitting, then reports the iteration. */
+typedef struct {
+  const wv_fit_job *job;
+  const char *ckpt;
+  const char *descriptor;
+  wv_error *err;
+  int ckpt_failed;
+} fit_cb_ctx;
+
+static int on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
+  fit_cb_ctx *u = user;
+  const wv_capture_progress *p = &u->job->progress;
+  if (p->on_iter) p->on_iter(p->user, st, o);
+  if (u->ckpt && o->checkpoint_every > 0 && (st->iter % o->checkpoint_every == 0 || st->iter == o->iters)) {
+    if (wv_fit_checkpoint_write(u->ckpt, st, o, u->descriptor, u->err)) {
+      u->ckpt_failed = 1;
+      return 1;
+    }
+  }
+  return 0;
+}
+
+wv_status wv_fit_job_run(const wv_fit_job *job, wv_fit_outcome *out, wv_error *err) {
+  char work[4096], ckpt[4096];
+  wv_fit_state st;
+  wv_fit_opts o = job->opts;
+  wv_outdir od = {NULL, NULL, -1};
+  int staged = 0;
+  wv_status rc;
+  memset(out, 0, sizeof *out);
+  if (job->drape && strcmp(job->drape, "none")) { /* a scene that cannot render is refused before the fit */
+    wv_scene3d s3;
+    if ((rc = wv_scene3d_read(job->drape, &s3, err))) return rc;
+    wv_scene3d_free(&s3);
+  }
+  if ((rc = open_state(job, &st, &o, &od, &staged, work, sizeof work, err))) {
+    wv_outdir_abort(&od, err);
+    return rc;
+  }
+  snprintf(ckpt, sizeof ckpt, "%s/checkpoint.json", work);
+  fit_cb_ctx u = {job, ckpt, wv_descriptor_name(job->desc), err, 0};
+  if (!job->resume || st.iter < o.iters)
+    wv_note(job->progress.on_note, job->progress.user,
+            "fitting %s: %d iterations from %d (%s start, iterating at 1/%d scale, %d spp)", job->photo_path, o.iters,
+            st.iter, job->start_label, o.iter_scale, o.iter_spp);
+  rc = wv_fit_run(&st, job->scene, job->photo, job->desc, &o, on_iter, &u, err);
+  if (!rc && !u.ckpt_failed) rc = wv_fit_checkpoint_write(ckpt, &st, &o, u.descriptor, err); /* with the alignment */
+  if (u.ckpt_failed && !rc) rc = err->code;
+  /* The results go into a temporary directory that then replaces the fit directory. */
+  if (!rc && !staged && !(rc = wv_outdir_begin(&od, job->dir, FIT_FILES, err))) {
+    if (!(rc = copy_into(job->dir, "fit.json", od.tmp, 0, err)) &&
+        !(rc = copy_into(job->dir, "checkpoint.json", od.tmp, 0, err)))
+      rc = copy_into(job->dir, "network.json", od.tmp, 1, err);
+  }
+  out->views = (wv_weave_views){.wsc = {-2, -2}};
+  wv_fit_scene(&st, job->scene, &out->fit_scene); /* with the registration's fabric offset */
+  if (!rc)
+    wv_note(job->progress.on_note, job->progress.user, "rendering start and fit at %d x %d, %d spp", job->scene->width,
+            job->scene->height, job->scene->spp);
+  if (!rc)
+    rc = write_results(job, od.tmp, &st, &o, &out->fit_scene, &out->ssim_start, &out->ssim_fit, &out->views, err);
+  if (!rc) rc = wv_outdir_commit(&od, err);
+  if (rc) {
+    wv_outdir_abort(&od, err);
+    wv_fit_state_free(&st);
+    return rc;
+  }
+  out->state = st;
+  snprintf(out->start_label, sizeof out->start_label, "%s", job->start_label);
+  return WV_OK;
+}
+
+wv_status wv_fit_dir_run(const wv_fit_dir_opts *o, wv_fit_outcome *out, wv_error *err) {
+  const wv_fit_record_job *rec = o->resume;
+  const char *photo = rec ? rec->photo : o->photo, *desc_name = rec ? rec->descriptor : o->descriptor;
+  const char *weights = rec ? (rec->weights[0] ? rec->weights : NULL) : o->weights;
+  wv_crop crop = rec ? rec->crop : o->crop;
+  wv_fit_job job;
+  memset(&job, 0, sizeof job);
+  job.opts = o->fit, job.drape = o->drape, job.progress = o->progress;
+  wv_scene scene;
+  wv_status rc;
+  if (rec)
+    scene = rec->scene;
+  else if ((rc = wv_scene_load(o->scene, &scene, err)))
+    return rc;
+  /* Everything is checked before anything is written; the directory first (cheap). */
+  job.dir = o->dir, job.resume = rec != NULL, job.force = o->force;
+  const char *inputs[] = {photo, rec ? NULL : o->scene, o->init, weights};
+  memcpy(job.inputs, inputs, sizeof inputs);
+  if ((rc = wv_fit_job_check_dir(&job, err))) return rc;
+  wv_params start;
+  if (!rec && o->init) {
+    if ((rc = wv_params_read(o->init, &start, err))) return rc;
+    if (o->pattern && strcmp(o->pattern, start.pattern))
+      return wv_fail(err, WV_ERR_INVALID, "--pattern %s disagrees with %s (pattern '%s')", o->pattern, o->init,
+                     start.pattern);
+  } else if (!rec && (rc = wv_params_default(o->pattern, &start, err))) {
+    return rc;
+  }
+  wv_descriptor *desc;
+  if ((rc = wv_descriptor_create(desc_name ? desc_name : "default", weights, &desc, err))) return rc;
+  wv_image ph = {0};
+  wv_photo_info info;
+  if ((rec || !(rc = wv_fit_check_sizes(&scene, desc, &job.opts, err))) &&
+      !(rc = wv_photo_load(photo, &scene, &crop, &ph, &info, err))) {
+    job.crop = (wv_crop){info.crop[0], info.crop[1], info.crop[2], info.crop[3]};
+    job.weights = weights;
+    job.scene = &scene, job.photo = &ph, job.desc = desc, job.start = rec ? NULL : &start;
+    job.photo_path = photo, job.iters_given = o->iters_given;
+    job.start_label = rec ? rec->start_label : o->init ? "start" : "prior";
+    job.title = "woven fit";
+    rc = wv_fit_job_run(&job, out, err);
+  }
+  wv_descriptor_free(desc);
+  wv_image_free(&ph);
+  return rc;
+}
+
+/* A path in fit.json: absolute; a relative one (written by older versions, relative to
+ * the working directory of the time) is looked up from here, then from the fit directory. */
+static void resolve_recorded(const char *dir, const char *p, char *out, size_t cap) {
+  struct stat sb;
+  snprintf(out, cap, "%s", p);
+  if (p[0] == '/' || stat(out, &sb) == 0) return;
+  snprintf(out, cap, "%s/%s", dir, p);
+  if (stat(out, &sb) != 0) snprintf(out, cap, "%s", p); /* the message names it as recorded */
+}
+
+wv_status wv_fit_job_read(const char *dir, wv_fit_record_job *rec, wv_error *err) {
+  char *photo = rec->photo, *desc = rec->descriptor, *weights = rec->weights, *label = rec->start_label;
+  size_t pcap = sizeof rec->photo, dcap = sizeof rec->descriptor, wcap = sizeof rec->weights,
+         lcap = sizeof rec->start_label;
+  wv_crop *crop = &rec->crop;
+  wv_scene *s = &rec->scene;
+  char path[4096];
+  snprintf(path, sizeof path, "%s/fit.json", dir);
+  struct stat sb;
+  if (stat(path, &sb) != 0) return wv_fail(err, WV_ERR_INVALID, "%s is not a fit directory (no fit.json)", dir);
+  json_t *o;
+  wv_status st = wv_json_load_file(path, &o, err);
+  if (st) return st;
+  const char *ph = NULL, *de = NULL, *we = NULL, *kind = NULL, *lb = NULL;
+  json_t *scene = NULL, *cr = json_object_get(o, "crop");
+  if (json_unpack(o, "{s:s,s:s,s:o,s:s,s?s,s?s}", "kind", &kind, "photo", &ph, "scene", &scene, "descriptor", &de,
+                  "vgg19_weights", &we, "start_label", &lb) ||
+      strcmp(kind, "woven-fit") || !json_is_array(cr) || json_array_size(cr) != 4) {
+    st = wv_fail(err, WV_ERR_FORMAT, "%s: not a woven fit description", path);
+  } else {
+    static const char *names[4] = {"crop[0]", "crop[1]", "crop[2]", "crop[3]"};
+    int *dst[4] = {&crop->x, &crop->y, &crop->w, &crop->h};
+    for (int i = 0; i < 4 && !st; i++) {
+      long long v;
+      st = wv_json_integer_value(json_array_get(cr, (size_t)i), names[i], i < 2 ? 0 : 1, 2147483647LL, &v, err);
+      if (!st) *dst[i] = (int)v;
+    }
+    if (st) wv_error_prefix(err, "%s", path);
+  }
+  if (!st) {
+    resolve_recorded(dir, ph, photo, pcap);
+    snprintf(desc, dcap, "%s", de);
+    if (we)
+      resolve_recorded(dir, we, weights, wcap);
+    else
+      weights[0] = '\0';
+    snprintf(label, lcap, "%s", lb ? lb : "start");
+    char *sj = json_dumps(scene, JSON_REAL_PRECISION(17));
+    st = sj ? wv_scene_parse(sj, path, s, err) : wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
+    free(sj);
+  }
+  json_decref(o);
+  return st;
+}
+
+#ifndef WOVEN_MODEL_DIR
+#define WOVEN_MODEL_DIR "models"
+#endif
+
+/* models/fabricnet-<scene>.bin, in $WOVEN_MODEL_DIR or the source tree's models/. */
+static void default_model(const wv_scene *s, char *buf, size_t cap) {
+  const char *d = getenv("WOVEN_MODEL_DIR");
+  snprintf(buf, cap, "%s/fabricnet-%s.bin", d && *d ? d : WOVEN_MODEL_DIR, s->name);
+}
+
+void wv_estimate_free(wv_estimate *e) {
+  wv_image_free(&e->photo);
+  wv_descriptor_free(e->desc);
+  e->desc = NULL;
+}
+
+wv_status wv_estimate_run(const wv_estimate_opts *o, wv_estimate *e, wv_error *err) {
+  double t0 = omp_get_wtime();
+  memset(e, 0, sizeof *e);
+  wv_status rc = wv_scene_load(o->scene, &e->scene, err);
+  if (rc) return rc;
+  wv_params probe; /* the pattern is checked before the slow steps */
+  if (o->pattern && (rc = wv_params_default(o->pattern, &probe, err))) return rc;
+  if (o->pattern && !strcmp(o->pattern, "custom"))
+    return wv_fail(err, WV_ERR_INVALID, "the pattern must be a built-in pattern, not 'custom'");
+  char mpath[4096];
+  if (o->model)
+    snprintf(mpath, sizeof mpath, "%s", o->model);
+  else
+    default_model(&e->scene, mpath, sizeof mpath);
+  struct stat sb;
+  if (!o->model && stat(mpath, &sb) != 0)
+    return wv_fail(err, WV_ERR_IO,
+                   "no default model for scene '%s' (%s); train one with 'woven dataset' and "
+                   "'woven train' (docs/fabricnet.md) and pass --model",
+                   e->scene.name, mpath);
+  wv_fabricnet net;
+  if ((rc = wv_fabricnet_load(mpath, &net, err))) return rc;
+  if (!(rc = wv_descriptor_create(o->descriptor ? o->descriptor : "default", o->weights, &e->desc, err)) &&
+      !(rc = wv_fabricnet_check(&net, mpath, wv_descriptor_name(e->desc), wv_descriptor_size(e->desc),
+                                o->any_scene ? NULL : &e->scene, err)))
+    rc = wv_photo_load(o->photo, &e->scene, &o->crop, &e->photo, &e->info, err);
+  float y[WV_NET_OUT];
+  if (!rc && !o->pattern) {
+    e->chosen = 1;
+    if (!(rc = wv_fabricnet_predict_pattern(&net, e->desc, &e->scene, &e->photo, NULL, y, &e->choice, err)))
+      e->params = e->choice.params[e->choice.best];
+  } else if (!rc) {
+    float *feat = malloc(sizeof(float) * (size_t)net.n_in);
+    if (!feat)
+      rc = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+    else if (!(rc = wv_fabricnet_predict(&net, e->desc, &e->photo, feat, y, NULL, err)))
+      rc = wv_fabricnet_params(&net, y, o->pattern, &e->params, err);
+    free(feat);
+  }
+  wv_fabricnet_free(&net);
+  if (rc) wv_estimate_free(e);
+  e->seconds = omp_get_wtime() - t0;
+  return rc;
+}
+
+wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outcome *out, wv_error *err) {
+  memset(est, 0, sizeof *est);
+  /* Everything is checked before anything is written; the directory first (cheap). */
+  wv_fit_job job;
+  memset(&job, 0, sizeof job);
+  job.opts = o->fit, job.drape = o->drape, job.dir = o->dir, job.force = o->force;
+  const char *inputs[] = {o->estimate.photo, o->estimate.scene, o->estimate.model, o->estimate.weights};
+  memcpy(job.inputs, inputs, sizeof inputs);
+  wv_status rc = wv_fit_job_check_dir(&job, err);
+  if (rc) return rc;
+  wv_scene probe; /* the fit's size limits, before the network runs */
+  if ((rc = wv_scene_load(o->estimate.scene, &probe, err)) || (rc = wv_fit_check_sizes(&probe, NULL, &o->fit, err)))
+    return rc;
+  if ((rc = wv_estimate_run(&o->estimate, est, err))) return rc;
+  if (o->on_estimate) o->on_estimate(o->progress.user, est);
+  char *network = wv_params_to_json(&est->params), *nl = network ? realloc(network, strlen(network) + 2) : NULL;
+  if (nl) strcat(nl, "\n"), network = nl; /* as wv_params_write writes it */
+  if (!(rc = wv_fit_check_sizes(&est->scene, est->desc, &o->fit, err)) && !network)
+    rc = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  if (!rc) {
+    job.crop = (wv_crop){est->info.crop[0], est->info.crop[1], est->info.crop[2], est->info.crop[3]};
+    job.weights = o->estimate.weights;
+    job.extra_name = "network.json", job.extra_text = network;
+    job.scene = &est->scene, job.photo = &est->photo, job.desc = est->desc, job.start = &est->params;
+    job.pattern_choice = est->chosen ? &est->choice : NULL;
+    job.photo_path = o->estimate.photo, job.iters_given = o->iters_given;
+    job.start_label = "network";
+    job.title = "woven capture";
+    job.progress = o->progress;
+    rc = wv_fit_job_run(&job, out, err);
+  }
+  free(network);
+  if (rc) wv_estimate_free(est);
+  return rc;
+}
