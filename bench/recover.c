@@ -28,6 +28,7 @@
 
 #include "bench_common.h"
 #include "util/hash.h"
+#include "woven/capture.h"
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
 #include "woven/fit.h"
@@ -63,6 +64,7 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
   wv_error err = {0};
   double t0 = bench_now();
   memset(c, 0, sizeof *c);
+  wv_fit_opts o = st->o; /* as woven capture adapts them to the pattern choice */
   if (given) {
     c->start = *given;
     c->method = "given";
@@ -77,11 +79,12 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
     int lb = pc->lattice.found ? wv_pattern_decide(pc, 0.0, -1.0, NULL) : pc->best;
     snprintf(c->lattice_choice, sizeof c->lattice_choice, "%s", wv_weave_builtin_name(lb >= 0 ? lb : pc->best));
     c->choice_seconds = pc->seconds;
+    wv_capture_fit_opts(pc, 0, &o);
     free(pc);
   }
   snprintf(c->chosen, sizeof c->chosen, "%s", c->start.pattern);
   wv_fit_state fs;
-  if (wv_fit_state_init(&fs, &c->start, &st->o, &err) || wv_fit_run(&fs, st->s, photo, st->d, &st->o, NULL, NULL, &err))
+  if (wv_fit_state_init(&fs, &c->start, &o, &err) || wv_fit_run(&fs, st->s, photo, st->d, &o, NULL, NULL, &err))
     die(&err);
   c->fit = fs.params;
   wv_fit_scene(&fs, st->s, &c->fit_scene);

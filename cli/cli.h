@@ -131,7 +131,7 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
 typedef struct {
   const char *photo, *scene, *pattern, *model, *descriptor, *weights, *out, *init, *resume, *drape;
   wv_crop crop;
-  int force, iters_given;
+  int force, iters_given, align_given;
   wv_fit_opts fit;
 } capture_args;
 void cli_capture_args_init(capture_args *a);

@@ -42,6 +42,12 @@ static int parse_iters(const char *cmd, const cli_opt *o, const char *v, void *b
   return cli_opt_int(cmd, o, v, &a->fit.iters);
 }
 
+static int parse_align(const char *cmd, const cli_opt *o, const char *v, void *base) {
+  capture_args *a = base;
+  a->align_given = 1;
+  return cli_opt_int(cmd, o, v, &a->fit.align_radius);
+}
+
 static int parse_seed(const char *cmd, const cli_opt *o, const char *v, void *base) {
   capture_args *a = base;
   int seed;
@@ -92,9 +98,10 @@ const cli_opt CLI_FIT_OPTS[] = {
               "iterate on the image downscaled N times (default 1); the final\nrender and SSIM use the scene's full "
               "resolution and spp"),
     CLI_O_CUSTOM("--seed", capture_args, fit.seed, 0, INT_MAX, parse_seed, "N", "the seed of the discrete steps"),
-    CLI_O_INT("--align-radius", NULL, capture_args, fit.align_radius, 0, WV_FIT_MAX_ALIGN_RADIUS, "N",
-              "after the iterations, search each density +-N yarns/inch for the\nbest SSIM in a centre window "
-              "(default 230: the whole range;\n0 = off)"),
+    CLI_O_CUSTOM("--align-radius", capture_args, fit.align_radius, 0, WV_FIT_MAX_ALIGN_RADIUS, parse_align, "N",
+                 "after the iterations, search each density +-N yarns/inch for the\nbest SSIM in a centre window "
+                 "(default 230: the whole range; 0 = off, the default of a\ncapture whose weave analysis measured the "
+                 "densities)"),
     CLI_O_INT("--register-radius", NULL, capture_args, fit.register_radius, 0, WV_FIT_MAX_REGISTER_RADIUS, "N",
               "then register the weave to the photo: densities on a 2-D grid\n+-N yarns/inch refined to 0.1, and "
               "the weave's offset, by phase\ncorrelation; kept if the SSIM rises (default 6; 0 = off)"),
@@ -168,8 +175,9 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
   const wv_fit_state *st = &r->state;
   const wv_weave_views *wv = &r->views;
   const wv_fit_record *last = st->iter ? &st->log[st->iter - 1] : NULL;
-  cli_info(c, "SSIM %s %.4f -> fit %.4f, WSC %.3f -> %.3f; %d iterations in %.1f s; results in %s/\n", r->start_label,
-           r->ssim_start, r->ssim_fit, wv->wsc[0], wv->wsc[1], st->iter, st->timing.total, dir);
+  cli_info(c, "SSIM %s %.4f -> fit %.4f, WSC %.3f -> %.3f, whitened WSC %.3f -> %.3f; %d iterations in %.1f s; "
+              "results in %s/\n", r->start_label, r->ssim_start, r->ssim_fit, wv->wsc[0], wv->wsc[1],
+           wv->wsc_whitened[0], wv->wsc_whitened[1], st->iter, st->timing.total, dir);
   if (c->json) {
     json_t *o_json = json_pack(
         "{s:o,s:i,s:o,s:o,s:o,s:{s:o,s:o,s:o,s:o,s:o,s:o},s:[o,o],s:{s:[o,o],s:[o,o],s:[o,o]}}", "dir",
@@ -189,6 +197,10 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
       json_object_set_new(o_json, "ssim_rgb_fit", cli_real(wv->ssim_rgb[1], 6));
       json_object_set_new(o_json, "wsc_start", wv->wsc[0] > -2 ? cli_real(wv->wsc[0], 6) : json_null());
       json_object_set_new(o_json, "wsc_fit", wv->wsc[1] > -2 ? cli_real(wv->wsc[1], 6) : json_null());
+      json_object_set_new(o_json, "wsc_whitened_start",
+                          wv->wsc_whitened[0] > -2 ? cli_real(wv->wsc_whitened[0], 6) : json_null());
+      json_object_set_new(o_json, "wsc_whitened_fit",
+                          wv->wsc_whitened[1] > -2 ? cli_real(wv->wsc_whitened[1], 6) : json_null());
       char bounds[WV_P_COUNT + 3][96];
       int nb = wv_params_at_bounds(&st->params, bounds, WV_P_COUNT + 3);
       json_t *ab = json_array();

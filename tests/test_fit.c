@@ -189,7 +189,7 @@ static void test_psf_estimate(void **state) {
     assert_int_equal(wv_render(&sb, &p, NULL, &photo, NULL, &err), WV_OK);
     double sigma, d;
     assert_int_equal(wv_psf_estimate(&s, &photo, &p, 0, &sigma, &d, &err), WV_OK);
-    printf("camera blur %.1f px: measured %.2f (envelope distance %.4f)\n", want[i], sigma, d);
+    printf("camera blur %.1f px: measured %.2f (1 - WSC %.4f)\n", want[i], sigma, d);
     assert_true(fabs(sigma - want[i]) <= 0.15);
     wv_image_free(&photo);
   }

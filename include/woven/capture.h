@@ -118,11 +118,21 @@ typedef struct {
   wv_estimate_opts estimate;
   wv_fit_opts fit;
   int iters_given;
+  int align_given; /* 0: fit.align_radius becomes WV_CAPTURE_ALIGN_RADIUS when the weave
+                    * analysis found the photo's lattice (wv_capture_fit_opts) */
   const char *dir, *drape;
   int force;
   void (*on_estimate)(void *user, const wv_estimate *e);
   wv_capture_progress progress; /* its user is on_estimate's too */
 } wv_capture_opts;
+#define WV_CAPTURE_ALIGN_RADIUS 0 /* yarns/inch; 0: no alignment (docs/analysis.md: on the real
+                                   * photos it changed SSIM by nothing and lost the weave) */
+/* The fit options of a capture after its pattern choice pc (NULL: the pattern was given).
+ * With a lattice the densities are measured, and the fit keeps them: no random density
+ * steps (density_steps 0) and, unless align_given, no density alignment, whose search for
+ * the best SSIM lands on aliases that erase the weave. The registration still refines
+ * them. */
+void wv_capture_fit_opts(const wv_pattern_choice *pc, int align_given, wv_fit_opts *o);
 /* On success est holds the estimate (wv_estimate_free) and out the fit. */
 wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outcome *out, wv_error *err);
 

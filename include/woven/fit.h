@@ -30,6 +30,8 @@ typedef struct {
   int colour_split;   /* 1: before the first iteration, try starts that split warp and weft colours (1) */
   int down_w, down_h; /* 16 x 8 */
   int discrete_every; /* 5 (0: no discrete search) */
+  int density_steps;  /* 1: the discrete search steps the densities too (1); 0: the noise level
+                       * alone (a capture whose weave analysis measured the densities) */
   int iter_scale;     /* iterate on the image downscaled by this factor (1) */
   int iter_spp;       /* samples per pixel while iterating (4) */
   uint64_t seed;      /* random steps of the discrete search */
@@ -127,9 +129,9 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
 
 /* The camera blur of photo (the scene's size): the sigma in 0..WV_PSF_RANGE pixels, in
  * steps of WV_PSF_RANGE / WV_PSF_STEPS, whose Gaussian blur of p's render (at WV_PSF_SPP)
- * gives the envelope of the photo's weave spectrum (the median of each ring of the
- * centre 256 x 256 pixels' spectrum, wv_weave_spectrum) the least squared difference
- * (returned in distance, may be NULL). Photos under WV_PSF_MIN_SIDE pixels: 0. */
+ * has the weave spectrum (centre 256 x 256 pixels, wv_weave_spectrum) most correlated
+ * with the photo's: the least 1 - WSC (returned in distance, may be NULL). Photos under
+ * WV_PSF_MIN_SIDE pixels: 0. */
 #define WV_PSF_RANGE 2.0
 #define WV_PSF_STEPS 20
 #define WV_PSF_SPP 16

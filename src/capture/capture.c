@@ -318,7 +318,7 @@ wv_status wv_fit_job_run(const wv_fit_job *job, wv_fit_outcome *out, wv_error *e
         !(rc = copy_into(job->dir, "checkpoint.json", od.tmp, 0, err)))
       rc = copy_into(job->dir, "network.json", od.tmp, 1, err);
   }
-  out->views = (wv_weave_views){.wsc = {-2, -2}};
+  out->views = (wv_weave_views){.wsc = {-2, -2}, .wsc_whitened = {-2, -2}};
   wv_fit_scene(&st, job->scene, &out->fit_scene); /* with the registration's fabric offset */
   if (!rc)
     wv_note(job->progress.on_note, job->progress.user, "rendering start and fit at %d x %d, %d spp", job->scene->width,
@@ -499,6 +499,12 @@ wv_status wv_estimate_run(const wv_estimate_opts *o, wv_estimate *e, wv_error *e
   return rc;
 }
 
+void wv_capture_fit_opts(const wv_pattern_choice *pc, int align_given, wv_fit_opts *o) {
+  if (!pc || !pc->lattice.found) return;
+  if (!align_given && o->align_radius > WV_CAPTURE_ALIGN_RADIUS) o->align_radius = WV_CAPTURE_ALIGN_RADIUS;
+  o->density_steps = 0; /* random density steps follow what the Gram loss prefers, often an alias */
+}
+
 wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outcome *out, wv_error *err) {
   memset(est, 0, sizeof *est);
   /* Everything is checked before anything is written; the directory first (cheap). */
@@ -524,6 +530,7 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
     job.extra_name = "network.json", job.extra_text = network;
     job.scene = &est->scene, job.photo = &est->photo, job.desc = est->desc, job.start = &est->params;
     job.pattern_choice = est->chosen ? &est->choice : NULL;
+    wv_capture_fit_opts(est->chosen ? &est->choice : NULL, o->align_given, &job.opts);
     job.photo_path = o->estimate.photo, job.iters_given = o->iters_given;
     job.start_label = "network";
     job.title = "woven capture";

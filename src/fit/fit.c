@@ -37,6 +37,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->seed = 1;
   o->checkpoint_every = 10;
   o->align_radius = 230;
+  o->density_steps = 1;
   o->register_radius = 6;
   o->psf_sigma = WV_FIT_PSF_AUTO;
 }
@@ -68,6 +69,7 @@ static const opt_range OPT_RANGES[] = {
     OPT(register_radius, 'i', 0, WV_FIT_MAX_REGISTER_RADIUS, 2),
     OPT(w_struct, 'd', 0, 1e6, 2),
     OPT(colour_split, 'i', 0, 1, 2),
+    OPT(density_steps, 'i', 0, 1, 2),
     OPT(psf_sigma, 'd', WV_FIT_PSF_AUTO, WV_PSF_MAX_SIGMA, 2),
 };
 #undef OPT
@@ -256,9 +258,10 @@ static uint64_t next_rand(uint64_t *state) {
 
 /* One random step of a discrete parameter (SPEC section 7 schedule). Returns 0
  * when the step would leave the range (nothing to try). */
-static int discrete_step(wv_params *p, uint64_t *rng, int iter, int iters) {
+static int discrete_step(wv_params *p, uint64_t *rng, int iter, int iters, int density_steps) {
   uint64_t r = next_rand(rng);
   int which = (int)(r % 3), sign = (r >> 8) & 1 ? 1 : -1;
+  if (which && !density_steps) return 0; /* the same draws either way: only what is tried differs */
   double frac = (double)iter / (iters > 0 ? iters : 1);
   double dstep = frac < 0.5 ? 10 : frac < 0.75 ? 5 : 2;
   if (which == 0) {
@@ -494,7 +497,7 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
       double td = omp_get_wtime();
       wv_fit_timing saved = st->timing;
       wv_params trial = st->params;
-      if (discrete_step(&trial, &st->rng, st->iter, o->iters)) {
+      if (discrete_step(&trial, &st->rng, st->iter, o->iters, o->density_steps)) {
         wv_fit_record cur = {0}, alt = {0};
         if ((rc = evaluate(&c, &st->params, &cur, NULL, err))) break;
         if ((rc = evaluate(&c, &trial, &alt, NULL, err))) break;
@@ -580,6 +583,7 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_object_set_new(json_object_get(root, "opts"), "register_radius", json_integer(o->register_radius));
   json_object_set_new(json_object_get(root, "opts"), "w_struct", json_real(o->w_struct));
   json_object_set_new(json_object_get(root, "opts"), "colour_split", json_integer(o->colour_split));
+  json_object_set_new(json_object_get(root, "opts"), "density_steps", json_integer(o->density_steps));
   json_object_set_new(root, "colour_split", json_integer(st->colour_split));
   json_object_set_new(root, "camera_blur", json_pack("{s:b,s:f}", "done", st->psf_done, "sigma_px", st->psf_sigma));
   json_t *log = json_array();
