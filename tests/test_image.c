@@ -1,3 +1,4 @@
+/* Tests of the image type: allocation limits. */
 #include "testutil.h"
 #include "woven/image.h"
 

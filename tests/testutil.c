@@ -1,3 +1,4 @@
+/* Shared helpers of the cmocka tests (testutil.h): preset windows and scratch directories. */
 #include "testutil.h"
 
 #include <math.h>

@@ -1,3 +1,4 @@
+/* woven: the status-and-message error type every library function fills (woven/error.h). */
 #include "woven/error.h"
 
 #include <stdarg.h>

@@ -1,3 +1,5 @@
+/* woven: float images in memory (woven/image.h): allocation with size limits, pixel access,
+ * mean and difference, and the one Gaussian blur (of an image or of one plane). */
 #include "woven/image.h"
 
 #include <math.h>
