@@ -42,26 +42,36 @@ static void crop(const wv_image *a, int x0, int y0, int w, int h, wv_image *out)
     memcpy(wv_image_px(out, 0, y), wv_image_px(a, x0, y0 + y), sizeof(float) * 3 * (size_t)w);
 }
 
+/* Crops of a weave's render (prior draw of pattern, densities d0 / d1) in flat45: a at the
+ * corner, b offset by (64, 57), ta of the weave turned by 20 degrees. */
+static void weave_crops(const char *pattern, uint64_t seed, double d0, double d1, wv_image *a, wv_image *b,
+                        wv_image *ta) {
+  wv_scene s;
+  wv_image img, turned;
+  wv_error e = {0};
+  wv_params p;
+  assert_int_equal(wv_params_sample_prior(pattern, seed, &p, &e), WV_OK);
+  p.density[0] = d0, p.density[1] = d1;
+  tu_centre_window(&s, "flat45", 320, 320, 8);
+  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  assert_int_equal(wv_render(&s, &p, &ro, &img, NULL, &e), WV_OK);
+  s.rotation_deg = 20;
+  assert_int_equal(wv_render(&s, &p, &ro, &turned, NULL, &e), WV_OK);
+  crop(&img, 0, 0, SIDE, SIDE, a);
+  crop(&img, 64, 57, SIDE, SIDE, b);
+  crop(&turned, 0, 0, SIDE, SIDE, ta);
+  wv_image_free(&img), wv_image_free(&turned);
+}
+
 /* Two crops of one render hold the same weave: WSC well above zero, whatever their offset
  * (about 0.24: a render's spectrum between its peaks is a flat floor whose bins fluctuate
  * independently in each crop; photos, with a smooth envelope, score 0.4 to 0.7); white
  * noise holds nothing in common; the same weave turned by 20 degrees scores far lower. */
 static void test_wsc(void **state) {
   (void)state;
-  wv_scene s;
-  wv_image img, a, b, noise, turned, ta;
+  wv_image a, b, noise, ta;
   wv_error e = {0};
-  wv_params p;
-  assert_int_equal(wv_params_sample_prior("twill31s", 11, &p, &e), WV_OK);
-  p.density[0] = 150, p.density[1] = 85;
-  tu_centre_window(&s, "flat45", 320, 320, 8);
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
-  assert_int_equal(wv_render(&s, &p, &ro, &img, NULL, &e), WV_OK);
-  s.rotation_deg = 20;
-  assert_int_equal(wv_render(&s, &p, &ro, &turned, NULL, &e), WV_OK);
-  crop(&img, 0, 0, SIDE, SIDE, &a);
-  crop(&img, 64, 57, SIDE, SIDE, &b);
-  crop(&turned, 0, 0, SIDE, SIDE, &ta);
+  weave_crops("twill31s", 11, 150, 85, &a, &b, &ta);
   noise_image(&noise, SIDE, SIDE, 5);
   double same, vs_noise, vs_turned, self;
   assert_int_equal(wv_wsc(&a, &b, &same, &e), WV_OK);
@@ -83,7 +93,7 @@ static void test_wsc(void **state) {
   assert_int_equal(wv_image_alloc(&grey, SIDE, SIDE, 3, NULL), WV_OK);
   assert_int_equal(wv_wsc(&grey, &a, &same, &e), WV_OK);
   assert_true(same == 0);
-  wv_image_free(&img), wv_image_free(&a), wv_image_free(&b), wv_image_free(&noise), wv_image_free(&turned);
+  wv_image_free(&a), wv_image_free(&b), wv_image_free(&noise);
   wv_image_free(&ta), wv_image_free(&tiny), wv_image_free(&grey);
 }
 
@@ -92,20 +102,9 @@ static void test_wsc(void **state) {
  * white noise and the weave turned by 20 degrees score far lower. */
 static void test_wsc_whitened(void **state) {
   (void)state;
-  wv_scene s;
-  wv_image img, a, b, bb, noise, turned, ta;
+  wv_image a, b, bb, noise, ta;
   wv_error e = {0};
-  wv_params p;
-  assert_int_equal(wv_params_sample_prior("satin5", 12, &p, &e), WV_OK);
-  p.density[0] = 120, p.density[1] = 90;
-  tu_centre_window(&s, "flat45", 320, 320, 8);
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
-  assert_int_equal(wv_render(&s, &p, &ro, &img, NULL, &e), WV_OK);
-  s.rotation_deg = 20;
-  assert_int_equal(wv_render(&s, &p, &ro, &turned, NULL, &e), WV_OK);
-  crop(&img, 0, 0, SIDE, SIDE, &a);
-  crop(&img, 64, 57, SIDE, SIDE, &b);
-  crop(&turned, 0, 0, SIDE, SIDE, &ta);
+  weave_crops("satin5", 12, 120, 90, &a, &b, &ta);
   assert_int_equal(wv_image_blur(&b, 1.0, &bb, &e), WV_OK);
   noise_image(&noise, SIDE, SIDE, 5);
   double same, blurred, vs_noise, vs_turned, self, plain_same, plain_blurred;
@@ -126,8 +125,8 @@ static void test_wsc_whitened(void **state) {
   wv_image tiny;
   assert_int_equal(wv_image_alloc(&tiny, 20, 20, 3, NULL), WV_OK);
   assert_int_equal(wv_wsc_whitened(&tiny, &tiny, &same, &e), WV_ERR_INVALID);
-  wv_image_free(&img), wv_image_free(&a), wv_image_free(&b), wv_image_free(&bb), wv_image_free(&noise);
-  wv_image_free(&turned), wv_image_free(&ta), wv_image_free(&tiny);
+  wv_image_free(&a), wv_image_free(&b), wv_image_free(&bb), wv_image_free(&noise);
+  wv_image_free(&ta), wv_image_free(&tiny);
 }
 
 /* The Gaussian blur keeps a constant and conserves the mean of a smooth image. */
