@@ -107,9 +107,10 @@ wv_status wv_image_detail(const wv_image *img, int x0, int y0, int w, int h, flo
       const float *c = wv_image_px(img, x0 + x, y0 + y);
       out[(size_t)y * w + x] = img->c >= 3 ? 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2] : c[0];
     }
-  if (wv_blur_plane(out, blur, w, h, 1, WV_DETAIL_SIGMA, err)) {
+  wv_status st = wv_blur_plane(out, blur, w, h, 1, WV_DETAIL_SIGMA, err);
+  if (st) {
     free(blur), free(hx);
-    return WV_ERR_NOMEM;
+    return st;
   }
   double m = 0, v = 0;
   for (size_t i = 0; i < n; i++) m += out[i] -= blur[i];
