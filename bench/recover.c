@@ -2,6 +2,7 @@
  * built-in library, then the fit), on synthetic targets or on real photos.
  *   recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b,...] [--seed S]
  *           [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]
+ *           [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S]   (the fit's options, as woven fit's)
  *     Synthetic: N prior draws of every canonical built-in (or of the listed patterns; the
  *     earlier names twill, satin, twill90, satin90 are built-ins too); every second draw is
  *     a two-colour cloth (a dark blue warp and a near-white weft, as denim), rendered in the
@@ -290,6 +291,11 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--iter-spp") && i + 1 < argc) st.o.iter_spp = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--iter-scale") && i + 1 < argc) st.o.iter_scale = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--threads") && i + 1 < argc) st.o.threads = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--w-struct") && i + 1 < argc) st.o.w_struct = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--w-colour") && i + 1 < argc) st.o.w_colour = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--camera-blur") && i + 1 < argc) st.o.psf_sigma = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--no-colour-split")) st.o.colour_split = 0;
+    else if (!strcmp(argv[i], "--colour-split")) st.o.colour_split = 1;
     else if (!strcmp(argv[i], "--seed") && i + 1 < argc) seed = strtoull(argv[++i], NULL, 10);
     else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene_name = argv[++i];
     else if (!strcmp(argv[i], "--model") && i + 1 < argc) model = argv[++i];
@@ -305,6 +311,7 @@ int main(int argc, char **argv) {
     else {
       fprintf(stderr, "usage: recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b] [--seed S]\n"
                       "               [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]\n"
+                      "               [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S]\n"
                       "       recover --real DIR [--model M] [--iters N] ...\n");
       return 1;
     }
@@ -314,6 +321,7 @@ int main(int argc, char **argv) {
     return 1;
   }
   wv_error err = {0};
+  if (wv_fit_opts_validate(&st.o, &err)) die(&err);
   wv_scene s;
   if (wv_scene_load(real_dir ? "flat45" : scene_name, &s, &err)) die(&err);
   st.s = &s;

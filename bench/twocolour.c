@@ -1,7 +1,7 @@
 /* Two-colour twills (denim: blue warp, near-white weft): does the fit keep the warp and
  * weft colours apart?
  *   twocolour [--n N] [--iters N] [--scene flat45|cylinder] [--side S] [--w-struct X]
- *             [--no-split] [--full] [--threads N]
+ *             [--w-colour X] [--[no-]split] [--full] [--threads N]
  *   N targets (default 4): a built-in twill (cycling through the S and Z twills), the
  *   rest of the parameters from its prior, then a blue warp and a near-white weft with a
  *   little jitter. Rendered in the scene's centre S x S window (default 256; 0 = the
@@ -58,12 +58,14 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene = argv[++i];
     else if (!strcmp(argv[i], "--side") && i + 1 < argc) side = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--w-struct") && i + 1 < argc) o.w_struct = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--w-colour") && i + 1 < argc) o.w_colour = atof(argv[++i]);
     else if (!strcmp(argv[i], "--no-split")) o.colour_split = 0;
+    else if (!strcmp(argv[i], "--split")) o.colour_split = 1;
     else if (!strcmp(argv[i], "--full")) full = 1;
     else if (!strcmp(argv[i], "--threads") && i + 1 < argc) o.threads = atoi(argv[++i]);
     else {
       fprintf(stderr, "usage: twocolour [--n N] [--iters N] [--scene flat45|cylinder] [--side S] [--w-struct X] "
-                      "[--no-split] [--full] [--threads N]\n");
+                      "[--w-colour X] [--[no-]split] [--full] [--threads N]\n");
       return 2;
     }
   }

@@ -107,8 +107,12 @@ const cli_opt CLI_FIT_OPTS[] = {
               "the weave's offset, by phase\ncorrelation; kept if the SSIM rises (default 6; 0 = off)"),
     CLI_O_REAL("--w-struct", capture_args, fit.w_struct, 0, 100, 0, "X",
                "weight of the structure term, the weave's log power spectrum\n(default 0.002; 0 = off)"),
-    CLI_O_CLEAR("--no-colour-split", capture_args, fit.colour_split,
-                "do not try starts that split the warp and weft diffuse colours"),
+    CLI_O_REAL("--w-colour", capture_args, fit.w_colour, 0, 100, 0, "X",
+               "weight of the detail-colour term, how the colour varies between\nyarns (default 0.1; 0 = off)"),
+    CLI_O_FLAG("--colour-split", capture_args, fit.colour_split,
+               "before the first iteration, try starts that split the warp and weft\ndiffuse colours (off by "
+               "default: the detail-colour term separates them)"),
+    CLI_O_CLEAR("--no-colour-split", capture_args, fit.colour_split, "no such starts (the default)"),
     CLI_O_CUSTOM("--camera-blur", capture_args, fit.psf_sigma, 0, WV_PSF_MAX_SIGMA, parse_blur, "auto|S",
                  "the camera's blur, a Gaussian of sigma S pixels on the radiance in\nevery render; auto (default): "
                  "the scene's, else measured from the\nphoto's spectrum"),
@@ -130,14 +134,15 @@ static const cli_cmd CMD = {
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
-    "                 [--register-radius N] [--w-struct X] [--no-colour-split] [--camera-blur auto|S]\n"
+    "                 [--register-radius N] [--w-struct X] [--w-colour X] [--colour-split]\n"
+    "                 [--camera-blur auto|S]\n"
     "                 [--seed N] [--threads N] [--drape S.json|none]\n"
     "                 [--force] [--quiet] [--json]\n"
     "       woven fit --resume DIR [--iters N] [--quiet] [--json]\n"
     "\n"
     "Refines fabric parameters so that a render of the scene matches the photo (paper 4.3):\n"
-    "Gram-matrix loss + 16x8 pixel loss + heightfield prior + the weave's spectrum (structure),\n"
-    "Adam (lr 0.01) on the continuous\n"
+    "Gram-matrix loss + 16x8 pixel loss + heightfield prior + the weave's spectrum (structure)\n"
+    "+ the colour of its detail, Adam (lr 0.01) on the continuous\n"
     "parameters, random steps of noise level and densities every 5 iterations.\n",
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), zoom.png (their\n"
     "centre crop enlarged 4x), spectra.png (their weave spectra), loss.svg, report.html (with\n"
@@ -154,8 +159,9 @@ static void on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
   const wv_fit_record *r = &st->log[st->iter - 1];
   if (!u->bar.enabled) return;
   double el = cli_now() - u->bar.start, f = (double)st->iter / o->iters;
-  fprintf(stderr, "\rfit %3d/%d  loss %.5f (Gram %.5f, pixel %.4f, prior %.3f, structure %.3f)  %.0fs, %.0fs left ",
-          st->iter, o->iters, r->loss, r->gram, r->pixel, r->prior, r->structure, el, f > 0 ? el * (1 - f) / f : 0.0);
+  fprintf(stderr, "\rfit %3d/%d  loss %.5f (Gram %.5f, pixel %.4f, prior %.3f, structure %.3f, colour %.3f)  %.0fs, %.0fs left ",
+          st->iter, o->iters, r->loss, r->gram, r->pixel, r->prior, r->structure, r->colour, el,
+          f > 0 ? el * (1 - f) / f : 0.0);
   fflush(stderr);
 }
 

@@ -20,7 +20,7 @@ static char *checkpoint_text(const char *path) {
   wv_fit_state st;
   assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
   st.iter = 1;
-  st.log[0] = (wv_fit_record){0, 0.5, 0.4, 0.01, 0.09, 0.0, 0, 0};
+  st.log[0] = (wv_fit_record){.iter = 0, .loss = 0.5, .gram = 0.4, .prior = 0.01, .pixel = 0.09};
   assert_int_equal(wv_fit_checkpoint_write(path, &st, &o, "default", &err), WV_OK);
   wv_fit_state_free(&st);
   char *text;

@@ -1,6 +1,7 @@
-/* The image losses of include/woven/loss.h: the structure loss's gradient against
- * finite differences, and what it is for: a shifted weave costs little, a blurred or an
- * erased one a lot, a change of contrast nothing. */
+/* The image losses of include/woven/loss.h: the structure and detail-colour losses'
+ * gradients against finite differences, and what they are for: a shifted weave costs
+ * little, a blurred or an erased one a lot, a change of contrast nothing; hues on the
+ * yarns that the photo's detail lacks cost, and so do two colours merged into one. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -117,6 +118,94 @@ static void test_spectrum_erasing_costs(void **state) {
   wv_image_free(&photo), wv_image_free(&shifted), wv_image_free(&blurred), wv_image_free(&flat), wv_image_free(&dim);
 }
 
+/* Threads of two colours ca and cb alternating every 2 px along x over ribs of period 6:
+ * the detail moves along ca - cb (and along the light, by the ribs). */
+static void two_colour(wv_image *img, int w, int h, const double ca[3], const double cb[3], double phase, uint64_t seed) {
+  wv_error e;
+  assert_int_equal(wv_image_alloc(img, w, h, 3, &e), WV_OK);
+  wv_rng r;
+  wv_rng_seed(&r, seed);
+  for (int y = 0; y < h; y++)
+    for (int x = 0; x < w; x++) {
+      const double *c = ((x + (int)phase) / 2) % 2 ? ca : cb;
+      double v = 1 + 0.2 * sin(2 * PI * (x + y + phase) / 6.0);
+      float *p = wv_image_px(img, x, y);
+      for (int k = 0; k < 3; k++) p[k] = (float)(c[k] * v + 0.01 * (wv_rng_uniform(&r) - 0.5));
+    }
+}
+
+static void test_colour_gradient(void **state) {
+  (void)state;
+  wv_image photo, img, d;
+  wv_error e;
+  ribs(&photo, 40, 36, 0, 1, 1);
+  const double ca[3] = {0.6, 0.3, 0.2}, cb[3] = {0.3, 0.5, 0.6};
+  two_colour(&img, 40, 36, ca, cb, 1, 2);
+  wv_colour_loss *c;
+  assert_int_equal(wv_colour_loss_create(&photo, &c, &e), WV_OK);
+  assert_int_equal(wv_image_alloc(&d, 40, 36, 3, &e), WV_OK);
+  memset(d.data, 0, sizeof(float) * 40 * 36 * 3);
+  const float wt = 0.7f;
+  double l0, fp, fm;
+  assert_int_equal(wv_colour_loss_eval(c, &img, &d, wt, &l0, &e), WV_OK);
+  assert_true(l0 > 0.05);
+  double gmax = 0;
+  for (size_t i = 0; i < 40 * 36 * 3; i++) gmax = fmax(gmax, fabs(d.data[i]));
+  double worst = 0;
+  int checked = 0;
+  for (size_t i = 5; i < 40 * 36 * 3; i += 29) {
+    float save = img.data[i], h = 1e-3f;
+    img.data[i] = save + h;
+    assert_int_equal(wv_colour_loss_eval(c, &img, NULL, 0, &fp, &e), WV_OK);
+    img.data[i] = save - h;
+    assert_int_equal(wv_colour_loss_eval(c, &img, NULL, 0, &fm, &e), WV_OK);
+    img.data[i] = save;
+    double num = wt * (fp - fm) / (2 * h), an = d.data[i];
+    double err = fabs(num - an) / (fabs(num) + fabs(an) + 0.05 * gmax);
+    if (err > 0.02) fprintf(stderr, "pixel value %zu: analytic %g, numeric %g\n", i, an, num);
+    worst = fmax(worst, err);
+    checked++;
+  }
+  fprintf(stderr, "detail-colour loss %.4f: %d gradient entries, worst relative error %.2e\n", l0, checked, worst);
+  assert_true(worst < 0.02);
+  /* the crop's edge pixels (outside the blur's reach of the interior) get no gradient */
+  assert_true(d.data[0] == 0.0f && d.data[3 * (40 * 36 - 1)] == 0.0f);
+  wv_colour_loss_free(c);
+  wv_image_free(&photo), wv_image_free(&img), wv_image_free(&d);
+}
+
+static void test_colour_what_it_sees(void **state) {
+  (void)state;
+  wv_image grey, grey2, split, denim, denim2, merged;
+  wv_error e;
+  const double olive[3] = {0.45, 0.5, 0.3}, pink[3] = {0.6, 0.4, 0.35}, green[3] = {0.3, 0.6, 0.25};
+  const double blue[3] = {0.05, 0.1, 0.35}, white[3] = {0.8, 0.78, 0.72};
+  two_colour(&grey, 64, 64, olive, olive, 0, 1);       /* one colour: light and shade */
+  two_colour(&grey2, 64, 64, olive, olive, 3, 2);      /* another phase and noise draw */
+  for (size_t i = 0; i < (size_t)64 * 64 * 3; i++) grey2.data[i] = 0.5f * grey2.data[i] + 0.1f; /* other contrast */
+  two_colour(&split, 64, 64, pink, green, 0, 3);      /* its mean colour, but hues on the yarns */
+  two_colour(&denim, 64, 64, blue, white, 0, 4);
+  two_colour(&denim2, 64, 64, white, blue, 3, 5);     /* the colours on the other yarns */
+  double mid[3];
+  for (int k = 0; k < 3; k++) mid[k] = 0.5 * (blue[k] + white[k]);
+  two_colour(&merged, 64, 64, mid, mid, 0, 6);        /* denim's mean colour on both */
+  wv_colour_loss *cg, *cd;
+  assert_int_equal(wv_colour_loss_create(&grey, &cg, &e), WV_OK);
+  assert_int_equal(wv_colour_loss_create(&denim, &cd, &e), WV_OK);
+  double same, hues, other, m;
+  assert_int_equal(wv_colour_loss_eval(cg, &grey2, NULL, 0, &same, &e), WV_OK);
+  assert_int_equal(wv_colour_loss_eval(cg, &split, NULL, 0, &hues, &e), WV_OK);
+  assert_int_equal(wv_colour_loss_eval(cd, &denim2, NULL, 0, &other, &e), WV_OK);
+  assert_int_equal(wv_colour_loss_eval(cd, &merged, NULL, 0, &m, &e), WV_OK);
+  fprintf(stderr, "detail-colour loss: one colour vs itself rescaled %.5f, vs hues on the yarns %.4f; "
+                  "denim vs its colours swapped %.5f, vs merged %.4f\n", same, hues, other, m);
+  assert_true(same < 0.01 && other < 0.01);
+  assert_true(hues > 20 * same + 0.05 && m > 20 * other + 0.05);
+  wv_colour_loss_free(cg), wv_colour_loss_free(cd);
+  wv_image_free(&grey), wv_image_free(&grey2), wv_image_free(&split), wv_image_free(&denim), wv_image_free(&denim2),
+      wv_image_free(&merged);
+}
+
 static void test_gram_loss(void **state) {
   (void)state;
   const float a[4] = {1, 2, 3, 4}, b[4] = {1, 3, 2, 5};
@@ -130,6 +219,8 @@ int main(void) {
       cmocka_unit_test(test_spectrum_gradient),
       cmocka_unit_test(test_spectrum_erasing_costs),
       cmocka_unit_test(test_gram_loss),
+      cmocka_unit_test(test_colour_gradient),
+      cmocka_unit_test(test_colour_what_it_sees),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

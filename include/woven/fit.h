@@ -1,11 +1,12 @@
 /* woven: refine fabric parameters from a photo by differentiable rendering
  * (paper section 4.3, SPEC section 7).
- *   L = L_g + w1 L_p + w2 L_c + w3 L_s
+ *   L = L_g + w1 L_p + w2 L_c + w3 L_s + w4 L_k
  *   L_g = mean |Gram(photo) - Gram(render)|        (the texture descriptor)
  *   L_p = sum over warp, weft of (beta - mu)^2 / (2 sigma^2)   (pattern prior)
  *   L_c = mean |down(photo) - down(render)|        (area average to 16 x 8)
  *   L_s = the weave's log power spectrum in the yarn band (phase-invariant structure;
  *         include/woven/loss.h)
+ *   L_k = how the colour of the pixel-scale detail varies (include/woven/loss.h)
  * Adam on the continuous parameters (normalised to [0,1] by their ranges, kept
  * inside them), the twist included (we have its gradient); every few iterations
  * a random step of a discrete parameter (noise level Q, warp or weft density) is
@@ -27,7 +28,8 @@ typedef struct {
   double w_prior;     /* w1 = 0.0005 */
   double w_pixel;     /* w2 = 0.2 */
   double w_struct;    /* w3 = WV_FIT_W_STRUCT (0: no structure term) */
-  int colour_split;   /* 1: before the first iteration, try starts that split warp and weft colours (1) */
+  double w_colour;    /* w4 = WV_FIT_W_COLOUR (0: no detail-colour term) */
+  int colour_split;   /* 1: before the first iteration, try starts that split warp and weft colours (0) */
   int down_w, down_h; /* 16 x 8 */
   int discrete_every; /* 5 (0: no discrete search) */
   int density_steps;  /* 1: the discrete search steps the densities too (1); 0: the noise level
@@ -46,6 +48,7 @@ typedef struct {
 void wv_fit_opts_default(wv_fit_opts *o);
 #define WV_FIT_PSF_AUTO -1.0
 #define WV_FIT_W_STRUCT 0.002 /* the structure term's weight (docs/fit.md: how it was chosen) */
+#define WV_FIT_W_COLOUR 0.1   /* the detail-colour term's weight (docs/fit.md: how it was chosen) */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000
@@ -69,7 +72,7 @@ wv_status wv_fit_check_sizes(const wv_scene *s, const wv_descriptor *d, const wv
 /* One iteration's record. */
 typedef struct {
   int iter;
-  double loss, gram, prior, pixel, structure;
+  double loss, gram, prior, pixel, structure, colour;
   int discrete_tried, discrete_kept;
 } wv_fit_record;
 
@@ -83,7 +86,8 @@ typedef struct {
   wv_params start, params;
   int iter; /* iterations done */
   int aligned; /* the density alignment after the last iteration is done */
-  int colour_split; /* the start's colours: 0 as given, 1..4 split (darker on the warp: 1, 3; weft: 2, 4; 3, 4 twice as far) */
+  int colour_split; /* the start's colours: 0 as given, 1..4 split (darker on the warp: 1, 3; weft: 2, 4; 3, 4 twice
+                     * as far), 5 both the start's mean */
   double align_ssim_before, align_ssim_after; /* its criterion at the start and end */
   int registered; /* the registration after the alignment is done */
   double offset_mm[2]; /* fabric offset found by the registration (added to the scene's) */

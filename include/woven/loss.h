@@ -10,6 +10,10 @@
  *        3 x 3 frequency bins, and E its mean over the band. Erasing the weave flattens
  *        P's peaks and costs L_s; a shift of the weave does not (the spectrum has no phase);
  *        neither does a change of contrast (P / E).
+ *   L_k  detail colour: sum over the 3 x 3 entries of (A_render / tr A_render - A_photo / tr A_photo)^2,
+ *        A the covariance of the R, G, B detail (each channel minus its Gaussian blur) over
+ *        the centre crop: which way the colour moves between yarns (along the light for a
+ *        one-colour cloth, between its two colours for a two-colour one), not how far.
  * docs/fit.md gives the weights and what each term is for. */
 #ifndef WOVEN_LOSS_H
 #define WOVEN_LOSS_H
@@ -21,17 +25,18 @@
 
 struct wv_descriptor;
 
-/* ---- The combined image loss L = L_g + w_pixel L_c + w_struct L_s of one photo ---- */
+/* ---- The combined image loss L = L_g + w_pixel L_c + w_struct L_s + w_colour L_k of one photo ---- */
 #define WV_LOSS_DOWN_W 16 /* the pixel loss's grid */
 #define WV_LOSS_DOWN_H 8
 typedef struct {
   double w_pixel;     /* weight of L_c */
   double w_struct;    /* weight of L_s (0: not computed) */
   int down_w, down_h; /* the pixel loss's grid (WV_LOSS_DOWN_W x WV_LOSS_DOWN_H) */
+  double w_colour;    /* weight of L_k (0: not computed) */
 } wv_loss_weights;
 typedef struct {
-  double total;                  /* gram + w_pixel pixel + w_struct structure */
-  double gram, pixel, structure; /* L_g, L_c, L_s */
+  double total;                          /* gram + w_pixel pixel + w_struct structure + w_colour colour */
+  double gram, pixel, structure, colour; /* L_g, L_c, L_s, L_k */
 } wv_loss_terms;
 typedef struct wv_image_loss wv_image_loss;
 /* Precomputes what the photo contributes (its Gram vector, its downsampled image, its
@@ -62,4 +67,15 @@ void wv_spectrum_loss_free(wv_spectrum_loss *s);
  * (an image of render's shape). Not thread-safe: one object per thread. */
 double wv_spectrum_loss_eval(wv_spectrum_loss *s, const wv_image *render, wv_image *d, float weight);
 
+/* ---- L_k: the colour of the detail ---- */
+#define WV_COLOUR_SIDE 256  /* the centre crop (smaller images: their largest square) */
+#define WV_COLOUR_SIGMA 2.0 /* the detail: each channel minus its Gaussian blur of this sigma (pixels) */
+typedef struct wv_colour_loss wv_colour_loss;
+/* Precomputes the photo's normalised detail covariance for images of photo's size. */
+wv_status wv_colour_loss_create(const wv_image *photo, wv_colour_loss **out, wv_error *err);
+void wv_colour_loss_free(wv_colour_loss *c);
+/* L_k of render (the photo's size) into *value; with d != NULL adds weight * dL_k/drender
+ * into d (an image of render's shape). Not thread-safe: one object per thread. */
+wv_status wv_colour_loss_eval(wv_colour_loss *c, const wv_image *render, wv_image *d, float weight, double *value,
+                              wv_error *err);
 #endif

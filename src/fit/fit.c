@@ -29,7 +29,8 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->w_prior = 0.0005;
   o->w_pixel = 0.2;
   o->w_struct = WV_FIT_W_STRUCT;
-  o->colour_split = 1;
+  o->w_colour = WV_FIT_W_COLOUR;
+  o->colour_split = 0; /* the detail-colour term separates warp and weft without it (docs/fit.md) */
   o->down_w = WV_LOSS_DOWN_W, o->down_h = WV_LOSS_DOWN_H;
   o->discrete_every = 5;
   o->iter_scale = 1;
@@ -68,6 +69,7 @@ static const opt_range OPT_RANGES[] = {
     OPT(align_radius, 'i', 0, WV_FIT_MAX_ALIGN_RADIUS, 1),
     OPT(register_radius, 'i', 0, WV_FIT_MAX_REGISTER_RADIUS, 2),
     OPT(w_struct, 'd', 0, 1e6, 2),
+    OPT(w_colour, 'd', 0, 1e6, 2),
     OPT(colour_split, 'i', 0, 1, 2),
     OPT(density_steps, 'i', 0, 1, 2),
     OPT(psf_sigma, 'd', WV_FIT_PSF_AUTO, WV_PSF_MAX_SIGMA, 2),
@@ -195,7 +197,7 @@ static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, 
   } else if ((st = wv_image_downsample(photo, c->scene.width, c->scene.height, &c->photo, err))) {
     return st;
   }
-  wv_loss_weights lw = {o->w_pixel, o->w_struct, o->down_w, o->down_h};
+  wv_loss_weights lw = {o->w_pixel, o->w_struct, o->down_w, o->down_h, o->w_colour};
   if ((st = wv_image_loss_create(&c->photo, d, NULL, &lw, &c->loss, err))) return st;
   if ((st = wv_image_alloc(&c->dcap, c->scene.width, c->scene.height, 3, err))) return st;
   return wv_footprints_create(&c->scene, o->threads, &c->fp, err);
@@ -224,7 +226,7 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   wv_fit_beta_prior(p->pattern, &mu, &sg);
   double lp = 0;
   for (int y = 0; y < 2; y++) lp += (p->heightfield[y] - mu) * (p->heightfield[y] - mu) / (2 * sg * sg);
-  rec->gram = lt.gram, rec->pixel = lt.pixel, rec->prior = lp, rec->structure = lt.structure;
+  rec->gram = lt.gram, rec->pixel = lt.pixel, rec->prior = lp, rec->structure = lt.structure, rec->colour = lt.colour;
   rec->loss = lt.total + o->w_prior * lp;
   double t3 = omp_get_wtime();
   c->timing->descriptor += t3 - t1;
@@ -402,7 +404,9 @@ static int photo_colour_ratios(const fit_ctx *c, double r[2][3], wv_error *err) 
  * alike), while a two-colour photo needs them apart. Candidates: the photo's two local
  * colours (photo_colour_ratios), once and twice as far apart (yarns of one or two pixels
  * mix them), on the warp and the weft each way round, scaled to the start's mean
- * diffuse colour; the candidate with the lowest loss (the start included) is kept. */
+ * diffuse colour; and both yarns given that mean (a one-colour cloth, where the start
+ * split the hues: per-channel detail the photo lacks). The candidate with the lowest
+ * loss (the start included) is kept. */
 static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
   double r[2][3];
   wv_fit_record base = {0};
@@ -411,8 +415,8 @@ static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
   double best = base.loss, lo, hi;
   int choice = 0;
   wv_params best_p = st->params;
-  for (int cand = 1; cand <= 4 && !rc; cand++) {
-    double alpha = cand <= 2 ? 1.0 : 2.0;
+  for (int cand = 1; cand <= 5 && !rc; cand++) {
+    double alpha = cand <= 2 ? 1.0 : cand <= 4 ? 2.0 : 0.0; /* 5: both the mean colour */
     int dark = (cand & 1) ? WV_WARP : WV_WEFT; /* the yarn type given the darker colour */
     wv_params p = st->params;
     for (int ch = 0; ch < 3; ch++) {
@@ -582,6 +586,7 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
                                 o->align_radius));
   json_object_set_new(json_object_get(root, "opts"), "register_radius", json_integer(o->register_radius));
   json_object_set_new(json_object_get(root, "opts"), "w_struct", json_real(o->w_struct));
+  json_object_set_new(json_object_get(root, "opts"), "w_colour", json_real(o->w_colour));
   json_object_set_new(json_object_get(root, "opts"), "colour_split", json_integer(o->colour_split));
   json_object_set_new(json_object_get(root, "opts"), "density_steps", json_integer(o->density_steps));
   json_object_set_new(root, "colour_split", json_integer(st->colour_split));
@@ -589,8 +594,8 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_t *log = json_array();
   for (int i = 0; i < st->iter; i++) {
     const wv_fit_record *r = &st->log[i];
-    json_array_append_new(log, json_pack("[i,f,f,f,f,i,i,f]", r->iter, r->loss, r->gram, r->prior, r->pixel,
-                                         r->discrete_tried, r->discrete_kept, r->structure));
+    json_array_append_new(log, json_pack("[i,f,f,f,f,i,i,f,f]", r->iter, r->loss, r->gram, r->prior, r->pixel,
+                                         r->discrete_tried, r->discrete_kept, r->structure, r->colour));
   }
   json_object_set_new(root, "log", log);
   char *text = json_dumps(root, JSON_COMPACT | JSON_REAL_PRECISION(17));
@@ -637,6 +642,7 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   wv_fit_opts_default(o);
   o->register_radius = 0; /* absent in checkpoints older than the registration */
   o->w_struct = 0, o->colour_split = 0; /* absent before the structure term: a resume stays without it */
+  o->w_colour = 0;                       /* absent before the detail-colour term: likewise */
   o->psf_sigma = 0;                      /* absent before the camera blur: none */
   if ((rc = read_opts(json_object_get(root, "opts"), o, err))) return rc;
   wv_params start;
@@ -672,7 +678,7 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
     if ((rc = wv_json_number(cb, "camera_blur", "sigma_px", 0, WV_PSF_MAX_SIGMA, 1, &st->psf_sigma, err))) return rc;
   }
   long long cs = 0; /* the start's colour split (absent before it existed: none) */
-  if ((rc = wv_json_integer(root, NULL, "colour_split", 0, 4, 0, &cs, err))) return rc;
+  if ((rc = wv_json_integer(root, NULL, "colour_split", 0, 5, 0, &cs, err))) return rc;
   st->colour_split = (int)cs;
   json_t *reg = json_object_get(root, "registration"); /* absent in checkpoints before it existed */
   if (reg) {
@@ -701,9 +707,10 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   for (int i = 0; i < st->iter; i++) {
     wv_fit_record *r = &st->log[i];
     json_t *e = json_array_get(log, i);
-    /* the 8th value, the structure term, is absent in fits made before it existed */
-    if (!json_is_array(e) || json_array_size(e) < 7 || json_array_size(e) > 8)
-      return wv_fail(err, WV_ERR_INVALID, "'log[%d]' must be an array of 7 or 8 values", i);
+    /* the 8th value, the structure term, and the 9th, the detail-colour term, are absent in
+     * fits made before they existed */
+    if (!json_is_array(e) || json_array_size(e) < 7 || json_array_size(e) > 9)
+      return wv_fail(err, WV_ERR_INVALID, "'log[%d]' must be an array of 7 to 9 values", i);
     double *v[4] = {&r->loss, &r->gram, &r->prior, &r->pixel};
     long long x;
     char name[40];
@@ -719,10 +726,11 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
       if ((rc = wv_json_integer_value(json_array_get(e, (size_t)k + 5), name, 0, 1, &x, err))) return rc;
       *(k ? &r->discrete_kept : &r->discrete_tried) = (int)x;
     }
-    r->structure = 0;
-    if (json_array_size(e) == 8) {
-      snprintf(name, sizeof name, "log[%d][7]", i);
-      if ((rc = wv_json_number_value(json_array_get(e, 7), name, -1e30, 1e30, &r->structure, err))) return rc;
+    r->structure = r->colour = 0;
+    double *extra[2] = {&r->structure, &r->colour};
+    for (int k = 7; k < (int)json_array_size(e); k++) {
+      snprintf(name, sizeof name, "log[%d][%d]", i, k);
+      if ((rc = wv_json_number_value(json_array_get(e, (size_t)k), name, -1e30, 1e30, extra[k - 7], err))) return rc;
     }
   }
   json_t *tm = json_object_get(root, "timing"); /* informative: absent or odd values are not fatal */

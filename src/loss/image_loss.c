@@ -1,6 +1,6 @@
-/* woven: the combined image loss of include/woven/loss.h: the texture (Gram), pixel and
- * structure terms of one photo, evaluated on renders with their joint adjoint. The fit
- * iterates on it; the pattern choice ranks candidates with it. */
+/* woven: the combined image loss of include/woven/loss.h: the texture (Gram), pixel,
+ * structure and detail-colour terms of one photo, evaluated on renders with their joint
+ * adjoint. The fit iterates on it; the pattern choice ranks candidates with it. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -16,6 +16,7 @@ struct wv_image_loss {
   float *gram_photo, *gram, *dgram;
   wv_image photo_down, down, ddown, dpix;
   wv_spectrum_loss *spec;
+  wv_colour_loss *colour;
 };
 
 void wv_image_loss_free(wv_image_loss *l) {
@@ -23,6 +24,7 @@ void wv_image_loss_free(wv_image_loss *l) {
   free(l->gram_photo), free(l->gram), free(l->dgram);
   wv_image_free(&l->photo_down), wv_image_free(&l->down), wv_image_free(&l->ddown), wv_image_free(&l->dpix);
   wv_spectrum_loss_free(l->spec);
+  wv_colour_loss_free(l->colour);
   free(l);
 }
 
@@ -43,6 +45,7 @@ wv_status wv_image_loss_create(const wv_image *photo, wv_descriptor *d, const fl
   if (!st) st = wv_image_downsample(photo, w->down_w, w->down_h, &l->photo_down, err);
   if (!st) st = wv_image_alloc(&l->ddown, w->down_w, w->down_h, 3, err);
   if (!st && w->w_struct > 0) st = wv_spectrum_loss_create(photo, &l->spec, err);
+  if (!st && w->w_colour > 0) st = wv_colour_loss_create(photo, &l->colour, err);
   if (st) {
     wv_image_loss_free(l);
     return st;
@@ -67,7 +70,9 @@ wv_status wv_image_loss_eval(wv_image_loss *l, const wv_image *render, wv_loss_t
   t->pixel = wv_image_l1(&l->down, &l->photo_down, dcap ? &l->ddown : NULL);
   /* L_s: the weave's spectrum (its gradient is added after the descriptor's) */
   t->structure = l->spec ? wv_spectrum_loss_eval(l->spec, render, NULL, 0) : 0.0;
-  t->total = t->gram + l->w.w_pixel * t->pixel + l->w.w_struct * t->structure;
+  /* L_k: the detail's colour (its gradient too is added after the descriptor's) */
+  if (l->colour && (st = wv_colour_loss_eval(l->colour, render, NULL, 0, &t->colour, err))) return st;
+  t->total = t->gram + l->w.w_pixel * t->pixel + l->w.w_struct * t->structure + l->w.w_colour * t->colour;
   if (!dcap) return WV_OK;
   /* dL/dcapture: descriptor backward, the pixel term through the downsampling, the spectrum */
   if ((st = wv_descriptor_backward(l->d, render, l->dgram, NULL, dcap, err))) return st;
@@ -76,5 +81,7 @@ wv_status wv_image_loss_eval(wv_image_loss *l, const wv_image *render, wv_loss_t
   size_t n = (size_t)render->w * render->h * 3;
   for (size_t i = 0; i < n; i++) dcap->data[i] += (float)l->w.w_pixel * l->dpix.data[i];
   if (l->spec) wv_spectrum_loss_eval(l->spec, render, dcap, (float)l->w.w_struct);
+  double unused;
+  if (l->colour) return wv_colour_loss_eval(l->colour, render, dcap, (float)l->w.w_colour, &unused, err);
   return WV_OK;
 }

@@ -48,7 +48,7 @@ static wv_status loss_of(wv_image_loss *loss, const wv_scene *sc, const wv_patte
 
 static wv_status criterion_create(const wv_image *photo, wv_descriptor *d, const float *gram_photo,
                                   const wv_pattern_opts *o, wv_image_loss **loss, wv_error *err) {
-  wv_loss_weights lw = {o->w_pixel, 0.0, WV_LOSS_DOWN_W, WV_LOSS_DOWN_H};
+  wv_loss_weights lw = {.w_pixel = o->w_pixel, .down_w = WV_LOSS_DOWN_W, .down_h = WV_LOSS_DOWN_H};
   return wv_image_loss_create(photo, d, gram_photo, &lw, loss, err);
 }
 
