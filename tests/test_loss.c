@@ -201,6 +201,19 @@ static void test_colour_what_it_sees(void **state) {
                   "denim vs its colours swapped %.5f, vs merged %.4f\n", same, hues, other, m);
   assert_true(same < 0.01 && other < 0.01);
   assert_true(hues > 20 * same + 0.05 && m > 20 * other + 0.05);
+  /* a flat card has no detail colour to match: no cost, no gradient */
+  wv_image card, dc;
+  assert_int_equal(wv_image_alloc(&card, 64, 64, 3, &e), WV_OK);
+  assert_int_equal(wv_image_alloc(&dc, 64, 64, 3, &e), WV_OK);
+  for (size_t i = 0; i < (size_t)64 * 64 * 3; i++) card.data[i] = 0.5f, dc.data[i] = 0;
+  wv_colour_loss *cc;
+  assert_int_equal(wv_colour_loss_create(&card, &cc, &e), WV_OK);
+  double lc = -1;
+  assert_int_equal(wv_colour_loss_eval(cc, &split, &dc, 1.0f, &lc, &e), WV_OK);
+  assert_true(lc == 0.0);
+  for (size_t i = 0; i < (size_t)64 * 64 * 3; i++) assert_true(dc.data[i] == 0.0f);
+  wv_colour_loss_free(cc);
+  wv_image_free(&card), wv_image_free(&dc);
   wv_colour_loss_free(cg), wv_colour_loss_free(cd);
   wv_image_free(&grey), wv_image_free(&grey2), wv_image_free(&split), wv_image_free(&denim), wv_image_free(&denim2),
       wv_image_free(&merged);

@@ -71,7 +71,8 @@ double wv_spectrum_loss_eval(wv_spectrum_loss *s, const wv_image *render, wv_ima
 #define WV_COLOUR_SIDE 256  /* the centre crop (smaller images: their largest square) */
 #define WV_COLOUR_SIGMA 2.0 /* the detail: each channel minus its Gaussian blur of this sigma (pixels) */
 typedef struct wv_colour_loss wv_colour_loss;
-/* Precomputes the photo's normalised detail covariance for images of photo's size. */
+/* Precomputes the photo's normalised detail covariance for images of photo's size (a
+ * photo without detail, a flat card, gives L_k = 0 for every render). */
 wv_status wv_colour_loss_create(const wv_image *photo, wv_colour_loss **out, wv_error *err);
 void wv_colour_loss_free(wv_colour_loss *c);
 /* L_k of render (the photo's size) into *value; with d != NULL adds weight * dL_k/drender

@@ -18,6 +18,7 @@ struct wv_colour_loss {
   float *det;        /* 3*n*n the detail, centred over the interior */
   float *g;          /* n*n gradient scratch */
   double photo[9];   /* the photo's normalised covariance */
+  int flat;          /* the photo has no detail: nothing to match, L_k = 0 */
 };
 
 void wv_colour_loss_free(wv_colour_loss *c) {
@@ -77,7 +78,8 @@ wv_status wv_colour_loss_create(const wv_image *photo, wv_colour_loss **out, wv_
   if (!c->x || !c->b || !c->g || !c->det) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for the detail-colour loss");
   double a[9];
   double t = st ? 0 : covariance(c, photo, a, err, &st);
-  for (int k = 0; k < 9 && !st; k++) c->photo[k] = t > 1e-20 ? a[k] / t : 0.0; /* a flat photo: no detail to match */
+  c->flat = !(t > 1e-20);
+  for (int k = 0; k < 9 && !st; k++) c->photo[k] = c->flat ? 0.0 : a[k] / t;
   if (st) {
     wv_colour_loss_free(c);
     return st;
@@ -93,6 +95,8 @@ wv_status wv_colour_loss_eval(wv_colour_loss *c, const wv_image *render, wv_imag
                    c->h);
   double a[9], gn[9], ga[9];
   wv_status st = WV_OK;
+  *value = 0;
+  if (c->flat) return WV_OK; /* a photo without detail says nothing of its colour */
   double t = covariance(c, render, a, err, &st);
   if (st) return st;
   /* L = sum_ij (A_ij / t - P_ij)^2, t = trace A */
