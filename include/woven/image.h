@@ -27,5 +27,8 @@ wv_status wv_image_blur(const wv_image *in, double sigma, wv_image *out, wv_erro
 /* The same blur of one plane of w x h floats whose pixels are `stride` floats apart (a
  * channel of an interleaved image), in to out (distinct). */
 wv_status wv_blur_plane(const float *in, float *out, int w, int h, int stride, double sigma, wv_error *err);
+/* The blur's taps: g[0..2r], r = wv_gaussian_radius(sigma), summing to 1 (sigma 0: one tap). */
+int wv_gaussian_radius(double sigma);
+void wv_gaussian_taps(double sigma, double *g);
 
 #endif

@@ -8,52 +8,99 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "woven/image.h"
 #include "woven/loss.h"
+
+#define TAPS_CAP 64
 
 struct wv_colour_loss {
   int w, h;          /* image size */
   int n, x0, y0;     /* crop side and corner */
   int r;             /* blur radius: the interior starts r pixels inside the crop */
-  float *x, *b;      /* n*n one channel of the crop, its blur */
-  float *det;        /* 3*n*n the detail, centred over the interior */
-  float *g;          /* n*n gradient scratch */
+  double g[TAPS_CAP]; /* the blur's taps (WV_COLOUR_SIGMA) */
+  float *tmp;        /* 3*n*n one pass of the blur, per channel */
+  float *det;        /* 3*n*n the detail on the interior (0 outside), centred */
+  float *gd;         /* 3*n*n the gradient with respect to the detail */
   double photo[9];   /* the photo's normalised covariance */
   int flat;          /* the photo has no detail: nothing to match, L_k = 0 */
 };
 
 void wv_colour_loss_free(wv_colour_loss *c) {
   if (!c) return;
-  free(c->x), free(c->b), free(c->det), free(c->g);
+  free(c->tmp), free(c->det), free(c->gd);
   free(c);
 }
 
-/* Forward: det_c = crop_c - blur(crop_c) on the interior, centred; a[9] its covariance
- * over the interior (M pixels). Returns the trace. */
-static double covariance(wv_colour_loss *c, const wv_image *img, double a[9], wv_error *err, wv_status *st) {
-  int n = c->n, r = c->r, m = n - 2 * r;
-  double M = (double)m * m, mu[3];
+/* det = x - blur(x) on the interior [r, n-r)^2 of the crop: the blur's taps there stay
+ * inside the crop, so no edge rule enters. One channel; tmp and det n*n. */
+static void detail_forward(const wv_colour_loss *c, const wv_image *img, int ch, float *tmp, float *det) {
+  int n = c->n, r = c->r;
+  const double *g = c->g;
+  for (int y = 0; y < n; y++) { /* along x, every row the second pass reads */
+    const float *row = wv_image_px(img, c->x0, c->y0 + y) + ch;
+    for (int x = r; x < n - r; x++) {
+      double s = 0;
+      for (int k = -r; k <= r; k++) s += g[k + r] * row[3 * (x + k)];
+      tmp[(size_t)y * n + x] = (float)s;
+    }
+  }
+  memset(det, 0, sizeof(float) * (size_t)n * n);
+  for (int y = r; y < n - r; y++) { /* along y, then det = x - blur(x) */
+    const float *row = wv_image_px(img, c->x0, c->y0 + y) + ch;
+    for (int x = r; x < n - r; x++) {
+      double s = 0;
+      for (int k = -r; k <= r; k++) s += g[k + r] * tmp[(size_t)(y + k) * n + x];
+      det[(size_t)y * n + x] = row[3 * x] - (float)s;
+    }
+  }
+}
+
+/* Backward of det = x - blur(x): dL/dx = gd - blur^T(gd), gd zero outside the interior;
+ * blur^T is the same separable sum with the taps that land inside the interior.
+ * weight * dL/dx is added into channel ch of d's crop. */
+static void detail_backward(const wv_colour_loss *c, const float *gd, float *tmp, wv_image *d, int ch, float weight) {
+  int n = c->n, r = c->r, lo = r, hi = n - r; /* the interior [lo, hi) */
+  const double *g = c->g;
+  for (int y = 0; y < n; y++) /* along y: rows y + k inside the interior */
+    for (int x = lo; x < hi; x++) {
+      double s = 0;
+      int k0 = lo - y > -r ? lo - y : -r, k1 = hi - 1 - y < r ? hi - 1 - y : r;
+      for (int k = k0; k <= k1; k++) s += g[k + r] * gd[(size_t)(y + k) * n + x];
+      tmp[(size_t)y * n + x] = (float)s;
+    }
+  for (int y = 0; y < n; y++) { /* along x: columns x + k inside the interior */
+    float *row = wv_image_px(d, c->x0, c->y0 + y) + ch;
+    for (int x = 0; x < n; x++) {
+      double s = 0;
+      int k0 = lo - x > -r ? lo - x : -r, k1 = hi - 1 - x < r ? hi - 1 - x : r;
+      for (int k = k0; k <= k1; k++) s += g[k + r] * tmp[(size_t)y * n + x + k];
+      row[3 * x] += weight * (gd[(size_t)y * n + x] - (float)s);
+    }
+  }
+}
+
+/* Forward: the three channels' detail, centred over the interior (M pixels); a[9] its
+ * covariance. Returns the trace. */
+static double covariance(wv_colour_loss *c, const wv_image *img, double a[9]) {
+  int n = c->n, r = c->r;
+  size_t nn = (size_t)n * n;
+  double M = (double)(n - 2 * r) * (n - 2 * r);
+#pragma omp parallel for schedule(static, 1)
   for (int ch = 0; ch < 3; ch++) {
-    for (int y = 0; y < n; y++)
-      for (int x = 0; x < n; x++) c->x[(size_t)y * n + x] = wv_image_px(img, c->x0 + x, c->y0 + y)[ch];
-    if ((*st = wv_blur_plane(c->x, c->b, n, n, 1, WV_COLOUR_SIGMA, err))) return 0;
-    float *d = c->det + (size_t)ch * n * n;
+    float *det = c->det + ch * nn;
+    detail_forward(c, img, ch, c->tmp + ch * nn, det);
     double s = 0;
-    memset(d, 0, sizeof(float) * (size_t)n * n);
     for (int y = r; y < n - r; y++)
-      for (int x = r; x < n - r; x++) {
-        size_t i = (size_t)y * n + x;
-        d[i] = c->x[i] - c->b[i]; /* det = x - blur(x) */
-        s += d[i];
-      }
-    mu[ch] = s / M;
+      for (int x = r; x < n - r; x++) s += det[(size_t)y * n + x];
+    float mu = (float)(s / M);
     for (int y = r; y < n - r; y++)
-      for (int x = r; x < n - r; x++) d[(size_t)y * n + x] -= (float)mu[ch];
+      for (int x = r; x < n - r; x++) det[(size_t)y * n + x] -= mu;
   }
   for (int i = 0; i < 3; i++)
     for (int j = i; j < 3; j++) {
-      const float *di = c->det + (size_t)i * n * n, *dj = c->det + (size_t)j * n * n;
+      const float *di = c->det + i * nn, *dj = c->det + j * nn;
       double s = 0;
-      for (size_t k = 0; k < (size_t)n * n; k++) s += (double)di[k] * dj[k];
+      for (size_t k = 0; k < nn; k++) s += (double)di[k] * dj[k];
       a[i * 3 + j] = a[j * 3 + i] = s / M; /* A_ij = mean (d_i - mu_i)(d_j - mu_j) */
     }
   return a[0] + a[4] + a[8];
@@ -63,7 +110,8 @@ wv_status wv_colour_loss_create(const wv_image *photo, wv_colour_loss **out, wv_
   *out = NULL;
   int n = photo->w < photo->h ? photo->w : photo->h;
   if (n > WV_COLOUR_SIDE) n = WV_COLOUR_SIDE;
-  int r = (int)ceil(3.0 * WV_COLOUR_SIGMA);
+  int r = wv_gaussian_radius(WV_COLOUR_SIGMA);
+  if (2 * r + 1 > TAPS_CAP) return wv_fail(err, WV_ERR_INVALID, "the detail-colour blur has too many taps");
   if (n < 4 * r || photo->c < 3)
     return wv_fail(err, WV_ERR_INVALID, "the detail-colour loss needs an RGB image of at least %d x %d pixels", 4 * r,
                    4 * r);
@@ -71,19 +119,17 @@ wv_status wv_colour_loss_create(const wv_image *photo, wv_colour_loss **out, wv_
   if (!c) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the detail-colour loss");
   c->w = photo->w, c->h = photo->h, c->n = n, c->r = r;
   c->x0 = (photo->w - n) / 2, c->y0 = (photo->h - n) / 2;
+  wv_gaussian_taps(WV_COLOUR_SIGMA, c->g);
   size_t nn = (size_t)n * n;
-  c->x = malloc(sizeof(float) * nn), c->b = malloc(sizeof(float) * nn), c->g = malloc(sizeof(float) * nn);
-  c->det = malloc(sizeof(float) * 3 * nn);
-  wv_status st = WV_OK;
-  if (!c->x || !c->b || !c->g || !c->det) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for the detail-colour loss");
-  double a[9];
-  double t = st ? 0 : covariance(c, photo, a, err, &st);
-  c->flat = !(t > 1e-20);
-  for (int k = 0; k < 9 && !st; k++) c->photo[k] = c->flat ? 0.0 : a[k] / t;
-  if (st) {
+  c->tmp = malloc(sizeof(float) * 3 * nn), c->det = malloc(sizeof(float) * 3 * nn);
+  c->gd = malloc(sizeof(float) * 3 * nn);
+  if (!c->tmp || !c->det || !c->gd) {
     wv_colour_loss_free(c);
-    return st;
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for the detail-colour loss");
   }
+  double a[9], t = covariance(c, photo, a);
+  c->flat = !(t > 1e-20);
+  for (int k = 0; k < 9; k++) c->photo[k] = c->flat ? 0.0 : a[k] / t;
   *out = c;
   return WV_OK;
 }
@@ -93,12 +139,10 @@ wv_status wv_colour_loss_eval(wv_colour_loss *c, const wv_image *render, wv_imag
   if (render->w != c->w || render->h != c->h || render->c < 3)
     return wv_fail(err, WV_ERR_INVALID, "the render is %d x %d but the photo %d x %d", render->w, render->h, c->w,
                    c->h);
-  double a[9], gn[9], ga[9];
-  wv_status st = WV_OK;
   *value = 0;
   if (c->flat) return WV_OK; /* a photo without detail says nothing of its colour */
-  double t = covariance(c, render, a, err, &st);
-  if (st) return st;
+  double a[9], gn[9], ga[9];
+  double t = covariance(c, render, a);
   /* L = sum_ij (A_ij / t - P_ij)^2, t = trace A */
   double l = 0, dot = 0;
   for (int k = 0; k < 9; k++) {
@@ -111,27 +155,18 @@ wv_status wv_colour_loss_eval(wv_colour_loss *c, const wv_image *render, wv_imag
   if (!d || !(t > 1e-20)) return WV_OK; /* a flat render: no direction to move its detail's colour */
   /* backward of N = A / t: dL/dA_ij = gN_ij / t - delta_ij sum_kl gN_kl A_kl / t^2 */
   for (int k = 0; k < 9; k++) ga[k] = gn[k] / t - (k % 4 == 0 ? dot / (t * t) : 0.0);
-  int n = c->n, r = c->r, m = n - 2 * r;
-  double M = (double)m * m;
+  int n = c->n;
+  size_t nn = (size_t)n * n;
+  double M = (double)(n - 2 * c->r) * (n - 2 * c->r);
+#pragma omp parallel for schedule(static, 1)
   for (int i = 0; i < 3; i++) {
     /* backward of A_ij = mean (d_i - mu_i)(d_j - mu_j): dL/dd_i = sum_j (gA_ij + gA_ji) (d_j - mu_j) / M
-     * (the centring's own term sums to zero) */
-    memset(c->g, 0, sizeof(float) * (size_t)n * n);
-    for (int y = r; y < n - r; y++)
-      for (int x = r; x < n - r; x++) {
-        size_t p = (size_t)y * n + x;
-        double s = 0;
-        for (int j = 0; j < 3; j++) s += (ga[i * 3 + j] + ga[j * 3 + i]) * c->det[(size_t)j * n * n + p];
-        c->g[p] = (float)(s / M);
-      }
-    /* backward of det = x - blur(x): g - blur^T(g). The clamped blur is its own transpose
-     * here: g is zero within r pixels of the crop's edge, so no tap is clamped. */
-    if ((st = wv_blur_plane(c->g, c->b, n, n, 1, WV_COLOUR_SIGMA, err))) return st;
-    for (int y = 0; y < n; y++)
-      for (int x = 0; x < n; x++) {
-        size_t p = (size_t)y * n + x;
-        wv_image_px(d, c->x0 + x, c->y0 + y)[i] += weight * (c->g[p] - c->b[p]);
-      }
+     * (the centring's own term sums to zero; det is zero outside the interior, so gd is too) */
+    float *gd = c->gd + i * nn;
+    double w[3];
+    for (int j = 0; j < 3; j++) w[j] = (ga[i * 3 + j] + ga[j * 3 + i]) / M;
+    for (size_t p = 0; p < nn; p++) gd[p] = (float)(w[0] * c->det[p] + w[1] * c->det[nn + p] + w[2] * c->det[2 * nn + p]);
+    detail_backward(c, gd, c->tmp + i * nn, d, i, weight);
   }
   return WV_OK;
 }

@@ -58,19 +58,26 @@ static void blur_pass(const float *in, float *out, int w, int h, int stride, int
     }
 }
 
+int wv_gaussian_radius(double sigma) { return (int)ceil(3.0 * sigma); }
+
+void wv_gaussian_taps(double sigma, double *g) {
+  int r = wv_gaussian_radius(sigma);
+  double gs = 0;
+  for (int k = -r; k <= r; k++) gs += g[k + r] = sigma > 0 ? exp(-0.5 * k * k / (sigma * sigma)) : 1.0;
+  for (int k = 0; k <= 2 * r; k++) g[k] /= gs;
+}
+
 wv_status wv_blur_plane(const float *in, float *out, int w, int h, int stride, double sigma, wv_error *err) {
   if (!(sigma >= 0.0 && sigma <= 1000.0))
     return wv_fail(err, WV_ERR_INVALID, "blur sigma %g is outside 0..1000 pixels", sigma);
-  int r = (int)ceil(3.0 * sigma);
+  int r = wv_gaussian_radius(sigma);
   float *tmp = malloc(sizeof(float) * (size_t)w * h * stride);
   double *g = malloc(sizeof(double) * (size_t)(2 * r + 1));
   if (!tmp || !g) {
     free(tmp), free(g);
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for a blur of %d x %d", w, h);
   }
-  double gs = 0;
-  for (int k = -r; k <= r; k++) gs += g[k + r] = sigma > 0 ? exp(-0.5 * k * k / (sigma * sigma)) : 1.0;
-  for (int k = 0; k <= 2 * r; k++) g[k] /= gs;
+  wv_gaussian_taps(sigma, g);
   blur_pass(in, tmp, w, h, stride, 0, g, r);
   blur_pass(tmp, out, w, h, stride, 1, g, r);
   free(tmp), free(g);
