@@ -30,6 +30,40 @@ static void ribs(wv_image *img, int w, int h, double phase, double contrast, uin
     }
 }
 
+/* Worst relative error of d (weight wt times a loss's gradient) against central
+ * differences of loss(img) at every step-th value from start; counts them in *checked. */
+typedef double (*loss_fn)(void *ctx, const wv_image *img);
+static double gradient_error(wv_image *img, const wv_image *d, float wt, size_t start, size_t step, float h,
+                             loss_fn loss, void *ctx, int *checked) {
+  size_t n = (size_t)img->w * img->h * 3;
+  double gmax = 0, worst = 0;
+  for (size_t i = 0; i < n; i++) gmax = fmax(gmax, fabs(d->data[i]));
+  *checked = 0;
+  for (size_t i = start; i < n; i += step) {
+    float save = img->data[i];
+    img->data[i] = save + h;
+    double fp = loss(ctx, img);
+    img->data[i] = save - h;
+    double fm = loss(ctx, img);
+    img->data[i] = save;
+    double num = wt * (fp - fm) / (2 * h), an = d->data[i];
+    double err = fabs(num - an) / (fabs(num) + fabs(an) + 0.05 * gmax);
+    if (err > 0.02) fprintf(stderr, "pixel value %zu: analytic %g, numeric %g\n", i, an, num);
+    worst = fmax(worst, err);
+    (*checked)++;
+  }
+  return worst;
+}
+
+static double spectrum_loss(void *ctx, const wv_image *img) { return wv_spectrum_loss_eval(ctx, img, NULL, 0); }
+
+static double colour_loss(void *ctx, const wv_image *img) {
+  double v = -1;
+  wv_error e;
+  assert_int_equal(wv_colour_loss_eval(ctx, img, NULL, 0, &v, &e), WV_OK);
+  return v;
+}
+
 static void test_spectrum_gradient(void **state) {
   (void)state;
   wv_image photo, img, d;
@@ -46,23 +80,8 @@ static void test_spectrum_gradient(void **state) {
   const float wt = 1.5f;
   double l0 = wv_spectrum_loss_eval(s, &img, &d, wt);
   assert_true(l0 > 0.05);
-  double gmax = 0;
-  for (size_t i = 0; i < 40 * 36 * 3; i++) gmax = fmax(gmax, fabs(d.data[i]));
-  double worst = 0;
-  int checked = 0;
-  for (size_t i = 7; i < 40 * 36 * 3; i += 37) {
-    float save = img.data[i], h = 2e-3f;
-    img.data[i] = save + h;
-    double fp = wv_spectrum_loss_eval(s, &img, NULL, 0);
-    img.data[i] = save - h;
-    double fm = wv_spectrum_loss_eval(s, &img, NULL, 0);
-    img.data[i] = save;
-    double num = wt * (fp - fm) / (2 * h), an = d.data[i];
-    double err = fabs(num - an) / (fabs(num) + fabs(an) + 0.05 * gmax);
-    if (err > 0.05) fprintf(stderr, "pixel value %zu: analytic %g, numeric %g\n", i, an, num);
-    worst = fmax(worst, err);
-    checked++;
-  }
+  int checked;
+  double worst = gradient_error(&img, &d, wt, 7, 37, 2e-3f, spectrum_loss, s, &checked);
   fprintf(stderr, "structure loss %.4f: %d gradient entries, worst relative error %.2e\n", l0, checked, worst);
   assert_true(worst < 0.05);
   /* d accumulates: a second evaluation adds the same again */
@@ -146,26 +165,11 @@ static void test_colour_gradient(void **state) {
   assert_int_equal(wv_image_alloc(&d, 40, 36, 3, &e), WV_OK);
   memset(d.data, 0, sizeof(float) * 40 * 36 * 3);
   const float wt = 0.7f;
-  double l0, fp, fm;
+  double l0;
   assert_int_equal(wv_colour_loss_eval(c, &img, &d, wt, &l0, &e), WV_OK);
   assert_true(l0 > 0.05);
-  double gmax = 0;
-  for (size_t i = 0; i < 40 * 36 * 3; i++) gmax = fmax(gmax, fabs(d.data[i]));
-  double worst = 0;
-  int checked = 0;
-  for (size_t i = 5; i < 40 * 36 * 3; i += 29) {
-    float save = img.data[i], h = 1e-3f;
-    img.data[i] = save + h;
-    assert_int_equal(wv_colour_loss_eval(c, &img, NULL, 0, &fp, &e), WV_OK);
-    img.data[i] = save - h;
-    assert_int_equal(wv_colour_loss_eval(c, &img, NULL, 0, &fm, &e), WV_OK);
-    img.data[i] = save;
-    double num = wt * (fp - fm) / (2 * h), an = d.data[i];
-    double err = fabs(num - an) / (fabs(num) + fabs(an) + 0.05 * gmax);
-    if (err > 0.02) fprintf(stderr, "pixel value %zu: analytic %g, numeric %g\n", i, an, num);
-    worst = fmax(worst, err);
-    checked++;
-  }
+  int checked;
+  double worst = gradient_error(&img, &d, wt, 5, 29, 1e-3f, colour_loss, c, &checked);
   fprintf(stderr, "detail-colour loss %.4f: %d gradient entries, worst relative error %.2e\n", l0, checked, worst);
   assert_true(worst < 0.02);
   /* the crop's edge pixels (outside the blur's reach of the interior) get no gradient */
