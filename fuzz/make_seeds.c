@@ -182,7 +182,9 @@ static void fit_checkpoint(void) {
   st.iter = 2;
   st.params.density[0] += 3;
   for (int i = 0; i < WV_P_COUNT; i++) st.adam_m[i] = 0.01 * i, st.adam_v[i] = 1e-4 * i;
-  for (int i = 0; i < st.iter; i++) st.log[i] = (wv_fit_record){i, 0.5 - 0.1 * i, 0.4, 0.01, 0.09, i, i / 2};
+  for (int i = 0; i < st.iter; i++)
+    st.log[i] = (wv_fit_record){.iter = i, .loss = 0.5 - 0.1 * i, .gram = 0.4, .prior = 0.01, .pixel = 0.09,
+                                .discrete_tried = i, .discrete_kept = i / 2};
   st.registered = 1;
   st.offset_mm[0] = 0.125;
   check(wv_fit_checkpoint_write(seed_path("fit_checkpoint", "checkpoint.json"), &st, &o, "default", &err), &err);
