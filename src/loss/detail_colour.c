@@ -4,7 +4,6 @@
  * together); a two-colour one (denim) along the line between its two yarn colours. The
  * Gram and spectrum terms see neither, so a fit could put hues on warp and weft that the
  * photo does not have, or merge two that it has. */
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
