@@ -2,7 +2,8 @@
  * built-in library, then the fit), on synthetic targets or on real photos.
  *   recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b,...] [--seed S]
  *           [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]
- *           [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S]   (the fit's options, as woven fit's)
+ *           [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S]
+ *           (the fit's options, as woven fit's)
  *     Synthetic: N prior draws of every canonical built-in (or of the listed patterns; the
  *     earlier names twill, satin, twill90, satin90 are built-ins too); every second draw is
  *     a two-colour cloth (a dark blue warp and a near-white weft, as denim), rendered in the

@@ -159,7 +159,8 @@ static void on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
   const wv_fit_record *r = &st->log[st->iter - 1];
   if (!u->bar.enabled) return;
   double el = cli_now() - u->bar.start, f = (double)st->iter / o->iters;
-  fprintf(stderr, "\rfit %3d/%d  loss %.5f (Gram %.5f, pixel %.4f, prior %.3f, structure %.3f, colour %.3f)  %.0fs, %.0fs left ",
+  fprintf(stderr,
+          "\rfit %3d/%d  loss %.5f (Gram %.5f, pixel %.4f, prior %.3f, structure %.3f, colour %.3f)  %.0fs, %.0fs left ",
           st->iter, o->iters, r->loss, r->gram, r->pixel, r->prior, r->structure, r->colour, el,
           f > 0 ? el * (1 - f) / f : 0.0);
   fflush(stderr);

@@ -75,7 +75,8 @@ void cli_capture_opts(const capture_args *a, wv_capture_opts *o) {
   memset(o, 0, sizeof *o);
   o->estimate = (wv_estimate_opts){a->photo, a->scene, a->model, a->pattern, a->descriptor, a->weights, a->crop,
                                    a->force};
-  o->fit = a->fit, o->iters_given = a->iters_given, o->align_given = a->align_given, o->dir = a->out, o->drape = a->drape, o->force = a->force;
+  o->fit = a->fit, o->iters_given = a->iters_given, o->align_given = a->align_given;
+  o->dir = a->out, o->drape = a->drape, o->force = a->force;
 }
 
 static int check_required(const char *cmd, const capture_args *pa) {

@@ -139,7 +139,8 @@ static void test_spectrum_erasing_costs(void **state) {
 
 /* Threads of two colours ca and cb alternating every 2 px along x over ribs of period 6:
  * the detail moves along ca - cb (and along the light, by the ribs). */
-static void two_colour(wv_image *img, int w, int h, const double ca[3], const double cb[3], double phase, uint64_t seed) {
+static void two_colour(wv_image *img, int w, int h, const double ca[3], const double cb[3], double phase,
+                       uint64_t seed) {
   wv_error e;
   assert_int_equal(wv_image_alloc(img, w, h, 3, &e), WV_OK);
   wv_rng r;

@@ -58,10 +58,10 @@ double wv_wsc_spectra(const float *sa, const float *sb, int n);
  * over the ring), rings one bin wide around DC, and z = q - floor_z clipped to
  * [0, cap_z - floor_z] (floor 0, cap 10: the weave analysis's peak prominence). It
  * divides out the radial envelope (the camera's and the renderer's blur, the yarns'
- * shading fall-off), which dominates the log spectrum, and keeps what stands out of it: the weave's lattice of peaks. Rings with
- * almost no power (a millionth of the window's median power) and bins within
- * WV_WSC_DC_RADIUS of DC get 0. z: n * n floats; it may be spec itself (whitened
- * in place: spec is read whole before z is written). */
+ * shading fall-off), which dominates the log spectrum, and keeps what stands out of it:
+ * the weave's lattice of peaks. Rings with almost no power (a millionth of the window's
+ * median power) and bins within WV_WSC_DC_RADIUS of DC get 0. z: n * n floats; it may
+ * be spec itself (whitened in place: spec is read whole before z is written). */
 wv_status wv_spectrum_whiten(const float *spec, int n, double floor_z, double cap_z, float *z, wv_error *err);
 
 /* Whitened WSC: the Pearson correlation of the whitened weave spectra (wv_spectrum_whiten,

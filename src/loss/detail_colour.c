@@ -164,7 +164,8 @@ wv_status wv_colour_loss_eval(wv_colour_loss *c, const wv_image *render, wv_imag
     float *gd = c->gd + i * nn;
     double w[3];
     for (int j = 0; j < 3; j++) w[j] = (ga[i * 3 + j] + ga[j * 3 + i]) / M;
-    for (size_t p = 0; p < nn; p++) gd[p] = (float)(w[0] * c->det[p] + w[1] * c->det[nn + p] + w[2] * c->det[2 * nn + p]);
+    for (size_t p = 0; p < nn; p++)
+      gd[p] = (float)(w[0] * c->det[p] + w[1] * c->det[nn + p] + w[2] * c->det[2 * nn + p]);
     detail_backward(c, gd, c->tmp + i * nn, d, i, weight);
   }
   return WV_OK;

@@ -68,20 +68,21 @@ wv_status wv_image_loss_eval(wv_image_loss *l, const wv_image *render, wv_loss_t
   wv_image_free(&l->down);
   if ((st = wv_image_downsample(render, l->w.down_w, l->w.down_h, &l->down, err))) return st;
   t->pixel = wv_image_l1(&l->down, &l->photo_down, dcap ? &l->ddown : NULL);
-  /* L_s: the weave's spectrum (its gradient is added after the descriptor's) */
-  t->structure = l->spec ? wv_spectrum_loss_eval(l->spec, render, NULL, 0) : 0.0;
-  /* L_k: the detail's colour (its gradient too is added after the descriptor's) */
-  if (l->colour && (st = wv_colour_loss_eval(l->colour, render, NULL, 0, &t->colour, err))) return st;
+  if (dcap) {
+    /* dL/dcapture: descriptor backward (it overwrites dcap), the pixel term through the
+     * downsampling; the spectrum and detail-colour terms then add theirs, each from the
+     * one evaluation that also gives its value */
+    if ((st = wv_descriptor_backward(l->d, render, l->dgram, NULL, dcap, err))) return st;
+    wv_image_free(&l->dpix);
+    if ((st = wv_image_downsample_backward(render->w, render->h, &l->ddown, &l->dpix, err))) return st;
+    size_t n = (size_t)render->w * render->h * 3;
+    for (size_t i = 0; i < n; i++) dcap->data[i] += (float)l->w.w_pixel * l->dpix.data[i];
+  }
+  /* L_s: the weave's spectrum */
+  t->structure = l->spec ? wv_spectrum_loss_eval(l->spec, render, dcap, (float)l->w.w_struct) : 0.0;
+  /* L_k: the detail's colour */
+  if (l->colour && (st = wv_colour_loss_eval(l->colour, render, dcap, (float)l->w.w_colour, &t->colour, err)))
+    return st;
   t->total = t->gram + l->w.w_pixel * t->pixel + l->w.w_struct * t->structure + l->w.w_colour * t->colour;
-  if (!dcap) return WV_OK;
-  /* dL/dcapture: descriptor backward, the pixel term through the downsampling, the spectrum */
-  if ((st = wv_descriptor_backward(l->d, render, l->dgram, NULL, dcap, err))) return st;
-  wv_image_free(&l->dpix);
-  if ((st = wv_image_downsample_backward(render->w, render->h, &l->ddown, &l->dpix, err))) return st;
-  size_t n = (size_t)render->w * render->h * 3;
-  for (size_t i = 0; i < n; i++) dcap->data[i] += (float)l->w.w_pixel * l->dpix.data[i];
-  if (l->spec) wv_spectrum_loss_eval(l->spec, render, dcap, (float)l->w.w_struct);
-  double unused;
-  if (l->colour) return wv_colour_loss_eval(l->colour, render, dcap, (float)l->w.w_colour, &unused, err);
   return WV_OK;
 }
