@@ -2,8 +2,9 @@
  * built-in library, then the fit), on synthetic targets or on real photos.
  *   recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b,...] [--seed S]
  *           [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]
- *           [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S]
- *           (the fit's options, as woven fit's)
+ *           [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S] [--no-orient]
+ *           (the fit's options, as woven fit's; --no-orient: candidates and fit on square cloth
+ *           without the lattice's rotation and skew)
  *     Synthetic: N prior draws of every canonical built-in (or of the listed patterns; the
  *     earlier names twill, satin, twill90, satin90 are built-ins too); every second draw is
  *     a two-colour cloth (a dark blue warp and a near-white weft, as denim), rendered in the
@@ -48,6 +49,7 @@ typedef struct {
   wv_descriptor *d;
   wv_fabricnet *net; /* NULL: --start prior */
   wv_fit_opts o;
+  int orient; /* wv_pattern_opts.orient */
 } study;
 
 /* What one capture gave. */
@@ -67,6 +69,7 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
   double t0 = bench_now();
   memset(c, 0, sizeof *c);
   wv_fit_opts o = st->o; /* as woven capture adapts them to the pattern choice */
+  wv_scene scene = *st->s; /* and its scene, with the lattice's orientation */
   if (given) {
     c->start = *given;
     c->method = "given";
@@ -74,7 +77,11 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
     float y[WV_NET_OUT];
     wv_pattern_choice *pc = malloc(sizeof *pc);
     if (!pc) exit(1);
-    if (wv_fabricnet_predict_pattern(st->net, st->d, st->s, photo, NULL, y, pc, &err)) die(&err);
+    wv_pattern_opts po;
+    wv_pattern_opts_default(&po);
+    po.orient = st->orient;
+    if (wv_fabricnet_predict_pattern(st->net, st->d, st->s, photo, &po, y, pc, &err)) die(&err);
+    wv_pattern_choice_scene(pc, st->s, pc->best, &scene);
     c->start = pc->params[pc->best];
     c->method = pc->method;
     /* no family tie and no pattern tie: the lattice and render match decide alone */
@@ -86,10 +93,10 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
   }
   snprintf(c->chosen, sizeof c->chosen, "%s", c->start.pattern);
   wv_fit_state fs;
-  if (wv_fit_state_init(&fs, &c->start, &o, &err) || wv_fit_run(&fs, st->s, photo, st->d, &o, NULL, NULL, &err))
+  if (wv_fit_state_init(&fs, &c->start, &o, &err) || wv_fit_run(&fs, &scene, photo, st->d, &o, NULL, NULL, &err))
     die(&err);
   c->fit = fs.params;
-  wv_fit_scene(&fs, st->s, &c->fit_scene);
+  wv_fit_scene(&fs, &scene, &c->fit_scene);
   wv_fit_state_free(&fs);
   c->seconds = bench_now() - t0;
 }
@@ -283,6 +290,7 @@ static int real(const study *st, const char *dir) {
 int main(int argc, char **argv) {
   study st;
   wv_fit_opts_default(&st.o);
+  st.orient = 1;
   int per = 4, prior_start = 0;
   uint64_t seed = 1;
   const char *real_dir = NULL, *scene_name = "flat45", *model = NULL, *patlist = NULL;
@@ -297,6 +305,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--camera-blur") && i + 1 < argc) st.o.psf_sigma = atof(argv[++i]);
     else if (!strcmp(argv[i], "--no-colour-split")) st.o.colour_split = 0;
     else if (!strcmp(argv[i], "--colour-split")) st.o.colour_split = 1;
+    else if (!strcmp(argv[i], "--no-orient")) st.orient = 0;
     else if (!strcmp(argv[i], "--seed") && i + 1 < argc) seed = strtoull(argv[++i], NULL, 10);
     else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene_name = argv[++i];
     else if (!strcmp(argv[i], "--model") && i + 1 < argc) model = argv[++i];
@@ -313,6 +322,7 @@ int main(int argc, char **argv) {
       fprintf(stderr, "usage: recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b] [--seed S]\n"
                       "               [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]\n"
                       "               [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S]\n"
+                      "               [--no-orient]\n"
                       "       recover --real DIR [--model M] [--iters N] ...\n");
       return 1;
     }

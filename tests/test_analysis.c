@@ -15,17 +15,22 @@
 #define SIDE 256
 
 /* A prior draw of pattern with the given densities, rendered in the centre window of flat45
- * (optionally turned by rot degrees). */
-static void render(const char *pattern, double dw, double df, double rot, uint64_t seed, wv_scene *s, wv_image *img) {
+ * (optionally turned by rot degrees and out of square by skew). */
+static void render_skewed(const char *pattern, double dw, double df, double rot, double skew, uint64_t seed,
+                          wv_scene *s, wv_image *img) {
   wv_params p;
   wv_error e = {0};
   assert_int_equal(wv_params_sample_prior(pattern, seed, &p, &e), WV_OK);
   p.density[WV_WARP] = dw, p.density[WV_WEFT] = df;
   tu_centre_window(s, "flat45", SIDE, SIDE, 8);
-  s->rotation_deg = rot;
+  s->rotation_deg = rot, s->skew_deg = skew;
   wv_render_opts ro = {0, 0, NULL, NULL, NULL};
   assert_int_equal(wv_render(s, &p, &ro, img, NULL, &e), WV_OK);
-  s->rotation_deg = 0; /* the analysis is told the scene as it was meant, the fabric turned in it */
+  s->rotation_deg = 0, s->skew_deg = 0; /* the analysis is told the scene as it was meant, the fabric turned in it */
+}
+
+static void render(const char *pattern, double dw, double df, double rot, uint64_t seed, wv_scene *s, wv_image *img) {
+  render_skewed(pattern, dw, df, rot, 0, seed, s, img);
 }
 
 static void noise_image(wv_image *img, int w, int h, uint64_t seed) {
@@ -151,23 +156,26 @@ static void test_gaussian(void **state) {
 
 typedef struct {
   const char *pattern;
-  double dw, df, rot;
+  double dw, df, rot, skew;
 } target;
 
 /* Built-ins with known densities: the true pattern's lattice recovers the densities within
  * 3%, the best lattice has the right family and, for twills, the right direction (S or Z);
- * a turned fabric gives its angle. */
+ * a turned fabric gives its angle, cloth out of square its skew. Rendered again in the
+ * scene with the lattice's orientation (wv_lattice_candidate), the cloth shows no turn and
+ * no skew left: the analysis and the renderer agree on the signs. */
 static void test_lattice_recovers(void **state) {
   (void)state;
   static const target T[] = {
-      {"twill31s", 150, 85, 0},   {"twill31z", 140, 80, 0},   {"twill21s", 120, 70, 0},
-      {"twill22z", 100, 60, 0},   {"satin5", 185, 100, 0},    {"satin8", 200, 110, 0},
-      {"twill31s_90", 80, 150, 0}, {"satin5_90", 100, 185, 0}, {"twill31s", 150, 85, 4},
+      {"twill31s", 150, 85, 0, 0},   {"twill31z", 140, 80, 0, 0},   {"twill21s", 120, 70, 0, 0},
+      {"twill22z", 100, 60, 0, 0},   {"satin5", 185, 100, 0, 0},    {"satin8", 200, 110, 0, 0},
+      {"twill31s_90", 80, 150, 0, 0}, {"satin5_90", 100, 185, 0, 0}, {"twill31s", 150, 85, 4, 0},
+      {"twill31s", 170, 82, -1, -4}, {"satin5_90", 130, 86, 1, 2.5},
   };
   for (size_t k = 0; k < sizeof T / sizeof T[0]; k++) {
     wv_scene s;
     wv_image img;
-    render(T[k].pattern, T[k].dw, T[k].df, T[k].rot, 100 + k, &s, &img);
+    render_skewed(T[k].pattern, T[k].dw, T[k].df, T[k].rot, T[k].skew, 100 + k, &s, &img);
     wv_lattice l;
     wv_error e = {0};
     assert_int_equal(wv_lattice_analyse(&s, &img, &l, &e), WV_OK);
@@ -175,13 +183,31 @@ static void test_lattice_recovers(void **state) {
     for (int i = 0; i < wv_weave_builtin_count(); i++)
       if (!strcmp(wv_weave_builtin_name(i), T[k].pattern)) t = i;
     const wv_lattice_fit *f = &l.fit[t];
-    fprintf(stderr, "%-12s %.0f/%.0f rot %.0f: found %d, best %s, own lattice %.1f/%.1f angle %.2f score %.3f\n",
-            T[k].pattern, T[k].dw, T[k].df, T[k].rot, l.found, l.found ? wv_weave_builtin_name(l.best) : "-",
-            f->density[0], f->density[1], f->angle_deg, f->score);
+    fprintf(stderr,
+            "%-12s %.0f/%.0f rot %.0f skew %.1f: found %d, best %s, own lattice %.1f/%.1f angle %.2f skew %.2f "
+            "score %.3f\n",
+            T[k].pattern, T[k].dw, T[k].df, T[k].rot, T[k].skew, l.found, l.found ? wv_weave_builtin_name(l.best) : "-",
+            f->density[0], f->density[1], f->angle_deg, f->skew_deg, f->score);
     assert_true(l.found);
     assert_true(fabs(f->density[0] / T[k].dw - 1) < 0.03);
     assert_true(fabs(f->density[1] / T[k].df - 1) < 0.03);
     assert_true(fabs(f->angle_deg - T[k].rot) < 1.0);
+    assert_true(fabs(f->skew_deg - T[k].skew) < 1.0);
+    if (T[k].rot != 0 || T[k].skew != 0) {
+      wv_params p, q;
+      wv_scene so;
+      assert_int_equal(wv_params_sample_prior(T[k].pattern, 100 + k, &p, &e), WV_OK);
+      wv_lattice_candidate(&l, t, &p, &s, 1, &q, &so);
+      wv_image again;
+      wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+      assert_int_equal(wv_render(&so, &q, &ro, &again, NULL, &e), WV_OK);
+      wv_lattice l2;
+      assert_int_equal(wv_lattice_analyse(&so, &again, &l2, &e), WV_OK);
+      fprintf(stderr, "  rendered with the lattice's orientation: angle %.2f skew %.2f left\n", l2.fit[t].angle_deg,
+              l2.fit[t].skew_deg);
+      assert_true(fabs(l2.fit[t].angle_deg) < 0.5 && fabs(l2.fit[t].skew_deg) < 0.5);
+      wv_image_free(&again);
+    }
     const char *best = wv_weave_builtin_name(l.best);
     assert_string_equal(wv_weave_family(best), wv_weave_family(T[k].pattern));
     if (!strcmp(wv_weave_family(best), "twill")) {
@@ -233,7 +259,7 @@ static void test_no_lattice(void **state) {
  * family comes first; class probabilities, when given, move the scores. */
 static void test_rank(void **state) {
   (void)state;
-  static const target T[] = {{"twill21z", 130, 75, 0}, {"satin8_90", 110, 200, 0}};
+  static const target T[] = {{"twill21z", 130, 75, 0, 0}, {"satin8_90", 110, 200, 0, 0}};
   for (size_t k = 0; k < sizeof T / sizeof T[0]; k++) {
     wv_scene s;
     wv_image img;

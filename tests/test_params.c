@@ -123,6 +123,18 @@ static void test_scenes(void **state) {
     free(text);
     assert_memory_equal(&a, &b, sizeof a);
   }
+  /* a skewed plane survives the round trip; square cloth writes no skew */
+  wv_scene k, r;
+  wv_error err = {0};
+  wv_scene_preset("flat45", &k, NULL);
+  char *square = wv_scene_to_json(&k);
+  assert_null(strstr(square, "skew_deg"));
+  free(square);
+  k.rotation_deg = -0.75, k.skew_deg = -4.05;
+  char *text = wv_scene_to_json(&k);
+  assert_int_equal(wv_scene_parse(text, "rt", &r, &err), WV_OK);
+  free(text);
+  assert_memory_equal(&k, &r, sizeof k);
   wv_scene s;
   wv_scene_preset("flat45", &s, NULL);
   assert_int_equal(s.width, 512);
@@ -157,6 +169,12 @@ static void test_bad_scenes(void **state) {
   expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE ", " LIGHT ", \"lens\": 1}",
                    WV_ERR_INVALID, "'lens'");
   expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE "}", WV_ERR_INVALID, "light");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM
+                   ", \"sample\": {\"shape\": \"plane\", \"skew_deg\": 20}, " LIGHT "}",
+                   WV_ERR_INVALID, "sample.skew_deg");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM
+                   ", \"sample\": {\"shape\": \"cylinder\", \"radius_mm\": 5, \"skew_deg\": 2}, " LIGHT "}",
+                   WV_ERR_INVALID, "skew_deg");
   expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE ", " LIGHT
                    ", \"response\": {\"encoding\": \"log\"}}",
                    WV_ERR_INVALID, "response.encoding");

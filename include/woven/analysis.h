@@ -37,7 +37,7 @@ typedef struct {
   double density[2];  /* yarns per inch, [WV_WARP], [WV_WEFT] */
   double angle_deg;   /* the fabric's rotation, counter-clockwise, to add to the scene's */
   double skew_deg;    /* how far the yarns are out of square: the warp turns by angle - skew / 2,
-                       * the weft by angle + skew / 2 (the renderer draws square cloth) */
+                       * the weft by angle + skew / 2 (a plane scene draws it: sample.skew_deg) */
   double precision;   /* weighted share of the predicted peaks the photo shows */
   double recall;      /* share of the photo's peak prominence the prediction explains */
   double score;       /* 2 precision recall / (precision + recall), 0..1 */
@@ -73,7 +73,7 @@ int wv_spectrum_peaks(const float *spectrum, int n, double min_z, wv_spectral_pe
 typedef struct {
   int spp;      /* samples per pixel of each candidate's render (WV_RANK_SPP) */
   int threads;  /* 0: OpenMP default */
-  int rotate;   /* 1: render with the lattice's orientation added to a plane scene's */
+  int rotate;   /* 1: render with the lattice's rotation and skew added to a plane scene's */
   /* Optional: a probability per canonical built-in (wv_weave_builtin_count() values, e.g.
    * FabricNet's pattern head), NULL when there is none. Each candidate's score is then
    * (1 - w_prob) match + w_prob probability. */
@@ -99,7 +99,8 @@ wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lat
                           const wv_rank_opts *o, wv_lattice_ranking *out, wv_error *err);
 
 /* The parameters base with built-in i and its lattice's densities (clamped to the
- * density range), and the scene s with its orientation when rotate and s is a plane. */
+ * density range), and the scene s with its orientation (rotation and skew added to the
+ * scene's) when rotate and s is a plane. */
 void wv_lattice_candidate(const wv_lattice *lat, int i, const wv_params *base, const wv_scene *s, int rotate,
                           wv_params *p, wv_scene *ps);
 

@@ -104,7 +104,7 @@ typedef struct {
   wv_pattern_choice choice;
   double seconds;
   /* What the fit from the estimate needs (wv_estimate_free releases them). */
-  wv_scene scene;
+  wv_scene scene; /* with the chosen pattern's lattice orientation (wv_pattern_choice_scene) */
   wv_image photo;
   wv_photo_info info;
   wv_descriptor *desc;

@@ -155,6 +155,8 @@ typedef struct {
   double w_prob;  /* 0.25 */
   double psf_sigma; /* camera blur of the candidates' renders: -1 (default) the scene's, else measured
                      * from the photo on the network's estimate (wv_psf_estimate); >= 0 this sigma */
+  int orient;     /* 1 (default): on a plane scene, each candidate is rendered, and the chosen one
+                   * fitted, with its lattice's rotation and skew (wv_pattern_choice_scene) */
 } wv_pattern_opts;
 void wv_pattern_opts_default(wv_pattern_opts *o);
 typedef struct {
@@ -178,7 +180,12 @@ typedef struct {
   double w_pixel;           /* what the criterion used */
   double seconds;           /* analysis, renders and descriptor passes */
   double psf_sigma;         /* the camera blur the candidates were rendered with */
+  int orient;               /* the candidates carry their lattice's orientation (wv_pattern_opts) */
 } wv_pattern_choice;
+/* The scene in which candidate i of c is rendered and fitted: s, with the rotation and
+ * skew of its lattice added when c->orient and the lattice was found (a plane scene). out
+ * may be s. */
+void wv_pattern_choice_scene(const wv_pattern_choice *c, const wv_scene *s, int i, wv_scene *out);
 /* The loss criterion of candidate i of a choice made for this photo (a no-op when known). */
 wv_status wv_pattern_loss(struct wv_descriptor *d, const wv_scene *s, const wv_image *photo, const float *gram_photo,
                           const wv_pattern_opts *o, int i, wv_pattern_choice *c, wv_error *err);

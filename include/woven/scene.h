@@ -20,6 +20,8 @@ typedef struct {
   double radius;        /* cylinder, mm */
   int warp_along_axis;  /* cylinder: 1 = warp along the axis (default), 0 = around it */
   double rotation_deg;  /* plane: angle of the fabric x axis from world x */
+  double skew_deg;      /* plane: cloth out of square: the warp yarns turn by rotation - skew / 2,
+                         * the weft yarns by rotation + skew / 2 (WV_SCENE_MAX_SKEW) */
   double fabric_offset[2]; /* shift of the pattern on the sample, mm */
   double mm_per_unit;      /* fabric millimetres per scene unit (1 when the scene is in mm) */
   /* Point light. */
@@ -40,6 +42,7 @@ typedef struct {
 #define WV_SCENE_MAX_SPP 4096
 #define WV_SCENE_MAX_SAMPLES (1LL << 34)
 #define WV_SCENE_MAX_MM 1e6        /* |coordinate| of the camera, look-at, up and light: 1 km */
+#define WV_SCENE_MAX_SKEW 15.0 /* |sample.skew_deg|, degrees */
 #define WV_SCENE_MAX_OFFSET_MM 1e4 /* |sample.offset_mm|: any offset is equivalent to one within a weave repeat */
 
 wv_status wv_scene_parse(const char *json, const char *source, wv_scene *s, wv_error *err);

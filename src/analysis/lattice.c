@@ -508,7 +508,10 @@ void wv_lattice_candidate(const wv_lattice *lat, int i, const wv_params *base, c
     p->density[y] = d < WV_DENSITY_MIN ? WV_DENSITY_MIN : d > WV_DENSITY_MAX ? WV_DENSITY_MAX : d;
   }
   *ps = *s;
-  if (rotate && s->shape == WV_SHAPE_PLANE) ps->rotation_deg += lat->fit[i].angle_deg;
+  if (!rotate || s->shape != WV_SHAPE_PLANE) return;
+  double r = s->rotation_deg + lat->fit[i].angle_deg, k = s->skew_deg + lat->fit[i].skew_deg;
+  ps->rotation_deg = r > 360 ? r - 360 : r < -360 ? r + 360 : r;
+  ps->skew_deg = k > WV_SCENE_MAX_SKEW ? WV_SCENE_MAX_SKEW : k < -WV_SCENE_MAX_SKEW ? -WV_SCENE_MAX_SKEW : k;
 }
 
 /* How well two peak lists agree: recall over a's prominence, precision over b's, their F. */
@@ -533,8 +536,8 @@ static double peak_match(const wv_spectral_peak *a, int na, const wv_spectral_pe
   return P + R > 0 ? 2 * P * R / (P + R) : 0;
 }
 
-/* The photo's peaks as the square cloth of fit i (its skew taken out, which the renderer
- * cannot draw) would show them: a peak near a predicted lattice point moves with it to
+/* The photo's peaks as the square cloth of fit i (its skew taken out, which a cylinder
+ * scene cannot draw) would show them: a peak near a predicted lattice point moves with it to
  * where that point lies without the skew. */
 static void deskew_peaks(const wv_lattice *lat, int i, const frame *fr, wv_spectral_peak *out) {
   const wv_lattice_fit *f = &lat->fit[i];
@@ -600,8 +603,11 @@ wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lat
     if (st) break;
     wv_spectral_peak pk[WV_LATTICE_PEAKS];
     int np = wv_spectrum_peaks(sr, n, Z_PEAK, pk, WV_LATTICE_PEAKS);
+    /* a render without the lattice's skew is compared with the photo's peaks as its
+     * square cloth would show them */
     wv_spectral_peak square[WV_LATTICE_PEAKS];
-    deskew_peaks(lat, i, &fr, square);
+    if (ps.shape == WV_SHAPE_PLANE && o->rotate) memcpy(square, lat->peaks, sizeof(wv_spectral_peak) * lat->n_peaks);
+    else deskew_peaks(lat, i, &fr, square);
     out->match[i] = peak_match(square, lat->n_peaks, pk, np, n);
     out->wsc[i] = wv_wsc_spectra(sp, sr, n);
     out->wsc_whitened[i] = wv_wsc_spectra(zp, zr, n);

@@ -483,8 +483,10 @@ wv_status wv_estimate_run(const wv_estimate_opts *o, wv_estimate *e, wv_error *e
   float y[WV_NET_OUT];
   if (!rc && !o->pattern) {
     e->chosen = 1;
-    if (!(rc = wv_fabricnet_predict_pattern(&net, e->desc, &e->scene, &e->photo, NULL, y, &e->choice, err)))
+    if (!(rc = wv_fabricnet_predict_pattern(&net, e->desc, &e->scene, &e->photo, NULL, y, &e->choice, err))) {
       e->params = e->choice.params[e->choice.best];
+      wv_pattern_choice_scene(&e->choice, &e->scene, e->choice.best, &e->scene); /* the cloth's orientation */
+    }
   } else if (!rc) {
     float *feat = malloc(sizeof(float) * (size_t)net.n_in);
     if (!feat)

@@ -26,6 +26,7 @@ void wv_pattern_opts_default(wv_pattern_opts *o) {
   o->prob = NULL;
   o->w_prob = 0.25;
   o->psf_sigma = -1;
+  o->orient = 1;
 }
 
 /* The loss criterion of candidate i: its parameters rendered over the whole image at sc's
@@ -34,8 +35,10 @@ static wv_status loss_of(wv_image_loss *loss, const wv_scene *sc, const wv_patte
                          wv_pattern_choice *out, wv_error *err) {
   wv_render_opts ro = {sc->spp, o->threads, NULL, NULL, NULL};
   wv_image img = {0};
+  wv_scene si;
+  wv_pattern_choice_scene(out, sc, i, &si);
   /* the same render seed for every candidate: the losses then differ by the pattern, not the noise draw */
-  wv_status st = wv_render(sc, &out->params[i], &ro, &img, NULL, err);
+  wv_status st = wv_render(&si, &out->params[i], &ro, &img, NULL, err);
   wv_loss_terms t;
   if (!st) st = wv_image_loss_eval(loss, &img, &t, NULL, err);
   wv_image_free(&img);
@@ -62,6 +65,13 @@ wv_status wv_pattern_loss(wv_descriptor *d, const wv_scene *s, const wv_image *p
   if (!st) st = loss_of(loss, &sc, o, i, c, err);
   wv_image_loss_free(loss);
   return st;
+}
+
+void wv_pattern_choice_scene(const wv_pattern_choice *c, const wv_scene *s, int i, wv_scene *out) {
+  wv_params unused;
+  wv_scene in = *s;
+  *out = in;
+  if (c->orient && c->lattice.found) wv_lattice_candidate(&c->lattice, i, &c->params[i], &in, 1, &unused, out);
 }
 
 int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie, int *contenders) {
@@ -124,7 +134,7 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
   int nb = wv_weave_builtin_count();
   wv_scene sc = *s;
   sc.spp = o->spp > 0 ? o->spp : WV_PATTERN_SPP;
-  out->spp = sc.spp, out->w_pixel = o->w_pixel;
+  out->spp = sc.spp, out->w_pixel = o->w_pixel, out->orient = o->orient;
   if (o->prob) {
     out->has_prob = 1;
     for (int i = 0; i < nb; i++) out->prob[i] = o->prob[i];
@@ -147,7 +157,7 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
     const wv_lattice *l = &out->lattice;
     wv_rank_opts ro;
     wv_rank_opts_default(&ro);
-    ro.spp = sc.spp, ro.threads = o->threads, ro.prob = o->prob, ro.w_prob = o->w_prob;
+    ro.spp = sc.spp, ro.threads = o->threads, ro.prob = o->prob, ro.w_prob = o->w_prob, ro.rotate = o->orient;
     /* the estimate's colours with pattern 0; wv_lattice_rank sets each candidate's pattern */
     st = wv_lattice_rank(s, photo, l, &out->params[0], &ro, &out->ranking, err);
     for (int i = 0; i < nb && !st; i++) { /* every candidate starts from its lattice densities */

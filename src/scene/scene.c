@@ -87,7 +87,7 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
   static const char *top[] = {"name", "comment", "image", "camera", "sample", "light", "response", "falloff", NULL};
   static const char *k_img[] = {"width", "height", "spp", NULL};
   static const char *k_cam[] = {"position_mm", "look_at_mm", "up", "vfov_deg", NULL};
-  static const char *k_smp[] = {"shape", "radius_mm", "warp", "rotation_deg", "offset_mm", "mm_per_unit", NULL};
+  static const char *k_smp[] = {"shape", "radius_mm", "warp", "rotation_deg", "skew_deg", "offset_mm", "mm_per_unit", NULL};
   static const char *k_lig[] = {"position_mm", "intensity", NULL};
   static const char *k_rsp[] = {"exposure", "clip", "encoding", "gamma", "psf_sigma_px", NULL};
   static const char *k_fal[] = {"type", "sigma_px", NULL};
@@ -128,6 +128,8 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
   const char *sh = json_is_string(shape) ? json_string_value(shape) : "";
   if (!strcmp(sh, "cylinder")) {
     s->shape = WV_SHAPE_CYLINDER;
+    if (json_object_get(o, "skew_deg"))
+      return wv_fail(err, WV_ERR_INVALID, "'sample.skew_deg' applies to a plane, not a cylinder");
     if ((st = num(o, "sample", "radius_mm", &s->radius, 1, err))) return st;
     s->warp_along_axis = 1;
     json_t *w = json_object_get(o, "warp");
@@ -140,6 +142,7 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
   } else if (!strcmp(sh, "plane")) {
     s->shape = WV_SHAPE_PLANE;
     if ((st = num(o, "sample", "rotation_deg", &s->rotation_deg, 0, err))) return st;
+    if ((st = num(o, "sample", "skew_deg", &s->skew_deg, 0, err))) return st;
   } else {
     return wv_fail(err, WV_ERR_INVALID, "'sample.shape' must be \"cylinder\" or \"plane\"");
   }
@@ -227,6 +230,9 @@ wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
   if (s->shape == WV_SHAPE_PLANE && !(s->rotation_deg >= -360 && s->rotation_deg <= 360))
     return wv_fail(err, WV_ERR_INVALID, "'sample.rotation_deg' = %s is outside -360..360",
                    wv_num_str(s->rotation_deg, a));
+  if (s->shape == WV_SHAPE_PLANE && !(s->skew_deg >= -WV_SCENE_MAX_SKEW && s->skew_deg <= WV_SCENE_MAX_SKEW))
+    return wv_fail(err, WV_ERR_INVALID, "'sample.skew_deg' = %s is outside -%g..%g", wv_num_str(s->skew_deg, a),
+                   WV_SCENE_MAX_SKEW, WV_SCENE_MAX_SKEW);
   if (!(s->mm_per_unit > 1e-6 && s->mm_per_unit < 1e6))
     return wv_fail(err, WV_ERR_INVALID, "'sample.mm_per_unit' = %s must be in (1e-06, 1000000)",
                    wv_num_str(s->mm_per_unit, a));
@@ -293,10 +299,13 @@ char *wv_scene_to_json(const wv_scene *s) {
                                                s->radius, "warp", s->warp_along_axis ? "along_axis" : "around_axis",
                                                "offset_mm", s->fabric_offset[0], s->fabric_offset[1], "mm_per_unit",
                                                s->mm_per_unit));
-  else
+  else {
     json_object_set_new(o, "sample", json_pack("{s:s,s:f,s:[f,f],s:f}", "shape", "plane", "rotation_deg",
                                                s->rotation_deg, "offset_mm", s->fabric_offset[0],
                                                s->fabric_offset[1], "mm_per_unit", s->mm_per_unit));
+    if (s->skew_deg != 0) /* written only when set: square cloth keeps its text */
+      json_object_set_new(json_object_get(o, "sample"), "skew_deg", json_real(s->skew_deg));
+  }
   json_object_set_new(o, "light", json_pack("{s:[f,f,f],s:f}", "position_mm", s->light_pos[0], s->light_pos[1],
                                             s->light_pos[2], "intensity", s->light_intensity));
   json_object_set_new(o, "response", json_pack("{s:f,s:f,s:s,s:f}", "exposure", s->exposure, "clip", s->clip,

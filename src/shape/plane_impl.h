@@ -1,5 +1,5 @@
-/* The plane z = 0, fabric x at angle rotation_deg from world x (a lane
- * template, see shape/shape.h). */
+/* The plane z = 0, fabric x at angle rotation_deg from world x, the yarns turned
+ * apart by skew_deg (a lane template, see shape/shape.h). */
 WV_INLINE void WV_FN(wv_plane_hit)(const wv_shape *sh, const float o[3], const WV_P d[3], WV_FN(wv_surface) * s) {
   WV_M miss = wv_abs(d[2]) < 1e-12f;
   WV_P t = -o[2] / wv_sel(miss, WV_PB(1.0f), d[2]);
@@ -8,6 +8,6 @@ WV_INLINE void WV_FN(wv_plane_hit)(const wv_shape *sh, const float o[3], const W
   s->n[0] = WV_PB(0.0f), s->n[1] = WV_PB(0.0f), s->n[2] = WV_PB(1.0f);
   s->t[0] = WV_PB(sh->rot_c), s->t[1] = WV_PB(sh->rot_s), s->t[2] = WV_PB(0.0f);
   s->b[0] = WV_PB(-sh->rot_s), s->b[1] = WV_PB(sh->rot_c), s->b[2] = WV_PB(0.0f);
-  s->fx = (s->p[0] * s->t[0] + s->p[1] * s->t[1]) * sh->scale + sh->off[0];
-  s->fy = (s->p[0] * s->b[0] + s->p[1] * s->b[1]) * sh->scale + sh->off[1];
+  s->fx = (s->p[0] * sh->across[0][0] + s->p[1] * sh->across[0][1]) * sh->scale + sh->off[0];
+  s->fy = (s->p[0] * sh->across[1][0] + s->p[1] * sh->across[1][1]) * sh->scale + sh->off[1];
 }

@@ -17,6 +17,9 @@ typedef struct {
   float radius;        /* cylinder: radius, scene units */
   int warp_along_axis; /* cylinder: warp along the axis (else around it) */
   float rot_c, rot_s;  /* plane: cos and sin of the fabric x axis's angle from world x */
+  float across[2][2];  /* plane: fabric x = p . across[0] (across the warp yarns), fabric y =
+                        * p . across[1] (across the weft yarns); with a skew the two are not
+                        * square, while the shading frame keeps the rotation's (a few degrees) */
   float off[2];        /* shift of the pattern on the sample, mm */
   float scale;         /* fabric mm per scene unit */
 } wv_shape;

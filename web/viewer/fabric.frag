@@ -38,6 +38,7 @@ uniform vec2 uInvGlintCell;
 uniform int uShape;
 uniform float uRadius, uRotC, uRotS, uMmPerUnit;
 uniform vec2 uOffset;
+uniform vec2 uAcross0, uAcross1; // plane: fabric x = P.xy . uAcross0, fabric y = P.xy . uAcross1 (skew)
 uniform bool uWarpAlongAxis;
 uniform float uUvMm;            // mesh: fabric mm per UV unit
 
@@ -232,7 +233,7 @@ void main() {
     N = vec3(0.0, 0.0, 1.0);
     T = vec3(uRotC, uRotS, 0.0);
     B = vec3(-uRotS, uRotC, 0.0);
-    f = vec2(dot(P.xy, T.xy), dot(P.xy, B.xy)) * uMmPerUnit + uOffset;
+    f = vec2(dot(P.xy, uAcross0), dot(P.xy, uAcross1)) * uMmPerUnit + uOffset;
   } else if (uShape == 1) { // cylinder around the x axis
     float sn = P.y / uRadius, cs = P.z / uRadius;
     N = vec3(0.0, sn, cs);

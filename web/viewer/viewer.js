@@ -132,7 +132,7 @@ weaveTex.minFilter = weaveTex.magFilter = THREE.NearestFilter;
 const fabricUniforms = {
   uWeave: { value: weaveTex }, uRows: { value: 1 }, uCols: { value: 1 },
   uShape: { value: 0 }, uRadius: { value: 1 }, uRotC: { value: 1 }, uRotS: { value: 0 }, uMmPerUnit: { value: 1 },
-  uOffset: { value: [0, 0] }, uWarpAlongAxis: { value: true }, uUvMm: { value: 1 },
+  uOffset: { value: [0, 0] }, uAcross0: { value: [1, 0] }, uAcross1: { value: [0, 1] }, uWarpAlongAxis: { value: true }, uUvMm: { value: 1 },
   uCamPos: { value: new THREE.Vector3() }, uLightPos: { value: new THREE.Vector3() }, uLightI: { value: 1 },
   uBoxes: { value: 0 }, uBoxC: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
   uBoxU: { value: [0, 1, 2].map(() => new THREE.Vector3()) }, uBoxV: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
@@ -269,8 +269,11 @@ function setMode(mode) {
     const cyl = SC.sample.shape === 'cylinder';
     u.uShape.value = cyl ? 1 : 0;
     u.uRadius.value = SC.sample.radius_mm || 1;
-    const rot = (SC.sample.rotation_deg || 0) * Math.PI / 180;
+    const rot = (SC.sample.rotation_deg || 0) * Math.PI / 180, skew = (SC.sample.skew_deg || 0) * Math.PI / 180;
     u.uRotC.value = Math.cos(rot), u.uRotS.value = Math.sin(rot);
+    // as woven's plane (src/shape/shape.c): the warp yarns turned by rot - skew / 2, the weft by rot + skew / 2
+    const wa = rot - skew / 2, fa = rot + skew / 2;
+    u.uAcross0.value = [Math.cos(wa), Math.sin(wa)], u.uAcross1.value = [-Math.sin(fa), Math.cos(fa)];
     u.uMmPerUnit.value = SC.sample.mm_per_unit, u.uOffset.value = SC.sample.offset_mm;
     u.uWarpAlongAxis.value = SC.sample.warp !== 'around_axis';
     u.uBoxes.value = 0, u.uAmbient.value = 0;
