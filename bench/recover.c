@@ -3,8 +3,10 @@
  *   recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b,...] [--seed S]
  *           [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]
  *           [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S] [--no-orient]
+ *           [--no-refine]
  *           (the fit's options, as woven fit's; --no-orient: candidates and fit on square cloth
- *           without the lattice's rotation and skew)
+ *           without the lattice's rotation and skew; --no-refine: the chosen lattice as the
+ *           analysis's centre window measured it, not refined over the whole image)
  *     Synthetic: N prior draws of every canonical built-in (or of the listed patterns; the
  *     earlier names twill, satin, twill90, satin90 are built-ins too); every second draw is
  *     a two-colour cloth (a dark blue warp and a near-white weft, as denim), rendered in the
@@ -49,7 +51,7 @@ typedef struct {
   wv_descriptor *d;
   wv_fabricnet *net; /* NULL: --start prior */
   wv_fit_opts o;
-  int orient; /* wv_pattern_opts.orient */
+  int orient, refine; /* wv_pattern_opts.orient, .refine */
 } study;
 
 /* What one capture gave. */
@@ -79,7 +81,7 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
     if (!pc) exit(1);
     wv_pattern_opts po;
     wv_pattern_opts_default(&po);
-    po.orient = st->orient;
+    po.orient = st->orient, po.refine = st->refine;
     if (wv_fabricnet_predict_pattern(st->net, st->d, st->s, photo, &po, y, pc, &err)) die(&err);
     wv_pattern_choice_scene(pc, st->s, pc->best, &scene);
     c->start = pc->params[pc->best];
@@ -290,7 +292,7 @@ static int real(const study *st, const char *dir) {
 int main(int argc, char **argv) {
   study st;
   wv_fit_opts_default(&st.o);
-  st.orient = 1;
+  st.orient = 1, st.refine = 1;
   int per = 4, prior_start = 0;
   uint64_t seed = 1;
   const char *real_dir = NULL, *scene_name = "flat45", *model = NULL, *patlist = NULL;
@@ -306,6 +308,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--no-colour-split")) st.o.colour_split = 0;
     else if (!strcmp(argv[i], "--colour-split")) st.o.colour_split = 1;
     else if (!strcmp(argv[i], "--no-orient")) st.orient = 0;
+    else if (!strcmp(argv[i], "--no-refine")) st.refine = 0;
     else if (!strcmp(argv[i], "--seed") && i + 1 < argc) seed = strtoull(argv[++i], NULL, 10);
     else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene_name = argv[++i];
     else if (!strcmp(argv[i], "--model") && i + 1 < argc) model = argv[++i];
@@ -322,7 +325,7 @@ int main(int argc, char **argv) {
       fprintf(stderr, "usage: recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b] [--seed S]\n"
                       "               [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]\n"
                       "               [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S]\n"
-                      "               [--no-orient]\n"
+                      "               [--no-orient] [--no-refine]\n"
                       "       recover --real DIR [--model M] [--iters N] ...\n");
       return 1;
     }

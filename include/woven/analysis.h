@@ -24,6 +24,7 @@
 #define WV_LATTICE_PEAKS 24     /* peaks kept, strongest first */
 #define WV_LATTICE_WINDOW 256   /* the centre window analysed (the WSC window) */
 #define WV_LATTICE_MIN_WINDOW 64
+#define WV_LATTICE_REFINE_WINDOW 512 /* the chosen pattern's lattice is refined over this window */
 
 /* One spectral peak, in the half plane v > 0 (or v = 0, u > 0): its mirror -(u, v) is
  * the same peak. */
@@ -57,12 +58,22 @@ typedef struct {
   int repeat;         /* the repeat's size in yarns */
   int shear;          /* cells the pattern moves per row: twill +1 (S) or -1 (Z) (90-degree
                        * variants: per column), satin its step, 0 for plain and basket */
+  int refined_window; /* 0, or the window over which wv_lattice_refine refined a fit */
   double seconds;
 } wv_lattice;
 
 /* Analyses the centre window of photo (the scene's capture image; at least 64 x 64). A
  * photo without a lattice is not an error: out->found = 0 with out->reason. */
 wv_status wv_lattice_analyse(const wv_scene *s, const wv_image *photo, wv_lattice *out, wv_error *err);
+
+/* Refines fit i of lat (found) over the photo's centre window of up to
+ * WV_LATTICE_REFINE_WINDOW pixels, larger than the analysis's: the lattice points of a
+ * render must fall within a fraction of a bin of the photo's across the whole image for
+ * the two to stay in register. The densities move by less than 2% (a larger step is an
+ * alias, not a refinement), the rotation and skew within their ranges; nothing changes
+ * when the fit explains that window no better. A no-op for a photo no larger than the
+ * analysis's window. */
+wv_status wv_lattice_refine(const wv_scene *s, const wv_image *photo, wv_lattice *lat, int i, wv_error *err);
 
 /* The peaks of a weave spectrum (n x n, from wv_weave_spectrum) with prominence at least
  * min_z, strongest first; returns how many (at most cap). */

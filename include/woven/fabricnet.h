@@ -157,6 +157,8 @@ typedef struct {
                      * from the photo on the network's estimate (wv_psf_estimate); >= 0 this sigma */
   int orient;     /* 1 (default): on a plane scene, each candidate is rendered, and the chosen one
                    * fitted, with its lattice's rotation and skew (wv_pattern_choice_scene) */
+  int refine;     /* 1 (default): the chosen pattern's lattice is refined over the whole image
+                   * (wv_lattice_refine) */
 } wv_pattern_opts;
 void wv_pattern_opts_default(wv_pattern_opts *o);
 typedef struct {

@@ -307,12 +307,56 @@ static double evaluate(const lmodel *m, const smap *sm, const frame *fr, const h
 #define RHO_MAX (10 * PI / 180)
 #define SIGMA_MAX (6 * PI / 180)
 
-/* Pattern search on (log dw, log df, rho, sigma) from h, with the fine map. */
-static double refine(const lmodel *m, const smap *sm, const frame *fr, hyp *h, scratch *sc) {
+/* What a pattern search maximises over hypotheses. */
+typedef struct {
+  const lmodel *m;
+  const frame *fr;
+  const smap *sm;      /* the F score on the fine map (with sc) ... */
+  scratch *sc;
+  const float *logp;   /* ... or, when set, the mean log power at the points (n x n spectrum) */
+  int n;
+} objective;
+
+/* Catmull-Rom weights of the four samples around fraction t. */
+static inline void cubic_weights(double t, double w[4]) {
+  double t2 = t * t, t3 = t2 * t;
+  w[0] = 0.5 * (-t3 + 2 * t2 - t), w[1] = 0.5 * (3 * t3 - 5 * t2 + 2);
+  w[2] = 0.5 * (-3 * t3 + 4 * t2 + t), w[3] = 0.5 * (t3 - t2);
+}
+
+/* The weighted mean of the log power spectrum, bicubic, at the lattice points of h: its
+ * maximum puts the points on the peaks' tops within a fraction of a bin, where the F
+ * score, whose prominence is capped, is flat (and a bilinear map peaks on the bins). */
+static double lattice_power(const objective *o, const hyp *h) {
+  const lmodel *m = o->m;
+  int n = o->n;
+  double px[2], py[2], sw = 0, s = 0;
+  axes(o->fr, h, px, py);
+  for (int k = 0; k < m->n; k++) {
+    double kx = m->u[k] * px[0] + m->v[k] * py[0], ky = m->u[k] * px[1] + m->v[k] * py[1];
+    kx -= floor(kx + 0.5), ky -= floor(ky + 0.5);
+    double bu = kx * n, bv = ky * n;
+    if (bu * bu + bv * bv <= WV_WSC_DC_RADIUS * WV_WSC_DC_RADIUS) continue;
+    int u = (int)floor(bu), v = (int)floor(bv);
+    double wu[4], wv[4], p = 0;
+    cubic_weights(bu - u, wu), cubic_weights(bv - v, wv);
+    for (int j = 0; j < 4; j++)
+      for (int i = 0; i < 4; i++) p += wv[j] * wu[i] * o->logp[bin(n, u - 1 + i, v - 1 + j)];
+    sw += m->w[k], s += m->w[k] * p;
+  }
+  return sw > 0 ? s / sw : 0;
+}
+
+static double objective_at(const objective *o, const hyp *h) {
+  return o->logp ? lattice_power(o, h) : evaluate(o->m, o->sm, o->fr, h, 1, o->sc, NULL, NULL);
+}
+
+/* Pattern search on (log dw, log df, rho, sigma) from h. */
+static double refine(const objective *o, hyp *h) {
   const double lo = log(WV_DENSITY_MIN), hi = log(WV_DENSITY_MAX);
   double x[4] = {log(h->dw), log(h->df), h->rho, h->sigma};
   double step[4] = {0.006, 0.006, 0.6 * PI / 180, 0.6 * PI / 180};
-  double best = evaluate(m, sm, fr, h, 1, sc, NULL, NULL);
+  double best = objective_at(o, h);
   for (int it = 0; it < 400; it++) {
     int moved = 0;
     for (int d = 0; d < 4; d++)
@@ -322,7 +366,7 @@ static double refine(const lmodel *m, const smap *sm, const frame *fr, hyp *h, s
         if (y[0] < lo || y[0] > hi || y[1] < lo || y[1] > hi || fabs(y[2]) > RHO_MAX || fabs(y[3]) > SIGMA_MAX)
           continue;
         hyp t = {exp(y[0]), exp(y[1]), y[2], y[3]};
-        double v = evaluate(m, sm, fr, &t, 1, sc, NULL, NULL);
+        double v = objective_at(o, &t);
         if (v > best + 1e-9) best = v, memcpy(x, y, sizeof x), moved = 1;
       }
     if (!moved) {
@@ -375,7 +419,8 @@ static void fit_pattern(const lmodel *m, const smap *sm, const frame *fr, double
       double v = evaluate(m, sm, fr, &h, 0, &sc, NULL, NULL);
       if (v > r0) r0 = v, hb = h;
     }
-    double f = refine(m, sm, fr, &hb, &sc);
+    objective ob = {m, fr, sm, &sc, NULL, 0};
+    double f = refine(&ob, &hb);
     if (f > best_f) {
       best_f = f;
       out->density[WV_WARP] = hb.dw, out->density[WV_WEFT] = hb.df;
@@ -486,6 +531,42 @@ wv_status wv_lattice_analyse(const wv_scene *s, const wv_image *photo, wv_lattic
     for (int y = 0; y < 2; y++) out->spacing_px[y] = 25.4 / (out->fit[best].density[y] * out->mm_per_px);
   }
   out->seconds = omp_get_wtime() - t0;
+  return WV_OK;
+}
+
+/* ---- the chosen lattice over the whole image ---- */
+
+wv_status wv_lattice_refine(const wv_scene *s, const wv_image *photo, wv_lattice *lat, int i, wv_error *err) {
+  int n = photo->w < photo->h ? photo->w : photo->h;
+  n = n > WV_LATTICE_REFINE_WINDOW ? WV_LATTICE_REFINE_WINDOW : n - n % 2;
+  frame fr;
+  double mmpp;
+  if (!lat->found || i < 0 || i >= wv_weave_builtin_count() || n <= lat->window || !centre_frame(s, &fr, &mmpp))
+    return WV_OK;
+  float *spec = malloc(sizeof(float) * (size_t)n * n);
+  if (!spec) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the weave analysis");
+  wv_status st = wv_weave_spectrum(photo, (photo->w - n) / 2, (photo->h - n) / 2, n, spec, err);
+  if (st) {
+    free(spec);
+    return st;
+  }
+  wv_weave w;
+  lmodel m;
+  wv_weave_builtin(wv_weave_builtin_name(i), &w, NULL);
+  build_model(&w, &m);
+  wv_lattice_fit *f = &lat->fit[i];
+  hyp h = {f->density[WV_WARP], f->density[WV_WEFT], f->angle_deg * PI / 180, f->skew_deg * PI / 180}, r = h;
+  objective ob = {&m, &fr, NULL, NULL, spec, n};
+  double before = objective_at(&ob, &h), after = refine(&ob, &r);
+  free(spec);
+  lat->refined_window = n;
+  /* a step to a neighbouring alias is not a refinement: the densities may move by 2% */
+  if (after > before && fabs(log(r.dw / h.dw)) < 0.02 && fabs(log(r.df / h.df)) < 0.02) {
+    f->density[WV_WARP] = r.dw, f->density[WV_WEFT] = r.df;
+    f->angle_deg = r.rho * 180 / PI, f->skew_deg = r.sigma * 180 / PI;
+    if (i == lat->best)
+      for (int y = 0; y < 2; y++) lat->spacing_px[y] = 25.4 / (f->density[y] * lat->mm_per_px);
+  }
   return WV_OK;
 }
 
@@ -634,6 +715,7 @@ char *wv_lattice_to_json(const wv_lattice *l, const wv_lattice_ranking *r) {
   json_object_set_new(o, "found", json_boolean(l->found));
   json_object_set_new(o, "reason", l->found ? json_null() : json_string(l->reason));
   json_object_set_new(o, "window", json_integer(l->window));
+  if (l->refined_window) json_object_set_new(o, "refined_window", json_integer(l->refined_window));
   json_object_set_new(o, "mm_per_px", json_real(l->mm_per_px));
   json_t *pk = json_array();
   for (int i = 0; i < l->n_peaks; i++)

@@ -27,6 +27,7 @@ void wv_pattern_opts_default(wv_pattern_opts *o) {
   o->w_prob = 0.25;
   o->psf_sigma = -1;
   o->orient = 1;
+  o->refine = 1;
 }
 
 /* The loss criterion of candidate i: its parameters rendered over the whole image at sc's
@@ -170,6 +171,12 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
     while (!st && (b = wv_pattern_decide(out, o->family_tie, o->tie, &out->family_contenders)) < 0) st = LOSS(-1 - b);
     if (!st) {
       out->best = b;
+      /* the chosen lattice, refined over the whole image, gives the start its densities */
+      if (o->refine && !(st = wv_lattice_refine(s, photo, &out->lattice, b, err))) {
+        wv_scene unused;
+        wv_params p = out->params[b];
+        wv_lattice_candidate(&out->lattice, b, &p, s, 0, &out->params[b], &unused);
+      }
       int used = 0;
       for (int i = 0; i < nb; i++) used += out->evaluated[i];
       out->method = used ? "lattice+loss" : "lattice";
