@@ -29,6 +29,13 @@ static void render_skewed(const char *pattern, double dw, double df, double rot,
   s->rotation_deg = 0, s->skew_deg = 0; /* the analysis is told the scene as it was meant, the fabric turned in it */
 }
 
+/* The built-in's index in the library (-1: not built in). */
+static int builtin_index(const char *pattern) {
+  for (int i = 0; i < wv_weave_builtin_count(); i++)
+    if (!strcmp(wv_weave_builtin_name(i), pattern)) return i;
+  return -1;
+}
+
 static void render(const char *pattern, double dw, double df, double rot, uint64_t seed, wv_scene *s, wv_image *img) {
   render_skewed(pattern, dw, df, rot, 0, seed, s, img);
 }
@@ -179,9 +186,7 @@ static void test_lattice_recovers(void **state) {
     wv_lattice l;
     wv_error e = {0};
     assert_int_equal(wv_lattice_analyse(&s, &img, &l, &e), WV_OK);
-    int t = -1;
-    for (int i = 0; i < wv_weave_builtin_count(); i++)
-      if (!strcmp(wv_weave_builtin_name(i), T[k].pattern)) t = i;
+    int t = builtin_index(T[k].pattern);
     const wv_lattice_fit *f = &l.fit[t];
     fprintf(stderr,
             "%-12s %.0f/%.0f rot %.0f skew %.1f: found %d, best %s, own lattice %.1f/%.1f angle %.2f skew %.2f "
@@ -242,9 +247,7 @@ static void test_lattice_refine(void **state) {
     wv_lattice l;
     assert_int_equal(wv_lattice_analyse(&s, &img, &l, &e), WV_OK);
     assert_true(l.found);
-    int t = -1;
-    for (int i = 0; i < wv_weave_builtin_count(); i++)
-      if (!strcmp(wv_weave_builtin_name(i), T[k].pattern)) t = i;
+    int t = builtin_index(T[k].pattern);
     assert_true(t >= 0);
     wv_lattice_fit a = l.fit[t];
     assert_int_equal(wv_lattice_refine(&s, &img, &l, t, &e), WV_OK);

@@ -687,9 +687,9 @@ wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lat
     /* a render without the lattice's skew is compared with the photo's peaks as its
      * square cloth would show them */
     wv_spectral_peak square[WV_LATTICE_PEAKS];
-    if (ps.shape == WV_SHAPE_PLANE && o->rotate) memcpy(square, lat->peaks, sizeof(wv_spectral_peak) * lat->n_peaks);
-    else deskew_peaks(lat, i, &fr, square);
-    out->match[i] = peak_match(square, lat->n_peaks, pk, np, n);
+    const wv_spectral_peak *ref = lat->peaks;
+    if (!(ps.shape == WV_SHAPE_PLANE && o->rotate)) deskew_peaks(lat, i, &fr, square), ref = square;
+    out->match[i] = peak_match(ref, lat->n_peaks, pk, np, n);
     out->wsc[i] = wv_wsc_spectra(sp, sr, n);
     out->wsc_whitened[i] = wv_wsc_spectra(zp, zr, n);
     out->score[i] = out->match[i];
