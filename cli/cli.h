@@ -140,7 +140,7 @@ extern const cli_opt CLI_PHOTO_OPTS[];
 /* --model */
 extern const cli_opt CLI_MODEL_OPTS[];
 /* The fit's tuning: --iters, --iter-spp, --iter-scale, --seed, --align-radius,
- * --register-radius, --w-struct, --w-colour, --camera-blur, --colour-split, --no-colour-split, --threads, --drape. */
+ * --register-radius, --distort-degree, --w-struct, --w-colour, --camera-blur, --colour-split, --no-colour-split, --threads, --drape. */
 extern const cli_opt CLI_FIT_OPTS[];
 /* The capture's options from the parsed ones (photo, directory and all). */
 void cli_capture_opts(const capture_args *a, wv_capture_opts *o);

@@ -105,6 +105,9 @@ const cli_opt CLI_FIT_OPTS[] = {
     CLI_O_INT("--register-radius", NULL, capture_args, fit.register_radius, 0, WV_FIT_MAX_REGISTER_RADIUS, "N",
               "then register the weave to the photo: densities on a 2-D grid\n+-N yarns/inch refined to 0.1, and "
               "the weave's offset, by phase\ncorrelation; kept if the SSIM rises (default 6; 0 = off)"),
+    CLI_O_INT("--distort-degree", NULL, capture_args, fit.distort_degree, 0, 3, "N",
+              "then, on a plane, the cloth's distortion: a polynomial of degree N\ndisplacing the fabric so that "
+              "the weave stays in register across the\nwhole photo; kept if the SSIM rises (default 3; 0 = off)"),
     CLI_O_REAL("--w-struct", capture_args, fit.w_struct, 0, 100, 0, "X",
                "weight of the structure term, the weave's log power spectrum\n(default 0.002; 0 = off)"),
     CLI_O_REAL("--w-colour", capture_args, fit.w_colour, 0, 100, 0, "X",
@@ -134,7 +137,7 @@ static const cli_cmd CMD = {
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
-    "                 [--register-radius N] [--w-struct X] [--w-colour X] [--colour-split]\n"
+    "                 [--register-radius N] [--distort-degree N] [--w-struct X] [--w-colour X] [--colour-split]\n"
     "                 [--camera-blur auto|S]\n"
     "                 [--seed N] [--threads N] [--drape S.json|none]\n"
     "                 [--force] [--quiet] [--json]\n"
@@ -200,6 +203,11 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
     if (o_json) {
       json_object_set_new(o_json, "pattern_choice", pc ? cli_json_text(wv_pattern_choice_to_json(pc)) : json_null());
       json_object_set_new(o_json, "camera_blur_px", cli_real(r->fit_scene.psf_sigma, 3));
+      json_object_set_new(json_object_get(o_json, "time_s"), "distortion", cli_real(st->timing.distortion, 3));
+      json_object_set_new(o_json, "distortion",
+                          json_pack("{s:b,s:o,s:[o,o]}", "kept", st->dist_ssim_after > st->dist_ssim_before,
+                                    "extent_mm", cli_real(st->distort_extent_mm, 4), "ssim", cli_real(st->dist_ssim_before, 4),
+                                    cli_real(st->dist_ssim_after, 4)));
       json_object_set_new(o_json, "ssim_rgb_start", cli_real(wv->ssim_rgb[0], 6));
       json_object_set_new(o_json, "ssim_rgb_fit", cli_real(wv->ssim_rgb[1], 6));
       json_object_set_new(o_json, "wsc_start", wv->wsc[0] > -2 ? cli_real(wv->wsc[0], 6) : json_null());

@@ -135,6 +135,17 @@ static void test_scenes(void **state) {
   assert_int_equal(wv_scene_parse(text, "rt", &r, &err), WV_OK);
   free(text);
   assert_memory_equal(&k, &r, sizeof k);
+  /* and a distorted one; an undistorted plane writes no distortion */
+  assert_null(strstr(text = wv_scene_to_json(&k), "distortion"));
+  free(text);
+  k.distort_extent_mm = 31.9, k.distort[0][4] = 0.25, k.distort[0][2] = 7, k.distort[1][8] = -0.125;
+  text = wv_scene_to_json(&k);
+  assert_int_equal(wv_scene_parse(text, "rt", &r, &err), WV_OK);
+  free(text);
+  assert_memory_equal(&k, &r, sizeof k);
+  double d[2]; /* 0.25 b^2 + 7 a^2 and -0.125 b^3 at a = 0, b = 1: the point (0, 3.9875) units */
+  wv_scene_distortion_at(&k, 0, 31.9 / 8, d);
+  assert_true(fabs(d[0] - 0.25) < 1e-12 && fabs(d[1] + 0.125) < 1e-12);
   wv_scene s;
   wv_scene_preset("flat45", &s, NULL);
   assert_int_equal(s.width, 512);
@@ -175,6 +186,21 @@ static void test_bad_scenes(void **state) {
   expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM
                    ", \"sample\": {\"shape\": \"cylinder\", \"radius_mm\": 5, \"skew_deg\": 2}, " LIGHT "}",
                    WV_ERR_INVALID, "skew_deg");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM
+                   ", \"sample\": {\"shape\": \"cylinder\", \"radius_mm\": 5, \"distortion\": {}}, " LIGHT "}",
+                   WV_ERR_INVALID, "sample.distortion");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM
+                   ", \"sample\": {\"shape\": \"plane\", \"distortion\": {\"extent_mm\": 30, \"x\": [1], "
+                   "\"y\": [0,0,0,0,0,0,0,0,0]}}, " LIGHT "}",
+                   WV_ERR_INVALID, "sample.distortion.x");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM
+                   ", \"sample\": {\"shape\": \"plane\", \"distortion\": {\"extent_mm\": 0, \"x\": [1,0,0,0,0,0,0,0,0], "
+                   "\"y\": [0,0,0,0,0,0,0,0,0]}}, " LIGHT "}",
+                   WV_ERR_INVALID, "extent_mm");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM
+                   ", \"sample\": {\"shape\": \"plane\", \"distortion\": {\"extent_mm\": 30, \"x\": [1e9,0,0,0,0,0,0,0,0], "
+                   "\"y\": [0,0,0,0,0,0,0,0,0], \"z\": 1}}, " LIGHT "}",
+                   WV_ERR_INVALID, "sample.distortion.z");
   expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE ", " LIGHT
                    ", \"response\": {\"encoding\": \"log\"}}",
                    WV_ERR_INVALID, "response.encoding");

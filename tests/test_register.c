@@ -1,7 +1,8 @@
 /* The fit's registration: a weave a couple of yarns/inch off and shifted by an
  * unknown offset is brought back onto the photo (densities to within half a yarn/inch
  * in a 128-pixel window,
- * offset through the pixel -> fabric map), and an exact fit is left alone. */
+ * offset through the pixel -> fabric map), and an exact fit is left alone; the cloth's
+ * distortion follows a bent cloth and leaves a straight one. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -94,8 +95,109 @@ static void test_register_keeps_an_exact_fit(void **state) {
   wv_image_free(&photo);
 }
 
+/* The cloth's distortion: a photo of the truth on a bent cloth (a displacement of up to
+ * about two yarns toward the window's edges) is brought back into register by the fit's
+ * distortion, which then follows the true displacement up to a constant (a whole weave
+ * repeat is invisible); an undistorted photo gets no displacement to speak of. */
+static void distorted_photo(double amount, wv_scene *s, wv_scene *bent, wv_image *photo) {
+  tu_centre_window(s, "flat45", 256, 256, 16);
+  *bent = *s;
+  if (amount != 0) {
+    bent->distort_extent_mm = 16;
+    bent->distort[0][2] = 0.25 * amount, bent->distort[0][4] = -0.15 * amount, bent->distort[0][6] = 0.1 * amount;
+    bent->distort[1][3] = 0.2 * amount, bent->distort[1][8] = -0.15 * amount, bent->distort[1][1] = 0.05 * amount;
+  }
+  wv_params tp;
+  truth(&tp);
+  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  assert_int_equal(wv_render(bent, &tp, &ro, photo, NULL, NULL), WV_OK);
+}
+
+/* The spread over the window of the fitted displacement minus the true one, per axis (mm). */
+static void displacement_spread(const wv_scene *fit, const wv_scene *bent, double spread[2]) {
+  double lo[2] = {1e9, 1e9}, hi[2] = {-1e9, -1e9};
+  for (int j = 0; j <= 8; j++)
+    for (int i = 0; i <= 8; i++) {
+      double px = 8 + i * 30, py = 8 + j * 30, f[2], g[2];
+      assert_true(wv_render_fabric_at(fit, px, py, f) && wv_render_fabric_at(bent, px, py, g));
+      for (int k = 0; k < 2; k++) {
+        double d = f[k] - g[k];
+        lo[k] = d < lo[k] ? d : lo[k], hi[k] = d > hi[k] ? d : hi[k];
+      }
+    }
+  spread[0] = hi[0] - lo[0], spread[1] = hi[1] - lo[1];
+}
+
+static void test_distortion_follows_a_bent_cloth(void **state) {
+  (void)state;
+  wv_scene s, bent;
+  wv_image photo;
+  distorted_photo(1, &s, &bent, &photo);
+  wv_params p;
+  truth(&p);
+  wv_fit_opts o;
+  wv_fit_opts_default(&o);
+  wv_fit_state st;
+  wv_error err = {0};
+  assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
+  double spread0[2];
+  displacement_spread(&s, &bent, spread0);
+  if (wv_fit_distort(&st, &s, &photo, &o, &err)) fail_msg("%s", err.msg);
+  assert_true(st.distorted);
+  wv_scene fit;
+  wv_fit_scene(&st, &s, &fit);
+  double spread[2], before = ssim_of(&s, &p, &photo), after = ssim_of(&fit, &p, &photo);
+  displacement_spread(&fit, &bent, spread);
+  print_message("bent cloth: displacement spread %.3f / %.3f mm -> %.3f / %.3f mm, SSIM %.3f -> %.3f\n", spread0[0],
+                spread0[1], spread[0], spread[1], before, after);
+  assert_true(spread0[0] > 0.2 && spread0[1] > 0.2); /* the bend moves yarns by more than a yarn */
+  assert_true(spread[0] < 0.03 && spread[1] < 0.03);
+  assert_true(before < 0.6 && after > 0.9);
+  assert_true(st.dist_ssim_after > st.dist_ssim_before);
+  wv_fit_state_free(&st);
+  wv_image_free(&photo);
+}
+
+static void test_distortion_leaves_a_straight_cloth(void **state) {
+  (void)state;
+  wv_scene s, bent;
+  wv_image photo;
+  distorted_photo(0, &s, &bent, &photo);
+  wv_params p;
+  truth(&p);
+  wv_fit_opts o;
+  wv_fit_opts_default(&o);
+  wv_fit_state st;
+  wv_error err = {0};
+  assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
+  if (wv_fit_distort(&st, &s, &photo, &o, &err)) fail_msg("%s", err.msg);
+  wv_scene fit;
+  wv_fit_scene(&st, &s, &fit);
+  double spread[2];
+  displacement_spread(&fit, &s, spread);
+  print_message("straight cloth: displacement spread %.4f / %.4f mm, offset %.4f %.4f mm, SSIM %.3f -> %.3f\n",
+                spread[0], spread[1], st.offset_mm[0], st.offset_mm[1], st.dist_ssim_before, st.dist_ssim_after);
+  assert_true(spread[0] < 0.01 && spread[1] < 0.01);
+  assert_true(fabs(st.offset_mm[0]) < 0.01 && fabs(st.offset_mm[1]) < 0.01);
+  assert_true(st.dist_ssim_after >= st.dist_ssim_before);
+  /* a cylinder has no distortion */
+  wv_fit_state_free(&st);
+  wv_scene cyl;
+  tu_centre_window(&cyl, "cylinder", 128, 128, 4);
+  wv_image_free(&photo);
+  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  assert_int_equal(wv_render(&cyl, &p, &ro, &photo, NULL, NULL), WV_OK);
+  assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
+  assert_int_equal(wv_fit_distort(&st, &cyl, &photo, &o, &err), WV_OK);
+  assert_true(st.distorted && st.distort_extent_mm == 0);
+  wv_fit_state_free(&st);
+  wv_image_free(&photo);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_register_recovers_density_and_phase),
-                                     cmocka_unit_test(test_register_keeps_an_exact_fit)};
+                                     cmocka_unit_test(test_register_keeps_an_exact_fit),
+                                     cmocka_unit_test(test_distortion_follows_a_bent_cloth),
+                                     cmocka_unit_test(test_distortion_leaves_a_straight_cloth)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

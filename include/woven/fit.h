@@ -41,6 +41,8 @@ typedef struct {
   int checkpoint_every; /* 10 */
   int align_radius;   /* density alignment: search +-this many yarns/inch (230: the whole range; 0 = off) */
   int register_radius; /* registration: whole-yarn grid +-this many yarns/inch around the fit (6; 0 = off) */
+  int distort_degree;  /* the cloth's distortion after the registration, a plane scene's: the
+                        * polynomial's degree (3; 0 = off; wv_fit_distort) */
   double psf_sigma;   /* camera blur in pixels: WV_FIT_PSF_AUTO (-1, the default) measures it from the
                        * photo (wv_psf_estimate) unless the scene gives one; >= 0: this sigma */
 } wv_fit_opts;
@@ -78,7 +80,7 @@ typedef struct {
 
 /* Time spent, seconds. */
 typedef struct {
-  double render, gradient, descriptor, discrete, registration, total;
+  double render, gradient, descriptor, discrete, registration, distortion, total;
 } wv_fit_timing;
 
 /* Everything needed to continue a fit: parameters, Adam moments, RNG, history. */
@@ -95,6 +97,9 @@ typedef struct {
   double psf_sigma;    /* ... its sigma in pixels of the scene's image (0: none) */
   double reg_ncc_before, reg_ncc_after;   /* correlation with the photo at zero shift, whole image */
   double reg_ssim_before, reg_ssim_after; /* SSIM of the whole image at the iteration spp */
+  int distorted;       /* the distortion after the registration is done */
+  double distort_extent_mm, distort[2][WV_DISTORT_TERMS]; /* found (added to the scene's; wv_scene) */
+  double dist_ssim_before, dist_ssim_after; /* SSIM of the whole image (luminance, 16 spp) */
   float adam_m[WV_P_COUNT], adam_v[WV_P_COUNT]; /* wv_nn_adam's moments */
   uint64_t rng;
   wv_fit_record *log; /* iter entries */
@@ -130,6 +135,20 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
  * correlation at zero shift reaches 0.2. */
 wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                           wv_error *err);
+
+/* The cloth's distortion (after the registration, a plane scene only): a real cloth is not
+ * laid perfectly straight, so a render in register at the image centre drifts out of it
+ * toward the edges, by whole yarns on some photos, and SSIM counts every yarn out of step.
+ * For the N_FREQ weave frequencies the photo and the render share most, the local phase of
+ * each (its demodulated detail, low-passed) in the photo against the render says how far
+ * the render's fabric must move there; the frequency's fabric frequency comes from two
+ * renders moved by 0.01 mm. A polynomial displacement of the fabric coordinates (degree
+ * o->distort_degree, wv_scene.distort) is fitted to those phases by Gauss-Newton, degree
+ * by degree, and estimated again from its own render; kept only as far as it raises the
+ * whole image's SSIM. The fit's parameters do not change; the displacement goes to the
+ * fit's scene (wv_fit_scene). docs/fit.md. */
+wv_status wv_fit_distort(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
+                         wv_error *err);
 
 /* The camera blur of photo (the scene's size): the sigma in 0..WV_PSF_RANGE pixels, in
  * steps of WV_PSF_RANGE / WV_PSF_STEPS, whose Gaussian blur of p's render (at WV_PSF_SPP)

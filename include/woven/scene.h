@@ -10,6 +10,8 @@
 typedef enum { WV_SHAPE_CYLINDER = 0, WV_SHAPE_PLANE = 1 } wv_shape_type;
 typedef enum { WV_ENC_LINEAR = 0, WV_ENC_SRGB = 1, WV_ENC_GAMMA = 2 } wv_encoding;
 
+#define WV_DISTORT_TERMS 9 /* cubic, without the constant (sample.offset_mm) */
+
 typedef struct {
   char name[64];
   int width, height, spp;
@@ -23,6 +25,12 @@ typedef struct {
   double skew_deg;      /* plane: cloth out of square: the warp yarns turn by rotation - skew / 2,
                          * the weft yarns by rotation + skew / 2 (WV_SCENE_MAX_SKEW) */
   double fabric_offset[2]; /* shift of the pattern on the sample, mm */
+  /* plane: cloth not laid straight, a smooth displacement of the fabric coordinates (mm)
+   * added to the offset: distort[k][t] times term t of (a, b) = (x, y) * mm_per_unit /
+   * distort_extent_mm, (x, y) the point on the plane; terms a, b, a^2, ab, b^2, a^3, a^2 b,
+   * a b^2, b^3 (WV_DISTORT_TERMS); k = 0 fabric x, 1 fabric y. All 0: none. */
+  double distort_extent_mm;
+  double distort[2][WV_DISTORT_TERMS];
   double mm_per_unit;      /* fabric millimetres per scene unit (1 when the scene is in mm) */
   /* Point light. */
   double light_pos[3], light_intensity;
@@ -53,6 +61,15 @@ wv_status wv_scene_preset(const char *name, wv_scene *s, wv_error *err);
 /* "cylinder" / "flat45" name a preset; anything else is read as a file. */
 wv_status wv_scene_load(const char *name_or_path, wv_scene *s, wv_error *err);
 char *wv_scene_to_json(const wv_scene *s);
+/* The displacement (mm) of s's distortion at plane point (x, y) (scene units); 0 without one. */
+void wv_scene_distortion_at(const wv_scene *s, double x, double y, double d[2]);
+/* The distortion's terms at (a, b) (see wv_scene.distort), for any arithmetic type (the
+ * renderer's 8-wide lanes too). */
+#define WV_DISTORT_EVAL(a, b, t)                                                    \
+  ((t)[0] = (a), (t)[1] = (b), (t)[2] = (a) * (a), (t)[3] = (a) * (b), (t)[4] = (b) * (b), \
+   (t)[5] = (t)[2] * (a), (t)[6] = (t)[2] * (b), (t)[7] = (t)[3] * (b), (t)[8] = (t)[4] * (b))
+/* 1 when s has a distortion (a nonzero term). */
+int wv_scene_distorted(const wv_scene *s);
 
 /* Sensor response: capture = mask * encode(clip(exposure * radiance)). In place allowed.
  * (Its adjoint is applied inside the gradient renderer, woven/grad.h.) The camera blur is

@@ -40,6 +40,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->align_radius = 230;
   o->density_steps = 1;
   o->register_radius = 6;
+  o->distort_degree = 3;
   o->psf_sigma = WV_FIT_PSF_AUTO;
 }
 
@@ -68,6 +69,7 @@ static const opt_range OPT_RANGES[] = {
     OPT(checkpoint_every, 'i', 0, WV_FIT_MAX_ITERS, 0),
     OPT(align_radius, 'i', 0, WV_FIT_MAX_ALIGN_RADIUS, 1),
     OPT(register_radius, 'i', 0, WV_FIT_MAX_REGISTER_RADIUS, 2),
+    OPT(distort_degree, 'i', 0, 3, 2),
     OPT(w_struct, 'd', 0, 1e6, 2),
     OPT(w_colour, 'd', 0, 1e6, 2),
     OPT(colour_split, 'i', 0, 1, 2),
@@ -446,7 +448,7 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     if (!nl) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the fit log");
     st->log = nl, st->log_cap = o->iters;
   }
-  if (st->iter < o->iters) st->aligned = st->registered = 0; /* more iterations: align again after them */
+  if (st->iter < o->iters) st->aligned = st->registered = st->distorted = 0; /* more iterations: align again after them */
   fit_ctx c;
   double t_start = omp_get_wtime();
   wv_status rc = ctx_init(&c, s, photo, d, o->iter_scale, o->iter_spp, o, &st->timing, err);
@@ -535,6 +537,12 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     st->timing.registration += omp_get_wtime() - ta;
     st->timing.total += omp_get_wtime() - ta;
   }
+  if (!rc && st->iter >= o->iters && !st->distorted && o->distort_degree > 0) {
+    double ta = omp_get_wtime();
+    rc = wv_fit_distort(st, s, photo, o, err);
+    st->timing.distortion += omp_get_wtime() - ta;
+    st->timing.total += omp_get_wtime() - ta;
+  }
   return rc;
 }
 
@@ -566,6 +574,11 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
                                 st->offset_mm[0], st->offset_mm[1], "ncc_before", st->reg_ncc_before, "ncc_after",
                                 st->reg_ncc_after, "ssim_before", st->reg_ssim_before, "ssim_after",
                                 st->reg_ssim_after));
+  json_t *dist = json_pack("{s:b,s:f,s:f,s:f}", "done", st->distorted, "extent_mm", st->distort_extent_mm,
+                           "ssim_before", st->dist_ssim_before, "ssim_after", st->dist_ssim_after);
+  json_object_set_new(dist, "x", darray(st->distort[0], WV_DISTORT_TERMS));
+  json_object_set_new(dist, "y", darray(st->distort[1], WV_DISTORT_TERMS));
+  json_object_set_new(root, "distortion", dist);
   json_object_set_new(root, "start", params_json(&st->start));
   json_object_set_new(root, "params", params_json(&st->params));
   double am[WV_P_COUNT], av[WV_P_COUNT];
@@ -644,6 +657,7 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   o->w_struct = 0, o->colour_split = 0; /* absent before the structure term: a resume stays without it */
   o->w_colour = 0;                       /* absent before the detail-colour term: likewise */
   o->psf_sigma = 0;                      /* absent before the camera blur: none */
+  o->distort_degree = 0;                 /* absent before the distortion: none */
   if ((rc = read_opts(json_object_get(root, "opts"), o, err))) return rc;
   wv_params start;
   if ((rc = read_params_obj(root, path, "start", &start, err))) return rc;
@@ -701,6 +715,21 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
       return rc;
   } else {
     st->registered = 1; /* an old fit: nothing to redo */
+  }
+  json_t *dist = json_object_get(root, "distortion"); /* absent in checkpoints before it existed */
+  st->distorted = 1;
+  if (dist) {
+    json_t *done = json_object_get(dist, "done");
+    if (!json_is_boolean(done)) return wv_fail(err, WV_ERR_INVALID, "'distortion.done' must be true or false");
+    st->distorted = json_is_true(done);
+    if ((rc = wv_json_number(dist, "distortion", "extent_mm", 0, WV_SCENE_MAX_MM, 1, &st->distort_extent_mm, err)) ||
+        (rc = wv_json_number(dist, "distortion", "ssim_before", -2, 2, 1, &st->dist_ssim_before, err)) ||
+        (rc = wv_json_number(dist, "distortion", "ssim_after", -2, 2, 1, &st->dist_ssim_after, err)) ||
+        (rc = read_darray(dist, "x", st->distort[0], WV_DISTORT_TERMS, -WV_SCENE_MAX_OFFSET_MM, WV_SCENE_MAX_OFFSET_MM,
+                          err)) ||
+        (rc = read_darray(dist, "y", st->distort[1], WV_DISTORT_TERMS, -WV_SCENE_MAX_OFFSET_MM, WV_SCENE_MAX_OFFSET_MM,
+                          err)))
+      return rc;
   }
   snprintf(descriptor_name, name_cap, "%s", dn);
   st->iter = (int)it;

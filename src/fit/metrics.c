@@ -1,6 +1,7 @@
 /* Image comparison metrics: SSIM, mean absolute difference, and the weave's spectrum
  * (the luminance detail, its log power spectrum and the weave-spectrum correlation). */
 #include "woven/metrics.h"
+#include "fit/fit_internal.h"
 
 #include <fftw3.h>
 #include <math.h>
@@ -92,6 +93,11 @@ wv_status wv_mae(const wv_image *a, const wv_image *b, double *out, wv_error *er
 static const double PI = 3.14159265358979323846;
 
 wv_status wv_image_detail(const wv_image *img, int x0, int y0, int w, int h, float *out, wv_error *err) {
+  return wv_image_detail_window(img, x0, y0, w, h, 1, out, err);
+}
+
+wv_status wv_image_detail_window(const wv_image *img, int x0, int y0, int w, int h, int hann, float *out,
+                                 wv_error *err) {
   if (w < 1 || h < 1 || x0 < 0 || y0 < 0 || x0 + w > img->w || y0 + h > img->h)
     return wv_fail(err, WV_ERR_INVALID, "detail window %d x %d at (%d, %d) is not inside the %d x %d image", w, h, x0,
                    y0, img->w, img->h);
@@ -117,8 +123,8 @@ wv_status wv_image_detail(const wv_image *img, int x0, int y0, int w, int h, flo
   m /= (double)n;
   for (size_t i = 0; i < n; i++) v += (out[i] - m) * (out[i] - m);
   double is = v > 1e-20 ? 1.0 / sqrt(v / (double)n) : 0.0; /* a flat window has no detail */
-  for (int x = 0; x < w; x++) hx[x] = 0.5 - 0.5 * cos(2 * PI * (x + 0.5) / w);
-  for (int y = 0; y < h; y++) hy[y] = 0.5 - 0.5 * cos(2 * PI * (y + 0.5) / h);
+  for (int x = 0; x < w; x++) hx[x] = hann ? 0.5 - 0.5 * cos(2 * PI * (x + 0.5) / w) : 1;
+  for (int y = 0; y < h; y++) hy[y] = hann ? 0.5 - 0.5 * cos(2 * PI * (y + 0.5) / h) : 1;
   for (int y = 0; y < h; y++)
     for (int x = 0; x < w; x++) {
       size_t i = (size_t)y * w + x;

@@ -87,7 +87,9 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
   static const char *top[] = {"name", "comment", "image", "camera", "sample", "light", "response", "falloff", NULL};
   static const char *k_img[] = {"width", "height", "spp", NULL};
   static const char *k_cam[] = {"position_mm", "look_at_mm", "up", "vfov_deg", NULL};
-  static const char *k_smp[] = {"shape", "radius_mm", "warp", "rotation_deg", "skew_deg", "offset_mm", "mm_per_unit", NULL};
+  static const char *k_smp[] = {"shape", "radius_mm", "warp", "rotation_deg", "skew_deg", "offset_mm", "mm_per_unit",
+                                 "distortion", NULL};
+  static const char *k_dis[] = {"extent_mm", "x", "y", NULL};
   static const char *k_lig[] = {"position_mm", "intensity", NULL};
   static const char *k_rsp[] = {"exposure", "clip", "encoding", "gamma", "psf_sigma_px", NULL};
   static const char *k_fal[] = {"type", "sigma_px", NULL};
@@ -130,6 +132,8 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
     s->shape = WV_SHAPE_CYLINDER;
     if (json_object_get(o, "skew_deg"))
       return wv_fail(err, WV_ERR_INVALID, "'sample.skew_deg' applies to a plane, not a cylinder");
+    if (json_object_get(o, "distortion"))
+      return wv_fail(err, WV_ERR_INVALID, "'sample.distortion' applies to a plane, not a cylinder");
     if ((st = num(o, "sample", "radius_mm", &s->radius, 1, err))) return st;
     s->warp_along_axis = 1;
     json_t *w = json_object_get(o, "warp");
@@ -143,6 +147,14 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
     s->shape = WV_SHAPE_PLANE;
     if ((st = num(o, "sample", "rotation_deg", &s->rotation_deg, 0, err))) return st;
     if ((st = num(o, "sample", "skew_deg", &s->skew_deg, 0, err))) return st;
+    json_t *d = json_object_get(o, "distortion");
+    if (d) {
+      if ((st = only_keys(d, "sample.distortion", k_dis, err))) return st;
+      if ((st = num(d, "sample.distortion", "extent_mm", &s->distort_extent_mm, 1, err)) ||
+          (st = vec(d, "sample.distortion", "x", s->distort[0], WV_DISTORT_TERMS, 1, err)) ||
+          (st = vec(d, "sample.distortion", "y", s->distort[1], WV_DISTORT_TERMS, 1, err)))
+        return st;
+    }
   } else {
     return wv_fail(err, WV_ERR_INVALID, "'sample.shape' must be \"cylinder\" or \"plane\"");
   }
@@ -233,6 +245,16 @@ wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
   if (s->shape == WV_SHAPE_PLANE && !(s->skew_deg >= -WV_SCENE_MAX_SKEW && s->skew_deg <= WV_SCENE_MAX_SKEW))
     return wv_fail(err, WV_ERR_INVALID, "'sample.skew_deg' = %s is outside -%g..%g", wv_num_str(s->skew_deg, a),
                    WV_SCENE_MAX_SKEW, WV_SCENE_MAX_SKEW);
+  if (wv_scene_distorted(s)) {
+    if (s->shape != WV_SHAPE_PLANE)
+      return wv_fail(err, WV_ERR_INVALID, "'sample.distortion' applies to a plane, not a cylinder");
+    if (!(s->distort_extent_mm > 1e-6 && s->distort_extent_mm < WV_SCENE_MAX_MM))
+      return wv_fail(err, WV_ERR_INVALID, "'sample.distortion.extent_mm' = %s must be in (1e-06, %g)",
+                     wv_num_str(s->distort_extent_mm, a), WV_SCENE_MAX_MM);
+    if ((st = check_vec(s->distort[0], WV_DISTORT_TERMS, "sample.distortion.x", WV_SCENE_MAX_OFFSET_MM, err)) ||
+        (st = check_vec(s->distort[1], WV_DISTORT_TERMS, "sample.distortion.y", WV_SCENE_MAX_OFFSET_MM, err)))
+      return st;
+  }
   if (!(s->mm_per_unit > 1e-6 && s->mm_per_unit < 1e6))
     return wv_fail(err, WV_ERR_INVALID, "'sample.mm_per_unit' = %s must be in (1e-06, 1000000)",
                    wv_num_str(s->mm_per_unit, a));
@@ -251,6 +273,21 @@ wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
     return wv_fail(err, WV_ERR_INVALID, "'falloff.sigma_px' = %s must be in (0, 1e+09]",
                    wv_num_str(s->falloff_sigma, a));
   return WV_OK;
+}
+
+int wv_scene_distorted(const wv_scene *s) {
+  for (int k = 0; k < 2; k++)
+    for (int t = 0; t < WV_DISTORT_TERMS; t++)
+      if (s->distort[k][t] != 0) return 1;
+  return 0;
+}
+
+void wv_scene_distortion_at(const wv_scene *s, double x, double y, double d[2]) {
+  d[0] = d[1] = 0;
+  if (s->shape != WV_SHAPE_PLANE || !wv_scene_distorted(s)) return;
+  double t[WV_DISTORT_TERMS], k = s->mm_per_unit / s->distort_extent_mm;
+  WV_DISTORT_EVAL(x * k, y * k, t);
+  for (int i = 0; i < WV_DISTORT_TERMS; i++) d[0] += s->distort[0][i] * t[i], d[1] += s->distort[1][i] * t[i];
 }
 
 wv_status wv_scene_parse(const char *text, const char *source, wv_scene *s, wv_error *err) {
@@ -305,6 +342,15 @@ char *wv_scene_to_json(const wv_scene *s) {
                                                s->fabric_offset[1], "mm_per_unit", s->mm_per_unit));
     if (s->skew_deg != 0) /* written only when set: square cloth keeps its text */
       json_object_set_new(json_object_get(o, "sample"), "skew_deg", json_real(s->skew_deg));
+    if (wv_scene_distorted(s)) {
+      json_t *d = json_object(), *c[2] = {json_array(), json_array()};
+      for (int k = 0; k < 2; k++)
+        for (int t = 0; t < WV_DISTORT_TERMS; t++) json_array_append_new(c[k], json_real(s->distort[k][t]));
+      json_object_set_new(d, "extent_mm", json_real(s->distort_extent_mm));
+      json_object_set_new(d, "x", c[0]);
+      json_object_set_new(d, "y", c[1]);
+      json_object_set_new(json_object_get(o, "sample"), "distortion", d);
+    }
   }
   json_object_set_new(o, "light", json_pack("{s:[f,f,f],s:f}", "position_mm", s->light_pos[0], s->light_pos[1],
                                             s->light_pos[2], "intensity", s->light_intensity));

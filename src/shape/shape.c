@@ -18,4 +18,10 @@ void wv_shape_prepare(const wv_scene *s, wv_shape *sh) {
   sh->across[1][0] = (float)-sin(fa), sh->across[1][1] = (float)cos(fa);
   sh->off[0] = (float)s->fabric_offset[0], sh->off[1] = (float)s->fabric_offset[1];
   sh->scale = (float)s->mm_per_unit;
+  sh->distorted = s->shape == WV_SHAPE_PLANE && wv_scene_distorted(s);
+  if (sh->distorted) {
+    sh->dist_k = (float)(s->mm_per_unit / s->distort_extent_mm);
+    for (int k = 0; k < 2; k++)
+      for (int t = 0; t < WV_DISTORT_TERMS; t++) sh->dist[k][t] = (float)s->distort[k][t];
+  }
 }

@@ -22,6 +22,9 @@ typedef struct {
                         * square, while the shading frame keeps the rotation's (a few degrees) */
   float off[2];        /* shift of the pattern on the sample, mm */
   float scale;         /* fabric mm per scene unit */
+  int distorted;       /* plane: the fabric coordinates are displaced by */
+  float dist_k;        /* ... the terms of (x, y) * dist_k (wv_scene.distort) */
+  float dist[2][WV_DISTORT_TERMS];
 } wv_shape;
 
 void wv_shape_prepare(const wv_scene *s, wv_shape *sh);

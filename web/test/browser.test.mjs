@@ -118,13 +118,17 @@ function studioScene(v, params, obj, uvMm, cspp) {
   };
 }
 
-// The rig with cloth turned and out of square (sample.rotation_deg, skew_deg, as a capture
-// writes them): the viewer must lay the yarns where woven render does: its SSIM against the
-// turned render must beat that against the square one.
+// The rig with cloth turned, out of square and bent (sample.rotation_deg, skew_deg, distortion,
+// as a capture writes them): the viewer must lay the yarns where woven render does: its SSIM
+// against that render must beat that against the square one and the one without the bend.
 async function skewedRig(pat, params, square) {
   const sc = JSON.parse(JSON.stringify(flat45));
   sc.sample.rotation_deg = 8, sc.sample.skew_deg = 5;
   const file = join(work, `${pat}_skewed_scene.json`), c = join(work, `${pat}_skewed_c.png`);
+  const straight = join(work, `${pat}_straight_c.png`);
+  writeFileSync(file, JSON.stringify(sc));
+  woven('render', '--params', params, '--scene', file, '-o', straight, '-q');
+  sc.sample.distortion = { extent_mm: 32, x: [0, 0, 0.4, 0, -0.3, 0, 0, 0.2, 0], y: [0.1, 0, 0, 0.3, 0, 0, 0, 0, -0.2] };
   const html = join(work, `${pat}_skewed.html`), v = join(work, `${pat}_skewed_viewer.png`);
   writeFileSync(file, JSON.stringify(sc));
   woven('render', '--params', params, '--scene', file, '-o', c, '-q');
@@ -136,10 +140,11 @@ async function skewedRig(pat, params, square) {
   await page.evaluate((s) => window.woven.render({ frames: 1, spp: s }), spp);
   png(await page.evaluate(() => window.woven.snapshot()), v);
   await page.close();
-  const turned = compare(c, v, 0).ssim, sq = compare(square, v, 0).ssim;
-  console.log(`${pat} turned 8 and skewed 5 degrees: viewer vs woven render SSIM ${turned.toFixed(4)}, ` +
-              `vs the square render ${sq.toFixed(4)}`);
+  const turned = compare(c, v, 0).ssim, sq = compare(square, v, 0).ssim, st = compare(straight, v, 0).ssim;
+  console.log(`${pat} turned 8, skewed 5 degrees and bent: viewer vs woven render SSIM ${turned.toFixed(4)}, ` +
+              `vs the square render ${sq.toFixed(4)}, vs the unbent one ${st.toFixed(4)}`);
   if (!(turned > sq + 0.05)) fail(`${pat}: the viewer does not lay the skewed cloth as woven render does`);
+  if (!(turned > st + 0.05)) fail(`${pat}: the viewer does not bend the cloth as woven render does`);
 }
 
 // One studio view (swatch or drape) of one pattern, key light alone: the viewer,

@@ -38,6 +38,7 @@ uniform vec2 uInvGlintCell;
 uniform int uShape;
 uniform float uRadius, uRotC, uRotS, uMmPerUnit;
 uniform vec2 uOffset;
+uniform float uDistX[9], uDistY[9], uDistK; // plane: the cloth's distortion (wv_scene.distort), uDistK 0: none
 uniform vec2 uAcross0, uAcross1; // plane: fabric x = P.xy . uAcross0, fabric y = P.xy . uAcross1 (skew)
 uniform bool uWarpAlongAxis;
 uniform float uUvMm;            // mesh: fabric mm per UV unit
@@ -234,6 +235,11 @@ void main() {
     T = vec3(uRotC, uRotS, 0.0);
     B = vec3(-uRotS, uRotC, 0.0);
     f = vec2(dot(P.xy, uAcross0), dot(P.xy, uAcross1)) * uMmPerUnit + uOffset;
+    if (uDistK > 0.0) { // the terms a, b, a^2, ab, b^2, a^3, a^2 b, a b^2, b^3 (WV_DISTORT_EVAL)
+      float a = P.x * uDistK, b = P.y * uDistK;
+      float t[9] = float[9](a, b, a * a, a * b, b * b, a * a * a, a * a * b, a * b * b, b * b * b);
+      for (int i = 0; i < 9; i++) f += t[i] * vec2(uDistX[i], uDistY[i]);
+    }
   } else if (uShape == 1) { // cylinder around the x axis
     float sn = P.y / uRadius, cs = P.z / uRadius;
     N = vec3(0.0, sn, cs);

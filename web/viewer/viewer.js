@@ -132,7 +132,8 @@ weaveTex.minFilter = weaveTex.magFilter = THREE.NearestFilter;
 const fabricUniforms = {
   uWeave: { value: weaveTex }, uRows: { value: 1 }, uCols: { value: 1 },
   uShape: { value: 0 }, uRadius: { value: 1 }, uRotC: { value: 1 }, uRotS: { value: 0 }, uMmPerUnit: { value: 1 },
-  uOffset: { value: [0, 0] }, uAcross0: { value: [1, 0] }, uAcross1: { value: [0, 1] }, uWarpAlongAxis: { value: true }, uUvMm: { value: 1 },
+  uOffset: { value: [0, 0] }, uAcross0: { value: [1, 0] }, uAcross1: { value: [0, 1] },
+  uDistX: { value: new Array(9).fill(0) }, uDistY: { value: new Array(9).fill(0) }, uDistK: { value: 0 }, uWarpAlongAxis: { value: true }, uUvMm: { value: 1 },
   uCamPos: { value: new THREE.Vector3() }, uLightPos: { value: new THREE.Vector3() }, uLightI: { value: 1 },
   uBoxes: { value: 0 }, uBoxC: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
   uBoxU: { value: [0, 1, 2].map(() => new THREE.Vector3()) }, uBoxV: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
@@ -275,6 +276,9 @@ function setMode(mode) {
     const wa = rot - skew / 2, fa = rot + skew / 2;
     u.uAcross0.value = [Math.cos(wa), Math.sin(wa)], u.uAcross1.value = [-Math.sin(fa), Math.cos(fa)];
     u.uMmPerUnit.value = SC.sample.mm_per_unit, u.uOffset.value = SC.sample.offset_mm;
+    const bend = cyl ? null : SC.sample.distortion; // the cloth's distortion, as src/shape/plane_impl.h
+    u.uDistK.value = bend ? SC.sample.mm_per_unit / bend.extent_mm : 0;
+    u.uDistX.value = bend ? bend.x : new Array(9).fill(0), u.uDistY.value = bend ? bend.y : new Array(9).fill(0);
     u.uWarpAlongAxis.value = SC.sample.warp !== 'around_axis';
     u.uBoxes.value = 0, u.uAmbient.value = 0;
     const w = SC.image.width, h = SC.image.height;
