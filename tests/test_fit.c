@@ -102,6 +102,7 @@ static void test_resume_equals_straight(void **state) {
   o6.iters = 6;
   o6.align_radius = 0; /* as if killed: a fit that stops early never reaches the alignment */
   o6.register_radius = 0; /* nor the registration */
+  o6.distort_degree = 0;  /* nor the distortion */
   assert_int_equal(wv_fit_state_init(&b, &start, &o, &err), WV_OK);
   assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o6, NULL, NULL, &err), WV_OK);
   const char *dir = tu_tmpdir("fit_resume");

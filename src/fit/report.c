@@ -274,9 +274,9 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
     sb_printf(&b, "<p>No parameter of the fit ended on a bound of its range.</p>\n");
   }
   if (r->timing)
-    sb_printf(&b, "<p>Time: %.1f s in all (render %.1f s, gradient %.1f s, descriptor %.1f s, discrete search %.1f s, registration %.1f s).</p>\n",
+    sb_printf(&b, "<p>Time: %.1f s in all (render %.1f s, gradient %.1f s, descriptor %.1f s, discrete search %.1f s, registration %.1f s, the cloth's distortion %.1f s).</p>\n",
               r->timing->total, r->timing->render, r->timing->gradient, r->timing->descriptor, r->timing->discrete,
-              r->timing->registration);
+              r->timing->registration, r->timing->distortion);
   const wv_pattern_choice *pc = r->pattern_choice;
   if (pc) {
     const wv_lattice *l = &pc->lattice;
