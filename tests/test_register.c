@@ -128,24 +128,32 @@ static void displacement_spread(const wv_scene *fit, const wv_scene *bent, doubl
   spread[0] = hi[0] - lo[0], spread[1] = hi[1] - lo[1];
 }
 
-static void test_distortion_follows_a_bent_cloth(void **state) {
-  (void)state;
-  wv_scene s, bent;
-  wv_image photo;
-  distorted_photo(1, &s, &bent, &photo);
+/* The distortion from the truth against a photo of the truth bent by `amount` (0:
+ * straight): the window's scene s, the bent one, the photo, the fit's state and scene. */
+static void run_distort(double amount, wv_scene *s, wv_scene *bent, wv_image *photo, wv_fit_state *st,
+                        wv_scene *fit) {
+  distorted_photo(amount, s, bent, photo);
   wv_params p;
   truth(&p);
   wv_fit_opts o;
   wv_fit_opts_default(&o);
-  wv_fit_state st;
   wv_error err = {0};
-  assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
+  assert_int_equal(wv_fit_state_init(st, &p, &o, &err), WV_OK);
+  if (wv_fit_distort(st, s, photo, &o, &err)) fail_msg("%s", err.msg);
+  assert_true(st->distorted);
+  wv_fit_scene(st, s, fit);
+}
+
+static void test_distortion_follows_a_bent_cloth(void **state) {
+  (void)state;
+  wv_scene s, bent, fit;
+  wv_image photo;
+  wv_fit_state st;
+  run_distort(1, &s, &bent, &photo, &st, &fit);
+  wv_params p;
+  truth(&p);
   double spread0[2];
   displacement_spread(&s, &bent, spread0);
-  if (wv_fit_distort(&st, &s, &photo, &o, &err)) fail_msg("%s", err.msg);
-  assert_true(st.distorted);
-  wv_scene fit;
-  wv_fit_scene(&st, &s, &fit);
   double spread[2], before = ssim_of(&s, &p, &photo), after = ssim_of(&fit, &p, &photo);
   displacement_spread(&fit, &bent, spread);
   print_message("bent cloth: displacement spread %.3f / %.3f mm -> %.3f / %.3f mm, SSIM %.3f -> %.3f\n", spread0[0],
@@ -160,19 +168,15 @@ static void test_distortion_follows_a_bent_cloth(void **state) {
 
 static void test_distortion_leaves_a_straight_cloth(void **state) {
   (void)state;
-  wv_scene s, bent;
+  wv_scene s, bent, fit;
   wv_image photo;
-  distorted_photo(0, &s, &bent, &photo);
+  wv_fit_state st;
+  run_distort(0, &s, &bent, &photo, &st, &fit);
   wv_params p;
   truth(&p);
   wv_fit_opts o;
   wv_fit_opts_default(&o);
-  wv_fit_state st;
   wv_error err = {0};
-  assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
-  if (wv_fit_distort(&st, &s, &photo, &o, &err)) fail_msg("%s", err.msg);
-  wv_scene fit;
-  wv_fit_scene(&st, &s, &fit);
   double spread[2];
   displacement_spread(&fit, &s, spread);
   print_message("straight cloth: displacement spread %.4f / %.4f mm, offset %.4f %.4f mm, SSIM %.3f -> %.3f\n",

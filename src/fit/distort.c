@@ -63,20 +63,20 @@ static void demodulate(const float *d, int w, int h, const double k[2], const do
 }
 
 /* The N_FREQ strongest local maxima (7 x 7 bins) of |P conj(R)|, the cross power of the
- * windowed details of photo and render, in the half plane u >= 0; returns how many. */
-static int shared_peaks(const float *wp, const float *wr, int w, int h, double (*k)[2], wv_error *err, int *fail) {
+ * windowed details of photo and render, in the half plane u >= 0; returns how many (-1:
+ * out of memory, err filled). */
+static int shared_peaks(const float *wp, const float *wr, int w, int h, double (*k)[2], wv_error *err) {
   int nc = w / 2 + 1, n = 0;
   float *a = fftwf_alloc_real((size_t)w * h);
   fftwf_complex *fp = fftwf_alloc_complex((size_t)h * nc), *fr = fftwf_alloc_complex((size_t)h * nc);
   float *cp = malloc(sizeof(float) * (size_t)h * nc);
   fftwf_plan plan = NULL;
-  *fail = 0;
   if (a && fp && fr && cp) {
 #pragma omp critical(wv_fftw_planner)
     plan = fftwf_plan_dft_r2c_2d(h, w, a, fp, FFTW_ESTIMATE);
   }
   if (!plan) {
-    *fail = 1;
+    n = -1;
     wv_fail(err, WV_ERR_NOMEM, "out of memory for the distortion's spectrum (%d x %d)", w, h);
   } else {
     memcpy(a, wp, sizeof(float) * (size_t)w * h);
@@ -149,7 +149,7 @@ typedef struct {
   int nf, np;
   double g[N_FREQ][2];
   double *c;     /* nf * np complex */
-  double *basis; /* np * N_COEF: 1 and the distortion's terms */
+  const double *basis; /* np * N_COEF: 1 and the distortion's terms */
 } phase_data;
 
 /* The displacement's Gauss-Newton fit: theta[k][0..n-1] (k = fabric x, y) maximising
@@ -194,10 +194,36 @@ static wv_status render(const wv_scene *sc, const wv_params *p, int threads, wv_
   return wv_render(sc, p, &ro, img, NULL, err);
 }
 
-/* One estimate from scene cur: the coefficients to add (theta, with the constant). */
+/* The scene cur with the fabric square, unmoved and undistorted: its fabric coordinates
+ * are the plane's, in mm. */
+static void square_scene(const wv_scene *cur, wv_scene *out) {
+  *out = *cur;
+  out->rotation_deg = out->skew_deg = 0;
+  out->fabric_offset[0] = out->fabric_offset[1] = 0;
+  memset(out->distort, 0, sizeof out->distort);
+}
+
+/* The terms (1 and the distortion's) at every grid point of cur, from its plane
+ * coordinates divided by extent; a point off the sample gets zeros (no data). basis:
+ * (w / STEP) * (h / STEP) * N_COEF. */
+static void grid_basis(const wv_scene *cur, double extent, double *basis) {
+  wv_scene sq;
+  square_scene(cur, &sq);
+  int gw = cur->width / STEP, np = gw * (cur->height / STEP);
+  for (int q = 0; q < np; q++) {
+    double f[2], *b = basis + (size_t)q * N_COEF;
+    memset(b, 0, sizeof(double) * N_COEF);
+    if (!wv_render_fabric_at(&sq, STEP / 2 + (q % gw) * STEP + 0.5, STEP / 2 + (q / gw) * STEP + 0.5, f)) continue;
+    b[0] = 1;
+    WV_DISTORT_EVAL(f[0] / extent, f[1] / extent, b + 1);
+  }
+}
+
+/* One estimate from scene cur: the coefficients to add (theta, with the constant). basis
+ * from grid_basis. */
 static wv_status estimate(const wv_scene *cur, const wv_image *photo, const float *dp, const float *wp,
-                          const wv_params *p, int degree, int threads, double extent, double theta[2][N_COEF],
-                          double *ssim_cur, wv_error *err) {
+                          const double *basis, const wv_params *p, int degree, int threads,
+                          double theta[2][N_COEF], double *ssim_cur, wv_error *err) {
   int w = cur->width, h = cur->height, gw = w / STEP, gh = h / STEP, np = gw * gh;
   size_t npx = (size_t)w * h;
   wv_image img[3] = {{0}};
@@ -205,9 +231,9 @@ static wv_status estimate(const wv_scene *cur, const wv_image *photo, const floa
   phase_data pd = {0};
   pd.np = np;
   pd.c = malloc(sizeof(double) * 2 * N_FREQ * (size_t)np);
-  pd.basis = malloc(sizeof(double) * N_COEF * (size_t)np);
+  pd.basis = basis;
   double *z = malloc(sizeof(double) * 2 * 4 * (size_t)np * N_FREQ);
-  wv_status rc = (!d || !pd.c || !pd.basis || !z)
+  wv_status rc = (!d || !pd.c || !z)
                      ? wv_fail(err, WV_ERR_NOMEM, "out of memory for the distortion (%d x %d)", w, h)
                      : WV_OK;
   for (int i = 0; i < 3 && !rc; i++) { /* at the scene, and moved by EPS_MM in fabric x and y */
@@ -217,26 +243,9 @@ static wv_status estimate(const wv_scene *cur, const wv_image *photo, const floa
   }
   if (!rc) rc = wv_ssim(photo, &img[0], WV_SSIM_LUMA, ssim_cur, err);
   if (!rc) rc = wv_image_detail(&img[0], 0, 0, w, h, wr, err);
-  int fail = 0;
   double k[N_FREQ][2];
-  if (!rc) pd.nf = shared_peaks(wp, wr, w, h, k, err, &fail);
-  if (fail) rc = WV_ERR_NOMEM;
-  /* the points' terms: plane coordinates through the scene with the fabric square,
-   * unmoved and undistorted */
-  wv_scene plain = *cur;
-  plain.rotation_deg = plain.skew_deg = 0;
-  plain.fabric_offset[0] = plain.fabric_offset[1] = 0;
-  memset(plain.distort, 0, sizeof plain.distort);
-  for (int q = 0; q < np && !rc; q++) {
-    double f[2], *b = pd.basis + (size_t)q * N_COEF;
-    int i = q % gw, j = q / gw;
-    if (!wv_render_fabric_at(&plain, STEP / 2 + i * STEP + 0.5, STEP / 2 + j * STEP + 0.5, f)) {
-      memset(b, 0, sizeof(double) * N_COEF); /* off the sample: no data */
-      continue;
-    }
-    b[0] = 1;
-    WV_DISTORT_EVAL(f[0] / extent, f[1] / extent, b + 1);
-  }
+  if (!rc && (pd.nf = shared_peaks(wp, wr, w, h, k, err)) < 0) rc = WV_ERR_NOMEM;
+  int fail = 0;
   if (!rc) {
     int r = wv_gaussian_radius(LP_SIGMA);
     double *g = malloc(sizeof(double) * (size_t)(2 * r + 1));
@@ -284,7 +293,7 @@ static wv_status estimate(const wv_scene *cur, const wv_image *photo, const floa
     for (int dg = 0; dg <= degree; dg++) fit_phases(&pd, terms[dg], theta);
   }
   for (int i = 0; i < 3; i++) wv_image_free(&img[i]);
-  free(d), free(pd.c), free(pd.basis), free(z);
+  free(d), free(pd.c), free(z);
   return rc;
 }
 
@@ -312,18 +321,22 @@ wv_status wv_fit_distort(wv_fit_state *st, const wv_scene *s, const wv_image *ph
   /* the terms' unit: the scene's own, or half the image's width on the plane */
   double extent = cur.distort_extent_mm;
   if (!wv_scene_distorted(&cur)) {
-    wv_scene plain = cur;
-    plain.rotation_deg = plain.skew_deg = 0, plain.fabric_offset[0] = plain.fabric_offset[1] = 0;
+    wv_scene sq;
+    square_scene(&cur, &sq);
     double a[2], b[2];
     extent = 0;
-    if (wv_render_fabric_at(&plain, 0, 0.5 * cur.height, a) &&
-        wv_render_fabric_at(&plain, cur.width, 0.5 * cur.height, b))
+    if (wv_render_fabric_at(&sq, 0, 0.5 * cur.height, a) && wv_render_fabric_at(&sq, cur.width, 0.5 * cur.height, b))
       extent = 0.5 * hypot(b[0] - a[0], b[1] - a[1]);
     if (!(extent > 1e-6)) return WV_OK;
   }
   size_t npx = (size_t)cur.width * cur.height;
   float *dp = malloc(sizeof(float) * npx * 2), *wp = dp + npx;
-  if (!dp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the distortion");
+  double *basis = malloc(sizeof(double) * N_COEF * (size_t)(cur.width / STEP) * (cur.height / STEP));
+  if (!dp || !basis) {
+    free(dp), free(basis);
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for the distortion");
+  }
+  grid_basis(&cur, extent, basis);
   wv_status rc = detail(photo, dp, err);
   if (!rc) rc = wv_image_detail(photo, 0, 0, cur.width, cur.height, wp, err);
   /* Each pass estimates from the render of cur (measuring it on the way) and moves cur;
@@ -331,8 +344,8 @@ wv_status wv_fit_distort(wv_fit_state *st, const wv_scene *s, const wv_image *ph
   double best = -2, now = -2;
   for (int pass = 0; pass <= PASSES && !rc; pass++) {
     double theta[2][N_COEF];
-    if (pass < PASSES) rc = estimate(&cur, photo, dp, wp, &st->params, o->distort_degree, threads, extent, theta,
-                                     &now, err);
+    if (pass < PASSES)
+      rc = estimate(&cur, photo, dp, wp, basis, &st->params, o->distort_degree, threads, theta, &now, err);
     else { /* the last estimate: measured alone */
       wv_image img = {0};
       wv_render_opts ro = {SPP, threads, NULL, NULL, NULL};
@@ -351,6 +364,6 @@ wv_status wv_fit_distort(wv_fit_state *st, const wv_scene *s, const wv_image *ph
     }
     if (wv_scene_validate(&cur, NULL)) break; /* a displacement out of range is not one to keep */
   }
-  free(dp);
+  free(dp), free(basis);
   return rc;
 }
