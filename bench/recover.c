@@ -2,7 +2,7 @@
  * built-in library, then the fit), on synthetic targets or on real photos.
  *   recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b,...] [--seed S]
  *           [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]
- *           [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S] [--no-orient]
+ *           [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur auto|measured|S] [--no-orient]
  *           [--no-refine]
  *           (the fit's options, as woven fit's; --no-orient: candidates and fit on square cloth
  *           without the lattice's rotation and skew; --no-refine: the chosen lattice as the
@@ -304,7 +304,11 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--threads") && i + 1 < argc) st.o.threads = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--w-struct") && i + 1 < argc) st.o.w_struct = atof(argv[++i]);
     else if (!strcmp(argv[i], "--w-colour") && i + 1 < argc) st.o.w_colour = atof(argv[++i]);
-    else if (!strcmp(argv[i], "--camera-blur") && i + 1 < argc) st.o.psf_sigma = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--camera-blur") && i + 1 < argc) {
+      const char *v = argv[++i]; /* auto, measured (not fitted) or a sigma */
+      st.o.psf_fit = strcmp(v, "measured") != 0;
+      st.o.psf_sigma = !strcmp(v, "auto") || !strcmp(v, "measured") ? WV_FIT_PSF_AUTO : atof(v);
+    }
     else if (!strcmp(argv[i], "--no-colour-split")) st.o.colour_split = 0;
     else if (!strcmp(argv[i], "--colour-split")) st.o.colour_split = 1;
     else if (!strcmp(argv[i], "--no-orient")) st.orient = 0;
@@ -324,7 +328,7 @@ int main(int argc, char **argv) {
     else {
       fprintf(stderr, "usage: recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b] [--seed S]\n"
                       "               [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]\n"
-                      "               [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur S]\n"
+                      "               [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur auto|measured|S]\n"
                       "               [--no-orient] [--no-refine]\n"
                       "       recover --real DIR [--model M] [--iters N] ...\n");
       return 1;

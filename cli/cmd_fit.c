@@ -58,8 +58,9 @@ static int parse_seed(const char *cmd, const cli_opt *o, const char *v, void *ba
 
 static int parse_blur(const char *cmd, const cli_opt *o, const char *v, void *base) {
   capture_args *a = base;
-  if (!strcmp(v, "auto")) {
+  if (!strcmp(v, "auto") || !strcmp(v, "measured")) {
     a->fit.psf_sigma = WV_FIT_PSF_AUTO;
+    a->fit.psf_fit = !strcmp(v, "auto");
     return 0;
   }
   return cli_opt_real(cmd, o, v, &a->fit.psf_sigma);
@@ -116,9 +117,10 @@ const cli_opt CLI_FIT_OPTS[] = {
                "before the first iteration, try starts that split the warp and weft\ndiffuse colours (off by "
                "default: the detail-colour term separates them)"),
     CLI_O_CLEAR("--no-colour-split", capture_args, fit.colour_split, "no such starts (the default)"),
-    CLI_O_CUSTOM("--camera-blur", capture_args, fit.psf_sigma, 0, WV_PSF_MAX_SIGMA, parse_blur, "auto|S",
+    CLI_O_CUSTOM("--camera-blur", capture_args, fit.psf_sigma, 0, WV_PSF_MAX_SIGMA, parse_blur, "auto|measured|S",
                  "the camera's blur, a Gaussian of sigma S pixels on the radiance in\nevery render; auto (default): "
-                 "the scene's, else measured from the\nphoto's spectrum"),
+                 "the scene's, else measured from the\nphoto's spectrum and then fitted with the parameters; "
+                 "measured:\nmeasured and kept"),
     CLI_O_INT("--threads", NULL, capture_args, fit.threads, 1, 1024, "N", "worker threads (default: all cores)"),
     CLI_O_STR("--drape", NULL, capture_args, drape, "S.json|none",
               "the mesh scene the report shows the fit on (default: the bundled\ndraped cloth, "
@@ -138,7 +140,7 @@ static const cli_cmd CMD = {
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
     "                 [--register-radius N] [--distort-degree N] [--w-struct X] [--w-colour X] [--colour-split]\n"
-    "                 [--camera-blur auto|S]\n"
+    "                 [--camera-blur auto|measured|S]\n"
     "                 [--seed N] [--threads N] [--drape S.json|none]\n"
     "                 [--force] [--quiet] [--json]\n"
     "       woven fit --resume DIR [--iters N] [--quiet] [--json]\n"
@@ -203,6 +205,7 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
     if (o_json) {
       json_object_set_new(o_json, "pattern_choice", pc ? cli_json_text(wv_pattern_choice_to_json(pc)) : json_null());
       json_object_set_new(o_json, "camera_blur_px", cli_real(r->fit_scene.psf_sigma, 3));
+      json_object_set_new(o_json, "camera_blur_measured_px", cli_real(st->psf_start, 3));
       json_object_set_new(json_object_get(o_json, "time_s"), "distortion", cli_real(st->timing.distortion, 3));
       json_object_set_new(o_json, "distortion",
                           json_pack("{s:b,s:o,s:[o,o]}", "kept", st->dist_ssim_after > st->dist_ssim_before,

@@ -171,17 +171,23 @@ static void test_photo_load(void **state) {
 
 /* Sizes the fit cannot work at are refused before it starts (the descriptor's
  * minimum, also at the iteration scale), and so are options out of range. */
+/* The camera blur's fits: a 128 x 128 flat45 window at 16 spp, a twill of 110 yarns/inch. */
+static void psf_setup(wv_scene *s, wv_params *p) {
+  wv_error err = {0};
+  assert_int_equal(wv_scene_preset("flat45", s, &err), WV_OK);
+  s->width = s->height = 128, s->spp = 16, s->vfov_deg = 14;
+  assert_int_equal(wv_params_default("twill31z", p, &err), WV_OK);
+  p->density[0] = p->density[1] = 110;
+}
+
 /* The camera blur measured from a photo: none on a plain render, the scene's on a
  * blurred one (the estimate starts from the truth, so only the blur is in question). */
 static void test_psf_estimate(void **state) {
   (void)state;
   wv_error err = {0};
   wv_scene s;
-  assert_int_equal(wv_scene_preset("flat45", &s, &err), WV_OK);
-  s.width = s.height = 128, s.spp = 16, s.vfov_deg = 14;
   wv_params p;
-  assert_int_equal(wv_params_default("twill31z", &p, &err), WV_OK);
-  p.density[0] = p.density[1] = 110;
+  psf_setup(&s, &p);
   double want[3] = {0, 0.6, 1.2};
   for (int i = 0; i < 3; i++) {
     wv_scene sb = s;
@@ -194,6 +200,55 @@ static void test_psf_estimate(void **state) {
     assert_true(fabs(sigma - want[i]) <= 0.15);
     wv_image_free(&photo);
   }
+}
+
+/* A measured blur that is off is fitted with the parameters: from 0.4 px toward the
+ * photo's 1.0 px; with psf_fit off it stays where it was measured. */
+static void test_psf_fitted(void **state) {
+  (void)state;
+  wv_error err = {0};
+  wv_scene s;
+  wv_params p;
+  psf_setup(&s, &p);
+  wv_scene sb = s;
+  sb.psf_sigma = 1.0;
+  wv_image photo;
+  assert_int_equal(wv_render(&sb, &p, NULL, &photo, NULL, &err), WV_OK);
+  wv_descriptor *d;
+  assert_int_equal(wv_descriptor_create("default", NULL, &d, &err), WV_OK);
+  double end[2];
+  for (int fit = 0; fit < 2; fit++) {
+    wv_fit_opts o;
+    wv_fit_opts_default(&o);
+    o.iters = 60, o.discrete_every = 0, o.align_radius = 0, o.register_radius = 0, o.distort_degree = 0;
+    o.psf_fit = fit;
+    wv_fit_state st;
+    assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
+    st.psf_done = 1, st.psf_sigma = st.psf_start = 0.4, st.psf_fit = fit; /* as if measured so */
+    assert_int_equal(wv_fit_run(&st, &s, &photo, d, &o, NULL, NULL, &err), WV_OK);
+    end[fit] = st.psf_sigma;
+    printf("camera blur measured 0.4 px, photo's 1.0 px: %s %.3f px, loss %.5f -> %.5f\n",
+           fit ? "fitted" : "kept", st.psf_sigma, st.log[0].loss, st.log[o.iters - 1].loss);
+    if (fit) assert_true(st.log[o.iters - 1].loss < st.log[0].loss);
+    wv_fit_state_free(&st);
+  }
+  assert_true(end[0] == 0.4);
+  assert_true(fabs(end[1] - 1.0) < 0.15);
+  /* who decides: a measured blur is fitted, a given one is not */
+  for (int given = 0; given < 2; given++) {
+    wv_fit_opts o;
+    wv_fit_opts_default(&o);
+    o.iters = 2, o.discrete_every = 0, o.align_radius = 0, o.register_radius = 0, o.distort_degree = 0;
+    if (given) o.psf_sigma = 0.7;
+    wv_fit_state st;
+    assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
+    assert_int_equal(wv_fit_run(&st, &s, &photo, d, &o, NULL, NULL, &err), WV_OK);
+    assert_int_equal(st.psf_fit, !given);
+    if (given) assert_true(st.psf_sigma == 0.7);
+    wv_fit_state_free(&st);
+  }
+  wv_descriptor_free(d);
+  wv_image_free(&photo);
 }
 
 static void test_limits(void **state) {
@@ -228,6 +283,7 @@ static void test_limits(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fit_improves), cmocka_unit_test(test_resume_equals_straight),
                                      cmocka_unit_test(test_photo_load), cmocka_unit_test(test_psf_estimate),
+                                     cmocka_unit_test(test_psf_fitted),
                                      cmocka_unit_test(test_limits)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -378,6 +378,17 @@ static void test_record(void **state) {
   wv_image_free(&dc);
 }
 
+/* The camera blur's checks: a 40 x 32 flat45 window, a random twill, a random adjoint;
+ * the double path's window. */
+static wv_grad_opts blur_setup(tu_rng *r, wv_scene *s, wv_params *p, wv_image *dc) {
+  wv_error err;
+  *s = small_scene("flat45", 40, 32, 4);
+  random_params("twill", r, p);
+  assert_int_equal(wv_image_alloc(dc, 40, 32, 3, &err), WV_OK);
+  fill_random(dc, r);
+  return (wv_grad_opts){0, 0, 40, 32, 1};
+}
+
 /* The camera blur: its adjoint is the transpose (<K x, y> = <x, K^T y>); the gradient
  * through it matches finite differences; the capture equals wv_render's. */
 static void test_camera_blur(void **state) {
@@ -394,14 +405,11 @@ static void test_camera_blur(void **state) {
   assert_true(fabs(a - b) < 1e-12 * (fabs(a) + 1));
   assert_true(fabs(skx - sx) < 0.2 * sx); /* a blur, not a gain (edges clamped: close, not equal) */
   assert_int_equal(wv_psf_apply(9.0, w, h, 3, x, kx, 0, &err), WV_ERR_INVALID);
-  wv_scene s = small_scene("flat45", 40, 32, 4);
-  s.psf_sigma = 0.8;
+  wv_scene s;
   wv_params p;
-  random_params("twill", &r, &p);
   wv_image dc;
-  assert_int_equal(wv_image_alloc(&dc, 40, 32, 3, &err), WV_OK);
-  fill_random(&dc, &r);
-  wv_grad_opts g = {0, 0, 40, 32, 1};
+  wv_grad_opts g = blur_setup(&r, &s, &p, &dc);
+  s.psf_sigma = 0.8;
   wv_grad_check_entry e[WV_P_COUNT];
   assert_int_equal(wv_grad_check(&s, &p, NULL, &g, &dc, 1e-5, e, &err), WV_OK);
   for (int i = 0; i < WV_P_COUNT; i++) {
@@ -420,6 +428,46 @@ static void test_camera_blur(void **state) {
   assert_int_equal(wv_render(&s, &p, NULL, &sharp, NULL, &err), WV_OK);
   assert_true(memcmp(sharp.data, ref.data, sizeof(float) * 40 * 32 * 3) != 0);
   wv_image_free(&cap), wv_image_free(&ref), wv_image_free(&sharp), wv_image_free(&dc);
+}
+
+/* The camera blur's sigma: dL/dsigma from a record (wv_record_grad_psf) against central
+ * differences of L = sum(dcapture * capture) in sigma, on the double path. */
+static void test_camera_blur_sigma(void **state) {
+  (void)state;
+  tu_rng r = {37};
+  wv_error err;
+  wv_scene s;
+  wv_params p;
+  wv_image dc;
+  wv_grad_opts g = blur_setup(&r, &s, &p, &dc);
+  const double sigmas[] = {0.45, 0.8, 1.7};
+  for (int k = 0; k < 3; k++) {
+    double h = 1e-4, gr[WV_P_COUNT], dsig, lp, lm;
+    s.psf_sigma = sigmas[k];
+    wv_grad_record *rec;
+    wv_image cap;
+    assert_int_equal(wv_render_record(&s, &p, NULL, &g, &cap, &rec, &err), WV_OK);
+    assert_int_equal(wv_record_grad_psf(rec, &dc, &dsig, &err), WV_OK);
+    wv_record_free(rec), wv_image_free(&cap);
+    s.psf_sigma = sigmas[k] + h;
+    assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &g, &dc, gr, &lp, NULL, &err), WV_OK);
+    s.psf_sigma = sigmas[k] - h;
+    assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &g, &dc, gr, &lm, NULL, &err), WV_OK);
+    double fd = (lp - lm) / (2 * h), rel = fabs(dsig - fd) / fmax(fabs(dsig), fabs(fd));
+    print_message("blur sigma %.2f: dL/dsigma %.9e, finite difference %.9e, relative error %.1e\n", sigmas[k], dsig,
+                  fd, rel);
+    assert_true(dsig != 0.0);
+    assert_true(rel < 1e-4);
+  }
+  /* no blur, no derivative */
+  s.psf_sigma = 0;
+  wv_grad_record *rec;
+  wv_image cap;
+  double dsig = 1;
+  assert_int_equal(wv_render_record(&s, &p, NULL, &g, &cap, &rec, &err), WV_OK);
+  assert_int_equal(wv_record_grad_psf(rec, &dc, &dsig, &err), WV_OK);
+  assert_true(dsig == 0.0);
+  wv_record_free(rec), wv_image_free(&cap), wv_image_free(&dc);
 }
 
 static void test_errors(void **state) {
@@ -450,6 +498,7 @@ int main(void) {
       cmocka_unit_test(test_capture_and_windows), cmocka_unit_test(test_exact_zeros),
       cmocka_unit_test(test_range_edges),        cmocka_unit_test(test_deterministic),
       cmocka_unit_test(test_chain_with_downsampling), cmocka_unit_test(test_record),
-      cmocka_unit_test(test_camera_blur),        cmocka_unit_test(test_errors)};
+      cmocka_unit_test(test_camera_blur),        cmocka_unit_test(test_camera_blur_sigma),
+      cmocka_unit_test(test_errors)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -45,6 +45,8 @@ typedef struct {
                         * polynomial's degree (3; 0 = off; wv_fit_distort) */
   double psf_sigma;   /* camera blur in pixels: WV_FIT_PSF_AUTO (-1, the default) measures it from the
                        * photo (wv_psf_estimate) unless the scene gives one; >= 0: this sigma */
+  int psf_fit;        /* 1: a measured blur is then fitted with the parameters, by its gradient (1);
+                       * 0: it stays as measured. A given blur is never fitted. */
 } wv_fit_opts;
 
 void wv_fit_opts_default(wv_fit_opts *o);
@@ -95,6 +97,9 @@ typedef struct {
   double offset_mm[2]; /* fabric offset found by the registration (added to the scene's) */
   int psf_done;        /* the camera blur is settled (measured, or given): */
   double psf_sigma;    /* ... its sigma in pixels of the scene's image (0: none) */
+  double psf_start;    /* ... as measured before the first iteration (psf_sigma moves when fitted) */
+  int psf_fit;         /* ... it is fitted with the parameters (measured, not 0, and opts.psf_fit) */
+  float psf_m, psf_v;  /* its Adam moments */
   double reg_ncc_before, reg_ncc_after;   /* correlation with the photo at zero shift, whole image */
   double reg_ssim_before, reg_ssim_after; /* SSIM of the whole image at the iteration spp */
   int distorted;       /* the distortion after the registration is done */

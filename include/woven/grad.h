@@ -51,6 +51,9 @@ wv_status wv_render_record(const wv_scene *s, const wv_params *p, const wv_rende
                            const wv_grad_opts *g, wv_image *capture, wv_grad_record **rec, wv_error *err);
 wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcapture, double grad[WV_P_COUNT],
                          double *dot, wv_error *err);
+/* dL/dsigma of the scene's camera blur (scene.psf_sigma, pixels) for the same adjoint
+ * (0 when the render had no blur). */
+wv_status wv_record_grad_psf(const wv_grad_record *rec, const wv_image *dcapture, double *dsigma, wv_error *err);
 void wv_record_free(wv_grad_record *rec);
 
 /* Gradient check: analytic gradient of L = sum(dcapture * capture) against

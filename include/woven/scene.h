@@ -84,6 +84,8 @@ wv_status wv_scene_capture(const wv_scene *s, const wv_image *radiance, wv_image
  * applies its transpose (for the gradient). in and out must differ. sigma <= 0 copies. */
 wv_status wv_psf_apply(double sigma, int w, int h, int c, const double *in, double *out, int adjoint,
                        wv_error *err);
+/* Its derivative by sigma applied to in: out = (dK/dsigma) in (0 at sigma <= 0). */
+wv_status wv_psf_apply_dsigma(double sigma, int w, int h, int c, const double *in, double *out, wv_error *err);
 /* Encoding of one value and its inverse (used to decode photos). */
 float wv_encode(const wv_scene *s, float linear);
 float wv_decode(const wv_scene *s, float encoded);

@@ -42,6 +42,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->register_radius = 6;
   o->distort_degree = 3;
   o->psf_sigma = WV_FIT_PSF_AUTO;
+  o->psf_fit = 1;
 }
 
 /* Every option's range, in one table: wv_fit_opts_validate and the checkpoint
@@ -75,6 +76,7 @@ static const opt_range OPT_RANGES[] = {
     OPT(colour_split, 'i', 0, 1, 2),
     OPT(density_steps, 'i', 0, 1, 2),
     OPT(psf_sigma, 'd', WV_FIT_PSF_AUTO, WV_PSF_MAX_SIGMA, 2),
+    OPT(psf_fit, 'i', 0, 1, 2),
 };
 #undef OPT
 #define N_OPTS (sizeof OPT_RANGES / sizeof OPT_RANGES[0])
@@ -205,9 +207,10 @@ static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, 
   return wv_footprints_create(&c->scene, o->threads, &c->fp, err);
 }
 
-/* Loss of p; with grad != NULL also dL/dtheta (file units). */
+/* Loss of p; with grad != NULL also dL/dtheta (file units), and with dpsf != NULL
+ * dL/dsigma of the iteration scene's camera blur (its pixels). */
 static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, double grad[WV_P_COUNT],
-                          wv_error *err) {
+                          double *dpsf, wv_error *err) {
   const wv_fit_opts *o = c->o;
   wv_render_opts ro = {c->scene.spp, o->threads, NULL, NULL, c->fp};
   double t0 = omp_get_wtime();
@@ -234,6 +237,7 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   c->timing->descriptor += t3 - t1;
   if (!grad) return WV_OK;
   st = wv_record_grad(record, &c->dcap, grad, NULL, err);
+  if (!st && dpsf) st = wv_record_grad_psf(record, &c->dcap, dpsf, err);
   wv_record_free(record);
   if (st) return st;
   c->timing->gradient += omp_get_wtime() - t3;
@@ -250,7 +254,7 @@ wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d
   fit_ctx c;
   wv_fit_timing t = {0};
   wv_status st = ctx_init(&c, s, photo, d, 1, 0, o, &t, err);
-  if (!st) st = evaluate(&c, p, out, NULL, err);
+  if (!st) st = evaluate(&c, p, out, NULL, NULL, err);
   ctx_free(&c);
   return st;
 }
@@ -412,7 +416,7 @@ static int photo_colour_ratios(const fit_ctx *c, double r[2][3], wv_error *err) 
 static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
   double r[2][3];
   wv_fit_record base = {0};
-  wv_status rc = evaluate(c, &st->params, &base, NULL, err);
+  wv_status rc = evaluate(c, &st->params, &base, NULL, NULL, err);
   if (rc || !photo_colour_ratios(c, r, err)) return rc;
   double best = base.loss, lo, hi;
   int choice = 0;
@@ -431,7 +435,7 @@ static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
       }
     }
     wv_fit_record rec = {0};
-    if ((rc = evaluate(c, &p, &rec, NULL, err))) break;
+    if ((rc = evaluate(c, &p, &rec, NULL, NULL, err))) break;
     if (rec.loss < best) best = rec.loss, choice = cand, best_p = p;
   }
   st->params = best_p;
@@ -462,12 +466,17 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
       rc = wv_psf_estimate(&se, photo, &st->params, o->threads, &st->psf_sigma, NULL, err);
     }
     st->psf_done = !rc;
+    st->psf_start = st->psf_sigma;
+    /* a measured blur is fitted with the parameters (a given one, or none measured, stays) */
+    st->psf_fit = o->psf_fit && o->psf_sigma < 0 && !(s->psf_sigma > 0) && st->psf_sigma > 0;
     st->timing.discrete += omp_get_wtime() - tp;
   }
+  int fit_psf = st->psf_fit;
+  double scale = o->iter_scale > 1 ? o->iter_scale : 1;
   wv_scene sb; /* the scene with the fit's camera blur */
   wv_fit_scene(st, s, &sb);
   sb.fabric_offset[0] = s->fabric_offset[0], sb.fabric_offset[1] = s->fabric_offset[1];
-  c.scene.psf_sigma = sb.psf_sigma / (o->iter_scale > 1 ? o->iter_scale : 1);
+  c.scene.psf_sigma = sb.psf_sigma / scale;
   if (!rc && st->iter == 0 && o->colour_split && o->iters > 0) {
     double td = omp_get_wtime();
     wv_fit_timing saved = st->timing;
@@ -479,7 +488,8 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     wv_fit_record rec = {0};
     rec.iter = st->iter;
     double g[WV_P_COUNT] = {0};
-    if ((rc = evaluate(&c, &st->params, &rec, g, err))) break;
+    double dpsf = 0;
+    if ((rc = evaluate(&c, &st->params, &rec, g, fit_psf ? &dpsf : NULL, err))) break;
     /* Adam in normalised coordinates z = (theta - lo) / (hi - lo), projected onto [0, 1];
      * z is remade from the parameters every step, so a resumed fit repeats this exactly. */
     int t = st->iter + 1;
@@ -498,6 +508,16 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
       wv_param_range(i, &lo, &hi);
       wv_param_set(&st->params, i, lo + z[i] * (hi - lo));
     }
+    if (fit_psf) {
+      /* the camera blur, by the same Adam on z = sigma / WV_PSF_RANGE: a measured blur
+       * and the parameters trade contrast, so they settle together */
+      float zs = (float)(st->psf_sigma / WV_PSF_RANGE), gs = (float)(dpsf / scale * WV_PSF_RANGE);
+      if (!isfinite(gs)) gs = 0.0f;
+      wv_nn_adam a1 = {1, (float)o->lr, 0.9f, 0.999f, 1e-8f, 0.0f, st->iter, &st->psf_m, &st->psf_v};
+      wv_nn_adam_step_box(&a1, &zs, &gs, 0.0f, 1.0f);
+      st->psf_sigma = zs * WV_PSF_RANGE;
+      c.scene.psf_sigma = st->psf_sigma / scale;
+    }
     /* Discrete search: keep a random step only if it lowers the loss. */
     if (o->discrete_every > 0 && t % o->discrete_every == 0) {
       double td = omp_get_wtime();
@@ -505,8 +525,8 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
       wv_params trial = st->params;
       if (discrete_step(&trial, &st->rng, st->iter, o->iters, o->density_steps)) {
         wv_fit_record cur = {0}, alt = {0};
-        if ((rc = evaluate(&c, &st->params, &cur, NULL, err))) break;
-        if ((rc = evaluate(&c, &trial, &alt, NULL, err))) break;
+        if ((rc = evaluate(&c, &st->params, &cur, NULL, NULL, err))) break;
+        if ((rc = evaluate(&c, &trial, &alt, NULL, NULL, err))) break;
         rec.discrete_tried = 1;
         if (alt.loss < cur.loss) {
           st->params = trial;
@@ -525,6 +545,8 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     if (cb && cb(user, st, o)) break;
   }
   ctx_free(&c);
+  wv_fit_scene(st, s, &sb); /* the blur as fitted */
+  sb.fabric_offset[0] = s->fabric_offset[0], sb.fabric_offset[1] = s->fabric_offset[1];
   if (!rc && st->iter >= o->iters && !st->aligned && o->align_radius > 0) {
     double ta = omp_get_wtime();
     rc = align_densities(st, &sb, photo, o, err);
@@ -603,7 +625,11 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_object_set_new(json_object_get(root, "opts"), "colour_split", json_integer(o->colour_split));
   json_object_set_new(json_object_get(root, "opts"), "density_steps", json_integer(o->density_steps));
   json_object_set_new(root, "colour_split", json_integer(st->colour_split));
-  json_object_set_new(root, "camera_blur", json_pack("{s:b,s:f}", "done", st->psf_done, "sigma_px", st->psf_sigma));
+  json_object_set_new(root, "camera_blur",
+                      json_pack("{s:b,s:f,s:f,s:b,s:f,s:f}", "done", st->psf_done, "sigma_px", st->psf_sigma, "measured_px",
+                                st->psf_start, "fitted", st->psf_fit, "adam_m", (double)st->psf_m, "adam_v",
+                                (double)st->psf_v));
+  json_object_set_new(json_object_get(root, "opts"), "psf_fit", json_integer(o->psf_fit));
   json_t *log = json_array();
   for (int i = 0; i < st->iter; i++) {
     const wv_fit_record *r = &st->log[i];
@@ -657,6 +683,7 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   o->w_struct = 0, o->colour_split = 0; /* absent before the structure term: a resume stays without it */
   o->w_colour = 0;                       /* absent before the detail-colour term: likewise */
   o->psf_sigma = 0;                      /* absent before the camera blur: none */
+  o->psf_fit = 0;                        /* absent before the blur was fitted: as measured */
   o->distort_degree = 0;                 /* absent before the distortion: none */
   if ((rc = read_opts(json_object_get(root, "opts"), o, err))) return rc;
   wv_params start;
@@ -690,6 +717,18 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
     if (!json_is_boolean(done)) return wv_fail(err, WV_ERR_INVALID, "'camera_blur.done' must be true or false");
     st->psf_done = json_is_true(done);
     if ((rc = wv_json_number(cb, "camera_blur", "sigma_px", 0, WV_PSF_MAX_SIGMA, 1, &st->psf_sigma, err))) return rc;
+    /* absent before the blur was fitted: as measured, no moments */
+    double m = 0, v = 0;
+    st->psf_start = st->psf_sigma;
+    if ((rc = wv_json_number(cb, "camera_blur", "measured_px", 0, WV_PSF_MAX_SIGMA, 0, &st->psf_start, err)) ||
+        (rc = wv_json_number(cb, "camera_blur", "adam_m", -1e30, 1e30, 0, &m, err)) ||
+        (rc = wv_json_number(cb, "camera_blur", "adam_v", 0, 1e30, 0, &v, err)))
+      return rc;
+    st->psf_m = (float)m, st->psf_v = (float)v;
+    json_t *fitted = json_object_get(cb, "fitted");
+    if (fitted && !json_is_boolean(fitted))
+      return wv_fail(err, WV_ERR_INVALID, "'camera_blur.fitted' must be true or false");
+    st->psf_fit = json_is_true(fitted);
   }
   long long cs = 0; /* the start's colour split (absent before it existed: none) */
   if ((rc = wv_json_integer(root, NULL, "colour_split", 0, 5, 0, &cs, err))) return rc;

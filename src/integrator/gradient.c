@@ -328,6 +328,27 @@ wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcap, double
   return WV_OK;
 }
 
+wv_status wv_record_grad_psf(const wv_grad_record *rec, const wv_image *dcap, double *dsigma, wv_error *err) {
+  if (!rec || !dsigma) return wv_fail(err, WV_ERR_INVALID, "record_grad_psf: a record and an output are required");
+  if (!dcap || !dcap->data || dcap->w != rec->w || dcap->h != rec->h || dcap->c != 3)
+    return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", rec->w,
+                   rec->h, dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
+  *dsigma = 0;
+  if (!(rec->psf_sigma > 0)) return WV_OK;
+  /* capture = respond(K radiance): dL/dsigma = sum dL/dcapture .* slope .* (dK/dsigma radiance) */
+  size_t n = (size_t)rec->w * rec->h * 3;
+  double *a = malloc(2 * n * sizeof *a);
+  if (!a) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur's derivative");
+  for (size_t i = 0; i < n; i++) a[i] = rec->dbl ? rec->px[i / 3].rad[i % 3] : rec->pxf[i / 3].rad[i % 3];
+  wv_status st = wv_psf_apply_dsigma(rec->psf_sigma, rec->w, rec->h, 3, a, a + n, err);
+  double sum = 0;
+  for (size_t i = 0; i < n && !st; i++)
+    sum += (double)dcap->data[i] * (rec->dbl ? rec->px[i / 3].slope[i % 3] : rec->pxf[i / 3].slope[i % 3]) * a[n + i];
+  free(a);
+  if (!st) *dsigma = sum;
+  return st;
+}
+
 void wv_record_free(wv_grad_record *rec) {
   if (!rec) return;
   free(rec->px);

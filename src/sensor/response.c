@@ -65,6 +65,25 @@ static void psf_pass(const double *wk, int r, int w, int h, int c, int along_y, 
     }
 }
 
+/* The 1-D kernel of the camera blur: wk[0..r] (symmetric, summing to 1 over -r..r) and,
+ * when dwk is given, its derivative by sigma. With e_k = exp(-k^2 / 2 sigma^2) and
+ * w_k = e_k / S, S = sum_j e_j: dw_k/dsigma = w_k (k^2 - sum_j w_j j^2) / sigma^3. */
+static int psf_kernel(double sigma, double *wk, double *dwk) {
+  int r = (int)ceil(3 * sigma);
+  double sum = 0, m2 = 0;
+  for (int k = 0; k <= r; k++) sum += (k ? 2 : 1) * (wk[k] = exp(-0.5 * k * k / (sigma * sigma)));
+  for (int k = 0; k <= r; k++) wk[k] /= sum, m2 += (k ? 2 : 1) * wk[k] * k * k;
+  if (dwk)
+    for (int k = 0; k <= r; k++) dwk[k] = wk[k] * (k * k - m2) / (sigma * sigma * sigma);
+  return r;
+}
+
+static wv_status psf_check(double sigma, wv_error *err) {
+  if (!(sigma <= WV_PSF_MAX_SIGMA))
+    return wv_fail(err, WV_ERR_INVALID, "camera blur sigma %g px is outside 0..%g", sigma, WV_PSF_MAX_SIGMA);
+  return WV_OK;
+}
+
 wv_status wv_psf_apply(double sigma, int w, int h, int c, const double *in, double *out, int adjoint,
                        wv_error *err) {
   size_t n = (size_t)w * h * c;
@@ -72,18 +91,37 @@ wv_status wv_psf_apply(double sigma, int w, int h, int c, const double *in, doub
     memcpy(out, in, n * sizeof *out);
     return WV_OK;
   }
-  if (!(sigma <= WV_PSF_MAX_SIGMA))
-    return wv_fail(err, WV_ERR_INVALID, "camera blur sigma %g px is outside 0..%g", sigma, WV_PSF_MAX_SIGMA);
-  int r = (int)ceil(3 * sigma);
-  double wk[3 * (int)WV_PSF_MAX_SIGMA + 2], sum = 0;
-  for (int k = 0; k <= r; k++) sum += (k ? 2 : 1) * (wk[k] = exp(-0.5 * k * k / (sigma * sigma)));
-  for (int k = 0; k <= r; k++) wk[k] /= sum;
+  wv_status st = psf_check(sigma, err);
+  if (st) return st;
+  double wk[3 * (int)WV_PSF_MAX_SIGMA + 2];
+  int r = psf_kernel(sigma, wk, NULL);
   double *tmp = calloc(n, sizeof *tmp);
   if (!tmp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur");
   memset(out, 0, n * sizeof *out);
   /* K = Ky Kx, so K^T = Kx^T Ky^T: the passes in the other order */
   psf_pass(wk, r, w, h, c, adjoint, in, tmp, adjoint);
   psf_pass(wk, r, w, h, c, !adjoint, tmp, out, adjoint);
+  free(tmp);
+  return WV_OK;
+}
+
+wv_status wv_psf_apply_dsigma(double sigma, int w, int h, int c, const double *in, double *out, wv_error *err) {
+  size_t n = (size_t)w * h * c;
+  memset(out, 0, n * sizeof *out);
+  if (!(sigma > 0)) return WV_OK; /* every derivative of exp(-k^2 / 2 sigma^2) vanishes at 0 */
+  wv_status st = psf_check(sigma, err);
+  if (st) return st;
+  double wk[3 * (int)WV_PSF_MAX_SIGMA + 2], dwk[3 * (int)WV_PSF_MAX_SIGMA + 2];
+  int r = psf_kernel(sigma, wk, dwk);
+  double *tmp = malloc(n * sizeof *tmp);
+  if (!tmp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur's derivative");
+  /* K = Ky Kx: dK = dKy Kx + Ky dKx */
+  memset(tmp, 0, n * sizeof *tmp);
+  psf_pass(wk, r, w, h, c, 0, in, tmp, 0);
+  psf_pass(dwk, r, w, h, c, 1, tmp, out, 0);
+  memset(tmp, 0, n * sizeof *tmp);
+  psf_pass(dwk, r, w, h, c, 0, in, tmp, 0);
+  psf_pass(wk, r, w, h, c, 1, tmp, out, 0);
   free(tmp);
   return WV_OK;
 }
