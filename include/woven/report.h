@@ -52,6 +52,7 @@ typedef struct {
   const wv_pattern_choice *pattern_choice;     /* the pattern was chosen automatically (NULL: given) */
   const wv_weave_views *weave;                 /* zoom, spectra, SSIM per channel, WSC (NULL: none) */
   double camera_blur;                          /* the camera blur's sigma in pixels the renders used */
+  double camera_blur_measured;                 /* as measured before the fit when it was then fitted (< 0: not) */
   const char *viewer_html;                     /* the interactive viewer beside the report (NULL: none) */
   const char *drape_png;                       /* the fit on the draped cloth under new light (NULL: none) */
   const char *drape_note;                      /* what the drape shows, or why it is missing */

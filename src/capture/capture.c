@@ -180,6 +180,7 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
                    .pattern_choice = job->pattern_choice,
                    .weave = wv,
                    .camera_blur = fit_scene->psf_sigma,
+                   .camera_blur_measured = st->psf_fit ? st->psf_start : -1,
                    .viewer_html = "viewer.html",
                    .drape_png = drape ? pdrape : NULL,
                    .drape_note = note[0] ? note : NULL};
