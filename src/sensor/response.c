@@ -46,23 +46,43 @@ void wv_scene_response(const wv_scene *s, const wv_image *rad, wv_image *cap) {
     }
 }
 
-/* One 1-D pass along x (dx = 1, stride c) or y: out += K in, or K^T in when adjoint. */
+/* One 1-D pass along x or y: out += K in, or K^T in when adjoint. Rows along x, and
+ * column bands along y (whole rows of memory at a time), go to separate threads: each
+ * writes only its own, and every value sums its terms in the same order as one thread
+ * would (k ascending for each source pixel), so the result does not depend on the
+ * number of threads. */
 static void psf_pass(const double *wk, int r, int w, int h, int c, int along_y, const double *in, double *out,
                      int adjoint) {
-  int n = along_y ? h : w, m = along_y ? w : h;
-  for (int j = 0; j < m; j++)
-    for (int i = 0; i < n; i++) {
-      size_t at = along_y ? ((size_t)i * w + j) * c : ((size_t)j * w + i) * c;
-      for (int k = -r; k <= r; k++) {
-        int q = i + k < 0 ? 0 : i + k >= n ? n - 1 : i + k; /* clamped edge */
-        size_t qa = along_y ? ((size_t)q * w + j) * c : ((size_t)j * w + q) * c;
-        double wt = wk[k < 0 ? -k : k];
-        for (int ch = 0; ch < c; ch++) {
-          if (adjoint) out[qa + ch] += wt * in[at + ch];
-          else out[at + ch] += wt * in[qa + ch];
+  if (!along_y) {
+#pragma omp parallel for schedule(static)
+    for (int j = 0; j < h; j++) {
+      const double *ir = in + (size_t)j * w * c;
+      double *orow = out + (size_t)j * w * c;
+      for (int i = 0; i < w; i++)
+        for (int k = -r; k <= r; k++) {
+          int q = i + k < 0 ? 0 : i + k >= w ? w - 1 : i + k; /* clamped edge */
+          double wt = wk[k < 0 ? -k : k];
+          for (int ch = 0; ch < c; ch++) {
+            if (adjoint) orow[(size_t)q * c + ch] += wt * ir[(size_t)i * c + ch];
+            else orow[(size_t)i * c + ch] += wt * ir[(size_t)q * c + ch];
+          }
         }
-      }
     }
+    return;
+  }
+  int row = w * c, band = 256, nb = (row + band - 1) / band;
+#pragma omp parallel for schedule(static)
+  for (int b = 0; b < nb; b++) {
+    int x0 = b * band, x1 = x0 + band < row ? x0 + band : row;
+    for (int i = 0; i < h; i++)
+      for (int k = -r; k <= r; k++) {
+        int q = i + k < 0 ? 0 : i + k >= h ? h - 1 : i + k;
+        double wt = wk[k < 0 ? -k : k];
+        const double *src = in + (size_t)(adjoint ? i : q) * row;
+        double *dst = out + (size_t)(adjoint ? q : i) * row;
+        for (int x = x0; x < x1; x++) dst[x] += wt * src[x];
+      }
+  }
 }
 
 /* The 1-D kernel of the camera blur: wk[0..r] (symmetric, summing to 1 over -r..r) and,
