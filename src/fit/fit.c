@@ -471,11 +471,9 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     st->psf_fit = o->psf_fit && o->psf_sigma < 0 && !(s->psf_sigma > 0) && st->psf_sigma > 0;
     st->timing.discrete += omp_get_wtime() - tp;
   }
-  int fit_psf = st->psf_fit;
   double scale = o->iter_scale > 1 ? o->iter_scale : 1;
   wv_scene sb; /* the scene with the fit's camera blur */
   wv_fit_scene(st, s, &sb);
-  sb.fabric_offset[0] = s->fabric_offset[0], sb.fabric_offset[1] = s->fabric_offset[1];
   c.scene.psf_sigma = sb.psf_sigma / scale;
   if (!rc && st->iter == 0 && o->colour_split && o->iters > 0) {
     double td = omp_get_wtime();
@@ -489,7 +487,7 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     rec.iter = st->iter;
     double g[WV_P_COUNT] = {0};
     double dpsf = 0;
-    if ((rc = evaluate(&c, &st->params, &rec, g, fit_psf ? &dpsf : NULL, err))) break;
+    if ((rc = evaluate(&c, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, err))) break;
     /* Adam in normalised coordinates z = (theta - lo) / (hi - lo), projected onto [0, 1];
      * z is remade from the parameters every step, so a resumed fit repeats this exactly. */
     int t = st->iter + 1;
@@ -508,7 +506,7 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
       wv_param_range(i, &lo, &hi);
       wv_param_set(&st->params, i, lo + z[i] * (hi - lo));
     }
-    if (fit_psf) {
+    if (st->psf_fit) {
       /* the camera blur, by the same Adam on z = sigma / WV_PSF_RANGE: a measured blur
        * and the parameters trade contrast, so they settle together */
       float zs = (float)(st->psf_sigma / WV_PSF_RANGE), gs = (float)(dpsf / scale * WV_PSF_RANGE);
@@ -545,7 +543,7 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     if (cb && cb(user, st, o)) break;
   }
   ctx_free(&c);
-  wv_fit_scene(st, s, &sb); /* the blur as fitted */
+  wv_fit_scene(st, s, &sb); /* the blur as fitted; the offset as given (the alignment comes before the registration) */
   sb.fabric_offset[0] = s->fabric_offset[0], sb.fabric_offset[1] = s->fabric_offset[1];
   if (!rc && st->iter >= o->iters && !st->aligned && o->align_radius > 0) {
     double ta = omp_get_wtime();

@@ -256,15 +256,13 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
   if (r->weave && r->weave->wsc_whitened[0] > -2)
     sb_printf(&b, "<tr><td>whitened WSC (the weave's peaks alone)</td><td>%.4f</td><td>%.4f</td></tr>\n",
               r->weave->wsc_whitened[0], r->weave->wsc_whitened[1]);
+  char how[96] = "measured from the photo's spectrum unless given";
   if (r->camera_blur_measured >= 0)
-    sb_printf(&b, "</table>\n<p>Both renders pass through the camera blur: a Gaussian of sigma %.2f px on the "
-                  "radiance (measured from the photo's spectrum at %.2f px, then fitted with the parameters; "
-                  "docs/fit.md).</p>\n",
-              r->camera_blur, r->camera_blur_measured);
-  else
-    sb_printf(&b, "</table>\n<p>Both renders pass through the camera blur: a Gaussian of sigma %.2f px on the "
-                  "radiance (measured from the photo's spectrum unless given; docs/fit.md).</p>\n",
-              r->camera_blur);
+    snprintf(how, sizeof how, "measured from the photo's spectrum at %.2f px, then fitted with the parameters",
+             r->camera_blur_measured);
+  sb_printf(&b, "</table>\n<p>Both renders pass through the camera blur: a Gaussian of sigma %.2f px on the "
+                "radiance (%s; docs/fit.md).</p>\n",
+            r->camera_blur, how);
   sb_printf(&b, "<p>SSIM: Wang et al. 2004, 11x11 Gaussian window. WSC: Pearson correlation of the log "
                 "power spectra of the luminance detail of the centre 256 x 256 pixels, DC left out; 1 for the same "
                 "periodic structure, about 0 for none in common. Whitened WSC: the same after each ring of the spectrum is "

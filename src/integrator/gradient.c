@@ -89,6 +89,14 @@ struct wv_grad_record {
   pixel_rec_f *pxf; /* float mode */
 };
 
+/* Value i of a record's w x h x 3 radiance (before the camera blur) and of its slope. */
+static double rec_rad(const wv_grad_record *rec, size_t i) {
+  return rec->dbl ? rec->px[i / 3].rad[i % 3] : rec->pxf[i / 3].rad[i % 3];
+}
+static double rec_slope(const wv_grad_record *rec, size_t i) {
+  return rec->dbl ? rec->px[i / 3].slope[i % 3] : rec->pxf[i / 3].slope[i % 3];
+}
+
 /* Sensor response of one pixel and its slope; in float mode exactly
  * wv_scene_response's arithmetic, so the capture is wv_render's. */
 static void respond(const wv_scene *s, int dbl, int px, int py, const double rad[3], float cap[3], pixel_rec *rec) {
@@ -131,7 +139,7 @@ static wv_status respond_blurred(const wv_scene *s, int x0, int y0, wv_grad_reco
   size_t np = (size_t)rec->w * rec->h, n = np * 3;
   double *a = malloc(2 * n * sizeof *a);
   if (!a) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur");
-  for (size_t i = 0; i < n; i++) a[i] = rec->dbl ? rec->px[i / 3].rad[i % 3] : rec->pxf[i / 3].rad[i % 3];
+  for (size_t i = 0; i < n; i++) a[i] = rec_rad(rec, i);
   wv_status st = wv_psf_apply(rec->psf_sigma, rec->w, rec->h, 3, a, a + n, 0, err);
   for (size_t k = 0; k < np && !st; k++) {
     int i = (int)(k % (size_t)rec->w), r = (int)(k / (size_t)rec->w);
@@ -303,7 +311,7 @@ wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcap, double
     gb = malloc(2 * n * sizeof *gb);
     if (!gb) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur's adjoint");
     for (size_t i = 0; i < n; i++)
-      gb[i] = (double)dcap->data[i] * (rec->dbl ? rec->px[i / 3].slope[i % 3] : rec->pxf[i / 3].slope[i % 3]);
+      gb[i] = (double)dcap->data[i] * rec_slope(rec, i);
     wv_status st = wv_psf_apply(rec->psf_sigma, rec->w, rec->h, 3, gb, gb + n, 1, err);
     if (st) {
       free(gb);
@@ -339,11 +347,11 @@ wv_status wv_record_grad_psf(const wv_grad_record *rec, const wv_image *dcap, do
   size_t n = (size_t)rec->w * rec->h * 3;
   double *a = malloc(2 * n * sizeof *a);
   if (!a) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur's derivative");
-  for (size_t i = 0; i < n; i++) a[i] = rec->dbl ? rec->px[i / 3].rad[i % 3] : rec->pxf[i / 3].rad[i % 3];
+  for (size_t i = 0; i < n; i++) a[i] = rec_rad(rec, i);
   wv_status st = wv_psf_apply_dsigma(rec->psf_sigma, rec->w, rec->h, 3, a, a + n, err);
   double sum = 0;
   for (size_t i = 0; i < n && !st; i++)
-    sum += (double)dcap->data[i] * (rec->dbl ? rec->px[i / 3].slope[i % 3] : rec->pxf[i / 3].slope[i % 3]) * a[n + i];
+    sum += (double)dcap->data[i] * rec_slope(rec, i) * a[n + i];
   free(a);
   if (!st) *dsigma = sum;
   return st;
