@@ -114,9 +114,9 @@ const cli_opt CLI_FIT_OPTS[] = {
     CLI_O_REAL("--w-colour", capture_args, fit.w_colour, 0, 100, 0, "X",
                "weight of the detail-colour term, how the colour varies between\nyarns (default 0.1; 0 = off)"),
     CLI_O_FLAG("--colour-split", capture_args, fit.colour_split,
-               "before the first iteration, try starts that split the warp and weft\ndiffuse colours (off by "
-               "default: the detail-colour term separates them)"),
-    CLI_O_CLEAR("--no-colour-split", capture_args, fit.colour_split, "no such starts (the default)"),
+               "before the first iteration, try starts that split the warp and weft\ndiffuse colours, the "
+               "colour that covers more on the yarn type\nthat covers more (the default)"),
+    CLI_O_CLEAR("--no-colour-split", capture_args, fit.colour_split, "no such starts"),
     CLI_O_CUSTOM("--camera-blur", capture_args, fit.psf_sigma, 0, WV_PSF_MAX_SIGMA, parse_blur, "auto|measured|S",
                  "the camera's blur, a Gaussian of sigma S pixels on the radiance in\nevery render; auto (default): "
                  "the scene's, else measured from the\nphoto's spectrum and then fitted with the parameters; "

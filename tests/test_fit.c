@@ -251,6 +251,58 @@ static void test_psf_fitted(void **state) {
   wv_image_free(&photo);
 }
 
+/* A twill's parameters: heightfield, diffuse and specular colours, roughness of warp and
+ * weft, then twist, inclination and diffuse blend. */
+static void twill_params(wv_params *p, const double beta[2], const double kd[2][3], const double ks[2][3],
+                         const double alpha[2], double psi, double umax, double w) {
+  for (int y = 0; y < 2; y++) {
+    p->heightfield[y] = beta[y], p->roughness[y] = alpha[y];
+    for (int c = 0; c < 3; c++) p->diffuse[y][c] = kd[y][c], p->specular[y][c] = ks[y][c];
+  }
+  p->twist_deg = psi, p->inclination_deg = umax, p->diffuse_blend = w;
+}
+
+/* The colour split on the whole flat45 photo of a two-colour 2/1 twill whose floats run
+ * across: the weft, near-white, covers two thirds. The start (a network estimate of such a
+ * photo) has the colours the wrong way round, and the loss alone prefers the split that
+ * keeps them so (the darker colour on the weft); the rule of coverage puts it on the warp. */
+static void test_colour_split(void **state) {
+  (void)state;
+  wv_error err = {0};
+  wv_scene s;
+  assert_int_equal(wv_scene_preset("flat45", &s, &err), WV_OK);
+  wv_params truth, start;
+  assert_int_equal(wv_params_default("twill21z_90", &truth, &err), WV_OK);
+  truth.density[0] = 115, truth.density[1] = 98, truth.noise_level = 5, truth.seed = 1016823926;
+  start = truth;
+  start.noise_level = 2, start.seed = 1;
+  twill_params(&truth, (double[2]){1.647, 1.790}, (double[2][3]){{0.044, 0.087, 0.281}, {0.758, 0.748, 0.688}},
+               (double[2][3]){{0.209, 0.295, 0.530}, {0.871, 0.865, 0.830}}, (double[2]){0.620, 0.886}, -30, 28.6, 0.35);
+  twill_params(&start, (double[2]){1.574, 1.842}, (double[2][3]){{0.598, 0.603, 0.477}, {0.105, 0.140, 0.771}},
+               (double[2][3]){{0.826, 0.496, 0.486}, {0.302, 0.590, 0.945}}, (double[2]){0.801, 0.774}, -4.1, 24.8,
+               0.387);
+  wv_descriptor *d;
+  assert_int_equal(wv_descriptor_create("default", NULL, &d, &err), WV_OK);
+  wv_image photo;
+  assert_int_equal(wv_render(&s, &truth, NULL, &photo, NULL, &err), WV_OK);
+  wv_fit_opts o;
+  wv_fit_opts_default(&o);
+  o.iters = 1, o.lr = 1e-9, o.discrete_every = 0, o.align_radius = 0, o.register_radius = 0, o.distort_degree = 0;
+  o.psf_sigma = 0.5;
+  wv_fit_state st;
+  assert_int_equal(wv_fit_state_init(&st, &start, &o, &err), WV_OK);
+  assert_int_equal(wv_fit_run(&st, &s, &photo, d, &o, NULL, NULL, &err), WV_OK);
+  double lum[2];
+  for (int y = 0; y < 2; y++)
+    lum[y] = 0.2126 * st.params.diffuse[y][0] + 0.7152 * st.params.diffuse[y][1] + 0.0722 * st.params.diffuse[y][2];
+  printf("split %d: warp luminance %.3f, weft %.3f\n", st.colour_split, lum[WV_WARP], lum[WV_WEFT]);
+  assert_true(st.colour_split == 1 || st.colour_split == 3);
+  assert_true(lum[WV_WARP] < 0.5 * lum[WV_WEFT]);
+  wv_fit_state_free(&st);
+  wv_image_free(&photo);
+  wv_descriptor_free(d);
+}
+
 static void test_limits(void **state) {
   (void)state;
   wv_descriptor *d;
@@ -283,7 +335,7 @@ static void test_limits(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fit_improves), cmocka_unit_test(test_resume_equals_straight),
                                      cmocka_unit_test(test_photo_load), cmocka_unit_test(test_psf_estimate),
-                                     cmocka_unit_test(test_psf_fitted),
+                                     cmocka_unit_test(test_psf_fitted), cmocka_unit_test(test_colour_split),
                                      cmocka_unit_test(test_limits)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

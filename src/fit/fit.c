@@ -22,6 +22,15 @@
 #include "woven/nn.h"
 #include "woven/render.h"
 
+/* The colour split's rule of coverage: a share of warp cells this far from a half (the
+ * built-ins give 0, 1/6, 1/4, 3/10 or 3/8), and a share of dark pixels this far (a 2/1
+ * twill's third measures 0.35 to 0.43: blur mixes the colours at the yarns' edges), decide
+ * which yarn type wears which colour; start colours whose luminances differ by less than
+ * this fraction of their sum count as one colour. */
+#define SPLIT_WEAVE_MIN 0.08
+#define SPLIT_PHOTO_MIN 0.05
+#define SPLIT_LUM_SAME 0.05
+
 void wv_fit_opts_default(wv_fit_opts *o) {
   memset(o, 0, sizeof *o);
   o->iters = 200;
@@ -30,7 +39,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->w_pixel = 0.2;
   o->w_struct = WV_FIT_W_STRUCT;
   o->w_colour = WV_FIT_W_COLOUR;
-  o->colour_split = 0; /* the detail-colour term separates warp and weft without it (docs/fit.md) */
+  o->colour_split = 1;
   o->down_w = WV_LOSS_DOWN_W, o->down_h = WV_LOSS_DOWN_H;
   o->discrete_every = 5;
   o->iter_scale = 1;
@@ -357,8 +366,9 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
 
 /* The photo's two colours as ratios to their neighbourhood's mean colour (linear values,
  * so illumination and the falloff cancel): 2-means over every pixel, r[0] the darker
- * cluster. Returns 0 when the image has no colour detail to split. */
-static int photo_colour_ratios(const fit_ctx *c, double r[2][3], wv_error *err) {
+ * cluster, *dark_share the share of pixels in it. Returns 0 when the image has no colour
+ * detail to split. */
+static int photo_colour_ratios(const fit_ctx *c, double r[2][3], double *dark_share, wv_error *err) {
   const wv_image *ph = &c->photo;
   size_t n = (size_t)ph->w * ph->h;
   wv_image lin = {0}, mean = {0};
@@ -397,11 +407,14 @@ static int photo_colour_ratios(const fit_ctx *c, double r[2][3], wv_error *err) 
     for (int ch = 0; ch < 3; ch++) r[k][ch] = cnt[k] > 0 ? cen[k][ch] / cnt[k] : 1.0;
   double l0 = 0.2126 * r[0][0] + 0.7152 * r[0][1] + 0.0722 * r[0][2];
   double l1 = 0.2126 * r[1][0] + 0.7152 * r[1][1] + 0.0722 * r[1][2];
-  if (l0 > l1)
+  *dark_share = cnt[0] / (cnt[0] + cnt[1] > 0 ? cnt[0] + cnt[1] : 1);
+  if (l0 > l1) {
     for (int ch = 0; ch < 3; ch++) {
       double t = r[0][ch];
       r[0][ch] = r[1][ch], r[1][ch] = t;
     }
+    *dark_share = 1 - *dark_share;
+  }
   return cnt[0] > 0 && cnt[1] > 0 && fabs(l1 - l0) > 1e-3;
 }
 
@@ -412,18 +425,42 @@ static int photo_colour_ratios(const fit_ctx *c, double r[2][3], wv_error *err) 
  * mix them), on the warp and the weft each way round, scaled to the start's mean
  * diffuse colour; and both yarns given that mean (a one-colour cloth, where the start
  * split the hues: per-channel detail the photo lacks). The candidate with the lowest
- * loss (the start included) is kept. */
+ * loss (the start included) is kept.
+ * The loss sees yarns of one or two pixels at no phase (its pixel term is downsampled),
+ * so it cannot tell which yarn type wears which colour. The weave can when one yarn type
+ * covers more of the cloth than the other (a 2/1 twill, a satin): the colour that covers
+ * more of the photo goes on it, and a start with the colours the other way round is not
+ * kept. Where both cover half (plain, basket, 2/2 twills), the swap is a shift of the
+ * weave, which the registration after the fit finds. */
 static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
-  double r[2][3];
+  double r[2][3], dark_share = 0.5;
   wv_fit_record base = {0};
   wv_status rc = evaluate(c, &st->params, &base, NULL, NULL, err);
-  if (rc || !photo_colour_ratios(c, r, err)) return rc;
-  double best = base.loss, lo, hi;
+  if (rc || !photo_colour_ratios(c, r, &dark_share, err)) return rc;
+  wv_weave w;
+  double warp_share = 0.5;
+  if (!wv_params_weave(&st->params, &w, NULL)) {
+    int n = 0;
+    for (int i = 0; i < w.rows; i++)
+      for (int j = 0; j < w.cols; j++) n += w.p[i][j] != 0;
+    warp_share = (double)n / (w.rows * w.cols);
+  }
+  /* the yarn type the darker colour must go on, or -1: either */
+  int need = fabs(warp_share - 0.5) < SPLIT_WEAVE_MIN || fabs(dark_share - 0.5) < SPLIT_PHOTO_MIN ? -1
+             : (warp_share > 0.5) == (dark_share > 0.5)                                         ? WV_WARP
+                                                                                                 : WV_WEFT;
+  double lum[2];
+  for (int y = 0; y < 2; y++)
+    lum[y] = 0.2126 * st->params.diffuse[y][0] + 0.7152 * st->params.diffuse[y][1] + 0.0722 * st->params.diffuse[y][2];
+  int start_dark = lum[WV_WARP] < lum[WV_WEFT] ? WV_WARP : WV_WEFT;
+  int start_ok = need < 0 || start_dark == need || fabs(lum[0] - lum[1]) < SPLIT_LUM_SAME * (lum[0] + lum[1]);
+  double best = start_ok ? base.loss : INFINITY, lo, hi;
   int choice = 0;
   wv_params best_p = st->params;
   for (int cand = 1; cand <= 5 && !rc; cand++) {
     double alpha = cand <= 2 ? 1.0 : cand <= 4 ? 2.0 : 0.0; /* 5: both the mean colour */
     int dark = (cand & 1) ? WV_WARP : WV_WEFT; /* the yarn type given the darker colour */
+    if (cand <= 4 && need >= 0 && dark != need) continue;
     wv_params p = st->params;
     for (int ch = 0; ch < 3; ch++) {
       double m = 0.5 * (st->params.diffuse[WV_WARP][ch] + st->params.diffuse[WV_WEFT][ch]);
