@@ -145,11 +145,44 @@ static void test_photo_size(void **state) {
   wv_image_free(&photo);
 }
 
+/* The family: a lattice that fits a plain weave and a basket at twice its densities
+ * alike, a render match that prefers the basket (a two-colour plain weave's checks look
+ * the same in both), and the network sure of plain: plain. Without the network's
+ * probabilities, the render match decides: basket. */
+static void test_family_hears_network(void **state) {
+  (void)state;
+  int nb = wv_weave_builtin_count(), plain = 0, basket = 1;
+  assert_string_equal(wv_weave_builtin_name(plain), "plain");
+  assert_string_equal(wv_weave_builtin_name(basket), "basket");
+  static wv_pattern_choice c;
+  for (int net = 0; net < 2; net++) {
+    memset(&c, 0, sizeof c);
+    c.lattice.found = 1;
+    for (int i = 0; i < nb; i++) c.lattice.fit[i].score = 0.2, c.ranking.match[i] = 0.1;
+    c.lattice.fit[plain].score = 0.52, c.lattice.fit[basket].score = 0.50;
+    c.ranking.match[plain] = 0.50, c.ranking.match[basket] = 0.65;
+    for (int i = 0; i < nb; i++) /* the ranking's mix, as wv_lattice_rank makes it */
+      c.ranking.score[i] = net ? 0.75 * c.ranking.match[i] + 0.25 * (i == plain) : c.ranking.match[i];
+    /* best first by the ranking score */
+    for (int i = 0; i < nb; i++) c.ranking.order[i] = i;
+    for (int i = 0; i < nb; i++)
+      for (int j = i + 1; j < nb; j++)
+        if (c.ranking.score[c.ranking.order[j]] > c.ranking.score[c.ranking.order[i]]) {
+          int t = c.ranking.order[i];
+          c.ranking.order[i] = c.ranking.order[j], c.ranking.order[j] = t;
+        }
+    int b = wv_pattern_decide(&c, 0, 0, NULL);
+    printf("%s the network: %s\n", net ? "with" : "without", b >= 0 ? wv_weave_builtin_name(b) : "a loss asked for");
+    assert_int_equal(b, net ? plain : basket);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_picks_true_family, setup, teardown),
       cmocka_unit_test_setup_teardown(test_no_lattice_falls_back, setup, teardown),
       cmocka_unit_test_setup_teardown(test_photo_size, setup, teardown),
+      cmocka_unit_test(test_family_hears_network),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

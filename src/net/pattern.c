@@ -80,16 +80,18 @@ int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie,
   const wv_lattice *l = &c->lattice;
   const wv_lattice_ranking *r = &c->ranking;
   int nb = wv_weave_builtin_count();
-  /* 1. The family: the best by the mean of lattice score and render match (the lattice
+  /* 1. The family: the best by the mean of lattice score and ranking score (the lattice
    * alone cannot tell a plain weave from a basket at twice its densities, whose lattice
-   * holds the same points; their renders differ), or the loss criterion among the
-   * contenders, each represented by its best-ranked pattern. */
+   * holds the same points; their renders differ, and so do the network's probabilities,
+   * which the ranking score holds: on a two-colour plain weave the render match alone
+   * prefers the basket, whose colour checks look the same), or the loss criterion among
+   * the contenders, each represented by its best-ranked pattern. */
   double ff[4] = {-1, -1, -1, -1};
   int rep[4] = {-1, -1, -1, -1}, fam = 0, n = 0;
   for (int k = 0; k < nb; k++) {
     int i = r->order[k], f = 0;
     while (f < 3 && strcmp(wv_weave_family(wv_weave_builtin_name(i)), FAM[f])) f++;
-    double v = 0.5 * (l->fit[i].score + r->match[i]);
+    double v = 0.5 * (l->fit[i].score + r->score[i]);
     if (v > ff[f]) ff[f] = v;
     if (rep[f] < 0) rep[f] = i;
   }
