@@ -120,8 +120,9 @@ wv_status wv_fabricnet_predict_features(const wv_fabricnet *n, float *feat, floa
  * (wv_fabricnet_params) do. The choice (docs/analysis.md):
  *   1. The weave analysis of the photo (analysis.h): the lattice of its spectral peaks,
  *      explained for every built-in by densities and an orientation.
- *   2. If there is a lattice: the family (plain, basket, twill, satin) whose best lattice
- *      explains the peaks best wins; families within o->family_tie of it are contenders,
+ *   2. If there is a lattice: the family (plain, basket, twill, satin) whose best built-in
+ *      has the best mean of lattice score and ranking score (below) wins; families within
+ *      o->family_tie of it are contenders,
  *      decided by the loss criterion below (each with its best-ranked pattern). Within the
  *      family every built-in is rendered with the network's estimate and its own lattice
  *      densities in the centre window at a low spp and scored by how well its spectral peaks
