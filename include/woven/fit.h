@@ -29,7 +29,7 @@ typedef struct {
   double w_pixel;     /* w2 = 0.2 */
   double w_struct;    /* w3 = WV_FIT_W_STRUCT (0: no structure term) */
   double w_colour;    /* w4 = WV_FIT_W_COLOUR (0: no detail-colour term) */
-  int colour_split;   /* 1: before the first iteration, try starts that split warp and weft colours (0) */
+  int colour_split;   /* 1 (default): before the first iteration, try starts that split warp and weft colours */
   int down_w, down_h; /* 16 x 8 */
   int discrete_every; /* 5 (0: no discrete search) */
   int density_steps;  /* 1: the discrete search steps the densities too (1); 0: the noise level
