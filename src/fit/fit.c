@@ -31,6 +31,9 @@
 #define SPLIT_PHOTO_MIN 0.05
 #define SPLIT_LUM_SAME 0.05
 
+/* Rec. 709 luminance of an RGB triple. */
+static double luminance(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
+
 void wv_fit_opts_default(wv_fit_opts *o) {
   memset(o, 0, sizeof *o);
   o->iters = 200;
@@ -384,7 +387,7 @@ static int photo_colour_ratios(const fit_ctx *c, double r[2][3], double *dark_sh
   double cen[2][3] = {{0}}, cnt[2] = {0};
   for (size_t i = 0; i < n; i++) {
     const float *v = lin.data + 3 * i;
-    int k = 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2] > 1.0;
+    int k = luminance(v[0], v[1], v[2]) > 1.0;
     for (int ch = 0; ch < 3; ch++) cen[k][ch] += v[ch];
     cnt[k]++;
   }
@@ -405,8 +408,8 @@ static int photo_colour_ratios(const fit_ctx *c, double r[2][3], double *dark_sh
   wv_image_free(&lin);
   for (int k = 0; k < 2; k++)
     for (int ch = 0; ch < 3; ch++) r[k][ch] = cnt[k] > 0 ? cen[k][ch] / cnt[k] : 1.0;
-  double l0 = 0.2126 * r[0][0] + 0.7152 * r[0][1] + 0.0722 * r[0][2];
-  double l1 = 0.2126 * r[1][0] + 0.7152 * r[1][1] + 0.0722 * r[1][2];
+  double l0 = luminance(r[0][0], r[0][1], r[0][2]);
+  double l1 = luminance(r[1][0], r[1][1], r[1][2]);
   *dark_share = cnt[0] / (cnt[0] + cnt[1] > 0 ? cnt[0] + cnt[1] : 1);
   if (l0 > l1) {
     for (int ch = 0; ch < 3; ch++) {
@@ -451,7 +454,7 @@ static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
                                                                                                  : WV_WEFT;
   double lum[2];
   for (int y = 0; y < 2; y++)
-    lum[y] = 0.2126 * st->params.diffuse[y][0] + 0.7152 * st->params.diffuse[y][1] + 0.0722 * st->params.diffuse[y][2];
+    lum[y] = luminance(st->params.diffuse[y][0], st->params.diffuse[y][1], st->params.diffuse[y][2]);
   int start_dark = lum[WV_WARP] < lum[WV_WEFT] ? WV_WARP : WV_WEFT;
   int start_ok = need < 0 || start_dark == need || fabs(lum[0] - lum[1]) < SPLIT_LUM_SAME * (lum[0] + lum[1]);
   double best = start_ok ? base.loss : INFINITY, lo, hi;
