@@ -101,10 +101,10 @@ typedef struct {
   int psf_fit;         /* ... it is fitted with the parameters (measured, not 0, and opts.psf_fit) */
   float psf_m, psf_v;  /* its Adam moments */
   double reg_ncc_before, reg_ncc_after;   /* correlation with the photo at zero shift, whole image */
-  double reg_ssim_before, reg_ssim_after; /* SSIM of the whole image at the iteration spp */
+  double reg_ssim_before, reg_ssim_after; /* SSIM of the whole image (RGB) at the iteration spp */
   int distorted;       /* the distortion after the registration is done */
   double distort_extent_mm, distort[2][WV_DISTORT_TERMS]; /* found (added to the scene's; wv_scene) */
-  double dist_ssim_before, dist_ssim_after; /* SSIM of the whole image (luminance, 16 spp) */
+  double dist_ssim_before, dist_ssim_after; /* SSIM of the whole image (RGB, 16 spp) */
   float adam_m[WV_P_COUNT], adam_v[WV_P_COUNT]; /* wv_nn_adam's moments */
   uint64_t rng;
   wv_fit_record *log; /* iter entries */
@@ -136,7 +136,8 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
  * cross-correlation of high-passed luminance, via FFT). The densities are searched
  * over the whole range in a small centre window, refined in larger windows and
  * finally on the whole image to 0.1 yarns/inch (docs/fit.md); the best shift
- * becomes a fabric offset. Kept only if the whole image's SSIM rises and the
+ * becomes a fabric offset. Kept only if the whole image's SSIM per RGB channel rises
+ * (luminance alone misses yarns that differ in hue more than in brightness) and the
  * correlation at zero shift reaches 0.2. */
 wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                           wv_error *err);
@@ -150,7 +151,7 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
  * renders moved by 0.01 mm. A polynomial displacement of the fabric coordinates (degree
  * o->distort_degree, wv_scene.distort) is fitted to those phases by Gauss-Newton, degree
  * by degree, and estimated again from its own render; kept only as far as it raises the
- * whole image's SSIM. The fit's parameters do not change; the displacement goes to the
+ * whole image's SSIM per RGB channel. The fit's parameters do not change; the displacement goes to the
  * fit's scene (wv_fit_scene). docs/fit.md. */
 wv_status wv_fit_distort(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                          wv_error *err);

@@ -241,7 +241,7 @@ static wv_status estimate(const wv_scene *cur, const wv_image *photo, const floa
     if (i) sc.fabric_offset[i - 1] += EPS_MM;
     if (!(rc = render(&sc, p, threads, &img[i], err))) rc = detail(&img[i], d + npx * i, err);
   }
-  if (!rc) rc = wv_ssim(photo, &img[0], WV_SSIM_LUMA, ssim_cur, err);
+  if (!rc) rc = wv_ssim(photo, &img[0], WV_SSIM_RGB, ssim_cur, err);
   if (!rc) rc = wv_image_detail(&img[0], 0, 0, w, h, wr, err);
   double k[N_FREQ][2];
   if (!rc && (pd.nf = shared_peaks(wp, wr, w, h, k, err)) < 0) rc = WV_ERR_NOMEM;
@@ -349,7 +349,7 @@ wv_status wv_fit_distort(wv_fit_state *st, const wv_scene *s, const wv_image *ph
     else { /* the last estimate: measured alone */
       wv_image img = {0};
       wv_render_opts ro = {SPP, threads, NULL, NULL, NULL};
-      if (!(rc = wv_render(&cur, &st->params, &ro, &img, NULL, err))) rc = wv_ssim(photo, &img, WV_SSIM_LUMA, &now, err);
+      if (!(rc = wv_render(&cur, &st->params, &ro, &img, NULL, err))) rc = wv_ssim(photo, &img, WV_SSIM_RGB, &now, err);
       wv_image_free(&img);
     }
     if (rc) break;

@@ -23,12 +23,12 @@
 #include "woven/render.h"
 
 /* The colour split's rule of coverage: a share of warp cells this far from a half (the
- * built-ins give 0, 1/6, 1/4, 3/10 or 3/8), and a share of dark pixels this far (a 2/1
- * twill's third measures 0.35 to 0.43: blur mixes the colours at the yarns' edges), decide
- * which yarn type wears which colour; start colours whose luminances differ by less than
- * this fraction of their sum count as one colour. */
+ * built-ins give 0, 1/6, 1/4, 3/10 or 3/8) lets the weave decide which yarn type wears
+ * which colour, when the two ways round, rendered, differ by this much in how far their
+ * share of dark pixels lies from the photo's; start colours whose luminances differ by
+ * less than this fraction of their sum count as one colour. */
 #define SPLIT_WEAVE_MIN 0.08
-#define SPLIT_PHOTO_MIN 0.05
+#define SPLIT_SHARE_GAP 0.05
 #define SPLIT_LUM_SAME 0.05
 
 /* Rec. 709 luminance of an RGB triple. */
@@ -367,16 +367,15 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
   return WV_OK;
 }
 
-/* The photo's two colours as ratios to their neighbourhood's mean colour (linear values,
+/* An image's two colours as ratios to their neighbourhood's mean colour (linear values,
  * so illumination and the falloff cancel): 2-means over every pixel, r[0] the darker
  * cluster, *dark_share the share of pixels in it. Returns 0 when the image has no colour
  * detail to split. */
-static int photo_colour_ratios(const fit_ctx *c, double r[2][3], double *dark_share, wv_error *err) {
-  const wv_image *ph = &c->photo;
+static int colour_clusters(const wv_scene *s, const wv_image *ph, double r[2][3], double *dark_share, wv_error *err) {
   size_t n = (size_t)ph->w * ph->h;
   wv_image lin = {0}, mean = {0};
   if (wv_image_alloc(&lin, ph->w, ph->h, 3, err)) return 0;
-  for (size_t i = 0; i < 3 * n; i++) lin.data[i] = wv_decode(&c->scene, ph->data[i]);
+  for (size_t i = 0; i < 3 * n; i++) lin.data[i] = wv_decode(s, ph->data[i]);
   if (wv_image_blur(&lin, 4.0, &mean, err)) {
     wv_image_free(&lin);
     return 0;
@@ -424,22 +423,23 @@ static int photo_colour_ratios(const fit_ctx *c, double r[2][3], double *dark_sh
 /* A start that splits warp and weft colours. A start with one diffuse colour for both
  * yarn types is a symmetric point the gradient does not leave (both colours move
  * alike), while a two-colour photo needs them apart. Candidates: the photo's two local
- * colours (photo_colour_ratios), once and twice as far apart (yarns of one or two pixels
+ * colours (colour_clusters), once and twice as far apart (yarns of one or two pixels
  * mix them), on the warp and the weft each way round, scaled to the start's mean
  * diffuse colour; and both yarns given that mean (a one-colour cloth, where the start
  * split the hues: per-channel detail the photo lacks). The candidate with the lowest
  * loss (the start included) is kept.
  * The loss sees yarns of one or two pixels at no phase (its pixel term is downsampled),
  * so it cannot tell which yarn type wears which colour. The weave can when one yarn type
- * covers more of the cloth than the other (a 2/1 twill, a satin): the colour that covers
- * more of the photo goes on it, and a start with the colours the other way round is not
- * kept. Where both cover half (plain, basket, 2/2 twills), the swap is a shift of the
- * weave, which the registration after the fit finds. */
+ * covers more of the cloth than the other (a 2/1 twill, a satin): the way round whose
+ * render has a share of dark pixels nearer the photo's is kept (the renders carry the
+ * yarns' shading, which moves that share away from the weave's coverage), and a start
+ * with the colours the other way round is not. Where both cover half (plain, basket, 2/2
+ * twills), the swap is a shift of the weave, which the registration after the fit finds. */
 static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
   double r[2][3], dark_share = 0.5;
   wv_fit_record base = {0};
   wv_status rc = evaluate(c, &st->params, &base, NULL, NULL, err);
-  if (rc || !photo_colour_ratios(c, r, &dark_share, err)) return rc;
+  if (rc || !colour_clusters(&c->scene, &c->photo, r, &dark_share, err)) return rc;
   wv_weave w;
   double warp_share = 0.5;
   if (!wv_params_weave(&st->params, &w, NULL)) {
@@ -448,35 +448,54 @@ static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
       for (int j = 0; j < w.cols; j++) n += w.p[i][j] != 0;
     warp_share = (double)n / (w.rows * w.cols);
   }
-  /* the yarn type the darker colour must go on, or -1: either */
-  int need = fabs(warp_share - 0.5) < SPLIT_WEAVE_MIN || fabs(dark_share - 0.5) < SPLIT_PHOTO_MIN ? -1
-             : (warp_share > 0.5) == (dark_share > 0.5)                                         ? WV_WARP
-                                                                                                 : WV_WEFT;
-  double lum[2];
-  for (int y = 0; y < 2; y++)
-    lum[y] = luminance(st->params.diffuse[y][0], st->params.diffuse[y][1], st->params.diffuse[y][2]);
-  int start_dark = lum[WV_WARP] < lum[WV_WEFT] ? WV_WARP : WV_WEFT;
-  int start_ok = need < 0 || start_dark == need || fabs(lum[0] - lum[1]) < SPLIT_LUM_SAME * (lum[0] + lum[1]);
-  double best = start_ok ? base.loss : INFINITY, lo, hi;
-  int choice = 0;
-  wv_params best_p = st->params;
-  for (int cand = 1; cand <= 5 && !rc; cand++) {
+  wv_params cand_p[6];
+  double cand_loss[6], lo, hi, gap[2] = {0, 0};
+  for (int cand = 1; cand <= 5; cand++) {
     double alpha = cand <= 2 ? 1.0 : cand <= 4 ? 2.0 : 0.0; /* 5: both the mean colour */
-    int dark = (cand & 1) ? WV_WARP : WV_WEFT; /* the yarn type given the darker colour */
-    if (cand <= 4 && need >= 0 && dark != need) continue;
-    wv_params p = st->params;
+    int dark = (cand & 1) ? WV_WARP : WV_WEFT;              /* the yarn type given the darker colour */
+    wv_params *p = &cand_p[cand];
+    *p = st->params;
     for (int ch = 0; ch < 3; ch++) {
       double m = 0.5 * (st->params.diffuse[WV_WARP][ch] + st->params.diffuse[WV_WEFT][ch]);
       for (int k = 0; k < 2; k++) {
         int y = k == 0 ? dark : 1 - dark, id = y == WV_WARP ? WV_P_KD_WARP_R + ch : WV_P_KD_WEFT_R + ch;
         wv_param_range(id, &lo, &hi);
         double v = m * (1 + alpha * (r[k][ch] - 1));
-        p.diffuse[y][ch] = v < lo ? lo : v > hi ? hi : v;
+        p->diffuse[y][ch] = v < lo ? lo : v > hi ? hi : v;
       }
     }
-    wv_fit_record rec = {0};
-    if ((rc = evaluate(c, &p, &rec, NULL, NULL, err))) break;
-    if (rec.loss < best) best = rec.loss, choice = cand, best_p = p;
+    cand_loss[cand] = INFINITY;
+  }
+  /* the yarn type the darker colour must go on, or -1: either */
+  int need = -1;
+  if (fabs(warp_share - 0.5) >= SPLIT_WEAVE_MIN) {
+    for (int cand = 1; cand <= 2 && !rc; cand++) {
+      wv_fit_record rec = {0};
+      double rr[2][3], share = 0.5;
+      if ((rc = evaluate(c, &cand_p[cand], &rec, NULL, NULL, err))) break;
+      cand_loss[cand] = rec.loss;
+      colour_clusters(&c->scene, &c->render, rr, &share, err);
+      gap[cand - 1] = fabs(share - dark_share);
+    }
+    if (!rc && fabs(gap[0] - gap[1]) >= SPLIT_SHARE_GAP) need = gap[0] < gap[1] ? WV_WARP : WV_WEFT;
+  }
+  double lum[2];
+  for (int y = 0; y < 2; y++)
+    lum[y] = luminance(st->params.diffuse[y][0], st->params.diffuse[y][1], st->params.diffuse[y][2]);
+  int start_dark = lum[WV_WARP] < lum[WV_WEFT] ? WV_WARP : WV_WEFT;
+  int start_ok = need < 0 || start_dark == need || fabs(lum[0] - lum[1]) < SPLIT_LUM_SAME * (lum[0] + lum[1]);
+  double best = start_ok ? base.loss : INFINITY;
+  int choice = 0;
+  wv_params best_p = st->params;
+  for (int cand = 1; cand <= 5 && !rc; cand++) {
+    int dark = (cand & 1) ? WV_WARP : WV_WEFT;
+    if (cand <= 4 && need >= 0 && dark != need) continue;
+    if (cand_loss[cand] == INFINITY) {
+      wv_fit_record rec = {0};
+      if ((rc = evaluate(c, &cand_p[cand], &rec, NULL, NULL, err))) break;
+      cand_loss[cand] = rec.loss;
+    }
+    if (cand_loss[cand] < best) best = cand_loss[cand], choice = cand, best_p = cand_p[cand];
   }
   st->params = best_p;
   st->colour_split = choice;

@@ -156,7 +156,7 @@ static wv_status measure(level *l, const wv_scene *win, const wv_params *p, cons
   wv_status rc = wv_render(win, p, ro, &img, NULL, err);
   if (rc) return rc;
   rc = pc_best(&l->pc, &img, 0, NULL, ncc, err);
-  if (!rc) rc = wv_ssim(&l->ref, &img, WV_SSIM_LUMA, ssim, err);
+  if (!rc) rc = wv_ssim(&l->ref, &img, WV_SSIM_RGB, ssim, err);
   wv_image_free(&img);
   return rc;
 }
