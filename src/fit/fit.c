@@ -31,6 +31,8 @@
 #define SPLIT_SHARE_GAP 0.05
 #define SPLIT_LUM_SAME 0.05
 
+static double sq(double x) { return x * x; }
+
 /* Rec. 709 luminance of an RGB triple. */
 static double luminance(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
 
@@ -474,7 +476,15 @@ static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
       double rr[2][3], share = 0.5;
       if ((rc = evaluate(c, &cand_p[cand], &rec, NULL, NULL, err))) break;
       cand_loss[cand] = rec.loss;
-      colour_clusters(&c->scene, &c->render, rr, &share, err);
+      if (colour_clusters(&c->scene, &c->render, rr, &share, err)) {
+        /* the render's clusters matched to the photo's by colour: yarns that differ in hue
+         * more than in brightness can order them the other way by luminance */
+        double same = 0, swapped = 0;
+        for (int ch = 0; ch < 3; ch++)
+          same += sq(rr[0][ch] - r[0][ch]) + sq(rr[1][ch] - r[1][ch]),
+              swapped += sq(rr[0][ch] - r[1][ch]) + sq(rr[1][ch] - r[0][ch]);
+        if (swapped < same) share = 1 - share;
+      }
       gap[cand - 1] = fabs(share - dark_share);
     }
     if (!rc && fabs(gap[0] - gap[1]) >= SPLIT_SHARE_GAP) need = gap[0] < gap[1] ? WV_WARP : WV_WEFT;
