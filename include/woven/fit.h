@@ -151,8 +151,8 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
  * renders moved by 0.01 mm. A polynomial displacement of the fabric coordinates (degree
  * o->distort_degree, wv_scene.distort) is fitted to those phases by Gauss-Newton, degree
  * by degree, and estimated again from its own render; kept only as far as it raises the
- * whole image's SSIM per RGB channel. The fit's parameters do not change; the displacement goes to the
- * fit's scene (wv_fit_scene). docs/fit.md. */
+ * whole image's SSIM per RGB channel. The fit's parameters do not change; the displacement
+ * goes to the fit's scene (wv_fit_scene). docs/fit.md. */
 wv_status wv_fit_distort(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                          wv_error *err);
 
