@@ -3,8 +3,8 @@
 # compared file by file (a restructuring must leave every byte as it was):
 #   scripts/cli_outputs.sh WOVEN_BINARY OUT_DIR [PHOTO_FLAT45]
 #   diff -r OLD_OUT NEW_OUT
-# Timings are taken out of the JSON and HTML outputs (times.json; "seconds" fields),
-# since they differ from run to run of the same build.
+# Timings and the output's own path are blanked in the JSON and HTML outputs, since
+# they differ from run to run of the same build.
 set -euo pipefail
 wv=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
 out=$2
@@ -30,8 +30,23 @@ q=(--quiet --threads 2)
 if [[ -n $photo ]]; then
   "$wv" capture "$photo" --scene flat45 -o "$out/capture_flat" --iters 10 --drape none "${q[@]}"
 fi
-# Wall-clock figures differ between runs of one build: drop them.
+# Wall-clock figures and the output's own path differ between runs of one build: blank them.
 find "$out" -name 'times.json' -delete
-find "$out" \( -name '*.json' -o -name '*.html' \) -print0 |
-  xargs -0 sed -i -E 's/"([a-z_]*(seconds|_s|time|ms))": ?-?[0-9.e+-]+/"\1": 0/g'
+find "$out" -name '*.json' -print0 | xargs -0 python3 -c '
+import json, sys
+def blank(v):
+    if isinstance(v, dict):
+        return {k: (0 if k in ("timing", "time_s", "seconds") or k.endswith("_seconds") else "" if k == "dir" else blank(x))
+                for k, x in v.items()}
+    return [blank(x) for x in v] if isinstance(v, list) else v
+for path in sys.argv[1:]:
+    with open(path) as f:
+        try:
+            doc = json.load(f)
+        except ValueError:
+            continue
+    with open(path, "w") as f:
+        json.dump(blank(doc), f, sort_keys=True)
+'
+find "$out" -name '*.html' -print0 | xargs -0 sed -i -E 's/Time: [^<]*/Time: -/g'
 echo "outputs in $out"
