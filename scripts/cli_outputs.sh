@@ -32,12 +32,14 @@ if [[ -n $photo ]]; then
 fi
 # Wall-clock figures and the output's own path differ between runs of one build: blank them.
 find "$out" -name 'times.json' -delete
-find "$out" -name '*.json' -print0 | xargs -0 python3 -c '
-import json, sys
+find "$out" -name '*.json' -print0 | OUT="$(cd "$out" && pwd)" xargs -0 python3 -c '
+import json, os, sys
 def blank(v):
     if isinstance(v, dict):
-        return {k: (0 if k in ("timing", "time_s", "seconds") or k.endswith("_seconds") else "" if k == "dir" else blank(x))
+        return {k: (0 if k in ("timing", "time_s", "seconds", "ms") or k.endswith("_seconds") else blank(x))
                 for k, x in v.items()}
+    if isinstance(v, str):
+        return v.replace(os.environ["OUT"], "OUT")
     return [blank(x) for x in v] if isinstance(v, list) else v
 for path in sys.argv[1:]:
     with open(path) as f:
