@@ -2,7 +2,6 @@
  * validation every scene passes (ranges of every value). */
 #include "woven/scene.h"
 
-#include <float.h>
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -38,8 +37,8 @@ static const char *PRESET_FLAT45 =
     "  \"falloff\": {\"type\": \"gaussian\", \"sigma_px\": 450}\n"
     "}\n";
 
-/* Any finite number: the ranges are wv_scene_validate's, which also checks scenes made in code. */
-#define ANY (-DBL_MAX), DBL_MAX
+/* Numbers are read as any finite value (WV_JSON_FINITE): the ranges are wv_scene_validate's,
+ * which also checks scenes made in code. */
 
 static const char *const K_RESPONSE[] = {"exposure", "clip", "encoding", "gamma", "psf_sigma_px", NULL};
 static const char *const K_RESPONSE_NO_PSF[] = {"exposure", "clip", "encoding", "gamma", NULL};
@@ -53,16 +52,17 @@ wv_status wv_scene_read_response(json_t *root, int psf, wv_scene *s, wv_error *e
   wv_status st;
   s->exposure = 1, s->clip = 1, s->gamma = 2.2, s->psf_sigma = 0, s->falloff = 0, s->falloff_sigma = 0;
   if ((st = wv_json_object(root, NULL, "response", psf ? K_RESPONSE : K_RESPONSE_NO_PSF, 0, &o, err)) ||
-      (st = wv_json_number(o, "response", "exposure", ANY, 0, &s->exposure, err)) ||
-      (st = wv_json_number(o, "response", "clip", ANY, 0, &s->clip, err)) ||
-      (st = wv_json_number(o, "response", "gamma", ANY, 0, &s->gamma, err)) ||
-      (st = wv_json_number(o, "response", "psf_sigma_px", ANY, 0, &s->psf_sigma, err)) ||
+      (st = wv_json_number(o, "response", "exposure", WV_JSON_FINITE, 0, &s->exposure, err)) ||
+      (st = wv_json_number(o, "response", "clip", WV_JSON_FINITE, 0, &s->clip, err)) ||
+      (st = wv_json_number(o, "response", "gamma", WV_JSON_FINITE, 0, &s->gamma, err)) ||
+      (st = wv_json_number(o, "response", "psf_sigma_px", WV_JSON_FINITE, 0, &s->psf_sigma, err)) ||
       (st = wv_json_enum_of(o, "response", "encoding", enc, 0, &e, err)))
     return st;
   s->encoding = (wv_encoding)e;
   if ((st = wv_json_object(root, NULL, "falloff", K_FALLOFF, 0, &o, err))) return st;
   if (o && (st = wv_json_enum_of(o, "falloff", "type", type, WV_JSON_REQUIRED, &s->falloff, err))) return st;
-  if (s->falloff && (st = wv_json_number(o, "falloff", "sigma_px", ANY, WV_JSON_REQUIRED, &s->falloff_sigma, err)))
+  if (s->falloff &&
+      (st = wv_json_number(o, "falloff", "sigma_px", WV_JSON_FINITE, WV_JSON_REQUIRED, &s->falloff_sigma, err)))
     return st;
   return WV_OK;
 }
@@ -101,10 +101,10 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
 
   s->cam_up[1] = 1;
   if ((st = wv_json_object(r, NULL, "camera", k_cam, WV_JSON_REQUIRED, &o, err)) ||
-      (st = wv_json_numbers(o, "camera", "position_mm", 3, ANY, WV_JSON_REQUIRED, s->cam_pos, err)) ||
-      (st = wv_json_numbers(o, "camera", "look_at_mm", 3, ANY, WV_JSON_REQUIRED, s->cam_look_at, err)) ||
-      (st = wv_json_numbers(o, "camera", "up", 3, ANY, 0, s->cam_up, err)) ||
-      (st = wv_json_number(o, "camera", "vfov_deg", ANY, WV_JSON_REQUIRED, &s->vfov_deg, err)))
+      (st = wv_json_numbers(o, "camera", "position_mm", 3, WV_JSON_FINITE, WV_JSON_REQUIRED, s->cam_pos, err)) ||
+      (st = wv_json_numbers(o, "camera", "look_at_mm", 3, WV_JSON_FINITE, WV_JSON_REQUIRED, s->cam_look_at, err)) ||
+      (st = wv_json_numbers(o, "camera", "up", 3, WV_JSON_FINITE, 0, s->cam_up, err)) ||
+      (st = wv_json_number(o, "camera", "vfov_deg", WV_JSON_FINITE, WV_JSON_REQUIRED, &s->vfov_deg, err)))
     return st;
 
   int shape = 0;
@@ -118,31 +118,31 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
     if (json_object_get(o, "distortion"))
       return wv_fail(err, WV_ERR_INVALID, "'sample.distortion' applies to a plane, not a cylinder");
     s->warp_along_axis = 1;
-    if ((st = wv_json_number(o, "sample", "radius_mm", ANY, WV_JSON_REQUIRED, &s->radius, err)) ||
+    if ((st = wv_json_number(o, "sample", "radius_mm", WV_JSON_FINITE, WV_JSON_REQUIRED, &s->radius, err)) ||
         (st = wv_json_enum_of(o, "sample", "warp", warps, 0, &s->warp_along_axis, err)))
       return st;
   } else {
     json_t *d;
-    if ((st = wv_json_number(o, "sample", "rotation_deg", ANY, 0, &s->rotation_deg, err)) ||
-        (st = wv_json_number(o, "sample", "skew_deg", ANY, 0, &s->skew_deg, err)) ||
+    if ((st = wv_json_number(o, "sample", "rotation_deg", WV_JSON_FINITE, 0, &s->rotation_deg, err)) ||
+        (st = wv_json_number(o, "sample", "skew_deg", WV_JSON_FINITE, 0, &s->skew_deg, err)) ||
         (st = wv_json_object(o, "sample", "distortion", k_dis, 0, &d, err)))
       return st;
-    if (d && ((st = wv_json_number(d, "sample.distortion", "extent_mm", ANY, WV_JSON_REQUIRED, &s->distort_extent_mm,
-                                   err)) ||
-              (st = wv_json_numbers(d, "sample.distortion", "x", WV_DISTORT_TERMS, ANY, WV_JSON_REQUIRED, s->distort[0],
-                                    err)) ||
-              (st = wv_json_numbers(d, "sample.distortion", "y", WV_DISTORT_TERMS, ANY, WV_JSON_REQUIRED, s->distort[1],
-                                    err))))
+    if (d && ((st = wv_json_number(d, "sample.distortion", "extent_mm", WV_JSON_FINITE, WV_JSON_REQUIRED,
+                                   &s->distort_extent_mm, err)) ||
+              (st = wv_json_numbers(d, "sample.distortion", "x", WV_DISTORT_TERMS, WV_JSON_FINITE, WV_JSON_REQUIRED,
+                                    s->distort[0], err)) ||
+              (st = wv_json_numbers(d, "sample.distortion", "y", WV_DISTORT_TERMS, WV_JSON_FINITE, WV_JSON_REQUIRED,
+                                    s->distort[1], err))))
       return st;
   }
   s->mm_per_unit = 1;
-  if ((st = wv_json_numbers(o, "sample", "offset_mm", 2, ANY, 0, s->fabric_offset, err)) ||
-      (st = wv_json_number(o, "sample", "mm_per_unit", ANY, 0, &s->mm_per_unit, err)))
+  if ((st = wv_json_numbers(o, "sample", "offset_mm", 2, WV_JSON_FINITE, 0, s->fabric_offset, err)) ||
+      (st = wv_json_number(o, "sample", "mm_per_unit", WV_JSON_FINITE, 0, &s->mm_per_unit, err)))
     return st;
 
   if ((st = wv_json_object(r, NULL, "light", k_lig, WV_JSON_REQUIRED, &o, err)) ||
-      (st = wv_json_numbers(o, "light", "position_mm", 3, ANY, WV_JSON_REQUIRED, s->light_pos, err)) ||
-      (st = wv_json_number(o, "light", "intensity", ANY, WV_JSON_REQUIRED, &s->light_intensity, err)))
+      (st = wv_json_numbers(o, "light", "position_mm", 3, WV_JSON_FINITE, WV_JSON_REQUIRED, s->light_pos, err)) ||
+      (st = wv_json_number(o, "light", "intensity", WV_JSON_FINITE, WV_JSON_REQUIRED, &s->light_intensity, err)))
     return st;
 
   if ((st = wv_scene_read_response(r, 1, s, err))) return st;

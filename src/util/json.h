@@ -11,6 +11,7 @@
 #ifndef WOVEN_UTIL_JSON_H
 #define WOVEN_UTIL_JSON_H
 
+#include <float.h>
 #include <jansson.h>
 #include <stddef.h>
 
@@ -32,6 +33,10 @@ enum {
   WV_JSON_ONE_FOR_ALL = 2, /* wv_json_numbers: one number stands for every element (a grey colour) */
   WV_JSON_NONEMPTY = 4     /* wv_json_string: "" is refused */
 };
+
+/* lo, hi of a number that may take any finite value (JSON holds no other), for values
+ * whose ranges are checked later, on the struct they fill. */
+#define WV_JSON_FINITE (-DBL_MAX), DBL_MAX
 
 /* A key's name in messages: "obj.key", or "key" when obj is NULL or "". */
 void wv_json_key_name(const char *obj, const char *key, char *buf, size_t cap);
