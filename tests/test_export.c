@@ -304,7 +304,7 @@ static void test_bad_input(void **state) {
   wv_scene s;
   assert_int_equal(wv_scene_preset("flat45", &s, &err), WV_OK);
   p.roughness[0] = 3.0;
-  wv_view_opts vo = {&p, &s, NULL, NULL};
+  wv_view_opts vo = {.params = &p, .scene = &s};
   snprintf(path, sizeof path, "%s/v.html", dir);
   assert_int_equal(wv_view_write(path, &vo, &err), WV_ERR_INVALID);
   assert_non_null(strstr(err.msg, "roughness"));
@@ -326,7 +326,7 @@ static void test_view_page(void **state) {
   const char *dir = tu_tmpdir("view_page");
   char path[512];
   snprintf(path, sizeof path, "%s/v.html", dir);
-  wv_view_opts vo = {&p, &s, NULL, "t"};
+  wv_view_opts vo = {.params = &p, .scene = &s, .title = "t"};
   assert_int_equal(wv_view_write(path, &vo, &err), WV_OK);
   char *html;
   assert_int_equal(wv_read_file(path, &html, NULL, &err), WV_OK);

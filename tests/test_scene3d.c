@@ -198,7 +198,7 @@ static void render_text(const char *json, int threads, wv_image *cap, wv_image *
   wv_error err = {0};
   if (wv_scene3d_parse(json, "test scene", WOVEN_SOURCE_DIR "/scenes", &s, &err)) fail_msg("%s", err.msg);
   if (wv_world_load(&s, NULL, threads, &w, &err)) fail_msg("%s", err.msg);
-  wv_scene3d_opts o = {0, threads, NULL, NULL};
+  wv_scene3d_opts o = {.threads = threads};
   if (wv_scene3d_render(&s, w, &o, cap, rad, NULL, &err)) fail_msg("%s", err.msg);
   wv_world_free(w);
   wv_scene3d_free(&s);
@@ -252,12 +252,12 @@ static void test_quad_matches_flat45(void **state) {
   s.response.width = s.response.height = 96, s.response.falloff = 0, ref.falloff = 0;
   wv_world *w;
   assert_int_equal(wv_world_load(&s, NULL, 2, &w, &err), WV_OK);
-  wv_scene3d_opts o = {0, 2, NULL, NULL};
+  wv_scene3d_opts o = {.threads = 2};
   wv_image a, b;
   assert_int_equal(wv_scene3d_render(&s, w, &o, &a, NULL, NULL, &err), WV_OK);
   wv_params p;
   assert_int_equal(wv_params_read(WOVEN_SOURCE_DIR "/examples/twill.json", &p, &err), WV_OK);
-  wv_render_opts ro = {256, 2, NULL, NULL, NULL};
+  wv_render_opts ro = {.spp = 256, .threads = 2};
   assert_int_equal(wv_render(&ref, &p, &ro, &b, NULL, &err), WV_OK);
   double ssim, mae;
   assert_int_equal(wv_ssim(&a, &b, WV_SSIM_LUMA, &ssim, &err), WV_OK);
