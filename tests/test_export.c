@@ -289,6 +289,12 @@ static void test_bad_input(void **state) {
   assert_int_equal(wv_bake_fabric(&p, &o, &b, &err), WV_ERR_INVALID);
   assert_non_null(strstr(err.msg, "houndstooth"));
   params_of("plain", &p);
+  /* a field of 0 takes its default: texture_size 64 */
+  wv_bake_opts z = {.samples = 1, .directions = 8};
+  assert_int_equal(wv_bake_fabric(&p, &z, &b, &err), WV_OK);
+  assert_int_equal(b.base_color.w, 64);
+  assert_int_equal(b.directions, 8);
+  wv_bake_free(&b);
   assert_int_equal(wv_bake_fabric(&p, &o, &b, &err), WV_OK);
   wv_tri_mesh m;
   assert_int_equal(wv_tri_mesh_quad(10, &m, &err), WV_OK);

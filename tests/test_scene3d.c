@@ -389,6 +389,14 @@ static void test_parse_errors(void **state) {
       "\"a.obj\", \"material\": \"m\"}]}", "render.max_bounces");
   BAD("\"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": [{\"mesh\": \"a.obj\", \"quad\": {}, "
       "\"material\": \"m\"}]}", "exactly one");
+  /* the capture scenes' response: the same keys (but the camera blur) and ranges */
+#define OBJ "\"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": [{\"mesh\": \"a.obj\", \"material\": \"m\"}], "
+  BAD(OBJ "\"response\": {\"exposure\": 2e6}}", "'response.exposure' = 2000000 must be in (0, 1000000]");
+  BAD(OBJ "\"response\": {\"encoding\": \"gamma\", \"gamma\": 10}}", "'response.gamma' = 10 is outside (0.1, 10)");
+  BAD(OBJ "\"response\": {\"encoding\": \"log\"}}", "'response.encoding' = 'log': expected srgb, gamma or linear");
+  BAD(OBJ "\"response\": {\"psf_sigma_px\": 1}}", "unknown key 'response.psf_sigma_px'");
+  BAD(OBJ "\"falloff\": {\"type\": \"gaussian\", \"sigma_px\": 0}}", "'falloff.sigma_px' = 0 must be in (0, 1e+09]");
+#undef OBJ
   /* a scene that names a missing file parses (no file is read), then fails to load naming the file */
   wv_scene3d s;
   wv_world *w = NULL;
