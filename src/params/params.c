@@ -141,7 +141,6 @@ static const char *const KNOWN_KEYS[] = {
     "yarn_width", "seed",      "specular_noise",  "comment",       NULL};
 
 static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
-  if (!json_is_object(root)) return wv_fail(err, WV_ERR_INVALID, "top level must be a JSON object");
   const char *name = NULL;
   wv_status st;
   if ((st = wv_json_only_keys(root, NULL, KNOWN_KEYS, err)) ||
@@ -190,11 +189,10 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
 }
 
 wv_status wv_params_parse(const char *text, const char *source, wv_params *p, wv_error *err) {
-  json_error_t je;
-  json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
-  if (!root)
-    return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", source, je.line, je.column, je.text);
-  wv_status st = parse_root(root, p, err);
+  json_t *root;
+  wv_status st = wv_json_parse_object(text, source, &root, err);
+  if (st) return st;
+  st = parse_root(root, p, err);
   json_decref(root);
   if (st) wv_error_prefix(err, "%s", source);
   return st;

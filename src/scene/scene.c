@@ -245,11 +245,10 @@ void wv_scene_distortion_at(const wv_scene *s, double x, double y, double d[2]) 
 }
 
 wv_status wv_scene_parse(const char *text, const char *source, wv_scene *s, wv_error *err) {
-  json_error_t je;
-  json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
-  if (!root) return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", source, je.line, je.column, je.text);
-  wv_status st = json_is_object(root) ? parse_root(root, s, err)
-                                      : wv_fail(err, WV_ERR_INVALID, "top level must be a JSON object");
+  json_t *root;
+  wv_status st = wv_json_parse_object(text, source, &root, err);
+  if (st) return st;
+  st = parse_root(root, s, err);
   json_decref(root);
   if (st) wv_error_prefix(err, "%s", source);
   return st;

@@ -408,12 +408,11 @@ void wv_scene3d_free(wv_scene3d *s) {
 wv_status wv_scene3d_parse(const char *text, const char *source, const char *base_dir, wv_scene3d *s,
                            wv_error *err) {
   memset(s, 0, sizeof *s);
-  json_error_t je;
-  json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
-  if (!root) return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", source, je.line, je.column, je.text);
+  json_t *root;
+  wv_status st = wv_json_parse_object(text, source, &root, err);
+  if (st) return st;
   ctx c = {base_dir, err};
-  wv_status st = json_is_object(root) ? parse_root(root, &c, s)
-                                      : wv_fail(err, WV_ERR_INVALID, "the top level must be a JSON object");
+  st = parse_root(root, &c, s);
   json_decref(root);
   if (st) {
     wv_error_prefix(err, "%s", source);
@@ -425,8 +424,7 @@ wv_status wv_scene3d_parse(const char *text, const char *source, const char *bas
 wv_status wv_scene3d_read(const char *path, wv_scene3d *s, wv_error *err) {
   memset(s, 0, sizeof *s);
   char *text;
-  size_t len;
-  wv_status st = wv_read_file(path, &text, &len, err);
+  wv_status st = wv_json_read_text(path, &text, err);
   if (st) return st;
   char *base = strdup(path);
   if (!base) {
@@ -435,8 +433,7 @@ wv_status wv_scene3d_read(const char *path, wv_scene3d *s, wv_error *err) {
   }
   char *slash = strrchr(base, '/');
   if (slash) *(slash == base ? slash + 1 : slash) = '\0';
-  if (strlen(text) != len) st = wv_fail(err, WV_ERR_FORMAT, "%s: file contains a NUL byte; not a JSON text", path);
-  else st = wv_scene3d_parse(text, path, slash ? base : NULL, s, err);
+  st = wv_scene3d_parse(text, path, slash ? base : NULL, s, err);
   free(base);
   free(text);
   return st;

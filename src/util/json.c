@@ -39,16 +39,29 @@ wv_status wv_json_read_text(const char *path, char **text, wv_error *err) {
   return WV_OK;
 }
 
+static wv_status parse(const char *text, const char *source, json_t **root, wv_error *err) {
+  json_error_t je;
+  *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
+  if (!*root) return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", source, je.line, je.column, je.text);
+  return WV_OK;
+}
+
 wv_status wv_json_load_file(const char *path, json_t **root, wv_error *err) {
   char *text;
   *root = NULL;
   wv_status st = wv_json_read_text(path, &text, err);
   if (st) return st;
-  json_error_t je;
-  *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
+  st = parse(text, path, root, err);
   free(text);
-  if (!*root) return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", path, je.line, je.column, je.text);
-  return WV_OK;
+  return st;
+}
+
+wv_status wv_json_parse_object(const char *text, const char *source, json_t **root, wv_error *err) {
+  wv_status st = parse(text, source, root, err);
+  if (st || json_is_object(*root)) return st;
+  json_decref(*root);
+  *root = NULL;
+  return wv_fail(err, WV_ERR_INVALID, "%s: top level must be a JSON object", source);
 }
 
 void wv_json_key_name(const char *obj, const char *key, char *buf, size_t cap) {

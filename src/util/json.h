@@ -25,6 +25,9 @@ const char *wv_num_str(double v, char *buf);
 wv_status wv_json_read_text(const char *path, char **text, wv_error *err);
 /* wv_json_read_text, then parsed (duplicate keys refused). Messages start with the path. */
 wv_status wv_json_load_file(const char *path, json_t **root, wv_error *err);
+/* A JSON text whose top level is an object (duplicate keys refused); messages start
+ * with source ("source:line:column: malformed JSON: ..."). The caller frees *root. */
+wv_status wv_json_parse_object(const char *text, const char *source, json_t **root, wv_error *err);
 
 /* The flags of the readers below (1 and 0 also read as required / optional). */
 enum {
