@@ -188,23 +188,24 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
   return wv_params_validate(p, err);
 }
 
-wv_status wv_params_parse(const char *text, const char *source, wv_params *p, wv_error *err) {
-  json_t *root;
-  wv_status st = wv_json_parse_object(text, source, &root, err);
-  if (st) return st;
-  st = parse_root(root, p, err);
+/* parse_root, then root freed; messages start with source. */
+static wv_status from_root(json_t *root, const char *source, wv_params *p, wv_error *err) {
+  wv_status st = parse_root(root, p, err);
   json_decref(root);
   if (st) wv_error_prefix(err, "%s", source);
   return st;
 }
 
+wv_status wv_params_parse(const char *text, const char *source, wv_params *p, wv_error *err) {
+  json_t *root;
+  wv_status st = wv_json_parse_object(text, source, &root, err);
+  return st ? st : from_root(root, source, p, err);
+}
+
 wv_status wv_params_read(const char *path, wv_params *p, wv_error *err) {
-  char *text;
-  wv_status st = wv_json_read_text(path, &text, err);
-  if (st) return st;
-  st = wv_params_parse(text, path, p, err);
-  free(text);
-  return st;
+  json_t *root;
+  wv_status st = wv_json_load_object(path, &root, err);
+  return st ? st : from_root(root, path, p, err);
 }
 
 static json_t *rgb(const double v[3]) {

@@ -244,23 +244,24 @@ void wv_scene_distortion_at(const wv_scene *s, double x, double y, double d[2]) 
   for (int i = 0; i < WV_DISTORT_TERMS; i++) d[0] += s->distort[0][i] * t[i], d[1] += s->distort[1][i] * t[i];
 }
 
-wv_status wv_scene_parse(const char *text, const char *source, wv_scene *s, wv_error *err) {
-  json_t *root;
-  wv_status st = wv_json_parse_object(text, source, &root, err);
-  if (st) return st;
-  st = parse_root(root, s, err);
+/* parse_root, then root freed; messages start with source. */
+static wv_status from_root(json_t *root, const char *source, wv_scene *s, wv_error *err) {
+  wv_status st = parse_root(root, s, err);
   json_decref(root);
   if (st) wv_error_prefix(err, "%s", source);
   return st;
 }
 
+wv_status wv_scene_parse(const char *text, const char *source, wv_scene *s, wv_error *err) {
+  json_t *root;
+  wv_status st = wv_json_parse_object(text, source, &root, err);
+  return st ? st : from_root(root, source, s, err);
+}
+
 wv_status wv_scene_read(const char *path, wv_scene *s, wv_error *err) {
-  char *text;
-  wv_status st = wv_json_read_text(path, &text, err);
-  if (st) return st;
-  st = wv_scene_parse(text, path, s, err);
-  free(text);
-  return st;
+  json_t *root;
+  wv_status st = wv_json_load_object(path, &root, err);
+  return st ? st : from_root(root, path, s, err);
 }
 
 wv_status wv_scene_preset(const char *name, wv_scene *s, wv_error *err) {

@@ -56,12 +56,21 @@ wv_status wv_json_load_file(const char *path, json_t **root, wv_error *err) {
   return st;
 }
 
-wv_status wv_json_parse_object(const char *text, const char *source, json_t **root, wv_error *err) {
-  wv_status st = parse(text, source, root, err);
-  if (st || json_is_object(*root)) return st;
+static wv_status need_object(const char *source, json_t **root, wv_error *err) {
+  if (json_is_object(*root)) return WV_OK;
   json_decref(*root);
   *root = NULL;
   return wv_fail(err, WV_ERR_INVALID, "%s: top level must be a JSON object", source);
+}
+
+wv_status wv_json_parse_object(const char *text, const char *source, json_t **root, wv_error *err) {
+  wv_status st = parse(text, source, root, err);
+  return st ? st : need_object(source, root, err);
+}
+
+wv_status wv_json_load_object(const char *path, json_t **root, wv_error *err) {
+  wv_status st = wv_json_load_file(path, root, err);
+  return st ? st : need_object(path, root, err);
 }
 
 void wv_json_key_name(const char *obj, const char *key, char *buf, size_t cap) {

@@ -28,6 +28,8 @@ wv_status wv_json_load_file(const char *path, json_t **root, wv_error *err);
 /* A JSON text whose top level is an object (duplicate keys refused); messages start
  * with source ("source:line:column: malformed JSON: ..."). The caller frees *root. */
 wv_status wv_json_parse_object(const char *text, const char *source, json_t **root, wv_error *err);
+/* The same for a file (wv_json_load_file). */
+wv_status wv_json_load_object(const char *path, json_t **root, wv_error *err);
 
 /* The flags of the readers below (1 and 0 also read as required / optional). */
 enum {
