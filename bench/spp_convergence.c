@@ -45,7 +45,7 @@ int main(int argc, char **argv) {
         wv_image prev = {0};
         for (int k = 0; k <= LADDER; k++) {
           int spp = k < LADDER ? ladder[k] : 2 * ladder[LADDER - 1];
-          wv_render_opts ro = {spp, 2, NULL, NULL, NULL};
+          wv_render_opts ro = {.spp = spp, .threads = 2};
           wv_image img = {0};
           if (wv_render(&s, &p, &ro, &img, NULL, &e)) {
             fprintf(stderr, "%s\n", e.msg);

@@ -33,7 +33,7 @@ static void die(const wv_error *e) {
 }
 
 static double ssim_of(const wv_scene *s, const wv_params *p, const wv_image *ref, int threads) {
-  wv_render_opts ro = {0, threads, NULL, NULL, NULL};
+  wv_render_opts ro = {.threads = threads};
   wv_image img;
   wv_error err = {0};
   if (wv_render(s, p, &ro, &img, NULL, &err)) die(&err);
@@ -95,7 +95,7 @@ int main(int argc, char **argv) {
       target.specular[WV_WEFT][c] = pow(target.diffuse[WV_WEFT][c], 0.5);
     }
     if (wv_params_validate(&target, &err)) die(&err);
-    wv_render_opts ro = {0, o.threads, NULL, NULL, NULL};
+    wv_render_opts ro = {.threads = o.threads};
     wv_image photo;
     if (wv_render(&s, &target, &ro, &photo, NULL, &err)) die(&err);
     wv_params_default(pat, &start, NULL);

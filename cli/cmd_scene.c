@@ -83,7 +83,8 @@ int cmd_scene(int argc, char **argv) {
   double t_load = cli_now() - t0;
   cli_progress bar;
   cli_progress_start(&bar, &c, "scene");
-  wv_scene3d_opts opt = {(int)spp, (int)threads, cli_progress_update, &bar};
+  wv_scene3d_opts opt = {
+      .spp = (int)spp, .threads = (int)threads, .progress = cli_progress_update, .progress_user = &bar};
   wv_image cap, rad;
   wv_scene3d_stats stats = {0};
   double t1 = cli_now();

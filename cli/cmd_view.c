@@ -53,7 +53,7 @@ int cmd_view(int argc, char **argv) {
   if (!photo && src.has_photo && !scene_name) photo = src.photo; /* the fit's photo fits the fit's scene */
   char title[200];
   snprintf(title, sizeof title, "woven: %s", src.params.pattern);
-  wv_view_opts vo = {&src.params, &scene, photo, title};
+  wv_view_opts vo = {.params = &src.params, .scene = &scene, .photo = photo, .title = title};
   if (wv_view_write(out, &vo, &err)) return cli_fail(&c, &err);
   cli_info(&c, "wrote %s (%s, scene %s%s)\n", out, src.params.pattern, scene.name, photo ? ", with the photo" : "");
   if (c.json)

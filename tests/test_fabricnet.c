@@ -404,7 +404,7 @@ static void test_augment(void **state) {
   wv_params p;
   wv_error e;
   assert_int_equal(wv_params_sample_prior("twill21z", 5, &p, &e), WV_OK);
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   wv_image cap = {0}, rad = {0}, a = {0}, b = {0}, c = {0};
   assert_int_equal(wv_render(&s, &p, &ro, &cap, &rad, &e), WV_OK);
   assert_int_equal(wv_camera_augment(&s, &rad, 11, &a, &e), WV_OK);

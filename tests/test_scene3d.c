@@ -198,7 +198,7 @@ static void render_text(const char *json, int threads, wv_image *cap, wv_image *
   wv_error err = {0};
   if (wv_scene3d_parse(json, "test scene", WOVEN_SOURCE_DIR "/scenes", &s, &err)) fail_msg("%s", err.msg);
   if (wv_world_load(&s, NULL, threads, &w, &err)) fail_msg("%s", err.msg);
-  wv_scene3d_opts o = {0, threads, NULL, NULL};
+  wv_scene3d_opts o = {.threads = threads};
   if (wv_scene3d_render(&s, w, &o, cap, rad, NULL, &err)) fail_msg("%s", err.msg);
   wv_world_free(w);
   wv_scene3d_free(&s);
@@ -252,12 +252,12 @@ static void test_quad_matches_flat45(void **state) {
   s.response.width = s.response.height = 96, s.response.falloff = 0, ref.falloff = 0;
   wv_world *w;
   assert_int_equal(wv_world_load(&s, NULL, 2, &w, &err), WV_OK);
-  wv_scene3d_opts o = {0, 2, NULL, NULL};
+  wv_scene3d_opts o = {.threads = 2};
   wv_image a, b;
   assert_int_equal(wv_scene3d_render(&s, w, &o, &a, NULL, NULL, &err), WV_OK);
   wv_params p;
   assert_int_equal(wv_params_read(WOVEN_SOURCE_DIR "/examples/twill.json", &p, &err), WV_OK);
-  wv_render_opts ro = {256, 2, NULL, NULL, NULL};
+  wv_render_opts ro = {.spp = 256, .threads = 2};
   assert_int_equal(wv_render(&ref, &p, &ro, &b, NULL, &err), WV_OK);
   double ssim, mae;
   assert_int_equal(wv_ssim(&a, &b, WV_SSIM_LUMA, &ssim, &err), WV_OK);
@@ -389,6 +389,14 @@ static void test_parse_errors(void **state) {
       "\"a.obj\", \"material\": \"m\"}]}", "render.max_bounces");
   BAD("\"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": [{\"mesh\": \"a.obj\", \"quad\": {}, "
       "\"material\": \"m\"}]}", "exactly one");
+  /* the capture scenes' response: the same keys (but the camera blur) and ranges */
+#define OBJ "\"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": [{\"mesh\": \"a.obj\", \"material\": \"m\"}], "
+  BAD(OBJ "\"response\": {\"exposure\": 2e6}}", "'response.exposure' = 2000000 must be in (0, 1000000]");
+  BAD(OBJ "\"response\": {\"encoding\": \"gamma\", \"gamma\": 10}}", "'response.gamma' = 10 is outside (0.1, 10)");
+  BAD(OBJ "\"response\": {\"encoding\": \"log\"}}", "'response.encoding' = 'log': expected srgb, gamma or linear");
+  BAD(OBJ "\"response\": {\"psf_sigma_px\": 1}}", "unknown key 'response.psf_sigma_px'");
+  BAD(OBJ "\"falloff\": {\"type\": \"gaussian\", \"sigma_px\": 0}}", "'falloff.sigma_px' = 0 must be in (0, 1e+09]");
+#undef OBJ
   /* a scene that names a missing file parses (no file is read), then fails to load naming the file */
   wv_scene3d s;
   wv_world *w = NULL;

@@ -125,6 +125,7 @@ void wv_world_free(wv_world *w);
 /* Triangles and vertices over all objects. */
 void wv_world_size(const wv_world *w, long long *triangles, long long *vertices);
 
+/* A zeroed struct (or NULL) means the defaults: the scene's spp, all threads, no progress. */
 typedef struct {
   int spp;     /* camera rays per pixel; 0 = the scene's */
   int threads; /* 0 = OpenMP default */
@@ -155,7 +156,8 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
                             wv_image *radiance, wv_scene3d_stats *stats, wv_error *err);
 
 /* A scene file rendered with every fabric's parameters replaced (the capture's
- * report shows a fit on the bundled draped cloth this way). */
+ * report shows a fit on the bundled draped cloth this way). A zeroed struct means
+ * the scene's size and spp on all threads. */
 typedef struct {
   int width, height; /* image size instead of the scene's (same camera); 0: the scene's */
   int spp;           /* 0: the scene's */

@@ -215,8 +215,12 @@ static float q8(float v) { return (float)wv_io_quantise(v, 255u) / 255.0f; }
 
 wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, wv_error *err) {
   memset(b, 0, sizeof *b);
-  wv_bake_opts def;
-  if (!o) wv_bake_opts_default(&def), o = &def;
+  wv_bake_opts def, use = o ? *o : (wv_bake_opts){0};
+  wv_bake_opts_default(&def); /* 0 in a field takes its default */
+  if (!use.texture_size) use.texture_size = def.texture_size;
+  if (!use.samples) use.samples = def.samples;
+  if (!use.directions) use.directions = def.directions;
+  o = &use;
   if (o->texture_size < 8 || o->texture_size > 1024)
     return wv_fail(err, WV_ERR_INVALID, "texture size %d is outside 8..1024", o->texture_size);
   if (o->samples < 1 || o->samples > 8)
