@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "cli.h"
-#include "woven/fabricnet.h"
+#include "woven/pattern.h"
 
 static const cli_cmd PREDICT_CMD = {
     "predict",

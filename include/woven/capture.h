@@ -7,10 +7,10 @@
 
 #include "woven/descriptor.h"
 #include "woven/error.h"
-#include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/image.h"
 #include "woven/params.h"
+#include "woven/pattern.h"
 #include "woven/photo.h"
 #include "woven/report.h"
 #include "woven/scene.h"

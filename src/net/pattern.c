@@ -9,10 +9,10 @@
 #include <string.h>
 
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/imgops.h"
 #include "woven/loss.h"
+#include "woven/pattern.h"
 #include "woven/render.h"
 
 void wv_pattern_opts_default(wv_pattern_opts *o) {
