@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "cli.h"
-#include "woven/pattern.h"
+#include "woven/estimate.h"
 
 static const cli_cmd PREDICT_CMD = {
     "predict",
