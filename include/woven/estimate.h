@@ -36,6 +36,9 @@ typedef struct {
   wv_descriptor *desc;
 } wv_estimate;
 wv_status wv_estimate_run(const wv_estimate_opts *o, wv_estimate *e, wv_error *err);
+/* The same in the scene s, already loaded from o->scene (a caller that checks the scene
+ * before the network runs loads it once). */
+wv_status wv_estimate_run_scene(const wv_estimate_opts *o, const wv_scene *s, wv_estimate *e, wv_error *err);
 void wv_estimate_free(wv_estimate *e);
 
 #ifdef __cplusplus

@@ -455,10 +455,10 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
   memcpy(job.inputs, inputs, sizeof inputs);
   wv_status rc = wv_fit_job_check_dir(&job, err);
   if (rc) return rc;
-  wv_scene probe; /* the fit's size limits, before the network runs */
-  if ((rc = wv_scene_load(o->estimate.scene, &probe, err)) || (rc = wv_fit_check_sizes(&probe, NULL, &o->fit, err)))
+  wv_scene scene; /* loaded once: the fit's size limits are checked before the network runs */
+  if ((rc = wv_scene_load(o->estimate.scene, &scene, err)) || (rc = wv_fit_check_sizes(&scene, NULL, &o->fit, err)))
     return rc;
-  if ((rc = wv_estimate_run(&o->estimate, est, err))) return rc;
+  if ((rc = wv_estimate_run_scene(&o->estimate, &scene, est, err))) return rc;
   if (o->on_estimate) o->on_estimate(o->progress.user, est);
   char *network = wv_params_to_json(&est->params), *nl = network ? realloc(network, strlen(network) + 2) : NULL;
   if (nl) strcat(nl, "\n"), network = nl; /* as wv_params_write writes it */

@@ -28,10 +28,17 @@ void wv_estimate_free(wv_estimate *e) {
 }
 
 wv_status wv_estimate_run(const wv_estimate_opts *o, wv_estimate *e, wv_error *err) {
+  wv_scene s;
+  memset(e, 0, sizeof *e);
+  wv_status rc = wv_scene_load(o->scene, &s, err);
+  return rc ? rc : wv_estimate_run_scene(o, &s, e, err);
+}
+
+wv_status wv_estimate_run_scene(const wv_estimate_opts *o, const wv_scene *s, wv_estimate *e, wv_error *err) {
   double t0 = omp_get_wtime();
   memset(e, 0, sizeof *e);
-  wv_status rc = wv_scene_load(o->scene, &e->scene, err);
-  if (rc) return rc;
+  e->scene = *s;
+  wv_status rc;
   wv_params probe; /* the pattern is checked before the slow steps */
   if (o->pattern && (rc = wv_params_default(o->pattern, &probe, err))) return rc;
   if (o->pattern && !strcmp(o->pattern, "custom"))
