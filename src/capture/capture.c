@@ -120,7 +120,7 @@ static int render_drape(const wv_fit_job *job, const char *dir, const wv_params 
     snprintf(note, ncap, "No drape: the bundled scene %s was not found (set WOVEN_SCENE_DIR).", scene);
     return 0;
   }
-  wv_scene3d_preview po = {512, 384, 16, threads};
+  wv_scene3d_preview po = {.width = 512, .height = 384, .spp = 16, .threads = threads};
   wv_image img = {0};
   snprintf(out, cap, "%s/drape.png", dir);
   *rc = wv_scene3d_render_file(scene, p, &po, &img, err);
@@ -138,7 +138,7 @@ static int render_drape(const wv_fit_job *job, const char *dir, const wv_params 
 static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_fit_state *st, const wv_fit_opts *o,
                                const wv_scene *fit_scene, double *ssim_start, double *ssim_fit, wv_weave_views *wv,
                                wv_error *err) {
-  wv_render_opts ro = {0, o->threads, NULL, NULL, NULL};
+  wv_render_opts ro = {.threads = o->threads};
   wv_image r_start = {0}, r_fit = {0}, cmp = {0};
   char path[4096], pphoto[4096], pstart[4096], pfit[4096];
   wv_scene start_scene = *job->scene; /* the start seen through the same camera blur as the fit */
@@ -185,7 +185,7 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
                    .drape_png = drape ? pdrape : NULL,
                    .drape_note = note[0] ? note : NULL};
   /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
-  wv_view_opts vo = {&st->params, fit_scene, pphoto, job->title};
+  wv_view_opts vo = {.params = &st->params, .scene = fit_scene, .photo = pphoto, .title = job->title};
   snprintf(path, sizeof path, "%s/viewer.html", dir);
   if (!rc) rc = wv_view_write(path, &vo, err);
   snprintf(path, sizeof path, "%s/report.html", dir);

@@ -139,7 +139,7 @@ wv_status wv_dataset_make_sample(const char *dir, const wv_dataset_info *info, i
   wv_params p;
   wv_status st = wv_dataset_sample_params(info, k, &p, err);
   if (st) return st;
-  wv_render_opts ro = {info->spp, render_threads, NULL, NULL, fp};
+  wv_render_opts ro = {.spp = info->spp, .threads = render_threads, .footprints = fp};
   wv_image img = {0}, rad = {0};
   if ((st = wv_render(&info->scene, &p, &ro, &img, info->augment ? &rad : NULL, err))) return st;
   if (info->augment) {
