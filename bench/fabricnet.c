@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "bench_common.h"
+#include "woven/dataset.h"
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
 #include "woven/fit.h"

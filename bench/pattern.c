@@ -21,8 +21,8 @@
 #include "bench_common.h"
 #include "util/hash.h"
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
 #include "woven/metrics.h"
+#include "woven/pattern.h"
 #include "woven/photo.h"
 #include "woven/render.h"
 

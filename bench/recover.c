@@ -35,9 +35,9 @@
 #include "util/hash.h"
 #include "woven/capture.h"
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
+#include "woven/pattern.h"
 #include "woven/photo.h"
 #include "woven/render.h"
 

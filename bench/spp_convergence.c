@@ -12,7 +12,7 @@
 
 #include "bench_common.h"
 #include "fit/fit_internal.h"
-#include "woven/fabricnet.h"
+#include "woven/dataset.h"
 #include "woven/render.h"
 
 #define LADDER 5

@@ -1,10 +1,10 @@
 /* woven predict and woven capture: FabricNet's estimate of a photo's parameters, and
  * the whole pipeline (estimate, then the fit from it, then every output of the fit); the
- * jobs are the library's (woven/capture.h), this file parses and prints. */
+ * jobs are the library's (woven/estimate.h, woven/capture.h), this file parses and prints. */
 #include <string.h>
 
 #include "cli.h"
-#include "woven/fabricnet.h"
+#include "woven/estimate.h"
 
 static const cli_cmd PREDICT_CMD = {
     "predict",

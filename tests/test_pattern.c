@@ -10,7 +10,7 @@
 
 #include "testutil.h"
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
+#include "woven/pattern.h"
 #include "woven/render.h"
 
 /* The centre 256 x 256 pixels of the flat45 rig: yarns one to two and a half pixels apart,

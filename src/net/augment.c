@@ -5,7 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "woven/fabricnet.h"
+#include "woven/dataset.h"
 #include "woven/imgops.h"
 #include "woven/io.h"
 #include "woven/nn.h"
