@@ -37,7 +37,7 @@ static const cli_opt OPTS[] = {
                  "image size instead of the scene's (same camera and field of view:\na preview)"),
     CLI_O_INT("--seed", NULL, scene_args, seed, 0, INT_MAX, "N", "overrides the scene's render.seed"),
     CLI_O_INT("--mesh-limit-mb", NULL, scene_args, limit_mb, 1, 1 << 20, "N",
-              "memory limit for the meshes and the ray tracer (default: the\nscene's, else 2048)"),
+              "memory limit of the job: meshes, ray tracer, edit maps,\nenvironment (default 2048; the scene's limits.mesh_mb may\nlower it, never raise it)"),
     CLI_O_END};
 
 static const cli_cmd CMD = {
