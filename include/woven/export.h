@@ -28,6 +28,10 @@ typedef struct {
   char photo[4096];
 } wv_source;
 wv_status wv_source_load(const char *path, wv_source *src, wv_error *err);
+/* The files a source was read from, for output checks: path itself, and for a fit's
+ * directory its params.json, scene.json and photo.png. The names are written into
+ * names and pointed to by paths; returns how many (at most 4). */
+int wv_source_inputs(const char *path, const wv_source *src, char names[4][4096], const char **paths);
 
 /* A triangle mesh as the exporter (and the viewer) take it. Positions in metres
  * (glTF's unit), +y up; unit normals; UVs with u along the fabric's weft (x) and

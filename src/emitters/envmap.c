@@ -18,6 +18,11 @@ void wv_envmap_free(wv_envmap *e) {
   memset(e, 0, sizeof *e);
 }
 
+size_t wv_envmap_bytes(int w, int h) {
+  if (w < 0 || h < 0) return (size_t)-1;
+  return ((size_t)w * h * 3 + (size_t)(h + 1) + (size_t)h * (w + 1)) * sizeof(float) + (size_t)(h + 1) * sizeof(double);
+}
+
 wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, double rot_deg, const char *name,
                          wv_error *err) {
   memset(e, 0, sizeof *e);
@@ -41,6 +46,12 @@ wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, dou
       return wv_fail(err, WV_ERR_FORMAT, "%s: pixel %zu has a negative, NaN or infinite value", name, i / 3);
     }
     e->rgb[i] = (float)(v * strength);
+    /* after the scaling: a finite value times the strength can overflow */
+    if (!(e->rgb[i] <= WV_ENV_MAX_RADIANCE)) {
+      wv_envmap_free(e);
+      return wv_fail(err, WV_ERR_FORMAT, "%s: pixel %zu's radiance %g times the strength %g is above %g", name, i / 3,
+                     (double)v, strength, WV_ENV_MAX_RADIANCE);
+    }
   }
   double total = 0;
   e->cdf_row[0] = 0;

@@ -434,7 +434,28 @@ wv_status wv_scene3d_read(const char *path, wv_scene3d *s, wv_error *err) {
   char *slash = strrchr(base, '/');
   if (slash) *(slash == base ? slash + 1 : slash) = '\0';
   st = wv_scene3d_parse(text, path, slash ? base : NULL, s, err);
+  if (st) wv_error_excerpt(err, WV_EXCERPT_CHARS); /* the user named it as a scene: a short excerpt at most */
   free(base);
   free(text);
   return st;
+}
+
+int wv_scene3d_inputs(const wv_scene3d *s, const char **paths, int cap) {
+  int n = 0;
+#define ADD(p) \
+  do { \
+    if (p) { \
+      if (n < cap) paths[n] = (p); \
+      n++; \
+    } \
+  } while (0)
+  for (int i = 0; i < s->nmaterials; i++) ADD(s->materials[i].params_path);
+  for (int i = 0; i < s->nobjects; i++) ADD(s->objects[i].path);
+  for (int i = 0; i < s->nedits; i++) {
+    ADD(s->edits[i].map);
+    ADD(s->edits[i].mask);
+  }
+  if (s->env == WV_ENV_FILE) ADD(s->env_path);
+#undef ADD
+  return n;
 }
