@@ -128,3 +128,17 @@ def test_errors(root, tmp_path):
         woven.read_image(tmp_path / "garbage.png")
     with pytest.raises(woven.WovenError, match="nope"):
         woven.environment("nope", 64)
+
+
+def test_capture(root, tmp_path):
+    """The whole capture through the library, cut short (one iteration, no searches)."""
+    out = tmp_path / "cap"
+    r = woven.capture(root / "examples/photo_twill_cylinder.png", "cylinder", out, pattern="twill", iters=1,
+                      iter_spp=1, align_radius=0, register_radius=0, distort_degree=0, drape="none", threads=2)
+    assert r["pattern"] == "twill" and r["iterations"] == 1
+    assert 0 < r["ssim_fit"] <= 1 and 0 < r["ssim_network"] <= 1
+    assert r["params"].json == woven.Params(out / "params.json").json
+    assert r["render"].shape == (300, 800, 3)
+    assert (out / "network.json").exists() and (out / "report.html").exists()
+    with pytest.raises(woven.WovenError):  # an earlier capture is not replaced without force
+        woven.capture(root / "examples/photo_twill_cylinder.png", "cylinder", out, pattern="twill", iters=1)
