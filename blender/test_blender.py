@@ -7,6 +7,7 @@ The flat swatch must reach 0.95; the drape's number is printed.
     PYTHONPATH=python /usr/bin/python3 blender/test_blender.py build/woven [OUTDIR]
 Exit 77 (skipped) when Blender is not installed."""
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -37,7 +38,7 @@ def main():
     def blender_render(scene, exr, w, h, samples, *extra):
         r = subprocess.run([str(x) for x in (blender, "-b", "--factory-startup", "--python", ROOT / "blender/render_rig.py", "--",
                             "--scene", scene, "--out", exr, "--width", w, "--height", h, "--samples", samples,
-                            *extra)], capture_output=True, text=True, env={**__import__("os").environ,
+                            *extra)], capture_output=True, text=True, env={**os.environ,
                                                                          "WOVEN_BINARY": str(exe)})
         if r.returncode or not Path(exr).exists():
             sys.stderr.write(r.stdout[-4000:] + r.stderr[-4000:])
