@@ -12,6 +12,7 @@
 #include "woven/maps.h"
 #include "woven/grad.h"
 #include "woven/render.h"
+#include "woven/yarn.h"
 #include "woven/dataset.h"
 
 /* A centred w x h window of a scene: same pixels as the full image there. */

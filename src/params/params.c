@@ -12,7 +12,6 @@
 #include "util/json.h"
 #include "woven/io.h"
 
-#define DEG (3.14159265358979323846 / 180.0)
 
 /* Ranges of SPEC section 5. */
 typedef struct {
@@ -256,23 +255,6 @@ wv_status wv_params_write(const char *path, const wv_params *p, wv_error *err) {
   st = wv_write_file_atomic(path, t, n + 1, err);
   free(t);
   return st;
-}
-
-wv_status wv_params_yarn_model(const wv_params *p, wv_yarn_model *m, wv_error *err) {
-  memset(m, 0, sizeof *m);
-  wv_status st = wv_params_weave(p, &m->weave, err);
-  if (st) return st;
-  for (int y = 0; y < 2; y++) {
-    m->spacing[y] = (float)(25.4 / p->density[y]);
-    m->beta[y] = (float)p->heightfield[y];
-  }
-  m->umax = (float)(p->inclination_deg * DEG);
-  m->psi = (float)(p->twist_deg * DEG);
-  m->width = (float)p->yarn_width;
-  m->noise_level = p->noise_level;
-  m->seed = (uint64_t)p->seed;
-  wv_yarn_model_update(m);
-  return WV_OK;
 }
 
 static double *param_slot(wv_params *p, int id) {

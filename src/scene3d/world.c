@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "scene3d/world_internal.h"
+#include "util/colour.h"
 #include "woven/io.h"
 
 void wv_world_free(wv_world *w) {
@@ -46,8 +47,6 @@ void wv_edit_lookup(const wv_image *img, float u, float v, float out[3]) {
     for (int c = 0; c < 3; c++) out[c] += wgt * p[c];
   }
 }
-
-static float srgb_decode(float y) { return y <= 0.04045f ? y / 12.92f : powf((y + 0.055f) / 1.055f, 2.4f); }
 
 /* Memory of one job (meshes, tracer, maps, environment) against its limit. */
 typedef struct {
@@ -98,7 +97,7 @@ static wv_status read_map(const char *path, int grey, int colour, wv_image *img,
       return wv_fail(err, WV_ERR_FORMAT, "%s: pixel %zu has the value %g, above %g", path, i / 3, v,
                      WV_SCENE3D_MAX_MAP_VALUE);
     }
-    if (colour && png) img->data[i] = srgb_decode(v); /* 8/16-bit colour maps are sRGB */
+    if (colour && png) img->data[i] = wv_srgb_decode_f(v); /* 8/16-bit colour maps are sRGB */
   }
   return WV_OK;
 }

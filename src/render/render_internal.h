@@ -1,9 +1,9 @@
 /* The integrators' shared parts: what every render starts with, and the
- * 8-wide loop over a row's samples (integrator/rows.c) that both the forward
+ * 8-wide loop over a row's samples (render/rows.c) that both the forward
  * renderer (forward.c) and the gradient renderer (gradient.c) run. Internal
  * to the library. */
-#ifndef WOVEN_INTEGRATOR_H
-#define WOVEN_INTEGRATOR_H
+#ifndef WOVEN_RENDER_INTERNAL_H
+#define WOVEN_RENDER_INTERNAL_H
 
 #include "kernel/kernel.h"
 #include "sampler/sampler.h"
