@@ -165,18 +165,6 @@ static int in_range(const double d[2]) {
   return d[0] >= WV_DENSITY_MIN && d[0] <= WV_DENSITY_MAX && d[1] >= WV_DENSITY_MIN && d[1] <= WV_DENSITY_MAX;
 }
 
-void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out) {
-  *out = *s;
-  out->fabric_offset[0] += st->offset_mm[0];
-  out->fabric_offset[1] += st->offset_mm[1];
-  if (st->psf_done) out->psf_sigma = st->psf_sigma;
-  if (st->distort_extent_mm > 0) {
-    out->distort_extent_mm = st->distort_extent_mm;
-    for (int k = 0; k < 2; k++)
-      for (int t = 0; t < WV_DISTORT_TERMS; t++) out->distort[k][t] += st->distort[k][t];
-  }
-}
-
 #define MAX_THREADS 16
 
 /* One window size, one copy per thread (renders and FFTs run one per thread:
