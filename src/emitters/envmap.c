@@ -5,12 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "util/colour.h"
 #include "woven/emitters.h"
 
 #define PI_F 3.14159265358979f
 #define PI 3.14159265358979323846
-
-static float lum(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
 void wv_envmap_free(wv_envmap *e) {
   if (!e) return;
@@ -55,7 +54,8 @@ wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, dou
     float *cdf = e->cdf_col + (size_t)y * (w + 1);
     cdf[0] = 0;
     for (int x = 0; x < w; x++) {
-      acc += lum(e->rgb + ((size_t)y * w + x) * 3) * s;
+      const float *c = e->rgb + ((size_t)y * w + x) * 3;
+      acc += wv_luminance_f(c[0], c[1], c[2]) * s;
       cdf[x + 1] = (float)acc;
     }
     for (int x = 1; x <= w; x++) cdf[x] = acc > 0 ? (float)(cdf[x] / acc) : (float)x / w;

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "util/colour.h"
 #include "util/hash.h"
 #include "util/json.h"
 #include "woven/grad.h"
@@ -33,8 +34,6 @@
 
 static double sq(double x) { return x * x; }
 
-/* Rec. 709 luminance of an RGB triple. */
-static double luminance(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
 
 void wv_fit_opts_default(wv_fit_opts *o) {
   memset(o, 0, sizeof *o);
@@ -388,7 +387,7 @@ static int colour_clusters(const wv_scene *s, const wv_image *ph, double r[2][3]
   double cen[2][3] = {{0}}, cnt[2] = {0};
   for (size_t i = 0; i < n; i++) {
     const float *v = lin.data + 3 * i;
-    int k = luminance(v[0], v[1], v[2]) > 1.0;
+    int k = wv_luminance_d(v[0], v[1], v[2]) > 1.0;
     for (int ch = 0; ch < 3; ch++) cen[k][ch] += v[ch];
     cnt[k]++;
   }
@@ -409,8 +408,8 @@ static int colour_clusters(const wv_scene *s, const wv_image *ph, double r[2][3]
   wv_image_free(&lin);
   for (int k = 0; k < 2; k++)
     for (int ch = 0; ch < 3; ch++) r[k][ch] = cnt[k] > 0 ? cen[k][ch] / cnt[k] : 1.0;
-  double l0 = luminance(r[0][0], r[0][1], r[0][2]);
-  double l1 = luminance(r[1][0], r[1][1], r[1][2]);
+  double l0 = wv_luminance_d(r[0][0], r[0][1], r[0][2]);
+  double l1 = wv_luminance_d(r[1][0], r[1][1], r[1][2]);
   *dark_share = cnt[0] / (cnt[0] + cnt[1] > 0 ? cnt[0] + cnt[1] : 1);
   if (l0 > l1) {
     for (int ch = 0; ch < 3; ch++) {
@@ -491,7 +490,7 @@ static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
   }
   double lum[2];
   for (int y = 0; y < 2; y++)
-    lum[y] = luminance(st->params.diffuse[y][0], st->params.diffuse[y][1], st->params.diffuse[y][2]);
+    lum[y] = wv_luminance_d(st->params.diffuse[y][0], st->params.diffuse[y][1], st->params.diffuse[y][2]);
   int start_dark = lum[WV_WARP] < lum[WV_WEFT] ? WV_WARP : WV_WEFT;
   int start_ok = need < 0 || start_dark == need || fabs(lum[0] - lum[1]) < SPLIT_LUM_SAME * (lum[0] + lum[1]);
   double best = start_ok ? base.loss : INFINITY;

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "scene3d/world_internal.h"
+#include "util/colour.h"
 #include "woven/io.h"
 
 void wv_world_free(wv_world *w) {
@@ -44,8 +45,6 @@ void wv_edit_lookup(const wv_image *img, float u, float v, float out[3]) {
   }
 }
 
-static float srgb_decode(float y) { return y <= 0.04045f ? y / 12.92f : powf((y + 0.055f) / 1.055f, 2.4f); }
-
 /* PNG or EXR only (JPEG is lossy and has no linear form): checked by the magic bytes. */
 static wv_status read_map(const char *path, int grey, int colour, wv_image *img, wv_error *err) {
   unsigned char magic[4] = {0};
@@ -74,7 +73,7 @@ static wv_status read_map(const char *path, int grey, int colour, wv_image *img,
       wv_image_free(img);
       return wv_fail(err, WV_ERR_FORMAT, "%s: has a negative, NaN or infinite value", path);
     }
-    if (colour && png) img->data[i] = srgb_decode(v); /* 8/16-bit colour maps are sRGB */
+    if (colour && png) img->data[i] = wv_srgb_decode_f(v); /* 8/16-bit colour maps are sRGB */
   }
   return WV_OK;
 }

@@ -10,6 +10,7 @@
 
 #include "kernel/kernel.h"
 #include "shape/shape.h"
+#include "util/colour.h"
 #include "woven/render.h"
 #include "woven/scene.h"
 
