@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fit/fit_internal.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
 #include "woven/render.h"

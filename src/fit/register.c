@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fit/fit_internal.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
 #include "woven/render.h"
@@ -116,11 +115,11 @@ static wv_status level_init(level *l, const wv_scene *full, const wv_image *phot
   memset(l, 0, sizeof *l);
   int w = full->width < size ? full->width : size, h = full->height < size ? full->height : size;
   w -= (full->width - w) % 2, h -= (full->height - h) % 2; /* centred on whole pixels */
-  wv_fit_centre_window(full, w, h, &l->win);
+  wv_scene_centre_window(full, w, h, &l->win);
   l->win.spp = o->iter_spp;
   l->max_shift = (w < h ? w : h) / 4;
   l->ro = (wv_render_opts){l->win.spp, o->threads, NULL, NULL, NULL};
-  wv_status rc = wv_fit_centre_crop(photo, w, h, &l->ref, err);
+  wv_status rc = wv_image_centre_crop(photo, w, h, &l->ref, err);
   if (!rc) rc = pc_init(&l->pc, w, h, err);
   if (rc) {
     wv_image_free(&l->ref);
