@@ -118,7 +118,7 @@ static wv_status level_init(level *l, const wv_scene *full, const wv_image *phot
   wv_scene_centre_window(full, w, h, &l->win);
   l->win.spp = o->iter_spp;
   l->max_shift = (w < h ? w : h) / 4;
-  l->ro = (wv_render_opts){l->win.spp, o->threads, NULL, NULL, NULL};
+  l->ro = (wv_render_opts){.spp = l->win.spp, .threads = o->threads};
   wv_status rc = wv_image_centre_crop(photo, w, h, &l->ref, err);
   if (!rc) rc = pc_init(&l->pc, w, h, err);
   if (rc) {
