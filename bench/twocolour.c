@@ -18,7 +18,6 @@
 #include <string.h>
 
 #include "bench_common.h"
-#include "fit/fit_internal.h"
 #include "woven/descriptor.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
@@ -76,7 +75,7 @@ int main(int argc, char **argv) {
   if (wv_scene_preset(scene, &s, &err)) die(&err);
   if (side > 0) {
     wv_scene full = s;
-    wv_fit_centre_window(&full, side < full.width ? side : full.width, side < full.height ? side : full.height, &s);
+    wv_scene_centre_window(&full, side < full.width ? side : full.width, side < full.height ? side : full.height, &s);
   }
   wv_descriptor *d;
   if (wv_descriptor_create_default(&d, &err)) die(&err);

@@ -1,7 +1,6 @@
 /* Image comparison metrics: SSIM, mean absolute difference, and the weave's spectrum
  * (the luminance detail, its log power spectrum and the weave-spectrum correlation). */
 #include "woven/metrics.h"
-#include "fit/fit_internal.h"
 
 #include <fftw3.h>
 #include <math.h>
