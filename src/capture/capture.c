@@ -10,6 +10,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "io/json_file.h"
 #include "util/json.h"
 #include "util/note.h"
 #include "woven/analysis.h"

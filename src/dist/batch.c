@@ -14,6 +14,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "io/json_file.h"
 #include "util/json.h"
 #include "woven/batch.h"
 #include "woven/io.h"

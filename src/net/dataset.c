@@ -12,6 +12,7 @@
 
 #include "util/half.h"
 #include "util/hash.h"
+#include "io/json_file.h"
 #include "util/json.h"
 #include "woven/dataset.h"
 #include "woven/descriptor.h"

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "util/hash.h"
+#include "io/json_file.h"
 #include "util/json.h"
 #include "woven/io.h"
 

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "scene/scene_json.h"
+#include "io/json_file.h"
 #include "util/json.h"
 #include "woven/io.h"
 

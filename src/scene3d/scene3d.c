@@ -14,6 +14,7 @@
 #include "woven/io.h"
 #include "woven/mesh.h"
 #include "scene/scene_json.h"
+#include "io/json_file.h"
 #include "util/json.h"
 
 #define BIG 1e7 /* coordinates in mm: 10 km */

@@ -1,4 +1,4 @@
-/* woven: bounded JSON file reads and range-checked JSON values (see util/json.h). */
+/* woven: range-checked JSON values (see util/json.h). */
 #include "util/json.h"
 
 #include <limits.h>
@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "woven/io.h"
 
 const char *wv_num_str(double v, char *buf) {
   if (!isfinite(v)) {
@@ -27,33 +26,11 @@ const char *wv_num_str(double v, char *buf) {
   return buf;
 }
 
-wv_status wv_json_read_text(const char *path, char **text, wv_error *err) {
-  size_t len;
-  wv_status st = wv_read_file_max(path, WV_JSON_MAX_BYTES, text, &len, err);
-  if (st) return st;
-  if (strlen(*text) != len) {
-    free(*text);
-    *text = NULL;
-    return wv_fail(err, WV_ERR_FORMAT, "%s: file contains a NUL byte; not a JSON text", path);
-  }
-  return WV_OK;
-}
-
-static wv_status parse(const char *text, const char *source, json_t **root, wv_error *err) {
+wv_status wv_json_parse(const char *text, const char *source, json_t **root, wv_error *err) {
   json_error_t je;
   *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
   if (!*root) return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", source, je.line, je.column, je.text);
   return WV_OK;
-}
-
-wv_status wv_json_load_file(const char *path, json_t **root, wv_error *err) {
-  char *text;
-  *root = NULL;
-  wv_status st = wv_json_read_text(path, &text, err);
-  if (st) return st;
-  st = parse(text, path, root, err);
-  free(text);
-  return st;
 }
 
 static wv_status need_object(const char *source, json_t **root, wv_error *err) {
@@ -64,13 +41,8 @@ static wv_status need_object(const char *source, json_t **root, wv_error *err) {
 }
 
 wv_status wv_json_parse_object(const char *text, const char *source, json_t **root, wv_error *err) {
-  wv_status st = parse(text, source, root, err);
+  wv_status st = wv_json_parse(text, source, root, err);
   return st ? st : need_object(source, root, err);
-}
-
-wv_status wv_json_load_object(const char *path, json_t **root, wv_error *err) {
-  wv_status st = wv_json_load_file(path, root, err);
-  return st ? st : need_object(path, root, err);
 }
 
 void wv_json_key_name(const char *obj, const char *key, char *buf, size_t cap) {

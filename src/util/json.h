@@ -21,15 +21,12 @@
  * shown as 60); returns buf, which must hold 32 bytes. */
 const char *wv_num_str(double v, char *buf);
 
-/* A whole text file of at most WV_JSON_MAX_BYTES without NUL bytes; caller frees. */
-wv_status wv_json_read_text(const char *path, char **text, wv_error *err);
-/* wv_json_read_text, then parsed (duplicate keys refused). Messages start with the path. */
-wv_status wv_json_load_file(const char *path, json_t **root, wv_error *err);
-/* A JSON text whose top level is an object (duplicate keys refused); messages start
- * with source ("source:line:column: malformed JSON: ..."). The caller frees *root. */
+/* A JSON text (duplicate keys refused); messages start with source
+ * ("source:line:column: malformed JSON: ..."). The caller frees *root. */
+wv_status wv_json_parse(const char *text, const char *source, json_t **root, wv_error *err);
+/* The same for a text whose top level must be an object. */
 wv_status wv_json_parse_object(const char *text, const char *source, json_t **root, wv_error *err);
-/* The same for a file (wv_json_load_file). */
-wv_status wv_json_load_object(const char *path, json_t **root, wv_error *err);
+/* JSON files are read by io/json_file.h. */
 
 /* The flags of the readers below (1 and 0 also read as required / optional). */
 enum {
