@@ -1,7 +1,7 @@
 /* woven: the camera blur of a photo, measured from its spectrum. A photo's weave
  * spectrum falls toward high frequencies (optics, demosaicing) where a render's stays
  * flat; the blur whose render's spectrum has the photo's shape is the camera's. The blur
- * itself is the sensor's (wv_psf_apply, src/scene/response.c). */
+ * itself is the sensor's (wv_psf_apply, src/sensor/response.c). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
