@@ -18,22 +18,17 @@ wv_status wv_json_read_text(const char *path, char **text, wv_error *err) {
   return WV_OK;
 }
 
-wv_status wv_json_load_file(const char *path, json_t **root, wv_error *err) {
+/* The file parsed; with object set its top level must be an object. */
+static wv_status load(const char *path, int object, json_t **root, wv_error *err) {
   char *text;
   *root = NULL;
   wv_status st = wv_json_read_text(path, &text, err);
   if (st) return st;
-  st = wv_json_parse(text, path, root, err);
+  st = object ? wv_json_parse_object(text, path, root, err) : wv_json_parse(text, path, root, err);
   free(text);
   return st;
 }
 
-wv_status wv_json_load_object(const char *path, json_t **root, wv_error *err) {
-  char *text;
-  *root = NULL;
-  wv_status st = wv_json_read_text(path, &text, err);
-  if (st) return st;
-  st = wv_json_parse_object(text, path, root, err);
-  free(text);
-  return st;
-}
+wv_status wv_json_load_file(const char *path, json_t **root, wv_error *err) { return load(path, 0, root, err); }
+
+wv_status wv_json_load_object(const char *path, json_t **root, wv_error *err) { return load(path, 1, root, err); }
