@@ -172,7 +172,7 @@ int wv_ffi_render(const char *params, const double *theta, const char *scene, in
   wv_status st = setup(params, theta, scene, spp, seed, threads, &p, &s, &e);
   if (!st) st = check_len(n, (size_t)s.width * s.height * 3, "render", &e);
   if (st) return finish(st, &e, err, err_len);
-  wv_render_opts opt = {spp, threads, NULL, NULL, NULL};
+  wv_render_opts opt = {.spp = spp, .threads = threads};
   wv_image cap = {0}, rad = {0};
   st = wv_render(&s, &p, &opt, &cap, radiance ? &rad : NULL, &e);
   if (!st) {
@@ -203,7 +203,7 @@ int wv_ffi_render_record(const char *params, const double *theta, const char *sc
   if (w < 1 || h < 1) st = wv_fail(&e, WV_ERR_INVALID, "window of %d x %d pixels", w, h);
   if (!st) st = check_len(n, (size_t)w * h * 3, "render", &e);
   if (st) return finish(st, &e, err, err_len);
-  wv_render_opts opt = {spp, threads, NULL, NULL, NULL};
+  wv_render_opts opt = {.spp = spp, .threads = threads};
   wv_image cap = {0};
   wv_ffi_record *r = calloc(1, sizeof *r);
   if (!r) return finish(wv_fail(&e, WV_ERR_NOMEM, "out of memory"), &e, err, err_len);
