@@ -19,7 +19,14 @@ typedef struct {
   float *cdf_col; /* h x (w + 1): each row's conditional CDF */
   double total;   /* sum of the sampling weights (luminance x sin theta) */
   float rot_c, rot_s; /* rotation about +y */
+  /* Lookup tables (what the path tracer reads per sample, kept small and local):
+   * texel: w x h x 4, the radiance and the pixel's probability times w h (one
+   * cache line per lookup); guide_row: WV_ENV_GUIDE + 1 and guide_col: h x
+   * (WV_ENV_GUIDE + 1), where the CDF passes i / WV_ENV_GUIDE (search start points). */
+  float *texel;
+  int *guide_row, *guide_col;
 } wv_envmap;
+#define WV_ENV_GUIDE 64
 
 /* Tables for importance sampling of img (3 channels; copied, scaled by strength,
  * turned by rotation_deg about +y). name is used in messages. */
@@ -30,6 +37,8 @@ void wv_envmap_free(wv_envmap *e);
 void wv_envmap_eval(const wv_envmap *e, const float d[3], float rgb[3]);
 /* Solid-angle density with which wv_envmap_sample picks d. */
 float wv_envmap_pdf(const wv_envmap *e, const float d[3]);
+/* Both at once (one lookup): the radiance from d in rgb; returns the pdf of d. */
+float wv_envmap_lookup(const wv_envmap *e, const float d[3], float rgb[3]);
 /* A direction drawn with density ~ luminance x (u1, u2 in [0,1)); returns its
  * pdf (0 when the map is black) and the radiance in rgb. */
 float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float rgb[3]);

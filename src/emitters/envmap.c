@@ -15,7 +15,46 @@ static float lum(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.07
 void wv_envmap_free(wv_envmap *e) {
   if (!e) return;
   free(e->rgb), free(e->cdf_row), free(e->cdf_col);
+  free(e->texel), free(e->guide_row), free(e->guide_col);
   memset(e, 0, sizeof *e);
+}
+
+static float pixel_prob(const wv_envmap *e, int x, int y) {
+  const float *row = e->cdf_col + (size_t)y * (e->w + 1);
+  return (e->cdf_row[y + 1] - e->cdf_row[y]) * (row[x + 1] - row[x]);
+}
+
+/* guide[g] = the last interval i < n with cdf[i] <= g / WV_ENV_GUIDE. */
+static void make_guide(const float *cdf, int n, int *guide) {
+  int i = 0;
+  for (int g = 0; g <= WV_ENV_GUIDE; g++) {
+    float t = (float)g / WV_ENV_GUIDE;
+    while (i + 1 < n && cdf[i + 1] <= t) i++;
+    guide[g] = i;
+  }
+}
+
+/* The tables the lookups and the sampler read (emitters.h): texel and the guides. */
+static wv_status build_lookup(wv_envmap *e, const char *name, wv_error *err) {
+  int w = e->w, h = e->h;
+  e->texel = malloc((size_t)w * h * 4 * sizeof(float));
+  e->guide_row = malloc((WV_ENV_GUIDE + 1) * sizeof(int));
+  e->guide_col = malloc((size_t)h * (WV_ENV_GUIDE + 1) * sizeof(int));
+  if (!e->texel || !e->guide_row || !e->guide_col) {
+    wv_envmap_free(e);
+    return wv_fail(err, WV_ERR_NOMEM, "%s: out of memory for the environment's tables", name);
+  }
+  for (int y = 0; y < h; y++)
+    for (int x = 0; x < w; x++) {
+      float *t = e->texel + ((size_t)y * w + x) * 4;
+      const float *c = e->rgb + ((size_t)y * w + x) * 3;
+      t[0] = c[0], t[1] = c[1], t[2] = c[2];
+      /* the first two factors of the pdf, in the order wv_envmap_lookup continues them */
+      t[3] = pixel_prob(e, x, y) * (float)w * (float)h;
+    }
+  make_guide(e->cdf_row, h, e->guide_row);
+  for (int y = 0; y < h; y++) make_guide(e->cdf_col + (size_t)y * (w + 1), w, e->guide_col + (size_t)y * (WV_ENV_GUIDE + 1));
+  return WV_OK;
 }
 
 wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, double rot_deg, const char *name,
@@ -69,7 +108,7 @@ wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, dou
   e->total = total;
   double r = rot_deg * PI / 180.0;
   e->rot_c = (float)cos(r), e->rot_s = (float)sin(r);
-  return WV_OK;
+  return build_lookup(e, name, err);
 }
 
 /* World direction -> pixel of the map (turned by -rotation about +y). */
@@ -87,27 +126,33 @@ void wv_envmap_eval(const wv_envmap *e, const float d[3], float rgb[3]) {
   int x, y;
   float s;
   to_pixel(e, d, &x, &y, &s);
-  const float *c = e->rgb + ((size_t)y * e->w + x) * 3;
+  const float *c = e->texel + ((size_t)y * e->w + x) * 4;
   rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
 }
 
-static float pixel_prob(const wv_envmap *e, int x, int y) {
-  const float *row = e->cdf_col + (size_t)y * (e->w + 1);
-  return (e->cdf_row[y + 1] - e->cdf_row[y]) * (row[x + 1] - row[x]);
-}
-
-float wv_envmap_pdf(const wv_envmap *e, const float d[3]) {
-  if (!(e->total > 0)) return 0.0f;
+float wv_envmap_lookup(const wv_envmap *e, const float d[3], float rgb[3]) {
   int x, y;
   float s;
   to_pixel(e, d, &x, &y, &s);
-  if (s <= 0.0f) return 0.0f;
-  return pixel_prob(e, x, y) * (float)e->w * (float)e->h / (2.0f * PI_F * PI_F * s);
+  const float *c = e->texel + ((size_t)y * e->w + x) * 4;
+  rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
+  if (!(e->total > 0) || s <= 0.0f) return 0.0f;
+  return c[3] / (2.0f * PI_F * PI_F * s);
 }
 
-/* Index i with cdf[i] <= u < cdf[i + 1] among n intervals (skipping empty ones). */
-static int find(const float *cdf, int n, float u) {
-  int lo = 0, hi = n;
+float wv_envmap_pdf(const wv_envmap *e, const float d[3]) {
+  float rgb[3];
+  return wv_envmap_lookup(e, d, rgb);
+}
+
+/* Index i with cdf[i] <= u < cdf[i + 1] among n intervals (skipping empty ones),
+ * searched between the guide's bounds for u. */
+static int find(const float *cdf, const int *guide, int n, float u) {
+  int g = (int)(u * WV_ENV_GUIDE);
+  g = g < 0 ? 0 : g >= WV_ENV_GUIDE ? WV_ENV_GUIDE - 1 : g;
+  int lo = guide[g], hi = guide[g + 1] + 1;
+  if (!(cdf[lo] <= u)) lo = 0;
+  if (hi > n || !(u < cdf[hi])) hi = n;
   while (hi - lo > 1) {
     int mid = (lo + hi) / 2;
     if (cdf[mid] <= u) lo = mid;
@@ -121,9 +166,9 @@ float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float
     d[0] = 0, d[1] = 1, d[2] = 0, rgb[0] = rgb[1] = rgb[2] = 0;
     return 0.0f;
   }
-  int y = find(e->cdf_row, e->h, u1);
+  int y = find(e->cdf_row, e->guide_row, e->h, u1);
   const float *row = e->cdf_col + (size_t)y * (e->w + 1);
-  int x = find(row, e->w, u2);
+  int x = find(row, e->guide_col + (size_t)y * (WV_ENV_GUIDE + 1), e->w, u2);
   /* where inside the pixel: the leftover of each uniform number, rescaled */
   float fy = (u1 - e->cdf_row[y]) / (e->cdf_row[y + 1] - e->cdf_row[y]);
   float fx = (u2 - row[x]) / (row[x + 1] - row[x]);
@@ -134,8 +179,7 @@ float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float
   d[0] = e->rot_c * mx + e->rot_s * mz, d[1] = my, d[2] = -e->rot_s * mx + e->rot_c * mz;
   /* radiance and pdf where d looks up (not the drawn pixel): rounding at a pixel's
    * edge can move d to its neighbour, and the estimator must use the values of d */
-  wv_envmap_eval(e, d, rgb);
-  return wv_envmap_pdf(e, d);
+  return wv_envmap_lookup(e, d, rgb);
 }
 
 /* ---- built-in environments ---- */

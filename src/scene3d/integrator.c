@@ -315,9 +315,9 @@ static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3],
     }
     if (!got) {
       if (w->has_env && (depth > 0 || s->env_visible)) {
-        float le[3];
-        wv_envmap_eval(&w->env, d, le);
-        float wgt = prev_pdf > 0 ? power_heuristic(prev_pdf, wv_envmap_pdf(&w->env, d)) : 1;
+        float le[3], wgt = 1;
+        if (prev_pdf > 0) wgt = power_heuristic(prev_pdf, wv_envmap_lookup(&w->env, d, le));
+        else wv_envmap_eval(&w->env, d, le);
         for (int k = 0; k < 3; k++) L[k] += thr[k] * le[k] * wgt;
       }
       return;
