@@ -122,22 +122,26 @@ static void to_pixel(const wv_envmap *e, const float d[3], int *x, int *y, float
   *sin_t = sqrtf(1.0f - cy * cy);
 }
 
-void wv_envmap_eval(const wv_envmap *e, const float d[3], float rgb[3]) {
+wv_env_at wv_envmap_at(const wv_envmap *e, const float d[3]) {
   int x, y;
-  float s;
-  to_pixel(e, d, &x, &y, &s);
-  const float *c = e->texel + ((size_t)y * e->w + x) * 4;
-  rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
+  wv_env_at a;
+  to_pixel(e, d, &x, &y, &a.sin_t);
+  a.texel = (size_t)y * e->w + x;
+  __builtin_prefetch(e->texel + 4 * a.texel);
+  return a;
 }
 
-float wv_envmap_lookup(const wv_envmap *e, const float d[3], float rgb[3]) {
-  int x, y;
-  float s;
-  to_pixel(e, d, &x, &y, &s);
-  const float *c = e->texel + ((size_t)y * e->w + x) * 4;
+float wv_envmap_read(const wv_envmap *e, wv_env_at a, float rgb[3]) {
+  const float *c = e->texel + 4 * a.texel;
   rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
-  if (!(e->total > 0) || s <= 0.0f) return 0.0f;
-  return c[3] / (2.0f * PI_F * PI_F * s);
+  if (!(e->total > 0) || a.sin_t <= 0.0f) return 0.0f;
+  return c[3] / (2.0f * PI_F * PI_F * a.sin_t);
+}
+
+void wv_envmap_eval(const wv_envmap *e, const float d[3], float rgb[3]) { wv_envmap_read(e, wv_envmap_at(e, d), rgb); }
+
+float wv_envmap_lookup(const wv_envmap *e, const float d[3], float rgb[3]) {
+  return wv_envmap_read(e, wv_envmap_at(e, d), rgb);
 }
 
 float wv_envmap_pdf(const wv_envmap *e, const float d[3]) {
@@ -145,14 +149,17 @@ float wv_envmap_pdf(const wv_envmap *e, const float d[3]) {
   return wv_envmap_lookup(e, d, rgb);
 }
 
-/* Index i with cdf[i] <= u < cdf[i + 1] among n intervals (skipping empty ones),
- * searched between the guide's bounds for u. */
-static int find(const float *cdf, const int *guide, int n, float u) {
+/* Search bounds for u in cdf (n intervals) from its guide: cdf[*lo] <= u < cdf[*hi]. */
+static void guide_bounds(const float *cdf, const int *guide, int n, float u, int *lo, int *hi) {
   int g = (int)(u * WV_ENV_GUIDE);
   g = g < 0 ? 0 : g >= WV_ENV_GUIDE ? WV_ENV_GUIDE - 1 : g;
-  int lo = guide[g], hi = guide[g + 1] + 1;
-  if (!(cdf[lo] <= u)) lo = 0;
-  if (hi > n || !(u < cdf[hi])) hi = n;
+  *lo = guide[g], *hi = guide[g + 1] + 1;
+  if (!(cdf[*lo] <= u)) *lo = 0;
+  if (*hi > n || !(u < cdf[*hi])) *hi = n;
+}
+
+/* Index i with cdf[i] <= u < cdf[i + 1] (skipping empty intervals), between lo and hi. */
+static int bisect(const float *cdf, int lo, int hi, float u) {
   while (hi - lo > 1) {
     int mid = (lo + hi) / 2;
     if (cdf[mid] <= u) lo = mid;
@@ -161,15 +168,19 @@ static int find(const float *cdf, const int *guide, int n, float u) {
   return lo;
 }
 
-float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float rgb[3]) {
-  if (!(e->total > 0)) {
-    d[0] = 0, d[1] = 1, d[2] = 0, rgb[0] = rgb[1] = rgb[2] = 0;
-    return 0.0f;
-  }
-  int y = find(e->cdf_row, e->guide_row, e->h, u1);
-  const float *row = e->cdf_col + (size_t)y * (e->w + 1);
-  int x = find(row, e->guide_col + (size_t)y * (WV_ENV_GUIDE + 1), e->w, u2);
-  /* where inside the pixel: the leftover of each uniform number, rescaled */
+static int find(const float *cdf, const int *guide, int n, float u) {
+  int lo, hi;
+  guide_bounds(cdf, guide, n, u, &lo, &hi);
+  return bisect(cdf, lo, hi, u);
+}
+
+static const int *row_guide(const wv_envmap *e, int y) { return e->guide_col + (size_t)y * (WV_ENV_GUIDE + 1); }
+static const float *row_cdf(const wv_envmap *e, int y) { return e->cdf_col + (size_t)y * (e->w + 1); }
+
+/* The direction through pixel (x, y) of the draw: where inside it, the leftover
+ * of each uniform number, rescaled. */
+static void drawn_dir(const wv_envmap *e, float u1, float u2, int x, int y, float d[3]) {
+  const float *row = row_cdf(e, y);
   float fy = (u1 - e->cdf_row[y]) / (e->cdf_row[y + 1] - e->cdf_row[y]);
   float fx = (u2 - row[x]) / (row[x + 1] - row[x]);
   fy = fy < 0 ? 0 : fy > 0.999999f ? 0.999999f : fy;
@@ -177,9 +188,52 @@ float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float
   float theta = PI_F * (y + fy) / e->h, phi = 2 * PI_F * (x + fx) / e->w - PI_F;
   float st = sinf(theta), mx = st * sinf(phi), my = cosf(theta), mz = -st * cosf(phi);
   d[0] = e->rot_c * mx + e->rot_s * mz, d[1] = my, d[2] = -e->rot_s * mx + e->rot_c * mz;
+}
+
+static float no_sample(float d[3], float rgb[3]) {
+  d[0] = 0, d[1] = 1, d[2] = 0, rgb[0] = rgb[1] = rgb[2] = 0;
+  return 0.0f;
+}
+
+float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float rgb[3]) {
+  if (!(e->total > 0)) return no_sample(d, rgb);
+  int y = find(e->cdf_row, e->guide_row, e->h, u1);
+  int x = find(row_cdf(e, y), row_guide(e, y), e->w, u2);
+  drawn_dir(e, u1, u2, x, y, d);
   /* radiance and pdf where d looks up (not the drawn pixel): rounding at a pixel's
    * edge can move d to its neighbour, and the estimator must use the values of d */
   return wv_envmap_lookup(e, d, rgb);
+}
+
+/* wv_envmap_sample on many numbers, in stages over blocks of draws so that the
+ * table reads of different draws (random rows, random texels) overlap. */
+void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_sample *out) {
+  enum { B = 16 };
+  for (int j0 = 0; j0 < n; j0 += B) {
+    int m = n - j0 < B ? n - j0 : B, y[B], lo[B], hi[B];
+    wv_env_at at[B];
+    const float(*v)[2] = u + j0;
+    wv_env_sample *o = out + j0;
+    if (!(e->total > 0)) {
+      for (int j = 0; j < m; j++) o[j].pdf = no_sample(o[j].d, o[j].rgb);
+      continue;
+    }
+    for (int j = 0; j < m; j++) {
+      y[j] = find(e->cdf_row, e->guide_row, e->h, v[j][0]); /* the row CDF: small, cached */
+      int g = (int)(v[j][1] * WV_ENV_GUIDE);
+      __builtin_prefetch(row_guide(e, y[j]) + (g < 0 ? 0 : g >= WV_ENV_GUIDE ? WV_ENV_GUIDE - 1 : g));
+    }
+    for (int j = 0; j < m; j++) {
+      guide_bounds(row_cdf(e, y[j]), row_guide(e, y[j]), e->w, v[j][1], &lo[j], &hi[j]);
+      __builtin_prefetch(row_cdf(e, y[j]) + (lo[j] + hi[j]) / 2);
+    }
+    for (int j = 0; j < m; j++) {
+      int x = bisect(row_cdf(e, y[j]), lo[j], hi[j], v[j][1]);
+      drawn_dir(e, v[j][0], v[j][1], x, y[j], o[j].d);
+      at[j] = wv_envmap_at(e, o[j].d);
+    }
+    for (int j = 0; j < m; j++) o[j].pdf = wv_envmap_read(e, at[j], o[j].rgb);
+  }
 }
 
 /* ---- built-in environments ---- */
