@@ -144,6 +144,9 @@ typedef struct {
   float (*u)[2];       /* (1 + 3 CMJ_DEPTHS) x spp: camera; per depth: environment, area light, bounce */
   float (*yarn)[2];    /* spp x K: the yarn positions */
   wv_env_sample *env;  /* CMJ_DEPTHS x spp: the environment's samples of the numbers in u */
+  float (*dir)[3];     /* spp camera rays */
+  wv_trace_hit *hit;   /* spp: where they meet the scene */
+  int *got;            /* spp: whether they do */
   uint64_t pixel;
   int sample;
 } thread_state;
@@ -298,8 +301,9 @@ static int hit_area(const wv_light3d *l, const float o[3], const float d[3], flo
   return 1;
 }
 
-/* Radiance along one camera ray. */
-static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3], const float d0[3], float L[3]) {
+/* Radiance along one camera ray (o0, d0), which meets the scene at hit0 when got0. */
+static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3], const float d0[3],
+                       const wv_trace_hit *hit0, int got0, float L[3]) {
   const wv_scene3d *s = c->s;
   const wv_world *w = c->w;
   float o[3] = {o0[0], o0[1], o0[2]}, d[3] = {d0[0], d0[1], d0[2]}, thr[3] = {1, 1, 1};
@@ -310,7 +314,8 @@ static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3],
     wv_env_at at = {0, 0};
     if (w->has_env && prev_pdf > 0) at = wv_envmap_at(&w->env, d); /* its texel arrives while the ray is traced */
     ts->rays++;
-    int got = wv_tracer_intersect(w->tracer, o, d, 0.0f, INFINITY, &hit);
+    int got = depth ? wv_tracer_intersect(w->tracer, o, d, 0.0f, INFINITY, &hit) : got0;
+    if (!depth && got) hit = *hit0;
     float tmax = got ? hit.t : INFINITY;
     for (int i = 0; i < s->nlights; i++) { /* area lights the ray sees before the surface */
       const wv_light3d *l = &s->lights[i];
@@ -462,7 +467,11 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     ts[t].u = malloc(sizeof *ts[t].u * (size_t)(1 + 3 * CMJ_DEPTHS) * (size_t)c.spp);
     ts[t].yarn = malloc(sizeof *ts[t].yarn * (size_t)c.spp * (size_t)c.K);
     ts[t].env = malloc(sizeof *ts[t].env * (size_t)CMJ_DEPTHS * (size_t)c.spp);
-    fail |= !ts[t].scratch || !ts[t].fpos || !ts[t].u || !ts[t].yarn || !ts[t].env;
+    ts[t].dir = malloc(sizeof *ts[t].dir * (size_t)c.spp);
+    ts[t].hit = malloc(sizeof *ts[t].hit * (size_t)c.spp);
+    ts[t].got = malloc(sizeof *ts[t].got * (size_t)c.spp);
+    fail |= !ts[t].scratch || !ts[t].fpos || !ts[t].u || !ts[t].yarn || !ts[t].env || !ts[t].dir || !ts[t].hit ||
+            !ts[t].got;
     for (int m = 0; m < w->nmats && !fail; m++)
       if (w->mats[m].nedits) {
         fail |= !(ts[t].scratch[m] = malloc(sizeof(wv_fabric)));
@@ -497,12 +506,13 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
           if (need[1 + 3 * d])
             wv_envmap_sample_n(&w->env, c.spp, (const float(*)[2])me->u + (size_t)(1 + 3 * d) * c.spp,
                                me->env + (size_t)d * c.spp);
+        for (int j = 0; j < c.spp; j++) camera_dir(&c.cam, (float)px + me->u[j][0], (float)py + me->u[j][1], me->dir[j]);
+        wv_tracer_intersect_from(w->tracer, c.cam.cpos, (const float(*)[3])me->dir, c.spp, me->hit, me->got);
         double acc[3] = {0, 0, 0};
         for (int j = 0; j < c.spp; j++) {
           me->sample = j;
-          float sx = me->u[j][0], sy = me->u[j][1], d[3], L[3];
-          camera_dir(&c.cam, (float)px + sx, (float)py + sy, d);
-          trace_path(&c, me, c.cam.cpos, d, L);
+          float L[3];
+          trace_path(&c, me, c.cam.cpos, me->dir[j], &me->hit[j], me->got[j], L);
           for (int k = 0; k < 3; k++) acc[k] += isfinite(L[k]) ? L[k] : 0.0f;
         }
         float *out = wv_image_px(&rad, px, py);
@@ -517,6 +527,7 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     rays += ts[t].rays, shades += ts[t].shades;
     for (int m = 0; m < w->nmats && ts[t].scratch; m++) free(ts[t].scratch[m]);
     free(ts[t].scratch), free(ts[t].fpos), free(ts[t].u), free(ts[t].yarn), free(ts[t].env);
+    free(ts[t].dir), free(ts[t].hit), free(ts[t].got);
   }
   free(ts);
   if (fail) {
