@@ -1,9 +1,11 @@
 /* Equirectangular environment maps: lookup, importance sampling by luminance
  * times sin(theta) (piecewise constant over pixels, so the pdf and the lookup
  * agree exactly), and the built-in environments generated in code. */
+#define _DEFAULT_SOURCE /* madvise's MADV_HUGEPAGE */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #include "woven/emitters.h"
 
@@ -34,10 +36,22 @@ static void make_guide(const float *cdf, int n, int *guide) {
   }
 }
 
+/* Memory for a table read at random: on 2 MB pages where the system offers them
+ * (one TLB entry for what would take 512), else ordinary. */
+static void *table_alloc(size_t bytes) {
+  const size_t huge = (size_t)1 << 21;
+  if (bytes < huge / 2) return malloc(bytes);
+  void *p = aligned_alloc(huge, (bytes + huge - 1) / huge * huge);
+#ifdef MADV_HUGEPAGE
+  if (p) madvise(p, (bytes + huge - 1) / huge * huge, MADV_HUGEPAGE);
+#endif
+  return p;
+}
+
 /* The tables the lookups and the sampler read (emitters.h): texel and the guides. */
 static wv_status build_lookup(wv_envmap *e, const char *name, wv_error *err) {
   int w = e->w, h = e->h;
-  e->texel = malloc((size_t)w * h * 4 * sizeof(float));
+  e->texel = table_alloc((size_t)w * h * 4 * sizeof(float));
   e->guide_row = malloc((WV_ENV_GUIDE + 1) * sizeof(int));
   e->guide_col = malloc((size_t)h * (WV_ENV_GUIDE + 1) * sizeof(int));
   if (!e->texel || !e->guide_row || !e->guide_col) {

@@ -48,7 +48,7 @@ wv_status wv_tracer_create(const wv_mesh *const *meshes, int n, int threads, siz
   if (!t) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the ray tracer");
   t->limit = (long long)limit;
   char cfg[64];
-  snprintf(cfg, sizeof cfg, "threads=%d,set_affinity=0,verbose=0", threads > 0 ? threads : 0);
+  snprintf(cfg, sizeof cfg, "threads=%d,set_affinity=0,verbose=0,hugepages=1", threads > 0 ? threads : 0);
   t->dev = rtcNewDevice(cfg);
   if (!t->dev) {
     free(t);
