@@ -9,6 +9,8 @@
 #ifndef WOVEN_EMITTERS_H
 #define WOVEN_EMITTERS_H
 
+#include <stddef.h>
+
 #include "woven/error.h"
 #include "woven/image.h"
 
@@ -19,7 +21,14 @@ typedef struct {
   float *cdf_col; /* h x (w + 1): each row's conditional CDF */
   double total;   /* sum of the sampling weights (luminance x sin theta) */
   float rot_c, rot_s; /* rotation about +y */
+  /* Lookup tables (what the path tracer reads per sample, kept small and local):
+   * texel: w x h x 4, the radiance and the pixel's probability times w h (one
+   * cache line per lookup); guide_row: WV_ENV_GUIDE + 1 and guide_col: h x
+   * (WV_ENV_GUIDE + 1), where the CDF passes i / WV_ENV_GUIDE (search start points). */
+  float *texel;
+  int *guide_row, *guide_col;
 } wv_envmap;
+#define WV_ENV_GUIDE 64
 
 /* Largest radiance of a map after its strength (refused above, with its pixel). */
 #define WV_ENV_MAX_RADIANCE 1e18
@@ -36,9 +45,24 @@ size_t wv_envmap_bytes(int w, int h);
 void wv_envmap_eval(const wv_envmap *e, const float d[3], float rgb[3]);
 /* Solid-angle density with which wv_envmap_sample picks d. */
 float wv_envmap_pdf(const wv_envmap *e, const float d[3]);
+/* Both at once (one lookup): the radiance from d in rgb; returns the pdf of d. */
+float wv_envmap_lookup(const wv_envmap *e, const float d[3], float rgb[3]);
+/* wv_envmap_lookup in two halves: wv_envmap_at finds d's texel and starts
+ * fetching it, wv_envmap_read (later, after other work) reads it. */
+typedef struct {
+  size_t texel;
+  float sin_t;
+} wv_env_at;
+wv_env_at wv_envmap_at(const wv_envmap *e, const float d[3]);
+float wv_envmap_read(const wv_envmap *e, wv_env_at a, float rgb[3]);
 /* A direction drawn with density ~ luminance x (u1, u2 in [0,1)); returns its
  * pdf (0 when the map is black) and the radiance in rgb. */
 float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float rgb[3]);
+/* wv_envmap_sample for n pairs u[j] (the same results), faster than one by one. */
+typedef struct {
+  float d[3], rgb[3], pdf;
+} wv_env_sample;
+void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_sample *out);
 
 /* The built-in environments: "studio" (dark grey room, a large warm key soft box,
  * a fill and a rim box), "sky" (blue sky, bright horizon, ground, a sun 40 degrees

@@ -1,9 +1,11 @@
 /* Equirectangular environment maps: lookup, importance sampling by luminance
  * times sin(theta) (piecewise constant over pixels, so the pdf and the lookup
  * agree exactly), and the built-in environments generated in code. */
+#define _DEFAULT_SOURCE /* madvise's MADV_HUGEPAGE */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #include "util/colour.h"
 #include "woven/emitters.h"
@@ -14,12 +16,68 @@
 void wv_envmap_free(wv_envmap *e) {
   if (!e) return;
   free(e->rgb), free(e->cdf_row), free(e->cdf_col);
+  free(e->texel), free(e->guide_row), free(e->guide_col);
   memset(e, 0, sizeof *e);
 }
 
 size_t wv_envmap_bytes(int w, int h) {
   if (w < 0 || h < 0) return (size_t)-1;
-  return ((size_t)w * h * 3 + (size_t)(h + 1) + (size_t)h * (w + 1)) * sizeof(float) + (size_t)(h + 1) * sizeof(double);
+  /* colours, the CDFs, the packed texels (rounded up to the 2 MB pages they may take)
+   * and the guide tables */
+  size_t texel = (size_t)w * h * 4 * sizeof(float), huge = (size_t)1 << 21;
+  if (texel >= huge / 2) texel = (texel + huge - 1) / huge * huge;
+  return ((size_t)w * h * 3 + (size_t)(h + 1) + (size_t)h * (w + 1)) * sizeof(float) + (size_t)(h + 1) * sizeof(double) +
+         texel + (size_t)(h + 1) * (WV_ENV_GUIDE + 1) * sizeof(int);
+}
+
+static float pixel_prob(const wv_envmap *e, int x, int y) {
+  const float *row = e->cdf_col + (size_t)y * (e->w + 1);
+  return (e->cdf_row[y + 1] - e->cdf_row[y]) * (row[x + 1] - row[x]);
+}
+
+/* guide[g] = the last interval i < n with cdf[i] <= g / WV_ENV_GUIDE. */
+static void make_guide(const float *cdf, int n, int *guide) {
+  int i = 0;
+  for (int g = 0; g <= WV_ENV_GUIDE; g++) {
+    float t = (float)g / WV_ENV_GUIDE;
+    while (i + 1 < n && cdf[i + 1] <= t) i++;
+    guide[g] = i;
+  }
+}
+
+/* Memory for a table read at random: on 2 MB pages where the system offers them
+ * (one TLB entry for what would take 512), else ordinary. */
+static void *table_alloc(size_t bytes) {
+  const size_t huge = (size_t)1 << 21;
+  if (bytes < huge / 2) return malloc(bytes);
+  void *p = aligned_alloc(huge, (bytes + huge - 1) / huge * huge);
+#ifdef MADV_HUGEPAGE
+  if (p) madvise(p, (bytes + huge - 1) / huge * huge, MADV_HUGEPAGE);
+#endif
+  return p;
+}
+
+/* The tables the lookups and the sampler read (emitters.h): texel and the guides. */
+static wv_status build_lookup(wv_envmap *e, const char *name, wv_error *err) {
+  int w = e->w, h = e->h;
+  e->texel = table_alloc((size_t)w * h * 4 * sizeof(float));
+  e->guide_row = malloc((WV_ENV_GUIDE + 1) * sizeof(int));
+  e->guide_col = malloc((size_t)h * (WV_ENV_GUIDE + 1) * sizeof(int));
+  if (!e->texel || !e->guide_row || !e->guide_col) {
+    wv_envmap_free(e);
+    return wv_fail(err, WV_ERR_NOMEM, "%s: out of memory for the environment's tables", name);
+  }
+  for (int y = 0; y < h; y++)
+    for (int x = 0; x < w; x++) {
+      float *t = e->texel + ((size_t)y * w + x) * 4;
+      const float *c = e->rgb + ((size_t)y * w + x) * 3;
+      t[0] = c[0], t[1] = c[1], t[2] = c[2];
+      /* the first two factors of the pdf, in the order wv_envmap_lookup continues them */
+      t[3] = pixel_prob(e, x, y) * (float)w * (float)h;
+    }
+  make_guide(e->cdf_row, h, e->guide_row);
+  for (int y = 0; y < h; y++) make_guide(e->cdf_col + (size_t)y * (w + 1), w, e->guide_col + (size_t)y * (WV_ENV_GUIDE + 1));
+  return WV_OK;
 }
 
 wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, double rot_deg, const char *name,
@@ -80,7 +138,7 @@ wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, dou
   e->total = total;
   double r = rot_deg * PI / 180.0;
   e->rot_c = (float)cos(r), e->rot_s = (float)sin(r);
-  return WV_OK;
+  return build_lookup(e, name, err);
 }
 
 /* World direction -> pixel of the map (turned by -rotation about +y). */
@@ -94,31 +152,51 @@ static void to_pixel(const wv_envmap *e, const float d[3], int *x, int *y, float
   *sin_t = sqrtf(1.0f - cy * cy);
 }
 
-void wv_envmap_eval(const wv_envmap *e, const float d[3], float rgb[3]) {
+wv_env_at wv_envmap_at(const wv_envmap *e, const float d[3]) {
   int x, y;
-  float s;
-  to_pixel(e, d, &x, &y, &s);
-  const float *c = e->rgb + ((size_t)y * e->w + x) * 3;
-  rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
+  wv_env_at a;
+  to_pixel(e, d, &x, &y, &a.sin_t);
+  a.texel = (size_t)y * e->w + x;
+  __builtin_prefetch(e->texel + 4 * a.texel);
+  return a;
 }
 
-static float pixel_prob(const wv_envmap *e, int x, int y) {
-  const float *row = e->cdf_col + (size_t)y * (e->w + 1);
-  return (e->cdf_row[y + 1] - e->cdf_row[y]) * (row[x + 1] - row[x]);
+float wv_envmap_read(const wv_envmap *e, wv_env_at a, float rgb[3]) {
+  const float *c = e->texel + 4 * a.texel;
+  rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
+  if (!(e->total > 0) || a.sin_t <= 0.0f) return 0.0f;
+  return c[3] / (2.0f * PI_F * PI_F * a.sin_t);
+}
+
+void wv_envmap_eval(const wv_envmap *e, const float d[3], float rgb[3]) { wv_envmap_read(e, wv_envmap_at(e, d), rgb); }
+
+float wv_envmap_lookup(const wv_envmap *e, const float d[3], float rgb[3]) {
+  return wv_envmap_read(e, wv_envmap_at(e, d), rgb);
 }
 
 float wv_envmap_pdf(const wv_envmap *e, const float d[3]) {
-  if (!(e->total > 0)) return 0.0f;
-  int x, y;
-  float s;
-  to_pixel(e, d, &x, &y, &s);
-  if (s <= 0.0f) return 0.0f;
-  return pixel_prob(e, x, y) * (float)e->w * (float)e->h / (2.0f * PI_F * PI_F * s);
+  float rgb[3];
+  return wv_envmap_lookup(e, d, rgb);
 }
 
-/* Index i with cdf[i] <= u < cdf[i + 1] among n intervals (skipping empty ones). */
-static int find(const float *cdf, int n, float u) {
-  int lo = 0, hi = n;
+static int guide_cell(float u) {
+  int g = (int)(u * WV_ENV_GUIDE);
+  return g < 0 ? 0 : g >= WV_ENV_GUIDE ? WV_ENV_GUIDE - 1 : g;
+}
+
+/* Search bounds for u in cdf (n intervals) from its guide: cdf[*lo] <= u < cdf[*hi]
+ * (checked, in two steps: the batch reads the tables in between). */
+static void guide_read(const int *guide, float u, int *lo, int *hi) {
+  int g = guide_cell(u);
+  *lo = guide[g], *hi = guide[g + 1] + 1;
+}
+static void guide_check(const float *cdf, int n, float u, int *lo, int *hi) {
+  if (!(cdf[*lo] <= u)) *lo = 0;
+  if (*hi > n || !(u < cdf[*hi])) *hi = n;
+}
+
+/* Index i with cdf[i] <= u < cdf[i + 1] (skipping empty intervals), between lo and hi. */
+static int bisect(const float *cdf, int lo, int hi, float u) {
   while (hi - lo > 1) {
     int mid = (lo + hi) / 2;
     if (cdf[mid] <= u) lo = mid;
@@ -127,15 +205,27 @@ static int find(const float *cdf, int n, float u) {
   return lo;
 }
 
-float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float rgb[3]) {
-  if (!(e->total > 0)) {
-    d[0] = 0, d[1] = 1, d[2] = 0, rgb[0] = rgb[1] = rgb[2] = 0;
-    return 0.0f;
-  }
-  int y = find(e->cdf_row, e->h, u1);
-  const float *row = e->cdf_col + (size_t)y * (e->w + 1);
-  int x = find(row, e->w, u2);
-  /* where inside the pixel: the leftover of each uniform number, rescaled */
+static int find(const float *cdf, const int *guide, int n, float u) {
+  int lo, hi;
+  guide_read(guide, u, &lo, &hi);
+  guide_check(cdf, n, u, &lo, &hi);
+  return bisect(cdf, lo, hi, u);
+}
+
+static const int *row_guide(const wv_envmap *e, int y) { return e->guide_col + (size_t)y * (WV_ENV_GUIDE + 1); }
+static const float *row_cdf(const wv_envmap *e, int y) { return e->cdf_col + (size_t)y * (e->w + 1); }
+
+/* The direction through pixel (x, y) of the draw: where inside it, the leftover
+ * of each uniform number, rescaled. Returns 1 when d surely looks up (x, y) again
+ * (to_pixel would give it): its point lies WV_ENV_MARGIN of a pixel inside the
+ * pixel's edges, and away from the poles, where cos theta in float no longer
+ * tells rows apart finely. The margin is about seven times the error of the float
+ * round trip (angles -> d -> angles), at most 3e-3 of a pixel at 8192 x 4096; the
+ * pole test keeps the error of acos(cos theta), (h / pi) 2 ulp(1) / sin theta rows,
+ * below an eighth of the margin. */
+#define WV_ENV_MARGIN 0.02f
+static int drawn_dir(const wv_envmap *e, float u1, float u2, int x, int y, float d[3]) {
+  const float *row = row_cdf(e, y);
   float fy = (u1 - e->cdf_row[y]) / (e->cdf_row[y + 1] - e->cdf_row[y]);
   float fx = (u2 - row[x]) / (row[x + 1] - row[x]);
   fy = fy < 0 ? 0 : fy > 0.999999f ? 0.999999f : fy;
@@ -143,10 +233,61 @@ float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float
   float theta = PI_F * (y + fy) / e->h, phi = 2 * PI_F * (x + fx) / e->w - PI_F;
   float st = sinf(theta), mx = st * sinf(phi), my = cosf(theta), mz = -st * cosf(phi);
   d[0] = e->rot_c * mx + e->rot_s * mz, d[1] = my, d[2] = -e->rot_s * mx + e->rot_c * mz;
+  const float m = WV_ENV_MARGIN;
+  return fx > m && fx < 1 - m && fy > m && fy < 1 - m && st * m > 8 * 2.4e-7f * (float)e->h / PI_F;
+}
+
+static float no_sample(float d[3], float rgb[3]) {
+  d[0] = 0, d[1] = 1, d[2] = 0, rgb[0] = rgb[1] = rgb[2] = 0;
+  return 0.0f;
+}
+
+float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float rgb[3]) {
+  if (!(e->total > 0)) return no_sample(d, rgb);
+  int y = find(e->cdf_row, e->guide_row, e->h, u1);
+  int x = find(row_cdf(e, y), row_guide(e, y), e->w, u2);
+  drawn_dir(e, u1, u2, x, y, d);
   /* radiance and pdf where d looks up (not the drawn pixel): rounding at a pixel's
    * edge can move d to its neighbour, and the estimator must use the values of d */
-  wv_envmap_eval(e, d, rgb);
-  return wv_envmap_pdf(e, d);
+  return wv_envmap_lookup(e, d, rgb);
+}
+
+/* wv_envmap_sample on many numbers, in stages over blocks of draws so that the
+ * table reads of different draws (random rows, random texels) overlap. */
+void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_sample *out) {
+  enum { B = 16 };
+  for (int j0 = 0; j0 < n; j0 += B) {
+    int m = n - j0 < B ? n - j0 : B, y[B], lo[B], hi[B];
+    wv_env_at at[B];
+    const float(*v)[2] = u + j0;
+    wv_env_sample *o = out + j0;
+    if (!(e->total > 0)) {
+      for (int j = 0; j < m; j++) o[j].pdf = no_sample(o[j].d, o[j].rgb);
+      continue;
+    }
+    for (int j = 0; j < m; j++) {
+      y[j] = find(e->cdf_row, e->guide_row, e->h, v[j][0]); /* the row CDF: small, cached */
+      __builtin_prefetch(row_guide(e, y[j]) + guide_cell(v[j][1]));
+    }
+    for (int j = 0; j < m; j++) {
+      guide_read(row_guide(e, y[j]), v[j][1], &lo[j], &hi[j]);
+      __builtin_prefetch(row_cdf(e, y[j]) + lo[j]);
+      __builtin_prefetch(row_cdf(e, y[j]) + (hi[j] < e->w ? hi[j] : e->w));
+    }
+    for (int j = 0; j < m; j++) {
+      const float *cdf = row_cdf(e, y[j]);
+      guide_check(cdf, e->w, v[j][1], &lo[j], &hi[j]);
+      int x = bisect(cdf, lo[j], hi[j], v[j][1]);
+      if (drawn_dir(e, v[j][0], v[j][1], x, y[j], o[j].d)) { /* to_pixel's answer, without its acos and atan2 */
+        float cy = o[j].d[1] < -1.0f ? -1.0f : o[j].d[1] > 1.0f ? 1.0f : o[j].d[1];
+        at[j].texel = (size_t)y[j] * e->w + x, at[j].sin_t = sqrtf(1.0f - cy * cy);
+        __builtin_prefetch(e->texel + 4 * at[j].texel);
+      } else {
+        at[j] = wv_envmap_at(e, o[j].d);
+      }
+    }
+    for (int j = 0; j < m; j++) o[j].pdf = wv_envmap_read(e, at[j], o[j].rgb);
+  }
 }
 
 /* ---- built-in environments ---- */

@@ -16,20 +16,20 @@
 #define PI_F 3.14159265358979f
 #define CMJ_DEPTHS 2 /* path vertices whose light and bounce samples are stratified */
 
-/* One sample sequence of a pixel (the capture renderer's sampler, sampler/sampler.h)
- * and the grid of its spp. */
-typedef struct {
-  wv_pixel_sampler_f ps;
+/* Samples 0 .. n-1 of a pixel's sequence of n (the capture renderer's sampler,
+ * sampler/sampler.h), eight at a time: the numbers wv_sample_at_f gives one by one. */
+WV_SIMD_CLONES static void draw_sequence(int px, int py, int n, int width, uint64_t seed, float (*out)[2]) {
   int nx, ny;
-} wv_pixel_sampler;
-
-static void wv_pixel_sampler_init(wv_pixel_sampler *p, int px, int py, int spp, int width, uint64_t seed) {
-  wv_pixel_grid(spp, &p->nx, &p->ny);
-  p->ps = wv_pixel_sampler_make(px, py, width, seed);
-}
-
-static void wv_pixel_sampler_at(const wv_pixel_sampler *p, int s, float *sx, float *sy) {
-  wv_sample_at_f(&p->ps, p->nx, p->ny, s, sx, sy);
+  wv_pixel_grid(n, &nx, &ny);
+  wv_pixel_sampler_f p = wv_pixel_sampler_make(px, py, width, seed);
+  wv_pixel_sampler_8 p8 = {(wv_q8){0} + p.hash, (wv_w8){0} + p.keyx, (wv_w8){0} + p.keyy};
+  for (int s0 = 0; s0 < n; s0 += 8) {
+    wv_i8 s = s0 + WV_IOTA8;
+    s = wv_seli(s < n, s, wv_splati8(0)); /* lanes past the end: a valid index, result dropped */
+    wv_f8 sx, sy;
+    wv_sample_at_8(&p8, nx, ny, s, &sx, &sy);
+    for (int k = 0; k < 8 && s0 + k < n; k++) out[s0 + k][0] = sx[k], out[s0 + k][1] = sy[k];
+  }
 }
 
 /* Per-hit fabric parameters after the edits, handed to shade_fabric. */
@@ -135,12 +135,18 @@ typedef struct {
   float eps; /* ray offset */
 } render_ctx;
 
+/* Per thread: scratch, counters, and the current pixel's stratified numbers,
+ * drawn for all its samples before its first path. */
 typedef struct {
   wv_fabric **scratch; /* per material, NULL without edits */
   double rays, shades;
   float (*fpos)[2];    /* K positions */
-  wv_pixel_sampler strata[1 + 3 * CMJ_DEPTHS]; /* camera; per depth: environment, area light, bounce */
-  wv_pixel_sampler yarn;
+  float (*u)[2];       /* (1 + 3 CMJ_DEPTHS) x spp: camera; per depth: environment, area light, bounce */
+  float (*yarn)[2];    /* spp x K: the yarn positions */
+  wv_env_sample *env;  /* CMJ_DEPTHS x spp: the environment's samples of the numbers in u */
+  float (*dir)[3];     /* spp camera rays */
+  wv_trace_hit *hit;   /* spp: where they meet the scene */
+  int *got;            /* spp: whether they do */
   uint64_t pixel;
   int sample;
 } thread_state;
@@ -148,7 +154,8 @@ typedef struct {
 /* 2D sample 'which' (0 environment, 1 area light, 2 bounce) at path vertex depth. */
 static void rand2(const render_ctx *c, thread_state *ts, int depth, int which, float *u1, float *u2) {
   if (depth < CMJ_DEPTHS) {
-    wv_pixel_sampler_at(&ts->strata[1 + 3 * depth + which], ts->sample, u1, u2);
+    const float *v = ts->u[(1 + 3 * depth + which) * c->spp + ts->sample];
+    *u1 = v[0], *u2 = v[1];
     return;
   }
   uint64_t h = wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + which), c->s->seed);
@@ -242,8 +249,8 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   float pn = dot(rel, sf->ng); /* camera to the plane, along its normal */
   int px = (int)(ts->pixel % (uint64_t)r->width), py = (int)(ts->pixel / (uint64_t)r->width);
   for (int k = 0; k < c->K; k++) {
-    float sx, sy, dd[3], u = sf->u, v = sf->v;
-    wv_pixel_sampler_at(&ts->yarn, ts->sample * c->K + k, &sx, &sy);
+    float sx = ts->yarn[ts->sample * c->K + k][0], sy = ts->yarn[ts->sample * c->K + k][1], dd[3], u = sf->u,
+          v = sf->v;
     camera_dir(r, (float)px + sx, (float)py + sy, dd);
     float den = dot(dd, sf->ng);
     if (fabsf(den) > 1e-6f && pn / den > 0) {
@@ -294,8 +301,9 @@ static int hit_area(const wv_light3d *l, const float o[3], const float d[3], flo
   return 1;
 }
 
-/* Radiance along one camera ray. */
-static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3], const float d0[3], float L[3]) {
+/* Radiance along one camera ray (o0, d0), which meets the scene at hit0 when got0. */
+static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3], const float d0[3],
+                       const wv_trace_hit *hit0, int got0, float L[3]) {
   const wv_scene3d *s = c->s;
   const wv_world *w = c->w;
   float o[3] = {o0[0], o0[1], o0[2]}, d[3] = {d0[0], d0[1], d0[2]}, thr[3] = {1, 1, 1};
@@ -303,8 +311,11 @@ static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3],
   L[0] = L[1] = L[2] = 0;
   for (int depth = 0;; depth++) {
     wv_trace_hit hit;
+    wv_env_at at = {0, 0};
+    if (w->has_env && prev_pdf > 0) at = wv_envmap_at(&w->env, d); /* its texel arrives while the ray is traced */
     ts->rays++;
-    int got = wv_tracer_intersect(w->tracer, o, d, 0.0f, INFINITY, &hit);
+    int got = depth ? wv_tracer_intersect(w->tracer, o, d, 0.0f, INFINITY, &hit) : got0;
+    if (!depth && got) hit = *hit0;
     float tmax = got ? hit.t : INFINITY;
     for (int i = 0; i < s->nlights; i++) { /* area lights the ray sees before the surface */
       const wv_light3d *l = &s->lights[i];
@@ -315,9 +326,9 @@ static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3],
     }
     if (!got) {
       if (w->has_env && (depth > 0 || s->env_visible)) {
-        float le[3];
-        wv_envmap_eval(&w->env, d, le);
-        float wgt = prev_pdf > 0 ? power_heuristic(prev_pdf, wv_envmap_pdf(&w->env, d)) : 1;
+        float le[3], wgt = 1;
+        if (prev_pdf > 0) wgt = power_heuristic(prev_pdf, wv_envmap_read(&w->env, at, le));
+        else wv_envmap_eval(&w->env, d, le);
         for (int k = 0; k < 3; k++) L[k] += thr[k] * le[k] * wgt;
       }
       return;
@@ -375,9 +386,14 @@ static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3],
       for (int k = 0; k < 3; k++) L[k] += thr[k] * f[k] * li[k] * wgt;
     }
     if (w->has_env) {
-      float u1, u2, wi[3], le[3];
-      rand2(c, ts, depth, 0, &u1, &u2);
-      float pl = wv_envmap_sample(&w->env, u1, u2, wi, le);
+      float u1, u2, wi[3], le[3], pl;
+      if (depth < CMJ_DEPTHS) {
+        const wv_env_sample *es = &ts->env[depth * c->spp + ts->sample];
+        memcpy(wi, es->d, sizeof wi), memcpy(le, es->rgb, sizeof le), pl = es->pdf;
+      } else {
+        rand2(c, ts, depth, 0, &u1, &u2);
+        pl = wv_envmap_sample(&w->env, u1, u2, wi, le);
+      }
       if (pl > 0 && maxc(le) > 0) {
         float f[3];
         eval_bsdf(&sf, ts, wi, wo, f);
@@ -448,13 +464,26 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
   for (int t = 0; t < threads && !fail; t++) {
     ts[t].scratch = calloc((size_t)w->nmats, sizeof *ts[t].scratch);
     ts[t].fpos = malloc(sizeof *ts[t].fpos * (size_t)c.K);
-    fail |= !ts[t].scratch || !ts[t].fpos;
+    ts[t].u = malloc(sizeof *ts[t].u * (size_t)(1 + 3 * CMJ_DEPTHS) * (size_t)c.spp);
+    ts[t].yarn = malloc(sizeof *ts[t].yarn * (size_t)c.spp * (size_t)c.K);
+    ts[t].env = malloc(sizeof *ts[t].env * (size_t)CMJ_DEPTHS * (size_t)c.spp);
+    ts[t].dir = malloc(sizeof *ts[t].dir * (size_t)c.spp);
+    ts[t].hit = malloc(sizeof *ts[t].hit * (size_t)c.spp);
+    ts[t].got = malloc(sizeof *ts[t].got * (size_t)c.spp);
+    fail |= !ts[t].scratch || !ts[t].fpos || !ts[t].u || !ts[t].yarn || !ts[t].env || !ts[t].dir || !ts[t].hit ||
+            !ts[t].got;
     for (int m = 0; m < w->nmats && !fail; m++)
       if (w->mats[m].nedits) {
         fail |= !(ts[t].scratch[m] = malloc(sizeof(wv_fabric)));
         if (!fail) *ts[t].scratch[m] = *w->mats[m].fab;
       }
   }
+  /* the stratified dimensions a path can use: camera; per depth environment, area light, bounce */
+  int need[1 + 3 * CMJ_DEPTHS] = {1}, area = 0;
+  for (int i = 0; i < s->nlights; i++) area |= s->lights[i].type == WV_LIGHT_AREA;
+  for (int d = 0; d < CMJ_DEPTHS; d++)
+    need[1 + 3 * d] = w->has_env && d <= s->max_bounces, need[2 + 3 * d] = area && d <= s->max_bounces,
+                 need[3 + 3 * d] = d < s->max_bounces;
   int rows_done = 0;
   if (!fail) {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
@@ -468,17 +497,22 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
       }
       for (int px = 0; px < s->width; px++) {
         me->pixel = (uint64_t)py * (uint64_t)s->width + (uint64_t)px;
-        wv_pixel_sampler_init(&me->strata[0], px, py, c.spp, s->width, s->seed);
-        for (int k = 1; k < 1 + 3 * CMJ_DEPTHS; k++)
-          wv_pixel_sampler_init(&me->strata[k], px, py, c.spp, s->width, wv_mix64(s->seed + 0x51ed27ULL * (uint64_t)k));
-        wv_pixel_sampler_init(&me->yarn, px, py, c.spp * c.K, s->width, wv_mix64(s->seed ^ 0x7961726eULL));
+        for (int k = 0; k < 1 + 3 * CMJ_DEPTHS; k++)
+          if (need[k])
+            draw_sequence(px, py, c.spp, s->width, k ? wv_mix64(s->seed + 0x51ed27ULL * (uint64_t)k) : s->seed,
+                          me->u + (size_t)k * c.spp);
+        draw_sequence(px, py, c.spp * c.K, s->width, wv_mix64(s->seed ^ 0x7961726eULL), me->yarn);
+        for (int d = 0; d < CMJ_DEPTHS; d++)
+          if (need[1 + 3 * d])
+            wv_envmap_sample_n(&w->env, c.spp, (const float(*)[2])me->u + (size_t)(1 + 3 * d) * c.spp,
+                               me->env + (size_t)d * c.spp);
+        for (int j = 0; j < c.spp; j++) camera_dir(&c.cam, (float)px + me->u[j][0], (float)py + me->u[j][1], me->dir[j]);
+        wv_tracer_intersect_from(w->tracer, c.cam.cpos, (const float(*)[3])me->dir, c.spp, me->hit, me->got);
         double acc[3] = {0, 0, 0};
         for (int j = 0; j < c.spp; j++) {
           me->sample = j;
-          float sx, sy, d[3], L[3];
-          wv_pixel_sampler_at(&me->strata[0], j, &sx, &sy);
-          camera_dir(&c.cam, (float)px + sx, (float)py + sy, d);
-          trace_path(&c, me, c.cam.cpos, d, L);
+          float L[3];
+          trace_path(&c, me, c.cam.cpos, me->dir[j], &me->hit[j], me->got[j], L);
           for (int k = 0; k < 3; k++) acc[k] += isfinite(L[k]) ? L[k] : 0.0f;
         }
         float *out = wv_image_px(&rad, px, py);
@@ -492,7 +526,8 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
   for (int t = 0; t < threads && ts; t++) {
     rays += ts[t].rays, shades += ts[t].shades;
     for (int m = 0; m < w->nmats && ts[t].scratch; m++) free(ts[t].scratch[m]);
-    free(ts[t].scratch), free(ts[t].fpos);
+    free(ts[t].scratch), free(ts[t].fpos), free(ts[t].u), free(ts[t].yarn), free(ts[t].env);
+    free(ts[t].dir), free(ts[t].hit), free(ts[t].got);
   }
   free(ts);
   if (fail) {

@@ -1,8 +1,10 @@
 /* Embree 3 scene of triangle meshes: building it under a memory limit, and the
- * two queries the integrator needs (closest hit, occlusion). */
+ * queries the integrator needs (closest hit, for one ray or for many from one
+ * point; occlusion). */
 #include "tracer/tracer.h"
 
 #include <embree3/rtcore.h>
+#include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -46,7 +48,7 @@ wv_status wv_tracer_create(const wv_mesh *const *meshes, int n, int threads, siz
   if (!t) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the ray tracer");
   t->limit = (long long)limit;
   char cfg[64];
-  snprintf(cfg, sizeof cfg, "threads=%d,set_affinity=0,verbose=0", threads > 0 ? threads : 0);
+  snprintf(cfg, sizeof cfg, "threads=%d,set_affinity=0,verbose=0,hugepages=1", threads > 0 ? threads : 0);
   t->dev = rtcNewDevice(cfg);
   if (!t->dev) {
     free(t);
@@ -94,6 +96,13 @@ static void set_ray(struct RTCRay *r, const float o[3], const float d[3], float 
   r->time = 0, r->mask = 0xffffffffu, r->id = 0, r->flags = 0;
 }
 
+static void to_hit(const struct RTCRayHit *rh, wv_trace_hit *hit) {
+  hit->t = rh->ray.tfar;
+  hit->b1 = rh->hit.u, hit->b2 = rh->hit.v;
+  hit->geom = (int)rh->hit.geomID, hit->prim = (int)rh->hit.primID;
+  hit->ng[0] = rh->hit.Ng_x, hit->ng[1] = rh->hit.Ng_y, hit->ng[2] = rh->hit.Ng_z;
+}
+
 int wv_tracer_intersect(const wv_tracer *t, const float o[3], const float d[3], float tmin, float tmax,
                         wv_trace_hit *hit) {
   struct RTCIntersectContext ctx;
@@ -104,11 +113,33 @@ int wv_tracer_intersect(const wv_tracer *t, const float o[3], const float d[3], 
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(t->scene, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
-  hit->t = rh.ray.tfar;
-  hit->b1 = rh.hit.u, hit->b2 = rh.hit.v;
-  hit->geom = (int)rh.hit.geomID, hit->prim = (int)rh.hit.primID;
-  hit->ng[0] = rh.hit.Ng_x, hit->ng[1] = rh.hit.Ng_y, hit->ng[2] = rh.hit.Ng_z;
+  to_hit(&rh, hit);
   return 1;
+}
+
+int wv_tracer_intersect_from(const wv_tracer *t, const float o[3], const float (*d)[3], int n, wv_trace_hit *hit,
+                             int *got) {
+  enum { B = 64 };
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  struct RTCRayHit rh[B];
+  int hits = 0;
+  for (int j0 = 0; j0 < n; j0 += B) {
+    int m = n - j0 < B ? n - j0 : B;
+    for (int j = 0; j < m; j++) {
+      set_ray(&rh[j].ray, o, d[j0 + j], 0.0f, INFINITY);
+      rh[j].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh[j].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect1M(t->scene, &ctx, rh, (unsigned)m, sizeof *rh);
+    for (int j = 0; j < m; j++) {
+      got[j0 + j] = rh[j].hit.geomID != RTC_INVALID_GEOMETRY_ID;
+      hits += got[j0 + j];
+      if (got[j0 + j]) to_hit(&rh[j], &hit[j0 + j]);
+    }
+  }
+  return hits;
 }
 
 int wv_tracer_occluded(const wv_tracer *t, const float o[3], const float d[3], float tmin, float tmax) {

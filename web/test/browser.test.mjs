@@ -11,7 +11,9 @@
 //      its key light alone is written as a `woven scene` file (camera, light,
 //      the page's own mesh, uv scale, response) and rendered by woven's path
 //      tracer: viewer vs that render must reach SSIM 0.9 (4-px blur); the glTF
-//      of the same mesh in three.js, same view, is reported against it;
+//      of the same mesh in three.js, same view, is reported against it; and
+//      spp frames of one sample give the picture of one frame of spp samples
+//      (the progressive accumulation);
 // and the viewer refuses out-of-range parameters visibly. Nothing is fetched:
 // the viewer is a file, the glTF page is served from web/ by request
 // interception, and any other request fails the test.
@@ -160,8 +162,14 @@ async function studioCompare(pat, params, html, mode) {
   const t1 = Date.now();
   await page.evaluate((s) => window.woven.render({ frames: 1, spp: s }), spp);
   const ms = Date.now() - t1;
-  const v = `${base}_viewer.png`, t = `${base}_gltf.png`, c = `${base}_c.png`;
+  const v = `${base}_viewer.png`, t = `${base}_gltf.png`, c = `${base}_c.png`, vf = `${base}_viewer_frames.png`;
   png(await page.evaluate(() => window.woven.snapshot()), v);
+  // The same samples as spp frames of 1: the frames' sum (accumulated over the
+  // first frame's surfaces) must give the one frame's picture.
+  await page.evaluate((s) => window.woven.render({ frames: s, spp: 1 }), spp);
+  png(await page.evaluate(() => window.woven.snapshot()), vf);
+  const frames = compare(v, vf, 0);
+  if (!(frames.mae < 2e-3)) fail(`${pat} ${mode}: ${spp} frames of 1 sample differ from 1 frame of ${spp}: MAE ${frames.mae}`);
   const view = await page.evaluate(() => window.woven.view());
   const mesh = await page.evaluate((m) => JSON.parse(document.getElementById('woven-data').textContent).meshes[m], mode);
   await page.close();
@@ -180,7 +188,8 @@ async function studioCompare(pat, params, html, mode) {
   if (!(sv.ssim >= 0.9)) fail(`${pat} ${mode}: viewer vs woven scene SSIM ${sv.ssim.toFixed(4)} < 0.9`);
   return { pattern: pat, mode, viewer_ssim_blur4: sv.ssim, viewer_mae_blur4: sv.mae, viewer_ssim: rv.ssim, viewer_mae: rv.mae,
            gltf_ssim_blur4: sg.ssim, gltf_mae_blur4: sg.mae, gltf_ssim: rg.ssim, gltf_mae: rg.mae,
-           gltf_vs_viewer_ssim_blur4: gv.ssim, viewer_ms: ms, scene_ms: cms, vertices: pos.length / 3 };
+           gltf_vs_viewer_ssim_blur4: gv.ssim, viewer_frames_mae: frames.mae, viewer_ms: ms, scene_ms: cms,
+           vertices: pos.length / 3 };
 }
 
 const rows = [], studio = [];

@@ -51,6 +51,8 @@ uniform float uLightI;
 uniform int uBoxes;
 uniform vec3 uBoxC[3], uBoxU[3], uBoxV[3];
 uniform float uBoxL[3];
+uniform vec3 uBoxN[3];          // unit normal
+uniform float uBoxArea[3];
 uniform float uAmbient;
 // The key light's shadow map (studio; see renderShadows in viewer.js).
 uniform bool uShadows;
@@ -179,12 +181,19 @@ int yarnEval(float x, float y, inout SegCache cache, out vec3 n, out vec3 t) {
 }
 
 // U_s (wv_glint): -ln(1 - xi) at the midpoint of xi's 4096-bin cell, at most 10.
-float glint(float fx, float fy) {
+// The last cell's value is kept: where a pixel is smaller than a glint cell (an
+// eighth of the yarn spacing), its samples share one and hash it once.
+struct GlintCache { ivec2 cell; float us; };
+float glint(float fx, float fy, inout GlintCache cache) {
   if (!uGlints) return 1.0;
-  int gx = int(floor(fx * uInvGlintCell.x)), gy = int(floor(fy * uInvGlintCell.y));
-  uvec2 h = hash2(i64(gx), i64(gy), uSeed ^ uvec2(0u, 0x676c696eu));
-  float xi = (float(h.x >> 20) + 0.5) / 4096.0;
-  return min(-log(1.0 - xi), 10.0);
+  ivec2 g = ivec2(int(floor(fx * uInvGlintCell.x)), int(floor(fy * uInvGlintCell.y)));
+  if (g != cache.cell) {
+    uvec2 h = hash2(i64(g.x), i64(g.y), uSeed ^ uvec2(0u, 0x676c696eu));
+    float xi = (float(h.x >> 20) + 0.5) / 4096.0;
+    cache.cell = g;
+    cache.us = min(-log(1.0 - xi), 10.0);
+  }
+  return cache.us;
 }
 
 // wv_shade for one light: the radiance of a fabric point with yarn frame (n, t),
@@ -279,6 +288,7 @@ void main() {
   vec2 rot = vec2(float(ph >> 8) * (1.0 / 16777216.0), float(pcg(ph) >> 8) * (1.0 / 16777216.0));
   vec3 sum = vec3(0.0);
   SegCache cache = SegCache(ivec3(-1, 0x7fffffff, 0), 0.0);
+  GlintCache gcache = GlintCache(ivec2(0x7fffffff, -0x7fffffff), 1.0); // a cell no position reaches
   for (int s = 0; s < uSpp; s++) {
     float g = float(uFrame * uSpp + s);
     vec2 xi = fract(rot + g * vec2(0.7548776662466927, 0.5698402909980532));
@@ -286,7 +296,7 @@ void main() {
     vec3 yn, yt;
     int ty = yarnEval(fs.x, fs.y, cache, yn, yt);
     if (ty < 0) continue; // gap: nothing reflects
-    float us = glint(fs.x, fs.y);
+    float us = glint(fs.x, fs.y, gcache);
     sum += shadeLight(ty, yn, yt, us, wi, wo, light);
     for (int b = 0; b < uBoxes; b++) { // one point of each soft box per sample
       vec2 e = fract(rot.yx + g * vec2(0.5698402909980532, 0.7548776662466927) + 0.37 * float(b + 1)) * 2.0 - 1.0;
@@ -294,11 +304,9 @@ void main() {
       vec3 Lb = q - P;
       float rb2 = dot(Lb, Lb);
       vec3 lb = Lb * (1.0 / sqrt(rb2));
-      vec3 nb = normalize(cross(uBoxU[b], uBoxV[b]));
-      float area = 4.0 * length(cross(uBoxU[b], uBoxV[b]));
-      float cosb = abs(dot(lb, nb)); // two-sided emitter
+      float cosb = abs(dot(lb, uBoxN[b])); // two-sided emitter
       vec3 wib = vec3(dot(lb, T), dot(lb, B), dot(lb, N));
-      sum += shadeLight(ty, yn, yt, us, wib, wo, uBoxL[b] * area * cosb / rb2);
+      sum += shadeLight(ty, yn, yt, us, wib, wo, uBoxL[b] * uBoxArea[b] * cosb / rb2);
     }
     if (uAmbient > 0.0 && wo.z > 0.0) // uniform sky on the diffuse lobe: its exact cosine integral
       sum += uAmbient * uKd[ty] * (uBlend * 0.5 * (1.0 + yn.z) + (1.0 - uBlend));

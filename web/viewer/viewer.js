@@ -137,7 +137,8 @@ const fabricUniforms = {
   uCamPos: { value: new THREE.Vector3() }, uLightPos: { value: new THREE.Vector3() }, uLightI: { value: 1 },
   uBoxes: { value: 0 }, uBoxC: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
   uBoxU: { value: [0, 1, 2].map(() => new THREE.Vector3()) }, uBoxV: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
-  uBoxL: { value: [0, 0, 0] }, uAmbient: { value: 0 }, uSpp: { value: 4 }, uFrame: { value: 0 },
+  uBoxL: { value: [0, 0, 0] }, uBoxN: { value: [0, 1, 2].map(() => new THREE.Vector3()) },
+  uBoxArea: { value: [0, 0, 0] }, uAmbient: { value: 0 }, uSpp: { value: 4 }, uFrame: { value: 0 },
   uShadows: { value: false }, uShadowMap: { value: null }, uShadowMatrix: { value: new THREE.Matrix4() },
   uShadowInvFar: { value: 1 }, uShadowBias: { value: 0 }, uShadowTexel: { value: 0 },
 };
@@ -145,6 +146,7 @@ for (const [k, v] of Object.entries(prepareFabric(params, seedWords))) fabricUni
 const fabricMaterial = new THREE.RawShaderMaterial({
   glslVersion: THREE.GLSL3, vertexShader: shader('woven-fabric-vert'), fragmentShader: shader('woven-fabric-frag'),
   uniforms: fabricUniforms, side: THREE.DoubleSide,
+  blendEquation: THREE.AddEquation, blendSrc: THREE.OneFactor, blendDst: THREE.OneFactor, // the sum of frames
 });
 const scene = new THREE.Scene();
 const fabricMesh = new THREE.Mesh(new THREE.BufferGeometry(), fabricMaterial);
@@ -225,14 +227,21 @@ const display = screenPass(shader('woven-display-frag'), {
 });
 const quadCamera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
 
+// Frames accumulate by additive blending into one float target (EXT_float_blend)
+// when the GL offers it: the first frame of a view draws the fabric with the
+// depth test and writes its depth, later frames shade only the fragments at
+// that depth (no pass over hidden folds) and add into the sum. Without the
+// extension: a fabric target and an accumulation pass between two sums.
+const blendAccumulate = !!gl.getExtension('EXT_float_blend');
 let targets = null;
 function makeTargets(w, h) {
   if (targets) for (const t of targets) t.dispose();
   const opt = { type: THREE.FloatType, format: THREE.RGBAFormat, minFilter: THREE.NearestFilter,
                 magFilter: THREE.NearestFilter, generateMipmaps: false };
-  targets = [new THREE.WebGLRenderTarget(w, h, { ...opt, depthBuffer: true }),
-             new THREE.WebGLRenderTarget(w, h, { ...opt, depthBuffer: false }),
-             new THREE.WebGLRenderTarget(w, h, { ...opt, depthBuffer: false })];
+  targets = blendAccumulate ? [new THREE.WebGLRenderTarget(w, h, { ...opt, depthBuffer: true })]
+    : [new THREE.WebGLRenderTarget(w, h, { ...opt, depthBuffer: true }),
+       new THREE.WebGLRenderTarget(w, h, { ...opt, depthBuffer: false }),
+       new THREE.WebGLRenderTarget(w, h, { ...opt, depthBuffer: false })];
 }
 
 // ---- views ----
@@ -322,6 +331,10 @@ function setMode(mode) {
     boxes.forEach((b, i) => {
       u.uBoxC.value[i].set(...b.c), u.uBoxU.value[i].set(...b.u), u.uBoxV.value[i].set(...b.v);
       u.uBoxL.value[i] = b.L;
+      // the box's constants, once here instead of per sample in the shader
+      const n = new THREE.Vector3().crossVectors(u.uBoxU.value[i], u.uBoxV.value[i]);
+      u.uBoxArea.value[i] = 4 * n.length();
+      u.uBoxN.value[i].copy(n.normalize());
     });
     u.uAmbient.value = pointOnly ? 0 : 0.08;
     display.uniforms.uBackdrop.value = !pointOnly; // the key light alone: nothing else, black behind
@@ -360,25 +373,41 @@ function applyLight() {
 
 function restart() { state.frame = 0; }
 
-// One frame of the progressive render: fabric pass, accumulation, display.
+// One frame of the progressive render: fabric pass (accumulating), display.
 function renderFrame() {
-  const [cur, a, b] = targets;
-  const prev = state.frame % 2 ? b : a, next = state.frame % 2 ? a : b;
   if (shadowStale) renderShadows();
   fabricUniforms.uCamPos.value.copy(camera.position);
   fabricUniforms.uSpp.value = state.spp;
   fabricUniforms.uFrame.value = state.frame;
-  renderer.setRenderTarget(cur);
-  renderer.setClearColor(0x000000, 0);
-  renderer.clear(true, true, false);
-  if (state.valid) renderer.render(scene, camera);
-  accumulate.uniforms.uPrev.value = prev.texture;
-  accumulate.uniforms.uCurrent.value = cur.texture;
-  accumulate.uniforms.uKeep.value = state.frame > 0 ? 1 : 0;
-  renderer.setRenderTarget(next);
-  renderer.render(accumulate.scene, quadCamera);
+  let sum;
+  if (blendAccumulate) {
+    [sum] = targets;
+    const first = state.frame === 0;
+    renderer.setRenderTarget(sum);
+    if (first) {
+      renderer.setClearColor(0x000000, 0);
+      renderer.clear(true, true, false);
+    }
+    fabricMaterial.blending = first ? THREE.NoBlending : THREE.CustomBlending;
+    fabricMaterial.depthFunc = first ? THREE.LessEqualDepth : THREE.EqualDepth;
+    fabricMaterial.depthWrite = first;
+    if (state.valid) renderer.render(scene, camera);
+  } else {
+    const [cur, a, b] = targets;
+    const prev = state.frame % 2 ? b : a;
+    sum = state.frame % 2 ? a : b;
+    renderer.setRenderTarget(cur);
+    renderer.setClearColor(0x000000, 0);
+    renderer.clear(true, true, false);
+    if (state.valid) renderer.render(scene, camera);
+    accumulate.uniforms.uPrev.value = prev.texture;
+    accumulate.uniforms.uCurrent.value = cur.texture;
+    accumulate.uniforms.uKeep.value = state.frame > 0 ? 1 : 0;
+    renderer.setRenderTarget(sum);
+    renderer.render(accumulate.scene, quadCamera);
+  }
   state.frame++;
-  display.uniforms.uAcc.value = next.texture;
+  display.uniforms.uAcc.value = sum.texture;
   display.uniforms.uInvFrames.value = 1 / state.frame;
   renderer.setRenderTarget(null);
   renderer.render(display.scene, quadCamera);
