@@ -103,7 +103,7 @@ const cli_opt CLI_FIT_OPTS[] = {
     CLI_O_CLEAR("--no-schedule", capture_args, fit.schedule, "every iteration on the whole image"),
     CLI_O_INT("--patience", NULL, capture_args, fit.patience, 0, WV_FIT_MAX_ITERS, "N",
               "end a stage when its smoothed loss has not fallen by 1% in N\niterations; the last stage's end "
-              "ends the iterations (default 20;\n0 = run every iteration)"),
+              "ends the iterations (default 10;\n0 = run every iteration)"),
     CLI_O_CUSTOM("--seed", capture_args, fit.seed, 0, INT_MAX, parse_seed, "N", "the seed of the discrete steps"),
     CLI_O_CUSTOM("--align-radius", capture_args, fit.align_radius, 0, WV_FIT_MAX_ALIGN_RADIUS, parse_align, "N",
                  "after the iterations, search each density +-N yarns/inch for the\nbest SSIM in a centre window "

@@ -52,7 +52,7 @@ typedef struct {
                        * iterations, the second on the whole image; 0: one stage, the whole image */
   int patience;       /* the stopping rule (wv_fit_converged): a stage ends when its smoothed loss has not
                        * fallen by WV_FIT_MIN_GAIN in this many iterations, and the last stage ends the
-                       * iterations (20; 0: every stage runs to its limit) */
+                       * iterations (10; 0: every stage runs to its limit) */
 } wv_fit_opts;
 
 void wv_fit_opts_default(wv_fit_opts *o);
@@ -62,10 +62,10 @@ void wv_fit_opts_default(wv_fit_opts *o);
 
 /* The schedule (docs/fit.md, "Schedule and stopping rule"). */
 #define WV_FIT_WINDOW_DIV 2      /* the first stage's window: this fraction of each side */
-#define WV_FIT_WINDOW_SHARE 0.5  /* ... for at most this share of the iterations */
+#define WV_FIT_WINDOW_SHARE 0.3  /* ... for at most this share of the iterations */
 #define WV_FIT_SMOOTH 5          /* the smoothed loss: the mean of this many consecutive losses */
 #define WV_FIT_MIN_GAIN 0.01     /* a relative fall of the smoothed loss that counts as progress */
-#define WV_FIT_PATIENCE 20       /* the default patience */
+#define WV_FIT_PATIENCE 10       /* the default patience */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000
@@ -138,7 +138,7 @@ wv_status wv_fit_state_init(wv_fit_state *st, const wv_params *start, const wv_f
 /* The schedule's stage after st->iter iterations, replayed from the log (wv_fit_converged
  * on each stage): 0 the window's stage, 1 the whole image's (with o->schedule 0 the only one is
  * 1), 2 the iterations are over (o->iters reached, or the last stage converged). *from
- * (may be NULL): the stage's first iteration. */
+ * (may be NULL): the first iteration of the stage (when over, of the last one). */
 int wv_fit_stage(const wv_fit_state *st, const wv_fit_opts *o, int *from);
 /* The iterations are over: wv_fit_stage is 2. */
 int wv_fit_finished(const wv_fit_state *st, const wv_fit_opts *o);

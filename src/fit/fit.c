@@ -201,7 +201,7 @@ static int stage_limit(const wv_fit_opts *o, int stage) {
  * next one when the stage reached its limit or converged. */
 static int stage_after(const wv_fit_record *log, const wv_fit_opts *o, int stage, int *from, int done) {
   while (stage < 2 && (done >= stage_limit(o, stage) || wv_fit_converged(log, *from, done, o->patience)))
-    stage++, *from = done;
+    if (++stage < 2) *from = done;
   return stage;
 }
 
@@ -223,6 +223,7 @@ typedef struct {
   const wv_fit_opts *o;
   wv_fit_timing *timing;
   wv_footprints *fp; /* the iteration scene's camera geometry, made once */
+  wv_fit_opts wopts; /* a window's options (o points here) */
 } fit_ctx;
 
 static void ctx_free(fit_ctx *c) {
@@ -233,8 +234,10 @@ static void ctx_free(fit_ctx *c) {
 
 static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, wv_descriptor *d, int scale,
                           int spp, const wv_fit_opts *o, wv_fit_timing *timing, wv_error *err) {
+  wv_fit_opts keep = c->wopts; /* o may point to it */
   memset(c, 0, sizeof *c);
-  c->o = o, c->timing = timing;
+  c->wopts = keep;
+  c->o = o == &c->wopts ? &c->wopts : o, c->timing = timing;
   wv_fit_opts so = *o;
   so.iter_scale = scale;
   wv_status st = wv_fit_check_sizes(s, d, &so, err);
@@ -574,7 +577,14 @@ static wv_status stage_ctx(fit_ctx *c, int stage, const wv_scene *s, const wv_im
   wv_fit_centre_window(s, w, h, &win);
   wv_status rc = wv_fit_centre_crop(photo, w, h, &pw, err);
   if (rc) return rc;
-  rc = ctx_init(c, &win, &pw, d, o->iter_scale, o->iter_spp, o, timing, err);
+  /* the pixel term's cells as large as the whole image's (there they are the centre cells):
+   * smaller ones would fit the window's light to a detail the whole image's term ignores */
+  c->wopts = *o;
+  c->wopts.down_w = (o->down_w * w + s->width / 2) / s->width;
+  c->wopts.down_h = (o->down_h * h + s->height / 2) / s->height;
+  if (c->wopts.down_w < 1) c->wopts.down_w = 1;
+  if (c->wopts.down_h < 1) c->wopts.down_h = 1;
+  rc = ctx_init(c, &win, &pw, d, o->iter_scale, o->iter_spp, &c->wopts, timing, err);
   wv_image_free(&pw);
   return rc;
 }
