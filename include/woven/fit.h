@@ -187,8 +187,9 @@ wv_status wv_fit_distort(wv_fit_state *st, const wv_scene *s, const wv_image *ph
                          wv_error *err);
 
 /* The camera blur of photo (the scene's size): the sigma in 0..WV_PSF_RANGE pixels, in
- * steps of WV_PSF_RANGE / WV_PSF_STEPS, whose Gaussian blur of p's render of that window (at WV_PSF_SPP)
- * has the weave spectrum (centre 256 x 256 pixels, wv_weave_spectrum) most correlated
+ * steps of WV_PSF_RANGE / WV_PSF_STEPS, whose Gaussian blur of p's render (at WV_PSF_SPP, of the
+ * window the spectrum reads) has the weave spectrum (centre 256 x 256 pixels, wv_weave_spectrum)
+ * most correlated
  * with the photo's: the least 1 - WSC (returned in distance, may be NULL). Photos under
  * WV_PSF_MIN_SIDE pixels: 0. */
 #define WV_PSF_RANGE 2.0
