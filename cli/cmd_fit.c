@@ -99,8 +99,8 @@ const cli_opt CLI_FIT_OPTS[] = {
               "iterate on the image downscaled N times (default 1); the final\nrender and SSIM use the scene's full "
               "resolution and spp"),
     CLI_O_FLAG("--schedule", capture_args, fit.schedule,
-               "iterate first on the centre window of half of each side, then on\nthe whole image (the default)"),
-    CLI_O_CLEAR("--no-schedule", capture_args, fit.schedule, "every iteration on the whole image"),
+               "iterate first on the centre window of half of each side, then on\nthe whole image"),
+    CLI_O_CLEAR("--no-schedule", capture_args, fit.schedule, "every iteration on the whole image (the default)"),
     CLI_O_INT("--patience", NULL, capture_args, fit.patience, 0, WV_FIT_MAX_ITERS, "N",
               "end a stage when its smoothed loss has not fallen by 1% in N\niterations; the last stage's end "
               "ends the iterations (default 10;\n0 = run every iteration)"),

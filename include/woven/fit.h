@@ -47,9 +47,9 @@ typedef struct {
                        * photo (wv_psf_estimate) unless the scene gives one; >= 0: this sigma */
   int psf_fit;        /* 1: a measured blur is then fitted with the parameters, by its gradient (1);
                        * 0: it stays as measured. A given blur is never fitted. */
-  int schedule;       /* 1 (default): a first stage iterates on the centre window of 1/WV_FIT_WINDOW_DIV of
+  int schedule;       /* 1: a first stage iterates on the centre window of 1/WV_FIT_WINDOW_DIV of
                        * each side (when the fit holds it) for at most WV_FIT_WINDOW_SHARE of the
-                       * iterations, the second on the whole image; 0: one stage, the whole image */
+                       * iterations, the second on the whole image; 0 (default): one stage, the whole image */
   int patience;       /* the stopping rule (wv_fit_converged): a stage ends when its smoothed loss has not
                        * fallen by WV_FIT_MIN_GAIN in this many iterations, and the last stage ends the
                        * iterations (10; 0: every stage runs to its limit) */
@@ -187,9 +187,8 @@ wv_status wv_fit_distort(wv_fit_state *st, const wv_scene *s, const wv_image *ph
                          wv_error *err);
 
 /* The camera blur of photo (the scene's size): the sigma in 0..WV_PSF_RANGE pixels, in
- * steps of WV_PSF_RANGE / WV_PSF_STEPS, whose Gaussian blur of p's render (at WV_PSF_SPP, of the
- * window the spectrum reads) has the weave spectrum (centre 256 x 256 pixels, wv_weave_spectrum)
- * most correlated
+ * steps of WV_PSF_RANGE / WV_PSF_STEPS, whose Gaussian blur of p's render (at WV_PSF_SPP)
+ * has the weave spectrum (centre 256 x 256 pixels, wv_weave_spectrum) most correlated
  * with the photo's: the least 1 - WSC (returned in distance, may be NULL). Photos under
  * WV_PSF_MIN_SIDE pixels: 0. */
 #define WV_PSF_RANGE 2.0

@@ -57,7 +57,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->distort_degree = 3;
   o->psf_sigma = WV_FIT_PSF_AUTO;
   o->psf_fit = 1;
-  o->schedule = 1;
+  o->schedule = 0; /* the window stage did not keep the real photos' quality (docs/fit.md) */
   o->patience = WV_FIT_PATIENCE;
 }
 
