@@ -34,7 +34,7 @@ static int grad_check(const char *scene_name, int spp) {
     fprintf(stderr, "bench_grad: %s\n", err.msg);
     return 1;
   }
-  wv_grad_opts g = {s.width / 2 - 24, s.height / 2 - 16, 48, 32, 1};
+  wv_grad_opts g = {.x0 = s.width / 2 - 24, .y0 = s.height / 2 - 16, .width = 48, .height = 32, .double_precision = 1};
   wv_image dc;
   if (wv_image_alloc(&dc, g.width, g.height, 3, &err)) return 1;
   uint64_t st = 7;

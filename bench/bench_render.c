@@ -8,7 +8,7 @@
 #include "woven/render.h"
 
 static double time_render(const wv_scene *s, const wv_params *p, int threads, double *cpu) {
-  wv_render_opts o = {0, threads, NULL, NULL, NULL};
+  wv_render_opts o = {.threads = threads};
   wv_image img;
   wv_error err = {0};
   double t0 = bench_now(), c0 = bench_cpu_now();

@@ -26,7 +26,7 @@ static timing run(const char *path, int w, int h) {
   }
   t.load = bench_now() - t0;
   if (w) s.width = s.response.width = w, s.height = s.response.height = h;
-  wv_scene3d_opts o = {0, 2, NULL, NULL};
+  wv_scene3d_opts o = {.threads = 2};
   wv_scene3d_stats st;
   wv_image img;
   double t1 = bench_now(), c1 = bench_cpu_now();

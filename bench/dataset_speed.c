@@ -13,8 +13,8 @@
 #include <sys/stat.h>
 
 #include "bench_common.h"
+#include "woven/dataset.h"
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
 #include "woven/render.h"
 
 static void remove_dir(const char *dir) {

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "bench_common.h"
+#include "woven/dataset.h"
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
 #include "woven/fit.h"
@@ -73,7 +74,7 @@ int main(int argc, char **argv) {
     wv_fabricnet_targets(&truth, yt);
     wv_fabricnet_targets(&pred, y);
     for (int i = 0; i < WV_NET_OUT; i++) err_sum[i] += fabs((double)y[i] - yt[i]);
-    wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+    wv_render_opts ro = {0};
     double sn = 0;
     if (wv_render(s, &pred, &ro, &r_net, NULL, &e) || wv_ssim(&photo, &r_net, WV_SSIM_LUMA, &sn, &e)) return die(&e);
     ssim_net += sn;

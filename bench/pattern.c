@@ -21,8 +21,8 @@
 #include "bench_common.h"
 #include "util/hash.h"
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
 #include "woven/metrics.h"
+#include "woven/pattern.h"
 #include "woven/photo.h"
 #include "woven/render.h"
 
@@ -155,7 +155,7 @@ int main(int argc, char **argv) {
   double dens_err = 0;
   int dens_n = 0;
   double *secs = malloc(sizeof(double) * (size_t)total);
-  wv_render_opts ro = {target_spp, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {.spp = target_spp};
   for (int k = 0; k < total; k++) {
     int t = k % nb;
     const char *tname = wv_weave_builtin_name(t);

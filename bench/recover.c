@@ -35,9 +35,9 @@
 #include "util/hash.h"
 #include "woven/capture.h"
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
+#include "woven/pattern.h"
 #include "woven/photo.h"
 #include "woven/render.h"
 
@@ -108,7 +108,7 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
  * sigma (blurred[0] SSIM, [1] WSC). */
 static void measure(const wv_scene *s, const wv_params *p, const wv_image *ref, int threads, double *ssim_rgb,
                     double *ssim_luma, double wsc[2], double blur, double blurred[2]) {
-  wv_render_opts ro = {0, threads, NULL, NULL, NULL};
+  wv_render_opts ro = {.threads = threads};
   wv_image img, b;
   wv_error err = {0};
   if (wv_render(s, p, &ro, &img, NULL, &err)) die(&err);
@@ -182,7 +182,7 @@ static int synthetic(const study *st, int per, const char **pats, int np, uint64
       if (wv_params_sample_prior(pats[k], ts, &target, &err)) die(&err);
       int denim = i % 2 == 1;
       if (denim) two_colour(&target, ts);
-      wv_render_opts ro = {0, st->o.threads, NULL, NULL, NULL};
+      wv_render_opts ro = {.threads = st->o.threads};
       wv_image photo;
       if (wv_render(s, &target, &ro, &photo, NULL, &err)) die(&err);
       quantise8(&photo);

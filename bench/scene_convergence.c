@@ -27,7 +27,7 @@ int main(int argc, char **argv) {
   wv_image img[LADDER];
   double secs[LADDER];
   for (int k = 0; k < LADDER; k++) {
-    wv_scene3d_opts o = {ladder[k], threads, NULL, NULL};
+    wv_scene3d_opts o = {.spp = ladder[k], .threads = threads};
     double t0 = bench_now();
     if (wv_scene3d_render(&s, w, &o, &img[k], NULL, NULL, &e)) {
       fprintf(stderr, "scene_convergence: %s\n", e.msg);

@@ -11,8 +11,8 @@
 #include <string.h>
 
 #include "bench_common.h"
-#include "fit/fit_internal.h"
-#include "woven/fabricnet.h"
+#include "woven/dataset.h"
+#include "woven/metrics.h"
 #include "woven/render.h"
 
 #define LADDER 5
@@ -45,7 +45,7 @@ int main(int argc, char **argv) {
         wv_image prev = {0};
         for (int k = 0; k <= LADDER; k++) {
           int spp = k < LADDER ? ladder[k] : 2 * ladder[LADDER - 1];
-          wv_render_opts ro = {spp, 2, NULL, NULL, NULL};
+          wv_render_opts ro = {.spp = spp, .threads = 2};
           wv_image img = {0};
           if (wv_render(&s, &p, &ro, &img, NULL, &e)) {
             fprintf(stderr, "%s\n", e.msg);
@@ -56,7 +56,7 @@ int main(int argc, char **argv) {
             sum[k - 1] += mad;
             if (mad > worst[k - 1]) worst[k - 1] = mad;
             wv_image ca = {0}, cb = {0};
-            if (wv_fit_centre_crop(&prev, 200, 100, &ca, &e) || wv_fit_centre_crop(&img, 200, 100, &cb, &e)) {
+            if (wv_image_centre_crop(&prev, 200, 100, &ca, &e) || wv_image_centre_crop(&img, 200, 100, &cb, &e)) {
               fprintf(stderr, "%s\n", e.msg);
               return 1;
             }

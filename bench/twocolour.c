@@ -18,7 +18,6 @@
 #include <string.h>
 
 #include "bench_common.h"
-#include "fit/fit_internal.h"
 #include "woven/descriptor.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
@@ -33,7 +32,7 @@ static void die(const wv_error *e) {
 }
 
 static double ssim_of(const wv_scene *s, const wv_params *p, const wv_image *ref, int threads) {
-  wv_render_opts ro = {0, threads, NULL, NULL, NULL};
+  wv_render_opts ro = {.threads = threads};
   wv_image img;
   wv_error err = {0};
   if (wv_render(s, p, &ro, &img, NULL, &err)) die(&err);
@@ -76,7 +75,7 @@ int main(int argc, char **argv) {
   if (wv_scene_preset(scene, &s, &err)) die(&err);
   if (side > 0) {
     wv_scene full = s;
-    wv_fit_centre_window(&full, side < full.width ? side : full.width, side < full.height ? side : full.height, &s);
+    wv_scene_centre_window(&full, side < full.width ? side : full.width, side < full.height ? side : full.height, &s);
   }
   wv_descriptor *d;
   if (wv_descriptor_create_default(&d, &err)) die(&err);
@@ -95,7 +94,7 @@ int main(int argc, char **argv) {
       target.specular[WV_WEFT][c] = pow(target.diffuse[WV_WEFT][c], 0.5);
     }
     if (wv_params_validate(&target, &err)) die(&err);
-    wv_render_opts ro = {0, o.threads, NULL, NULL, NULL};
+    wv_render_opts ro = {.threads = o.threads};
     wv_image photo;
     if (wv_render(&s, &target, &ro, &photo, NULL, &err)) die(&err);
     wv_params_default(pat, &start, NULL);

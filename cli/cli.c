@@ -84,6 +84,11 @@ json_t *cli_real(double v, int decimals) {
   return json_real(round(v * k) / k);
 }
 
+json_t *cli_count(double v) {
+  if (!(fabs(v) < 9e18)) return json_null();
+  return json_integer((json_int_t)llround(v));
+}
+
 json_t *cli_str(const char *s) { return wv_json_str_lossy(s); }
 
 json_t *cli_json_text(char *text) { return wv_json_from_text(text); }

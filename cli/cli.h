@@ -87,6 +87,8 @@ void cli_info(const cli_ctx *c, const char *fmt, ...) __attribute__((format(prin
 #include <jansson.h>
 void cli_print_json(json_t *o); /* prints and releases o */
 json_t *cli_real(double v, int decimals);
+/* A count held in a double, as a JSON integer (rounded; null when not finite or out of range). */
+json_t *cli_count(double v);
 /* A path or name as a JSON string (bytes that are not UTF-8 become U+FFFD). */
 json_t *cli_str(const char *s);
 /* A JSON text (e.g. wv_params_to_json) as a value; null when text is NULL. Frees text. */

@@ -104,7 +104,7 @@ int cmd_capture_batch(int argc, char **argv) {
   if (!rc) {
     b.rank = dist.rank, b.size = dist.size;
     if (dist.rank > 0) c.quiet = 1, c.json = 0;
-    wv_batch_opts bo = {list, dir, capture_one, &b, on_photo};
+    wv_batch_opts bo = {.list = list, .dir = dir, .capture = capture_one, .user = &b, .on_photo = on_photo};
     wv_batch_summary sum;
     char note[4400];
     wv_status st = wv_batch_run(&dist, &bo, &sum, note, sizeof note, &err);

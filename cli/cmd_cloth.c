@@ -70,6 +70,7 @@ int cmd_cloth(int argc, char **argv) {
   if (st) return cli_fail(&c, &err);
   cli_info(&c, "wrote %s (%d vertices, %d triangles, simulated in %.2f s)\n", out, nv, nt, secs);
   if (c.json)
-    printf("{\"output\": \"%s\", \"vertices\": %d, \"triangles\": %d, \"seconds\": %.3f}\n", out, nv, nt, secs);
+    cli_print_json(json_pack("{s:o,s:i,s:i,s:o}", "output", cli_str(out), "vertices", nv, "triangles", nt, "seconds",
+                             cli_real(secs, 3)));
   return 0;
 }

@@ -3,8 +3,8 @@
 #include <limits.h>
 
 #include "cli.h"
+#include "woven/dataset.h"
 #include "woven/dist.h"
-#include "woven/fabricnet.h"
 
 typedef struct {
   const char *scene, *dir, *descriptor, *weights;

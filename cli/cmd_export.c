@@ -53,6 +53,10 @@ int cmd_export(int argc, char **argv) {
   wv_error err = {0};
   wv_source src;
   if (wv_source_load(in, &src, &err)) return cli_fail(&c, &err);
+  char names[4][4096];
+  const char *inputs[4];
+  int n_in = wv_source_inputs(in, &src, names, inputs);
+  if ((rc = cli_check_not_input(&c, out, 0, inputs, n_in))) return rc;
   int drape = !strcmp(mesh_name, "drape");
   wv_tri_mesh mesh;
   wv_status st = drape ? wv_tri_mesh_drape(size_mm ? (double)size_mm : 600.0, 150.0, 96, &mesh, &err)
@@ -73,10 +77,11 @@ int cmd_export(int argc, char **argv) {
   cli_info(&c, "wrote %s (%s, %d vertices, tile %.3f x %.3f mm); fit residual RMS %.5f = %.1f%% of the woven RMS %.5f\n",
            out, mesh_name, verts, bake.tile_mm[0], bake.tile_mm[1], bake.rms, 100 * bake.relative, bake.target_rms);
   if (c.json)
-    printf("{\"output\": \"%s\", \"mesh\": \"%s\", \"vertices\": %d, \"texture_size\": %d, \"tile_mm\": [%.6f, %.6f], "
-           "\"fit\": {\"rms\": %.6f, \"target_rms\": %.6f, \"relative\": %.6f, \"direction_pairs\": %d}, \"ms\": %.1f}\n",
-           out, mesh_name, verts, bo.texture_size, bake.tile_mm[0], bake.tile_mm[1], bake.rms, bake.target_rms,
-           bake.relative, bake.directions, ms);
+    cli_print_json(json_pack(
+        "{s:o,s:s,s:i,s:i,s:[o,o],s:{s:o,s:o,s:o,s:i},s:o}", "output", cli_str(out), "mesh", mesh_name, "vertices", verts,
+        "texture_size", bo.texture_size, "tile_mm", cli_real(bake.tile_mm[0], 6), cli_real(bake.tile_mm[1], 6), "fit",
+        "rms", cli_real(bake.rms, 6), "target_rms", cli_real(bake.target_rms, 6), "relative", cli_real(bake.relative, 6),
+        "direction_pairs", bake.directions, "ms", cli_real(ms, 1)));
   wv_bake_free(&bake);
   return 0;
 }

@@ -1,10 +1,10 @@
 /* woven predict and woven capture: FabricNet's estimate of a photo's parameters, and
  * the whole pipeline (estimate, then the fit from it, then every output of the fit); the
- * jobs are the library's (woven/capture.h), this file parses and prints. */
+ * jobs are the library's (woven/estimate.h, woven/capture.h), this file parses and prints. */
 #include <string.h>
 
 #include "cli.h"
-#include "woven/fabricnet.h"
+#include "woven/estimate.h"
 
 static const cli_cmd PREDICT_CMD = {
     "predict",
@@ -74,8 +74,14 @@ static void print_choice(cli_ctx *c, const wv_pattern_choice *pc) {
 
 void cli_capture_opts(const capture_args *a, wv_capture_opts *o) {
   memset(o, 0, sizeof *o);
-  o->estimate = (wv_estimate_opts){a->photo, a->scene, a->model, a->pattern, a->descriptor, a->weights, a->crop,
-                                   a->force};
+  o->estimate = (wv_estimate_opts){.photo = a->photo,
+                                   .scene = a->scene,
+                                   .model = a->model,
+                                   .pattern = a->pattern,
+                                   .descriptor = a->descriptor,
+                                   .weights = a->weights,
+                                   .crop = a->crop,
+                                   .any_scene = a->force};
   o->fit = a->fit, o->iters_given = a->iters_given, o->align_given = a->align_given;
   o->dir = a->out, o->drape = a->drape, o->force = a->force;
 }

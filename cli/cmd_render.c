@@ -86,7 +86,7 @@ int cmd_render(int argc, char **argv) {
   if (wv_scene_load(scene_name, &s, &err)) return cli_fail(&c, &err);
   cli_progress bar;
   cli_progress_start(&bar, &c, "render");
-  wv_render_opts opt = {ra.spp, ra.threads, cli_progress_update, &bar, NULL};
+  wv_render_opts opt = {.spp = ra.spp, .threads = ra.threads, .progress = cli_progress_update, .progress_user = &bar};
   wv_image cap, rad;
   double t0 = cli_now();
   wv_status st = wv_render(&s, &p, &opt, &cap, &rad, &err);

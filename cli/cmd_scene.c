@@ -7,6 +7,7 @@
 
 #include "cli.h"
 #include "woven/io.h"
+#include "woven/mesh.h"
 #include "woven/scene3d.h"
 
 typedef struct {
@@ -36,7 +37,7 @@ static const cli_opt OPTS[] = {
                  "image size instead of the scene's (same camera and field of view:\na preview)"),
     CLI_O_INT("--seed", NULL, scene_args, seed, 0, INT_MAX, "N", "overrides the scene's render.seed"),
     CLI_O_INT("--mesh-limit-mb", NULL, scene_args, limit_mb, 1, 1 << 20, "N",
-              "memory limit for the meshes and the ray tracer (default: the\nscene's, else 2048)"),
+              "memory limit of the job: meshes, ray tracer, edit maps,\nenvironment (default 2048; the scene's limits.mesh_mb may\nlower it, never raise it)"),
     CLI_O_END};
 
 static const cli_cmd CMD = {
@@ -69,10 +70,21 @@ int cmd_scene(int argc, char **argv) {
   wv_error err = {0};
   wv_scene3d sc;
   wv_params p;
-  if (params_path && wv_params_read(params_path, &p, &err)) return cli_fail(&c, &err);
+  if (params_path && wv_params_read(params_path, &p, &err)) {
+    wv_error_excerpt(&err, WV_EXCERPT_CHARS);
+    return cli_fail(&c, &err);
+  }
   if (wv_scene3d_read(scene_path, &sc, &err)) return cli_fail(&c, &err);
   if (seed >= 0) sc.seed = (uint64_t)seed;
-  if (limit_mb) sc.mesh_limit_bytes = (size_t)limit_mb << 20;
+  /* the scene's own limit may lower the command line's, never raise it */
+  size_t limit_cap = (size_t)(limit_mb ? limit_mb : WV_MESH_DEFAULT_LIMIT_MB) << 20;
+  if (!sc.mesh_limit_bytes || sc.mesh_limit_bytes > limit_cap) sc.mesh_limit_bytes = limit_cap;
+  const char *inputs[4 * WV_SCENE3D_MAX_ITEMS + 2] = {scene_path, params_path};
+  int n_in = 2 + wv_scene3d_inputs(&sc, inputs + 2, 4 * WV_SCENE3D_MAX_ITEMS);
+  if (cli_check_not_input(&c, out, 0, inputs, n_in)) {
+    wv_scene3d_free(&sc);
+    return WV_ERR_INVALID;
+  }
   if (width) sc.width = sc.response.width = width, sc.height = sc.response.height = height;
   double t0 = cli_now();
   wv_world *w = NULL;
@@ -83,7 +95,8 @@ int cmd_scene(int argc, char **argv) {
   double t_load = cli_now() - t0;
   cli_progress bar;
   cli_progress_start(&bar, &c, "scene");
-  wv_scene3d_opts opt = {(int)spp, (int)threads, cli_progress_update, &bar};
+  wv_scene3d_opts opt = {
+      .spp = (int)spp, .threads = (int)threads, .progress = cli_progress_update, .progress_user = &bar};
   wv_image cap, rad;
   wv_scene3d_stats stats = {0};
   double t1 = cli_now();
@@ -108,8 +121,10 @@ int cmd_scene(int argc, char **argv) {
   cli_info(&c, "wrote %s (%d x %d, %d spp, %lld triangles, load %.2f s, render %.2f s, %.2f Mrays/s)\n", out, W, H,
            stats.spp, tris, t_load, t_render, stats.rays / t_render * 1e-6);
   if (c.json)
-    printf("{\"output\": \"%s\", \"width\": %d, \"height\": %d, \"spp\": %d, \"triangles\": %lld, \"load_s\": %.3f, "
-           "\"render_s\": %.3f, \"rays\": %.0f, \"rays_per_s\": %.0f, \"fabric_points_shaded\": %.0f, \"mean\": %.6f}\n",
-           out, W, H, stats.spp, tris, t_load, t_render, stats.rays, stats.rays / t_render, stats.shade_calls, mean);
+    cli_print_json(json_pack("{s:o,s:i,s:i,s:i,s:I,s:o,s:o,s:o,s:o,s:o,s:o}", "output", cli_str(out), "width", W,
+                             "height", H, "spp", stats.spp, "triangles", (json_int_t)tris, "load_s", cli_real(t_load, 3),
+                             "render_s", cli_real(t_render, 3), "rays", cli_count(stats.rays), "rays_per_s",
+                             cli_count(stats.rays / t_render), "fabric_points_shaded", cli_count(stats.shade_calls),
+                             "mean", cli_real(mean, 6)));
   return 0;
 }

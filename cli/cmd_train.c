@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "cli.h"
-#include "woven/fabricnet.h"
+#include "woven/train.h"
 
 typedef struct {
   const char *dir, *model, *init;

@@ -51,13 +51,18 @@ int cmd_view(int argc, char **argv) {
     return cli_fail(&c, &err);
   }
   if (!photo && src.has_photo && !scene_name) photo = src.photo; /* the fit's photo fits the fit's scene */
+  char names[4][4096];
+  const char *inputs[6];
+  int n_in = wv_source_inputs(in, &src, names, inputs);
+  inputs[n_in++] = scene_name, inputs[n_in++] = photo;
+  if ((rc = cli_check_not_input(&c, out, 0, inputs, n_in))) return rc;
   char title[200];
   snprintf(title, sizeof title, "woven: %s", src.params.pattern);
-  wv_view_opts vo = {&src.params, &scene, photo, title};
+  wv_view_opts vo = {.params = &src.params, .scene = &scene, .photo = photo, .title = title};
   if (wv_view_write(out, &vo, &err)) return cli_fail(&c, &err);
   cli_info(&c, "wrote %s (%s, scene %s%s)\n", out, src.params.pattern, scene.name, photo ? ", with the photo" : "");
   if (c.json)
-    printf("{\"output\": \"%s\", \"pattern\": \"%s\", \"scene\": \"%s\", \"photo\": %s}\n", out, src.params.pattern,
-           scene.name, photo ? "true" : "false");
+    cli_print_json(json_pack("{s:o,s:o,s:o,s:b}", "output", cli_str(out), "pattern", cli_str(src.params.pattern),
+                             "scene", cli_str(scene.name), "photo", photo != NULL));
   return 0;
 }

@@ -17,6 +17,13 @@ foreach(item IN LISTS items)
     set(path "${gz}")
   endif()
   file(READ "${path}" hex HEX)
+  if(mode STREQUAL "gz")
+    # The gzip header's bytes 4-7 hold the time of compression: zero, so that two builds
+    # of one tree embed the same bytes.
+    string(SUBSTRING "${hex}" 0 8 head)
+    string(SUBSTRING "${hex}" 16 -1 tail)
+    set(hex "${head}00000000${tail}")
+  endif()
   string(LENGTH "${hex}" n)
   math(EXPR len "${n} / 2")
   string(REGEX REPLACE "([0-9a-f][0-9a-f])" "0x\\1," body "${hex}")

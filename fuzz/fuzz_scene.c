@@ -43,7 +43,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   s.spp = 1;
   wv_params p;
   if (wv_params_default("twill", &p, &err) != WV_OK) fuzz_fail("%s", err.msg);
-  wv_render_opts ro = {1, 1, NULL, NULL, NULL};
+  wv_render_opts ro = {.spp = 1, .threads = 1};
   wv_image img = {0};
   st = wv_render(&s, &p, &ro, &img, NULL, &err);
   fuzz_check_refusal(st, &err, NULL);

@@ -53,7 +53,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     st = wv_world_load(&s, &p, 1, &w, &err);
     fuzz_check_refusal(st, &err, NULL);
     if (st == WV_OK) {
-      wv_scene3d_opts o = {1, 1, NULL, NULL};
+      wv_scene3d_opts o = {.spp = 1, .threads = 1};
       wv_image img = {0};
       st = wv_scene3d_render(&s, w, &o, &img, NULL, NULL, &err);
       fuzz_check_refusal(st, &err, NULL);

@@ -14,6 +14,7 @@
 #include <jpeglib.h> /* after stdio.h: it uses FILE and size_t */
 #include <png.h>
 
+#include "woven/dataset.h"
 #include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/io.h"

@@ -3,7 +3,7 @@
 # compared file by file (a restructuring must leave every byte as it was):
 #   scripts/cli_outputs.sh WOVEN_BINARY OUT_DIR [PHOTO_FLAT45]
 #   diff -r OLD_OUT NEW_OUT
-# Timings and the output's own path are blanked in the JSON and HTML outputs, since
+# Timings, the output's own path and the checkout's path are blanked in the JSON and HTML outputs, since
 # they differ from run to run of the same build.
 set -euo pipefail
 wv=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
@@ -32,14 +32,14 @@ if [[ -n $photo ]]; then
 fi
 # Wall-clock figures and the output's own path differ between runs of one build: blank them.
 find "$out" -name 'times.json' -delete
-find "$out" -name '*.json' -print0 | OUT="$(cd "$out" && pwd)" xargs -0 python3 -c '
+find "$out" -name '*.json' -print0 | OUT="$(cd "$out" && pwd)" ROOT="$root" xargs -0 python3 -c '
 import json, os, sys
 def blank(v):
     if isinstance(v, dict):
         return {k: (0 if k in ("timing", "time_s", "seconds", "ms") or k.endswith("_seconds") else blank(x))
                 for k, x in v.items()}
     if isinstance(v, str):
-        return v.replace(os.environ["OUT"], "OUT")
+        return v.replace(os.environ["OUT"], "OUT").replace(os.environ["ROOT"], "ROOT")
     return [blank(x) for x in v] if isinstance(v, list) else v
 for path in sys.argv[1:]:
     with open(path) as f:

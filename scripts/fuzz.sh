@@ -31,6 +31,12 @@ cp scenes/*.json "$B/seeds/scene3d/"
 # mesh: the first byte's low 2 bits pick the reader (0 OBJ, 1 PLY, 2 glTF, 3 GLB: 'l', 'm')
 printf 'lv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nf 1/1 2/2 4/4\nf 1/1 4/4 3/3\n' >"$B/seeds/mesh/quad.obj"
 printf 'mply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float s\nproperty float t\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n' >"$B/seeds/mesh/tri.ply"
+# mesh_check: the first byte's low 3 bits pick the extension (0 OBJ, 1 PLY, 2 glTF, 3 GLB, 4 STL);
+# seeds: the mesh seeds, a deep node tree, header counts over the limit, a GLB chunk too long
+mkdir -p "$B/seeds/mesh_check" "$B/seeds/scene3d_refs"
+cp "$B/seeds/mesh/"* "$B/seeds/mesh_check/"
+python3 fuzz/mesh_seeds.py "$B/seeds/mesh_check" "$B/seeds/mesh"
+cp fuzz/scene3d_refs/*.json "$B/seeds/scene3d_refs/"
 cp tests/golden/*.exr "$B/seeds/exr/"
 
 if (($#)); then
@@ -57,7 +63,7 @@ for h in "${harnesses[@]}"; do
   corpus="$B/corpus/$h" findings="$B/findings/$h" log="$B/logs/$h.log"
   # mesh: leaks inside assimp's readers are assimp's (fuzz/lsan-assimp.supp); full stacks
   # let the suppression see them.
-  lsan=() && [[ $h == mesh ]] && lsan=(env "LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan-assimp.supp"
+  lsan=() && [[ $h == mesh || $h == scene3d_refs ]] && lsan=(env "LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan-assimp.supp"
     "ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}fast_unwind_on_malloc=0")
   mkdir -p "$corpus" "$findings" "$B/logs" "$B/seeds/$h"
   rm -f "$findings"/*
@@ -78,7 +84,7 @@ for h in "${harnesses[@]}"; do
   # a starved process on a busy shared machine can still stall for several seconds).
   opts=(-max_total_time="$secs" -print_final_stats=1 -timeout=60 -rss_limit_mb=2048
         -artifact_prefix="$findings/")
-  case $h in params | scene | scene3d | safetensors | dataset | fit_checkpoint) opts+=(-dict=fuzz/json.dict) ;; esac
+  case $h in params | scene | scene3d | scene3d_refs | safetensors | dataset | fit_checkpoint) opts+=(-dict=fuzz/json.dict) ;; esac
   set +e
   "${lsan[@]}" "$exe" "${opts[@]}" "${dirs[@]}" >"$log" 2>&1
   rc=$?

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs woven's build and test dependencies: Debian packages (the C libraries,
-# Node.js and npm when missing, Chromium for the browser tests, and the extra packages
+# Node.js and npm when missing, Chromium for the browser tests, NumPy, pytest and PyTorch for
+# the Python package, Blender for the add-on's test, and the extra packages
 # named as arguments, see scripts/install-fuzz-deps.sh), then the npm packages of web/
 # (three.js, which the build embeds in the viewer; playwright-core and the Khronos glTF
 # validator for the tests) with `npm ci` from the committed web/package-lock.json. No
@@ -9,7 +10,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 PKGS=(build-essential cmake pkg-config python3
       libpng-dev libjpeg62-turbo-dev libopenexr-dev libjansson-dev libopenblas-dev libcmocka-dev libfftw3-dev
-      libassimp-dev libembree-dev libopenmpi-dev openmpi-bin chromium "$@")
+      libassimp-dev libembree-dev libopenmpi-dev openmpi-bin chromium
+      python3-numpy python3-pytest python3-torch python3-setuptools python3-venv blender "$@")
 command -v node >/dev/null 2>&1 || PKGS+=(nodejs)
 command -v npm >/dev/null 2>&1 || PKGS+=(npm)
 missing=()

@@ -39,7 +39,7 @@ echo '{"pattern": "twill", "noise_level": 2.5}' >"$T/q2.json"
 check "noise level not an integer" 2 "'noise_level' must be an integer" -- "$WOVEN" render --params "$T/q2.json" -o "$T/x.png"
 echo '{"pattern": "twill", "twist_deg": 60.0000000001}' >"$T/twist.json"
 check "twist just over" 2 "'twist_deg' = 60.0000000001 is outside -60..60" -- "$WOVEN" render --params "$T/twist.json" -o "$T/x.png"
-check "params from /dev/zero" 5 "/dev/zero: more than" -- "$WOVEN" render --params /dev/zero -o "$T/x.png"
+check "params from /dev/zero" 3 "/dev/zero: not a regular file" -- "$WOVEN" render --params /dev/zero -o "$T/x.png"
 check "params a directory" 3 "is a directory" -- "$WOVEN" render --params "$T" -o "$T/x.png"
 echo "${scene/\"width\":64,\"height\":48/\"width\":64,\"height\":32}" >"$T/flat.json"
 check "scene below the descriptor's size" 2 "too small for a fit" -- "$WOVEN" fit "$T/photo.png" --scene "$T/flat.json" "${FIT[@]}" -o "$T/smallfit"
@@ -136,6 +136,79 @@ EOF
 check "model of unknown kind" 4 "kind99.bin: unknown FabricNet file kind 99" -- "$WOVEN" predict "$T/photo.png" "${PRED[@]}" --model "$T/kind99.bin" -o "$T/p.json"
 check "model with NaN weights" 4 "nan.bin: layer 1 weights hold NaN" -- "$WOVEN" predict "$T/photo.png" "${PRED[@]}" --model "$T/nan.bin" -o "$T/p.json"
 check "vgg19 weights a directory" 3 "is a directory" -- "$WOVEN" fit "$T/photo.png" --scene "$T/tiny.json" "${FIT[@]}" --descriptor vgg19 --vgg19-weights "$T" -o "$T/vggfit"
+
+# -- the mesh renderer, exporters and batches: hostile files (tests/harden_inputs.py writes them)
+H=$T/h
+python3 "$SRC/tests/harden_inputs.py" "$H" "$SRC/examples/twill.json"
+mkfifo "$H/fifo"
+S=(-q --threads 1)
+check "deep glTF node tree" 4 "deep.gltf: its node tree is more than 256 levels deep" -- "$WOVEN" scene "$H/s_deep.json" -o "$T/m.png" "${S[@]}"
+check "PLY header declares 2e9 vertices" 5 "bomb.ply: the PLY header declares 2000000000 vertices" -- "$WOVEN" scene "$H/s_bomb.json" -o "$T/m.png" "${S[@]}"
+check "binary PLY header declares 2e9 vertices" 5 "bombbin.ply: the PLY header declares 2000000000 vertices" -- "$WOVEN" scene "$H/s_bombbin.json" -o "$T/m.png" "${S[@]}"
+check "GLB chunk longer than the file" 4 "bomb.glb: a GLB chunk declares 2147483632 bytes, more than the file holds" -- "$WOVEN" scene "$H/s_glb.json" -o "$T/m.png" "${S[@]}"
+check "scene cannot raise its memory limit" 5 "above the memory limit of 2048 MB" -- "$WOVEN" scene "$H/s_raise.json" -o "$T/m.png" "${S[@]}"
+check "scene lowers its memory limit" 5 "above the memory limit of 1 MB" -- "$WOVEN" scene "$H/s_bomb.json" -o "$T/m.png" "${S[@]}" --mesh-limit-mb 1
+check "UVs of 1e20" 4 "uv1e20.obj: vertex 1 has a UV of (0, 1e+20), outside -1e+08..1e+08" -- "$WOVEN" scene "$H/s_uv.json" -o "$T/m.png" "${S[@]}"
+check "coordinates of 1e10 mm" 4 "c1e10.obj: vertex 0 has a coordinate of -1e+10 mm" -- "$WOVEN" scene "$H/s_c1e10.json" -o "$T/m.png" "${S[@]}"
+check "coordinates of 3e38 mm" 4 "c3e38.obj: vertex 0 has a coordinate of -3e+38 mm" -- "$WOVEN" scene "$H/s_c3e38.json" -o "$T/m.png" "${S[@]}"
+check "environment radiance times strength overflows" 4 "envhuge.exr: pixel 0's radiance 3.4e+38 times the strength 1e+06 is above 1e+18" -- "$WOVEN" scene "$H/s_env.json" -o "$T/m.png" "${S[@]}"
+[[ -e $T/m.png ]] && fail "a refused scene left an output"
+check "glTF within the depth limit" 0 "" -- "$WOVEN" scene "$H/s_tri.json" -o "$T/tri.png" "${S[@]}"
+ln -s map.exr "$H/maplink.exr"
+check "one map for 8 edits" 0 "" -- "$WOVEN" scene "$H/s_edits8.json" -o "$T/e8.png" "${S[@]}"
+for k in fifo_map fifo_env fifo_fab; do
+  check "FIFO as ${k#fifo_}" 3 "fifo: not a regular file" -- timeout 20 "$WOVEN" scene "$H/s_$k.json" -o "$T/m.png" "${S[@]}"
+done
+check "FIFO as scene file" 3 "fifo: not a regular file" -- timeout 20 "$WOVEN" scene "$H/fifo" -o "$T/m.png" "${S[@]}"
+check "FIFO as compare photo" 3 "fifo: not a regular file" -- timeout 20 "$WOVEN" compare "$H/fifo" "$T/photo.png"
+check "fabric that is not JSON: none of its text" 4 "/etc/passwd:1:4: malformed JSON" -- "$WOVEN" scene "$H/s_passwd.json" -o "$T/m.png" "${S[@]}"
+grep -q "near" "$T/err" && fail "a fabric named by a scene is quoted: $(cat "$T/err")"
+truncate -s 65M "$H/big.json"
+check "scene file over 64 MiB" 5 "big.json: file of 68157440 bytes is over the limit" -- "$WOVEN" scene "$H/big.json" -o "$T/m.png" "${S[@]}"
+# outputs that are inputs, also through links
+cp "$H/env.exr" "$T/env.keep" && cp "$H/map.exr" "$T/map.keep" && cp "$H/quad.obj" "$H/lnkt.png" && ln -s lnkt.png "$H/lnk.obj"
+check "scene onto its environment map" 2 "refusing to write over an input" -- "$WOVEN" scene "$H/s_ok.json" -o "$H/env.exr" "${S[@]}"
+check "scene onto its edit map" 2 "refusing to write over an input" -- "$WOVEN" scene "$H/s_ok.json" -o "$H/map.exr" "${S[@]}"
+check "scene onto a mesh through a link" 2 "the output is the input" -- "$WOVEN" scene "$H/s_link.json" -o "$H/lnkt.png" "${S[@]}"
+cmp -s "$H/env.exr" "$T/env.keep" && cmp -s "$H/map.exr" "$T/map.keep" && cmp -s "$H/quad.obj" "$H/lnkt.png" ||
+  fail "scene -o replaced an input"
+cp "$SRC/examples/twill.json" "$T/P.glb" && cp "$SRC/examples/twill.json" "$T/P.html"
+check "export onto its parameter file" 2 "refusing to write over an input" -- "$WOVEN" export "$T/P.glb" --gltf "$T/P.glb" --texture 8 --directions 8 -q
+check "view onto its parameter file" 2 "refusing to write over an input" -- "$WOVEN" view "$T/P.html" -o "$T/P.html" -q
+cmp -s "$T/P.glb" "$SRC/examples/twill.json" && cmp -s "$T/P.html" "$SRC/examples/twill.json" || fail "export or view replaced its input"
+# --json is JSON, whatever the paths and names hold
+check "scene --json escapes the path" 0 "" -- "$WOVEN" scene "$H/s_ok.json" -o "$T/q\"x.png" "${S[@]}" --json
+python3 -c 'import json,sys; assert json.load(open(sys.argv[1]))["output"] == sys.argv[2]' "$T/out" "$T/q\"x.png" || fail "scene --json is not JSON naming the path"
+check "cloth --json escapes the path" 0 '"triangles": 8' -- "$WOVEN" cloth -o "$T/c\"d.obj" --res 2 --seconds 0.01 -q --json
+python3 -c 'import json,sys; assert json.load(open(sys.argv[1]))["output"] == sys.argv[2]' "$T/out" "$T/c\"d.obj" || fail "cloth --json is not JSON"
+mkdir "$T/vfit" && cp "$SRC/examples/twill.json" "$T/vfit/params.json"
+echo "${scene/\"name\":\"tiny\"/\"name\":\"x\\\", \\\"photo\\\": true, \\\"y\\\": \\\"\"}" >"$T/vfit/scene.json"
+check "view --json: a scene name with quotes" 0 "" -- "$WOVEN" view "$T/vfit" -o "$T/v\"w.html" -q --json
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert list(d) == ["output", "pattern", "scene", "photo"] and d["photo"] is False and d["scene"].startswith("x\""), d' "$T/out" ||
+  fail "view --json copied a name raw"
+check "export --json escapes the path" 0 '"relative"' -- "$WOVEN" export "$SRC/examples/twill.json" --gltf "$T/e\"f.glb" --texture 8 --directions 8 -q --json
+python3 -c 'import json,sys; assert json.load(open(sys.argv[1]))["output"] == sys.argv[2]' "$T/out" "$T/e\"f.glb" || fail "export --json is not JSON"
+# batches: names the batch keeps for itself; FIFOs among the photos; leftovers of killed captures
+mkdir "$T/bl"
+cp "$T/photo.png" "$T/bl/summary.json.png"
+BATCH=(--scene "$T/tiny.json" --model "$SRC/models/fabricnet-cylinder.bin" --pattern satin --iters 1 --iter-spp 1 --align-radius 0 --register-radius 0 --drape none -q)
+check "batch photo named summary.json.png" 2 "a name the batch keeps for its own files" -- "$WOVEN" capture-batch "$T/bl" -o "$T/bo" "${BATCH[@]}"
+[[ -e $T/bo/summary.json ]] && fail "a refused batch wrote into its directory"
+mv "$T/bl/summary.json.png" "$T/bl/a.png" && mkfifo "$T/bl/x.png"
+check "batch with a FIFO among its photos: that photo fails" 2 "" -- timeout 120 "$WOVEN" capture-batch "$T/bl" -o "$T/bo" "${BATCH[@]}"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+st = {i["name"]: i["status"] for i in d["items"]}
+assert st == {"a": "ok", "x": "failed"}, st' "$T/bo/summary.json" 2>/dev/null || fail "batch summary: $(cat "$T/bo/summary.json" 2>&1 | head -c 400)"
+mkdir -p "$T/bo/.batch/work/a.tmp.ABC123" && touch -d '1 hour ago' "$T/bo/.batch/work/a.tmp.ABC123" "$T/bo/.batch/work"
+check "batch resume (the FIFO still fails)" 2 "" -- timeout 120 "$WOVEN" capture-batch "$T/bl" -o "$T/bo" "${BATCH[@]}"
+[[ -e $T/bo/.batch/work/a.tmp.ABC123 ]] && fail "a killed capture's temporary directory survived the resume"
+seq -f 'p%g.png' 1 100000 >"$T/many.txt" && echo p5.png >>"$T/many.txt"
+check "100,000-line list with a duplicate" 2 "would both be captured into 'p5'" -- timeout 30 "$WOVEN" capture-batch "$T/many.txt" -o "$T/bm" "${BATCH[@]}"
 
 echo "$fails failure(s)"
 [[ $fails == 0 ]]

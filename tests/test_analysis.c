@@ -24,7 +24,7 @@ static void render_skewed(const char *pattern, double dw, double df, double rot,
   p.density[WV_WARP] = dw, p.density[WV_WEFT] = df;
   tu_centre_window(s, "flat45", SIDE, SIDE, 8);
   s->rotation_deg = rot, s->skew_deg = skew;
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   assert_int_equal(wv_render(s, &p, &ro, img, NULL, &e), WV_OK);
   s->rotation_deg = 0, s->skew_deg = 0; /* the analysis is told the scene as it was meant, the fabric turned in it */
 }
@@ -65,7 +65,7 @@ static void weave_crops(const char *pattern, uint64_t seed, double d0, double d1
   assert_int_equal(wv_params_sample_prior(pattern, seed, &p, &e), WV_OK);
   p.density[0] = d0, p.density[1] = d1;
   tu_centre_window(&s, "flat45", 320, 320, 8);
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   assert_int_equal(wv_render(&s, &p, &ro, &img, NULL, &e), WV_OK);
   s.rotation_deg = 20;
   assert_int_equal(wv_render(&s, &p, &ro, &turned, NULL, &e), WV_OK);
@@ -204,7 +204,7 @@ static void test_lattice_recovers(void **state) {
       assert_int_equal(wv_params_sample_prior(T[k].pattern, 100 + k, &p, &e), WV_OK);
       wv_lattice_candidate(&l, t, &p, &s, 1, &q, &so);
       wv_image again;
-      wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+      wv_render_opts ro = {0};
       assert_int_equal(wv_render(&so, &q, &ro, &again, NULL, &e), WV_OK);
       wv_lattice l2;
       assert_int_equal(wv_lattice_analyse(&so, &again, &l2, &e), WV_OK);
@@ -241,7 +241,7 @@ static void test_lattice_refine(void **state) {
     tu_centre_window(&s, "flat45", 512, 512, 8);
     s.rotation_deg = T[k].rot, s.skew_deg = T[k].skew;
     wv_image img;
-    wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+    wv_render_opts ro = {0};
     assert_int_equal(wv_render(&s, &p, &ro, &img, NULL, &e), WV_OK);
     s.rotation_deg = 0, s.skew_deg = 0;
     wv_lattice l;

@@ -69,6 +69,23 @@ static void test_lock(void **state) {
   assert_int_equal(stat(path, &sb), 0);
   wv_dir_lock_release(&a);
   assert_int_not_equal(stat(path, &sb), 0);
+  /* the lock's temporary file never follows a link planted under its name */
+  char tmp[4300], victim[4300];
+  snprintf(victim, sizeof victim, "%s/victim", dir);
+  snprintf(tmp, sizeof tmp, "%s/woven.lock.%ld.tmp", dir, (long)getpid());
+  FILE *vf = fopen(victim, "w");
+  assert_non_null(vf);
+  fputs("keep", vf), fclose(vf);
+  assert_int_equal(symlink(victim, tmp), 0);
+  assert_int_equal(wv_dir_lock_acquire(dir, &a, note, sizeof note, &err), WV_OK);
+  wv_dir_lock_release(&a);
+  vf = fopen(victim, "r");
+  char kept[8] = {0};
+  assert_non_null(vf);
+  assert_int_equal(fread(kept, 1, sizeof kept - 1, vf), 4), fclose(vf);
+  assert_string_equal(kept, "keep");
+  assert_int_not_equal(lstat(tmp, &sb), 0);
+  unlink(victim);
   /* the lock of a process that is gone is taken over, with a note */
   gethostname(host, sizeof host);
   host[sizeof host - 1] = 0;

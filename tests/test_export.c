@@ -289,6 +289,12 @@ static void test_bad_input(void **state) {
   assert_int_equal(wv_bake_fabric(&p, &o, &b, &err), WV_ERR_INVALID);
   assert_non_null(strstr(err.msg, "houndstooth"));
   params_of("plain", &p);
+  /* a field of 0 takes its default: texture_size 64 */
+  wv_bake_opts z = {.samples = 1, .directions = 8};
+  assert_int_equal(wv_bake_fabric(&p, &z, &b, &err), WV_OK);
+  assert_int_equal(b.base_color.w, 64);
+  assert_int_equal(b.directions, 8);
+  wv_bake_free(&b);
   assert_int_equal(wv_bake_fabric(&p, &o, &b, &err), WV_OK);
   wv_tri_mesh m;
   assert_int_equal(wv_tri_mesh_quad(10, &m, &err), WV_OK);
@@ -304,7 +310,7 @@ static void test_bad_input(void **state) {
   wv_scene s;
   assert_int_equal(wv_scene_preset("flat45", &s, &err), WV_OK);
   p.roughness[0] = 3.0;
-  wv_view_opts vo = {&p, &s, NULL, NULL};
+  wv_view_opts vo = {.params = &p, .scene = &s};
   snprintf(path, sizeof path, "%s/v.html", dir);
   assert_int_equal(wv_view_write(path, &vo, &err), WV_ERR_INVALID);
   assert_non_null(strstr(err.msg, "roughness"));
@@ -326,7 +332,7 @@ static void test_view_page(void **state) {
   const char *dir = tu_tmpdir("view_page");
   char path[512];
   snprintf(path, sizeof path, "%s/v.html", dir);
-  wv_view_opts vo = {&p, &s, NULL, "t"};
+  wv_view_opts vo = {.params = &p, .scene = &s, .title = "t"};
   assert_int_equal(wv_view_write(path, &vo, &err), WV_OK);
   char *html;
   assert_int_equal(wv_read_file(path, &html, NULL, &err), WV_OK);

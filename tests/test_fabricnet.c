@@ -8,13 +8,17 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <zlib.h>
 
 #include "testutil.h"
-#include "woven/fabricnet.h"
+#include "util/half.h"
+#include "woven/dataset.h"
 #include "woven/descriptor.h"
+#include "woven/fabricnet.h"
 #include "woven/io.h"
 #include "woven/nn.h"
 #include "woven/render.h"
+#include "woven/train.h"
 #include "woven/weave.h"
 
 static wv_scene tiny_scene(void) {
@@ -169,7 +173,7 @@ static void test_f16_crc(void **state) {
   }
   /* every half value survives a round trip through float */
   for (uint32_t h = 0; h < 0x7c00; h++) assert_int_equal(wv_f32_to_f16(wv_nn_f16_to_f32((uint16_t)h)), h);
-  assert_int_equal(wv_crc32(0, "123456789", 9), 0xcbf43926u); /* the standard check value */
+  assert_int_equal(crc32_z(0, (const unsigned char *)"123456789", 9), 0xcbf43926u); /* the standard check value */
 }
 
 static void write_bytes(const char *path, const unsigned char *b, size_t n) {
@@ -182,9 +186,9 @@ static void write_bytes(const char *path, const unsigned char *b, size_t n) {
 /* Recomputes the payload and header checksums of a patched model file (format 2: a
  * 512-byte header, payload CRC at 504, header CRC at 508 over the bytes before it). */
 static void reseal(unsigned char *b, size_t n) {
-  uint32_t c = wv_crc32(0, b + 512, n - 512);
+  uint32_t c = crc32_z(0, b + 512, n - 512);
   for (int i = 0; i < 4; i++) b[504 + i] = (unsigned char)(c >> (8 * i));
-  c = wv_crc32(0, b, 508);
+  c = crc32_z(0, b, 508);
   for (int i = 0; i < 4; i++) b[508 + i] = (unsigned char)(c >> (8 * i));
 }
 
@@ -313,7 +317,7 @@ static void test_files(void **state) {
   /* a model of another library (the class checksum): refused with a clear message */
   memcpy(b, data, n_bytes);
   b[492] ^= 1;
-  uint32_t hc = wv_crc32(0, b, 508);
+  uint32_t hc = crc32_z(0, b, 508);
   for (int i = 0; i < 4; i++) b[508 + i] = (unsigned char)(hc >> (8 * i));
   write_bytes(bad, b, n_bytes);
   expect_load_fails(bad, "weave library");
@@ -373,7 +377,7 @@ static void test_v1_model(void **state) {
   memcpy(b + 488, data + 496, 8);
   memcpy(b + 496, data + 504, 4);
   b[8] = 1, b[9] = b[10] = b[11] = 0;
-  uint32_t hc = wv_crc32(0, b, 500);
+  uint32_t hc = crc32_z(0, b, 500);
   for (int i = 0; i < 4; i++) b[500 + i] = (unsigned char)(hc >> (8 * i));
   memcpy(b + 504, data + 512, len - 512);
   write_bytes(old, b, len - 8);
@@ -404,7 +408,7 @@ static void test_augment(void **state) {
   wv_params p;
   wv_error e;
   assert_int_equal(wv_params_sample_prior("twill21z", 5, &p, &e), WV_OK);
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   wv_image cap = {0}, rad = {0}, a = {0}, b = {0}, c = {0};
   assert_int_equal(wv_render(&s, &p, &ro, &cap, &rad, &e), WV_OK);
   assert_int_equal(wv_camera_augment(&s, &rad, 11, &a, &e), WV_OK);

@@ -35,7 +35,7 @@ static void opts(wv_fit_opts *o, int iters) {
 static void setup(wv_scene *s, wv_params *tp, wv_image *photo, wv_descriptor **d) {
   small_scene(s);
   target(tp);
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   assert_int_equal(wv_render(s, tp, &ro, photo, NULL, NULL), WV_OK);
   assert_int_equal(wv_descriptor_create_default(d, NULL), WV_OK);
 }

@@ -46,7 +46,7 @@ typedef struct {
 
 static void fd_check(const wv_scene *s, const wv_params *p, int x0, int y0, int w, int h, int spp, tu_rng *r,
                      fd_stats *stats) {
-  wv_grad_opts g = {x0, y0, w, h, 1};
+  wv_grad_opts g = {.x0 = x0, .y0 = y0, .width = w, .height = h, .double_precision = 1};
   wv_render_opts o = {0};
   o.spp = spp;
   wv_image dc;
@@ -106,7 +106,7 @@ static void test_float_matches_double(void **state) {
     wv_scene s = preset(scenes[k]);
     wv_params p;
     random_params(k ? "satin" : "twill", &r, &p);
-    wv_grad_opts gf = {s.width / 2 - 32, s.height / 2 - 16, 64, 32, 0}, gd = gf;
+    wv_grad_opts gf = {.x0 = s.width / 2 - 32, .y0 = s.height / 2 - 16, .width = 64, .height = 32}, gd = gf;
     gd.double_precision = 1;
     wv_render_opts o = {0};
     o.spp = 16;
@@ -161,7 +161,7 @@ static void test_capture_and_windows(void **state) {
     /* Other sample counts take the 8-wide path's other branches: 64 (8 columns, a
      * block is one row of the grid), 20 (5 columns, two blocks and a scalar tail). */
     for (int t = 0; t < 2; t++) {
-      wv_render_opts o = {t ? 20 : 64, 0, NULL, NULL, NULL};
+      wv_render_opts o = {.spp = t ? 20 : 64};
       wv_image r2, c2;
       double g2[WV_P_COUNT], d2;
       assert_int_equal(wv_render(&s, &p, &o, &r2, NULL, &err), WV_OK);
@@ -177,7 +177,7 @@ static void test_capture_and_windows(void **state) {
       wv_image sub;
       assert_int_equal(wv_image_alloc(&sub, s.width, wh, 3, &err), WV_OK);
       memcpy(sub.data, wv_image_px(&dc, 0, y0), sizeof(float) * 3 * s.width * wh);
-      wv_grad_opts go = {0, y0, s.width, wh, 0};
+      wv_grad_opts go = {.y0 = y0, .width = s.width, .height = wh};
       double gp[WV_P_COUNT], dp;
       assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &go, &sub, gp, &dp, &win, &err), WV_OK);
       assert_int_equal(memcmp(win.data, wv_image_px(&ref, 0, y0), sizeof(float) * 3 * s.width * wh), 0);
@@ -192,7 +192,11 @@ static void test_capture_and_windows(void **state) {
 }
 
 static void grad_window(const wv_scene *s, const wv_params *p, const wv_image *dc, int dbl, double g[WV_P_COUNT]) {
-  wv_grad_opts go = {s->width / 2 - dc->w / 2, s->height / 2 - dc->h / 2, dc->w, dc->h, dbl};
+  wv_grad_opts go = {.x0 = s->width / 2 - dc->w / 2,
+                     .y0 = s->height / 2 - dc->h / 2,
+                     .width = dc->w,
+                     .height = dc->h,
+                     .double_precision = dbl};
   wv_render_opts o = {0};
   o.spp = 8;
   wv_error err = {0};
@@ -335,7 +339,7 @@ static void test_chain_with_downsampling(void **state) {
   assert_int_equal(wv_image_alloc(&W, 16, 8, 3, &err), WV_OK);
   fill_random(&W, &r);
   assert_int_equal(wv_image_downsample_backward(80, 30, &W, &dc, &err), WV_OK);
-  wv_grad_opts g = {0, 0, 80, 30, 1};
+  wv_grad_opts g = {.width = 80, .height = 30, .double_precision = 1};
   wv_grad_check_entry e[WV_P_COUNT];
   assert_int_equal(wv_grad_check(&s, &p, NULL, &g, &dc, 1e-5, e, &err), WV_OK);
   for (int i = 0; i < WV_P_COUNT; i++) assert_true(e[i].rel_err < 1e-3);
@@ -354,7 +358,7 @@ static void test_record(void **state) {
   wv_image dc, cap1, cap2;
   assert_int_equal(wv_image_alloc(&dc, 32, 24, 3, &err), WV_OK);
   for (int dbl = 0; dbl < 2; dbl++) {
-    wv_grad_opts go = {8, 10, 32, 24, dbl};
+    wv_grad_opts go = {.x0 = 8, .y0 = 10, .width = 32, .height = 24, .double_precision = dbl};
     wv_grad_record *rec;
     assert_int_equal(wv_render_record(&s, &p, NULL, &go, &cap1, &rec, &err), WV_OK);
     for (int k = 0; k < 3; k++) {
@@ -386,7 +390,7 @@ static wv_grad_opts blur_setup(tu_rng *r, wv_scene *s, wv_params *p, wv_image *d
   random_params("twill", r, p);
   assert_int_equal(wv_image_alloc(dc, 40, 32, 3, &err), WV_OK);
   fill_random(dc, r);
-  return (wv_grad_opts){0, 0, 40, 32, 1};
+  return (wv_grad_opts){.width = 40, .height = 32, .double_precision = 1};
 }
 
 /* The camera blur: its adjoint is the transpose (<K x, y> = <x, K^T y>); the gradient
@@ -482,7 +486,7 @@ static void test_errors(void **state) {
   assert_int_equal(wv_render_grad(&s, &p, NULL, &dc, g, &cap, &err), WV_ERR_INVALID); /* wrong size */
   assert_non_null(strstr(err.msg, "32 x 32"));
   assert_null(cap.data);
-  wv_grad_opts go = {20, 0, 16, 16, 0};
+  wv_grad_opts go = {.x0 = 20, .width = 16, .height = 16};
   assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &go, &dc, g, NULL, NULL, &err), WV_ERR_INVALID);
   go.x0 = 16;
   assert_int_equal(wv_render_grad_ex(&s, &p, NULL, &go, &dc, g, NULL, NULL, &err), WV_OK);

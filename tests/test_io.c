@@ -424,9 +424,22 @@ static void test_read_limits(void **state) {
   char *data = NULL;
   size_t len;
   wv_error err = {0};
-  assert_int_equal(wv_read_file_max("/dev/zero", 1 << 20, &data, &len, &err), WV_ERR_NOMEM);
+  /* devices and FIFOs are refused before the first read: they could be endless or block */
+  assert_int_equal(wv_read_file_max("/dev/zero", 1 << 20, &data, &len, &err), WV_ERR_IO);
   assert_null(data);
-  assert_non_null(strstr(err.msg, "/dev/zero: more than 1048576 bytes"));
+  assert_non_null(strstr(err.msg, "/dev/zero: not a regular file"));
+  char fifo[600];
+  assert_int_equal(mkfifo(in_dir(fifo, sizeof fifo, "fifo"), 0600), 0);
+  assert_int_equal(wv_read_file(fifo, &data, &len, &err), WV_ERR_IO);
+  assert_non_null(strstr(err.msg, "not a regular file"));
+  wv_image img;
+  assert_int_equal(wv_image_read(fifo, &img, NULL, &err), WV_ERR_IO);
+  assert_non_null(strstr(err.msg, "not a regular file"));
+  assert_int_equal(wv_png_check(fifo, &err), WV_ERR_IO);
+  FILE *fp = NULL;
+  assert_int_equal(wv_fopen_regular(fifo, &fp, &err), WV_ERR_IO);
+  assert_null(fp);
+  unlink(fifo);
   char path[600];
   char big[3000];
   memset(big, 'x', sizeof big);
@@ -438,6 +451,23 @@ static void test_read_limits(void **state) {
   free(data);
   assert_int_equal(wv_read_file(dir, &data, &len, &err), WV_ERR_IO);
   assert_non_null(strstr(err.msg, "is a directory"));
+}
+
+/* Messages show at most a short printable excerpt of a file, or none of it. */
+static void test_error_excerpt(void **state) {
+  (void)state;
+  wv_error err = {0};
+  wv_fail(&err, WV_ERR_FORMAT, "p.json:1:4: malformed JSON: '[' or '{' expected near 'root:x:0:0:root:/root:/bin/bash\x01'");
+  wv_error kept = err;
+  wv_error_excerpt(&kept, WV_EXCERPT_CHARS);
+  assert_string_equal(kept.msg, "p.json:1:4: malformed JSON: '[' or '{' expected near 'root:x:0:0:root:/root...'");
+  wv_error_excerpt(&err, 0);
+  assert_string_equal(err.msg, "p.json:1:4: malformed JSON: '[' or '{' expected");
+  char out[8];
+  wv_printable_excerpt("ab\tc\x7f", out, sizeof out);
+  assert_string_equal(out, "ab?c?");
+  wv_printable_excerpt("abcdefghij", out, sizeof out);
+  assert_string_equal(out, "abcd...");
 }
 
 /* wv_png_check finds truncated and damaged files without decoding. */
@@ -1012,6 +1042,7 @@ int main(void) {
       cmocka_unit_test(test_threads),
       cmocka_unit_test(test_read_size_limits),
       cmocka_unit_test(test_read_limits),
+    cmocka_unit_test(test_error_excerpt),
       cmocka_unit_test(test_png_check),
       cmocka_unit_test(test_same_file),
       cmocka_unit_test(test_stale_temps),

@@ -106,6 +106,16 @@ static void test_entry_points(void **state) {
 
 /* d J / d theta of one sample: the double kernel's sums against central
  * differences of its own S and DF, for every non-linear parameter. */
+/* The scalar integer floor: exact within the 64-bit range, clamped beyond it and for
+ * NaN (a conversion out of range would be undefined; the sanitizer build traps it). */
+static void test_floori_range(void **state) {
+  (void)state;
+  assert_true(wv_floori_f(-2.5f) == -3 && wv_floori_f(2.5f) == 2 && wv_floori_f(-3.0f) == -3);
+  assert_true(wv_floori_f(1e18f) == (int64_t)1e18f);
+  assert_true(wv_floori_f(1e20f) == (int64_t)4.0e18f && wv_floori_f(-1e20f) == (int64_t)-4.0e18f);
+  assert_true(wv_floori_f(INFINITY) == (int64_t)4.0e18f && wv_floori_f(NAN) == (int64_t)-4.0e18f);
+}
+
 static void test_sample_derivatives(void **state) {
   (void)state;
   tu_rng r = {21};
@@ -171,6 +181,6 @@ static void test_sample_derivatives(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_scalar_equals_8wide), cmocka_unit_test(test_entry_points),
-                                     cmocka_unit_test(test_sample_derivatives)};
+                                     cmocka_unit_test(test_sample_derivatives), cmocka_unit_test(test_floori_range)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -101,7 +101,7 @@ static void test_spectrum_erasing_costs(void **state) {
   wv_error e;
   assert_int_equal(wv_params_sample_prior("twill21z", 3, &p, &e), WV_OK);
   p.density[0] = 140, p.density[1] = 90;
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   wv_image photo, shifted, blurred, flat, dim;
   assert_int_equal(wv_render(&sc, &p, &ro, &photo, NULL, &e), WV_OK);
   sc.fabric_offset[0] += 0.37, sc.fabric_offset[1] -= 0.21; /* another phase of the weave */

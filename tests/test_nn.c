@@ -380,7 +380,9 @@ static void test_adam(void **state) {
 static void test_adam_box(void **state) {
   (void)state;
   float m[2] = {0}, v[2] = {0}, m2[2] = {0}, v2[2] = {0};
-  wv_nn_adam a = {2, 0.05f, 0.9f, 0.999f, 1e-8f, 0.0f, 0, m, v}, b = {2, 0.05f, 0.9f, 0.999f, 1e-8f, 0.0f, 0, m2, v2};
+  wv_nn_adam
+      a = {.n = 2, .lr = 0.05f, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f, .weight_decay = 0.0f, .m = m, .v = v},
+      b = {.n = 2, .lr = 0.05f, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f, .weight_decay = 0.0f, .m = m2, .v = v2};
   float p[2] = {0.5f, 0.5f}, q[2] = {0.5f, 0.5f}, g[2];
   const float t[2] = {0.7f, 1.6f}; /* the second target lies outside [0, 1] */
   for (int it = 0; it < 400; it++) {

@@ -10,7 +10,7 @@
 
 #include "testutil.h"
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
+#include "woven/pattern.h"
 #include "woven/render.h"
 
 /* The centre 256 x 256 pixels of the flat45 rig: yarns one to two and a half pixels apart,
@@ -48,7 +48,7 @@ static int choose(fixture *f, const char *pattern, uint64_t seed, wv_pattern_cho
   wv_error e = {0};
   wv_params truth;
   wv_image photo = {0};
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   float y[WV_NET_OUT];
   assert_int_equal(wv_params_sample_prior(pattern, seed, &truth, &e), WV_OK);
   assert_int_equal(wv_render(&f->scene, &truth, &ro, &photo, NULL, &e), WV_OK);

@@ -22,7 +22,7 @@ static void truth(wv_params *p) {
 }
 
 static double ssim_in(const wv_scene *s, const wv_params *p, const wv_image *ref, wv_ssim_mode mode) {
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   wv_image img;
   assert_int_equal(wv_render(s, p, &ro, &img, NULL, NULL), WV_OK);
   double v;
@@ -43,7 +43,7 @@ static void run(const wv_params *from, const double shift[2], wv_fit_state *st, 
   truth(&tp);
   wv_scene shifted = *s;
   shifted.fabric_offset[0] = shift[0], shifted.fabric_offset[1] = shift[1];
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   assert_int_equal(wv_render(&shifted, &tp, &ro, photo, NULL, NULL), WV_OK);
   wv_fit_opts o;
   wv_fit_opts_default(&o);
@@ -129,7 +129,7 @@ static void test_register_sees_colour(void **state) {
       fit.diffuse[y][c] = fkd[y][c], fit.specular[y][c] = fks[y][c];
     }
   wv_image photo;
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, &err), WV_OK);
   wv_fit_opts o;
   wv_fit_opts_default(&o);
@@ -164,7 +164,7 @@ static void distorted_photo(double amount, wv_scene *s, wv_scene *bent, wv_image
   }
   wv_params tp;
   truth(&tp);
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   assert_int_equal(wv_render(bent, &tp, &ro, photo, NULL, NULL), WV_OK);
 }
 
@@ -244,7 +244,7 @@ static void test_distortion_leaves_a_straight_cloth(void **state) {
   wv_scene cyl;
   tu_centre_window(&cyl, "cylinder", 128, 128, 4);
   wv_image_free(&photo);
-  wv_render_opts ro = {0, 0, NULL, NULL, NULL};
+  wv_render_opts ro = {0};
   assert_int_equal(wv_render(&cyl, &p, &ro, &photo, NULL, NULL), WV_OK);
   assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
   assert_int_equal(wv_fit_distort(&st, &cyl, &photo, &o, &err), WV_OK);

@@ -12,7 +12,8 @@
 #include "woven/maps.h"
 #include "woven/grad.h"
 #include "woven/render.h"
-#include "woven/fabricnet.h"
+#include "woven/yarn.h"
+#include "woven/dataset.h"
 
 /* A centred w x h window of a scene: same pixels as the full image there. */
 static void crop_scene(wv_scene *s, int w, int h) {
@@ -30,7 +31,7 @@ static void render(const char *scene, const char *pattern, int w, int h, int spp
   if (w) crop_scene(&s, w, h);
   assert_int_equal(wv_params_default(pattern, &p, &err), WV_OK);
   p.seed = seed;
-  wv_render_opts o = {spp, threads, NULL, NULL, NULL};
+  wv_render_opts o = {.spp = spp, .threads = threads};
   if (wv_render(&s, &p, &o, out, NULL, &err)) fail_msg("%s", err.msg);
 }
 
@@ -62,7 +63,7 @@ static void test_footprints_cache(void **state) {
   assert_int_equal(wv_params_default("satin", &p, &err), WV_OK);
   wv_footprints *fp;
   assert_int_equal(wv_footprints_create(&s, 2, &fp, &err), WV_OK);
-  wv_render_opts plain = {8, 2, NULL, NULL, NULL}, cached = {8, 2, NULL, NULL, fp};
+  wv_render_opts plain = {.spp = 8, .threads = 2}, cached = {.spp = 8, .threads = 2, .footprints = fp};
   wv_image a, b;
   assert_int_equal(wv_render(&s, &p, &plain, &a, NULL, &err), WV_OK);
   assert_int_equal(wv_render(&s, &p, &cached, &b, NULL, &err), WV_OK);
@@ -109,7 +110,7 @@ static void test_default_spp_converged(void **state) {
       assert_int_equal(wv_params_sample_prior(wv_net_pattern(k), (uint64_t)(90 + k), &p, &err), WV_OK);
       wv_scene c = s;
       crop_scene(&c, 200, 100);
-      wv_render_opts o1 = {s.spp, 0, NULL, NULL, NULL}, o2 = {2 * s.spp, 0, NULL, NULL, NULL};
+      wv_render_opts o1 = {.spp = s.spp}, o2 = {.spp = 2 * s.spp};
       wv_image a, b;
       assert_int_equal(wv_render(&c, &p, &o1, &a, NULL, &err), WV_OK);
       assert_int_equal(wv_render(&c, &p, &o2, &b, NULL, &err), WV_OK);
@@ -236,7 +237,7 @@ static void test_golden(void **state) {
     } else if (cases[i].variant == 2) {
       s.fabric_offset[0] = 1e4, s.fabric_offset[1] = -1e4; /* the scenes' limit, WV_SCENE_MAX_OFFSET_MM */
     }
-    wv_render_opts o = {cases[i].spp, 0, NULL, NULL, NULL};
+    wv_render_opts o = {.spp = cases[i].spp};
     wv_image img, ref;
     if (wv_render(&s, &p, &o, &img, NULL, &err)) fail_msg("%s", err.msg);
     char path[512];

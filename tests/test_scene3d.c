@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "testutil.h"
@@ -135,6 +136,82 @@ static void test_mesh_errors(void **state) {
   wv_error err = {0};
   assert_int_equal(wv_mesh_load(file("missing.obj", NULL), 0, 1, &m, &err), WV_ERR_IO);
   assert_non_null(strstr(err.msg, "missing.obj"));
+  /* numbers a mesh brings: coordinates and UVs within range */
+  expect_mesh_error("far.obj", "v 0 0 0\nv 2e8 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n", 0, WV_ERR_FORMAT,
+                    "vertex 1 has a coordinate of 2e+08 mm");
+  expect_mesh_error("biguv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1e20 0\nvt 0 1\nf 1/1 2/2 3/3\n", 0,
+                    WV_ERR_FORMAT, "vertex 1 has a UV of (1e+20, 0)");
+  expect_mesh_error("quad.fbx", QUAD_OBJ, 0, WV_ERR_FORMAT, "not a mesh file woven reads");
+}
+
+/* What a mesh file declares is checked before assimp allocates or recurses for it. */
+static void expect_declared(const char *name, const char *text, size_t len, wv_status code, const char *needle) {
+  char path[4200];
+  snprintf(path, sizeof path, "%s/%s", tu_tmpdir("scene3d"), name);
+  FILE *f = fopen(path, "wb");
+  assert_non_null(f);
+  assert_int_equal(fwrite(text, 1, len, f), len);
+  fclose(f);
+  wv_error err = {0};
+  wv_status st = wv_mesh_check_file(path, 0, &err);
+  if (st != code || (code && (!strstr(err.msg, needle) || !strstr(err.msg, name))))
+    fail_msg("%s: status %d, message '%s' (wanted %d and '%s')", name, st, err.msg, code, needle);
+}
+
+static char *deep_gltf(int depth) {
+  size_t cap = (size_t)depth * 24 + 1024, n = 0;
+  char *t = malloc(cap);
+  assert_non_null(t);
+  n += (size_t)snprintf(t + n, cap - n, "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[");
+  for (int i = 0; i + 1 < depth; i++) n += (size_t)snprintf(t + n, cap - n, "{\"children\":[%d]},", i + 1);
+  snprintf(t + n, cap - n, "{}]}");
+  return t;
+}
+
+static void test_mesh_check(void **state) {
+  (void)state;
+  char *g = deep_gltf(20000);
+  expect_declared("deep.gltf", g, strlen(g), WV_ERR_FORMAT, "more than 256 levels deep");
+  free(g);
+  g = deep_gltf(WV_MESH_MAX_NODE_DEPTH);
+  expect_declared("deep256.gltf", g, strlen(g), WV_OK, "");
+  free(g);
+  static const char cyc[] = "{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{\"children\":[1]},{\"children\":[0]}]}";
+  expect_declared("cycle.gltf", cyc, sizeof cyc - 1, WV_ERR_FORMAT, "levels deep (or has a cycle)");
+  static const char two[] = "{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{\"children\":[2]},{\"children\":[2]},{}]}";
+  expect_declared("twoparents.gltf", two, sizeof two - 1, WV_ERR_FORMAT, "more than one parent");
+  static const char acc[] = "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":8,\"uri\":\"data:,AAAAAAAAAAA=\"}],"
+                            "\"bufferViews\":[{\"buffer\":0,\"byteLength\":8}],\"accessors\":[{\"bufferView\":0,"
+                            "\"componentType\":5126,\"count\":1000,\"type\":\"VEC3\"}]}";
+  expect_declared("acc.gltf", acc, sizeof acc - 1, WV_ERR_FORMAT, "accessor 0 reads past its buffer view");
+  static const char ply[] = "ply\nformat ascii 1.0\nelement vertex 2000000000\nproperty float x\nproperty float y\n"
+                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n";
+  expect_declared("bomb.ply", ply, sizeof ply - 1, WV_ERR_NOMEM, "declares 2000000000 vertices");
+  static const char ply2[] = "ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\n"
+                             "property float y\nproperty float z\nend_header\n0123456789";
+  expect_declared("short.ply", ply2, sizeof ply2 - 1, WV_ERR_FORMAT, "more than its 10 bytes of data can hold");
+  /* a GLB whose binary chunk claims 2 GB */
+  static const char js[] = "{\"asset\":{\"version\":\"2.0\"}} "; /* 28 bytes: chunks are 4-aligned */
+  unsigned char glb[12 + 8 + sizeof js - 1 + 8 + 16];
+  uint32_t total = sizeof glb, jl = sizeof js - 1, bl = 0x7ffffff0;
+  memcpy(glb, "glTF\2\0\0\0", 8), memcpy(glb + 8, &total, 4), memcpy(glb + 12, &jl, 4), memcpy(glb + 16, "JSON", 4);
+  memcpy(glb + 20, js, jl), memcpy(glb + 20 + jl, &bl, 4), memcpy(glb + 24 + jl, "BIN", 4);
+  memset(glb + 28 + jl, 0, 16);
+  expect_declared("chunk.glb", (const char *)glb, sizeof glb, WV_ERR_FORMAT, "a GLB chunk declares 2147483632 bytes");
+  static const char stl[84] = {0};
+  char stl2[84];
+  memcpy(stl2, stl, 84);
+  stl2[83] = 0x10; /* 268 million triangles in 84 bytes */
+  expect_declared("bomb.stl", stl2, 84, WV_ERR_FORMAT, "declares 268435456 triangles");
+  /* a FIFO as a mesh: refused at once, never opened for blocking reads */
+  char fifo[4200];
+  snprintf(fifo, sizeof fifo, "%s/fifo.obj", tu_tmpdir("scene3d"));
+  unlink(fifo);
+  assert_int_equal(mkfifo(fifo, 0600), 0);
+  wv_error err = {0};
+  assert_int_equal(wv_mesh_check_file(fifo, 0, &err), WV_ERR_IO);
+  assert_non_null(strstr(err.msg, "not a regular file"));
+  unlink(fifo);
 }
 
 /* A material refused after its parameter file's path was read frees that path (the
@@ -198,7 +275,7 @@ static void render_text(const char *json, int threads, wv_image *cap, wv_image *
   wv_error err = {0};
   if (wv_scene3d_parse(json, "test scene", WOVEN_SOURCE_DIR "/scenes", &s, &err)) fail_msg("%s", err.msg);
   if (wv_world_load(&s, NULL, threads, &w, &err)) fail_msg("%s", err.msg);
-  wv_scene3d_opts o = {0, threads, NULL, NULL};
+  wv_scene3d_opts o = {.threads = threads};
   if (wv_scene3d_render(&s, w, &o, cap, rad, NULL, &err)) fail_msg("%s", err.msg);
   wv_world_free(w);
   wv_scene3d_free(&s);
@@ -252,12 +329,12 @@ static void test_quad_matches_flat45(void **state) {
   s.response.width = s.response.height = 96, s.response.falloff = 0, ref.falloff = 0;
   wv_world *w;
   assert_int_equal(wv_world_load(&s, NULL, 2, &w, &err), WV_OK);
-  wv_scene3d_opts o = {0, 2, NULL, NULL};
+  wv_scene3d_opts o = {.threads = 2};
   wv_image a, b;
   assert_int_equal(wv_scene3d_render(&s, w, &o, &a, NULL, NULL, &err), WV_OK);
   wv_params p;
   assert_int_equal(wv_params_read(WOVEN_SOURCE_DIR "/examples/twill.json", &p, &err), WV_OK);
-  wv_render_opts ro = {256, 2, NULL, NULL, NULL};
+  wv_render_opts ro = {.spp = 256, .threads = 2};
   assert_int_equal(wv_render(&ref, &p, &ro, &b, NULL, &err), WV_OK);
   double ssim, mae;
   assert_int_equal(wv_ssim(&a, &b, WV_SSIM_LUMA, &ssim, &err), WV_OK);
@@ -389,6 +466,14 @@ static void test_parse_errors(void **state) {
       "\"a.obj\", \"material\": \"m\"}]}", "render.max_bounces");
   BAD("\"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": [{\"mesh\": \"a.obj\", \"quad\": {}, "
       "\"material\": \"m\"}]}", "exactly one");
+  /* the capture scenes' response: the same keys (but the camera blur) and ranges */
+#define OBJ "\"materials\": {\"m\": {\"lambert\": 0.5}}, \"objects\": [{\"mesh\": \"a.obj\", \"material\": \"m\"}], "
+  BAD(OBJ "\"response\": {\"exposure\": 2e6}}", "'response.exposure' = 2000000 must be in (0, 1000000]");
+  BAD(OBJ "\"response\": {\"encoding\": \"gamma\", \"gamma\": 10}}", "'response.gamma' = 10 is outside (0.1, 10)");
+  BAD(OBJ "\"response\": {\"encoding\": \"log\"}}", "'response.encoding' = 'log': expected srgb, gamma or linear");
+  BAD(OBJ "\"response\": {\"psf_sigma_px\": 1}}", "unknown key 'response.psf_sigma_px'");
+  BAD(OBJ "\"falloff\": {\"type\": \"gaussian\", \"sigma_px\": 0}}", "'falloff.sigma_px' = 0 must be in (0, 1e+09]");
+#undef OBJ
   /* a scene that names a missing file parses (no file is read), then fails to load naming the file */
   wv_scene3d s;
   wv_world *w = NULL;
@@ -444,7 +529,7 @@ int main(void) {
   if (!d) return 1;
   snprintf(dir, sizeof dir, "%s", d);
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_mesh_formats),  cmocka_unit_test(test_mesh_errors),
+      cmocka_unit_test(test_mesh_formats),  cmocka_unit_test(test_mesh_errors), cmocka_unit_test(test_mesh_check),
       cmocka_unit_test(test_material_refused),
       cmocka_unit_test(test_env_sampling),  cmocka_unit_test(test_white_furnace),
       cmocka_unit_test(test_quad_matches_flat45), cmocka_unit_test(test_edits),

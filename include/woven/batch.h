@@ -38,6 +38,7 @@ typedef struct {
  * capture to replace); fills res and returns res->status. */
 typedef int (*wv_batch_capture_fn)(void *user, const char *photo, const char *dir, wv_batch_result *res);
 
+/* list, dir and capture are required; on_photo and user may be zero (NULL). */
 typedef struct {
   const char *list; /* as wv_batch_list takes it */
   const char *dir;  /* the output directory */

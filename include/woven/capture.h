@@ -1,13 +1,14 @@
-/* woven: the capture jobs behind woven fit, predict, capture and capture-batch:
- * FabricNet's estimate of a photo (with the choice of its pattern), and a fit run to
- * the end with every output written into a directory that appears whole or not at all
- * (params.json, renders, report, viewer, drape, maps, fit.json and its checkpoint). */
+/* woven: the capture jobs behind woven fit, capture and capture-batch: a fit run to the
+ * end with every output written into a directory that appears whole or not at all
+ * (params.json, renders, report, viewer, drape, maps, fit.json and its checkpoint), and
+ * the whole capture, which chains FabricNet's estimate of the photo (woven/estimate.h)
+ * and that fit. */
 #ifndef WOVEN_CAPTURE_H
 #define WOVEN_CAPTURE_H
 
 #include "woven/descriptor.h"
 #include "woven/error.h"
-#include "woven/fabricnet.h"
+#include "woven/estimate.h"
 #include "woven/fit.h"
 #include "woven/image.h"
 #include "woven/params.h"
@@ -89,28 +90,6 @@ typedef struct {
   wv_capture_progress progress;
 } wv_fit_dir_opts;
 wv_status wv_fit_dir_run(const wv_fit_dir_opts *o, wv_fit_outcome *out, wv_error *err);
-
-/* FabricNet's estimate of a photo's parameters (woven predict). */
-typedef struct {
-  const char *photo, *scene, *model; /* model NULL: models/fabricnet-<scene name>.bin ($WOVEN_MODEL_DIR) */
-  const char *pattern;               /* a built-in; NULL: chosen over the library (wv_fabricnet_predict_pattern) */
-  const char *descriptor, *weights;  /* NULL descriptor: "default" */
-  wv_crop crop;
-  int any_scene; /* use a model trained for another scene */
-} wv_estimate_opts;
-typedef struct {
-  wv_params params;
-  int chosen; /* the pattern was chosen: choice is filled */
-  wv_pattern_choice choice;
-  double seconds;
-  /* What the fit from the estimate needs (wv_estimate_free releases them). */
-  wv_scene scene; /* with the chosen pattern's lattice orientation (wv_pattern_choice_scene) */
-  wv_image photo;
-  wv_photo_info info;
-  wv_descriptor *desc;
-} wv_estimate;
-wv_status wv_estimate_run(const wv_estimate_opts *o, wv_estimate *e, wv_error *err);
-void wv_estimate_free(wv_estimate *e);
 
 /* The whole capture (woven capture): the estimate, then the fit from it with every output
  * in dir (fit.json, network.json, ...). on_estimate (optional) is called between them. */

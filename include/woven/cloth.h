@@ -16,6 +16,8 @@
 
 typedef enum { WV_OBSTACLE_NONE, WV_OBSTACLE_SPHERE, WV_OBSTACLE_BOX } wv_obstacle;
 
+/* A zeroed struct is not the defaults (0 is a meaningful obstacle, offset, floor and
+ * seed): start from wv_cloth_defaults and change what differs. */
 typedef struct {
   int res;                /* cells per side: (res + 1)^2 particles, 2 res^2 triangles */
   double size_mm;         /* side of the square */

@@ -21,11 +21,17 @@ typedef struct {
   float rot_c, rot_s; /* rotation about +y */
 } wv_envmap;
 
+/* Largest radiance of a map after its strength (refused above, with its pixel). */
+#define WV_ENV_MAX_RADIANCE 1e18
+
 /* Tables for importance sampling of img (3 channels; copied, scaled by strength,
- * turned by rotation_deg about +y). name is used in messages. */
+ * turned by rotation_deg about +y). Every value times strength must be finite and
+ * at most WV_ENV_MAX_RADIANCE. name is used in messages. */
 wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, double rotation_deg, const char *name,
                          wv_error *err);
 void wv_envmap_free(wv_envmap *e);
+/* Bytes wv_envmap_init allocates for a w x h map. */
+size_t wv_envmap_bytes(int w, int h);
 /* Radiance arriving from direction d (unit, pointing away from the scene point). */
 void wv_envmap_eval(const wv_envmap *e, const float d[3], float rgb[3]);
 /* Solid-angle density with which wv_envmap_sample picks d. */

@@ -28,6 +28,10 @@ typedef struct {
   char photo[4096];
 } wv_source;
 wv_status wv_source_load(const char *path, wv_source *src, wv_error *err);
+/* The files a source was read from, for output checks: path itself, and for a fit's
+ * directory its params.json, scene.json and photo.png. The names are written into
+ * names and pointed to by paths; returns how many (at most 4). */
+int wv_source_inputs(const char *path, const wv_source *src, char names[4][4096], const char **paths);
 
 /* A triangle mesh as the exporter (and the viewer) take it. Positions in metres
  * (glTF's unit), +y up; unit normals; UVs with u along the fabric's weft (x) and
@@ -60,12 +64,14 @@ wv_status wv_tri_mesh_tangents(wv_tri_mesh *m, wv_error *err);
 wv_status wv_tri_mesh_validate(const wv_tri_mesh *m, wv_error *err);
 void wv_tri_mesh_free(wv_tri_mesh *m);
 
+/* 0 in a field (a zeroed struct, or NULL) takes its default. */
 typedef struct {
-  int texture_size; /* texels per tile side, 8..1024 (default 64) */
-  int samples;      /* woven samples per texel side (default 3: 9 positions) */
-  int directions;   /* light/view direction pairs of the fit (default 48) */
+  int texture_size; /* texels per tile side, 8..1024 (0: 64) */
+  int samples;      /* woven samples per texel side, 1..8 (0: 3, i.e. 9 positions) */
+  int directions;   /* light/view direction pairs of the fit, 8..256 (0: 48) */
   int threads;      /* 0: all cores */
 } wv_bake_opts;
+/* The defaults written out (what 0 stands for). */
 void wv_bake_opts_default(wv_bake_opts *o);
 
 typedef struct {

@@ -9,7 +9,6 @@
 
 #include "woven/error.h"
 #include "woven/image.h"
-#include "woven/scene.h"
 
 /* Area average to w x h (any factor, integer or not, down or up): output pixel
  * (X, Y) is the mean of the input over the rectangle [X fw, (X+1) fw) x

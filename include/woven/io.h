@@ -9,6 +9,7 @@
 #define WOVEN_IO_H
 
 #include <stddef.h>
+#include <stdio.h>
 #include "woven/error.h"
 #include "woven/image.h"
 
@@ -51,6 +52,27 @@ wv_status wv_image_jpeg_roundtrip(const wv_image *in, int quality, wv_image *out
 /* An 8-bit PNG in memory (RGB, or RGBA for a 4-channel image; values clamped
  * to [0,1], no colour encoding applied). *out is malloc'ed; the caller frees it. */
 wv_status wv_image_encode_png(const wv_image *img, unsigned char **out, size_t *len, wv_error *err);
+
+/* Opens a file for reading only when it is a regular file: opened without blocking
+ * (a FIFO or device never stalls the open), checked with fstat, then switched back to
+ * blocking reads. Directories are refused as "is a directory", anything else that
+ * is not a regular file as "not a regular file" (WV_ERR_IO, naming path). *fd is
+ * close-on-exec; st, when not NULL, receives the file's status. Every reader of a
+ * user's file opens it through these. */
+struct stat;
+wv_status wv_open_regular(const char *path, int *fd, struct stat *st, wv_error *err);
+/* wv_open_regular as a stdio stream ("rb"). */
+wv_status wv_fopen_regular(const char *path, FILE **fp, wv_error *err);
+
+/* Messages never show more of a file than a short printable excerpt. Copies s into
+ * out (len bytes with the NUL): bytes outside printable ASCII become '?', and a
+ * longer text is cut with "...". */
+void wv_printable_excerpt(const char *s, char *out, size_t len);
+/* The JSON readers' messages end in "near '<text of the file>'": keeps at most keep
+ * printable characters of that text (WV_EXCERPT_CHARS for a file the user named as
+ * that kind of file), or with keep 0 drops it (a file another file refers to). */
+#define WV_EXCERPT_CHARS 24
+void wv_error_excerpt(wv_error *err, size_t keep);
 
 /* Atomically replaces path with len bytes of data. */
 wv_status wv_write_file_atomic(const char *path, const void *data, size_t len, wv_error *err);

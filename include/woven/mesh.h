@@ -1,5 +1,5 @@
-/* woven: triangle meshes for the mesh renderer. Loading (OBJ, PLY, glTF 2.0 and
- * whatever else assimp reads, through its C API), validation, per-vertex tangent
+/* woven: triangle meshes for the mesh renderer. Loading (OBJ, PLY, STL, glTF 2.0
+ * and GLB through assimp's C API, after woven's own checks of the file), validation, per-vertex tangent
  * frames from the UVs, the built-in shapes of scene files (quad, sphere,
  * cylinder), transforms and an OBJ writer (the cloth simulation's output).
  *
@@ -27,6 +27,13 @@ typedef struct {
 /* Default memory limit for one mesh (its arrays and the ray tracer's index). */
 #define WV_MESH_DEFAULT_LIMIT_MB 2048
 
+/* Limits on what a mesh file may declare and bring (docs/hardening.md). */
+#define WV_MESH_MAX_ELEMENTS 0x7fffffff /* vertices, faces or accessor elements */
+#define WV_MESH_MAX_NODE_DEPTH 256      /* levels of a glTF node tree */
+#define WV_MESH_MAX_COORD 1e8           /* |coordinate| in mm (100 km), after the object's transform */
+#define WV_MESH_MAX_UV 1e8              /* |texture coordinate| */
+#define WV_MESH_JSON_COST 32            /* a glTF's JSON text costs up to this many times its size parsed */
+
 /* Bytes a mesh of nv vertices and nt triangles costs: its arrays plus about
  * 96 bytes a triangle for the ray tracer's acceleration structure. */
 size_t wv_mesh_bytes(long long nv, long long nt);
@@ -42,7 +49,17 @@ void wv_mesh_free(wv_mesh *m);
  * checked with wv_mesh_validate(need_uv). Messages name the file. */
 wv_status wv_mesh_load(const char *path, size_t limit_bytes, int need_uv, wv_mesh *m, wv_error *err);
 
-/* Finite values, indices in range, no degenerate triangle (zero area), and with
+/* What wv_mesh_load checks before assimp reads the file: a regular file whose name
+ * ends in .obj, .ply, .stl, .gltf or .glb; no larger than limit_bytes (0: the
+ * default); the counts a PLY header or binary STL declares, the faces of an OBJ,
+ * a GLB's chunk lengths, and a glTF's JSON size, buffers (files beside it must be
+ * regular and long enough), accessor ranges and counts (once per node that places
+ * the mesh) against the limit and the file's size; a glTF node tree at most
+ * WV_MESH_MAX_NODE_DEPTH deep. OBJ material libraries must be regular files. */
+wv_status wv_mesh_check_file(const char *path, size_t limit_bytes, wv_error *err);
+
+/* Finite values, coordinates within WV_MESH_MAX_COORD and UVs within WV_MESH_MAX_UV,
+ * indices in range, no degenerate triangle (zero area), and with
  * need_uv: UVs present, finite, and no triangle with zero UV area (no tangent
  * frame there). name is used in messages. */
 wv_status wv_mesh_validate(const wv_mesh *m, const char *name, int need_uv, wv_error *err);

@@ -1,9 +1,10 @@
-/* woven: image comparison metrics. */
+/* woven: image comparison metrics, and the centre windows they compare. */
 #ifndef WOVEN_METRICS_H
 #define WOVEN_METRICS_H
 
 #include "woven/error.h"
 #include "woven/image.h"
+#include "woven/scene.h"
 
 typedef enum {
   WV_SSIM_LUMA = 0, /* on luminance Y = 0.2126 R + 0.7152 G + 0.0722 B of the given values */
@@ -18,6 +19,13 @@ wv_status wv_ssim(const wv_image *a, const wv_image *b, wv_ssim_mode mode, doubl
 
 /* Mean absolute difference over all samples. */
 wv_status wv_mae(const wv_image *a, const wv_image *b, double *out, wv_error *err);
+
+/* ---- centre windows ----
+ * A search that renders many candidates compares the centre of the image only. */
+/* The centre w x h window of a scene (same pixels as the full image there). */
+void wv_scene_centre_window(const wv_scene *s, int w, int h, wv_scene *out);
+/* Copies the matching centre w x h pixels of a full-size image. */
+wv_status wv_image_centre_crop(const wv_image *full, int w, int h, wv_image *out, wv_error *err);
 
 /* ---- the weave's spectrum ----
  * A weave is a periodic texture, and at one or two pixels per yarn its structure lives
@@ -35,6 +43,9 @@ wv_status wv_mae(const wv_image *a, const wv_image *b, double *out, wv_error *er
  * mean and unit variance (a flat window gives zeros), times the 2-D Hann window
  * (0.5 - 0.5 cos(2 pi (x + 0.5) / w)) (the same in y). out: w * h floats. */
 wv_status wv_image_detail(const wv_image *img, int x0, int y0, int w, int h, float *out, wv_error *err);
+/* The same with the Hann window (hann = 1) or without it (0). */
+wv_status wv_image_detail_window(const wv_image *img, int x0, int y0, int w, int h, int hann, float *out,
+                                 wv_error *err);
 
 /* The weave spectrum of the n x n window of img at (x0, y0) (n even, inside the image):
  * log(1 + |FFT(detail)|^2), unnormalised FFT, centred (row-major, DC at (n/2, n/2),

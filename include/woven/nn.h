@@ -110,8 +110,13 @@ void wv_nn_fc_backward(float *dx, float *dw, float *db, const float *dy, const f
 void wv_nn_sigmoid_forward(float *y, const float *x, size_t n);
 void wv_nn_sigmoid_backward(float *dx, const float *y, const float *dy, size_t n);
 
-/* ---- L1 loss: mean |pred - target| over n values; backward adds dloss * dL/dpred
- * (the subgradient 0 at pred == target). ---- */
+/* ---- L1 distance, the library's one (also the texture and pixel losses of loss.h
+ * and imgops.h, and wv_image_mad): returns sum |a - b| over n values, summed in
+ * double; when grad is not NULL, adds g sign(a - b) to it (the subgradient 0 at
+ * a == b). Each difference is taken in double, or with float_diff rounded to float
+ * first. ---- */
+double wv_nn_l1(const float *a, const float *b, size_t n, int float_diff, float *grad, float g);
+/* L1 loss: mean |pred - target| over n values; backward adds dloss * dL/dpred. */
 float wv_nn_l1_forward(const float *pred, const float *target, size_t n);
 void wv_nn_l1_backward(float *dpred, const float *pred, const float *target, float dloss, size_t n);
 

@@ -6,7 +6,6 @@
 #include <stdint.h>
 #include "woven/error.h"
 #include "woven/weave.h"
-#include "woven/yarn.h"
 
 #define WV_DENSITY_MIN 20.0  /* yarns per inch */
 #define WV_DENSITY_MAX 250.0
@@ -65,7 +64,5 @@ double wv_param_get(const wv_params *p, int id);
 void wv_param_set(wv_params *p, int id, double value);
 
 wv_status wv_params_weave(const wv_params *p, wv_weave *w, wv_error *err);
-/* The geometry model the renderer uses for these parameters. */
-wv_status wv_params_yarn_model(const wv_params *p, wv_yarn_model *m, wv_error *err);
 
 #endif

@@ -4,10 +4,10 @@
 #define WOVEN_REPORT_H
 
 #include "woven/error.h"
-#include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/image.h"
 #include "woven/params.h"
+#include "woven/pattern.h"
 
 /* n images of equal height side by side with gap white pixels between them. */
 wv_status wv_image_hconcat(const wv_image *const *imgs, int n, int gap, wv_image *out, wv_error *err);

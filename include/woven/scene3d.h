@@ -99,13 +99,14 @@ typedef struct {
   uint64_t seed;
   /* camera response: exposure, clip, encoding, gamma, falloff (wv_scene_response) */
   wv_scene response;
-  size_t mesh_limit_bytes; /* memory limit for the meshes and the ray tracer */
+  size_t mesh_limit_bytes; /* memory limit of the job: meshes, ray tracer, edit maps, environment */
 } wv_scene3d;
 
 /* Limits: what one scene may hold. */
 #define WV_SCENE3D_MAX_ITEMS 256 /* lights, materials, objects, edits: each */
 #define WV_SCENE3D_DEFAULT_SPP 64
 #define WV_SCENE3D_DEFAULT_YARN_SAMPLES 4
+#define WV_SCENE3D_MAX_MAP_VALUE 1e6 /* a value of an edit map or mask */
 
 /* Parses a scene text. source names it in messages; relative paths in it are
  * resolved against base_dir (NULL: the current directory). No file is read. */
@@ -113,6 +114,11 @@ wv_status wv_scene3d_parse(const char *json, const char *source, const char *bas
                            wv_error *err);
 /* Reads and parses a scene file (paths relative to its directory). */
 wv_status wv_scene3d_read(const char *path, wv_scene3d *s, wv_error *err);
+
+/* The files a scene refers to (fabric parameter files, meshes, edit maps and masks,
+ * the environment map), resolved, into paths (borrowed from s); returns how many
+ * there are, of which at most cap are stored. Outputs must be none of them. */
+int wv_scene3d_inputs(const wv_scene3d *s, const char **paths, int cap);
 void wv_scene3d_free(wv_scene3d *s);
 
 /* Everything a scene refers to, loaded and prepared for rendering. */
@@ -125,6 +131,7 @@ void wv_world_free(wv_world *w);
 /* Triangles and vertices over all objects. */
 void wv_world_size(const wv_world *w, long long *triangles, long long *vertices);
 
+/* A zeroed struct (or NULL) means the defaults: the scene's spp, all threads, no progress. */
 typedef struct {
   int spp;     /* camera rays per pixel; 0 = the scene's */
   int threads; /* 0 = OpenMP default */
@@ -155,7 +162,8 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
                             wv_image *radiance, wv_scene3d_stats *stats, wv_error *err);
 
 /* A scene file rendered with every fabric's parameters replaced (the capture's
- * report shows a fit on the bundled draped cloth this way). */
+ * report shows a fit on the bundled draped cloth this way). A zeroed struct means
+ * the scene's size and spp on all threads. */
 typedef struct {
   int width, height; /* image size instead of the scene's (same camera); 0: the scene's */
   int spp;           /* 0: the scene's */

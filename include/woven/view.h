@@ -11,12 +11,13 @@
 #include "woven/params.h"
 #include "woven/scene.h"
 
+/* params and scene are required; zero (NULL) in the others: no photo, the default title. */
 typedef struct {
   const wv_params *params;
   const wv_scene *scene;  /* the capture rig shown */
   const char *photo;      /* optional photo (any format woven reads), cropped and scaled
                              to the scene's image as a fit does */
-  const char *title;      /* optional */
+  const char *title;      /* optional; NULL: "woven viewer" */
 } wv_view_opts;
 
 /* Writes the page atomically (nothing is left on failure). */

@@ -6,6 +6,8 @@
 #define WOVEN_YARN_H
 
 #include <stdint.h>
+#include "woven/error.h"
+#include "woven/params.h"
 #include "woven/weave.h"
 
 typedef struct {
@@ -29,6 +31,8 @@ typedef struct {
   int32_t cellpack[WV_WEAVE_MAX * WV_WEAVE_MAX];
 } wv_yarn_model;
 
+/* The geometry model the renderer uses for these parameters. */
+wv_status wv_params_yarn_model(const wv_params *p, wv_yarn_model *m, wv_error *err);
 /* Recompute the derived fields; call after changing the weave, umax, psi,
  * spacing or width. */
 void wv_yarn_model_update(wv_yarn_model *m);
@@ -42,7 +46,8 @@ typedef struct {
   uint64_t segment;  /* identity of the visible segment (hash) */
 } wv_yarn_point;
 
-/* Fabric row/column of a point: rows grow toward -y, columns toward +x. */
+/* Fabric row/column of a point: rows grow toward -y, columns toward +x.
+ * Evaluated by the shading kernel's geometry (src/kernel/), in scalar float. */
 void wv_yarn_eval(const wv_yarn_model *m, float x, float y, wv_yarn_point *out);
 
 #endif

@@ -10,7 +10,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fit/fit_internal.h"
 #include "woven/metrics.h"
 #include "woven/render.h"
 
@@ -673,9 +672,9 @@ wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lat
     wv_params p;
     wv_scene ps, win;
     wv_lattice_candidate(lat, i, base, s, o->rotate, &p, &ps);
-    wv_fit_centre_window(&ps, n, n, &win);
+    wv_scene_centre_window(&ps, n, n, &win);
     win.spp = o->spp > 0 ? o->spp : WV_RANK_SPP;
-    wv_render_opts ro = {win.spp, o->threads, NULL, NULL, NULL};
+    wv_render_opts ro = {.spp = win.spp, .threads = o->threads};
     wv_image img = {0};
     if ((st = wv_render(&win, &p, &ro, &img, NULL, err))) break;
     st = wv_weave_spectrum(&img, 0, 0, n, sr, err);

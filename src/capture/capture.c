@@ -1,15 +1,16 @@
-/* woven: the capture jobs (woven/capture.h): FabricNet's estimate of a photo, and a fit
- * run with every output written into a directory that appears whole or not at all. */
+/* woven: the capture jobs (woven/capture.h): a fit run with every output written into a
+ * directory that appears whole or not at all, and the capture that chains FabricNet's
+ * estimate of a photo (src/net/estimate.c) and that fit. */
 #define _DEFAULT_SOURCE /* realpath */
 #include "woven/capture.h"
 
 #include <jansson.h>
-#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
+#include "io/json_file.h"
 #include "util/json.h"
 #include "util/note.h"
 #include "woven/analysis.h"
@@ -120,7 +121,7 @@ static int render_drape(const wv_fit_job *job, const char *dir, const wv_params 
     snprintf(note, ncap, "No drape: the bundled scene %s was not found (set WOVEN_SCENE_DIR).", scene);
     return 0;
   }
-  wv_scene3d_preview po = {512, 384, 16, threads};
+  wv_scene3d_preview po = {.width = 512, .height = 384, .spp = 16, .threads = threads};
   wv_image img = {0};
   snprintf(out, cap, "%s/drape.png", dir);
   *rc = wv_scene3d_render_file(scene, p, &po, &img, err);
@@ -138,7 +139,7 @@ static int render_drape(const wv_fit_job *job, const char *dir, const wv_params 
 static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_fit_state *st, const wv_fit_opts *o,
                                const wv_scene *fit_scene, double *ssim_start, double *ssim_fit, wv_weave_views *wv,
                                wv_error *err) {
-  wv_render_opts ro = {0, o->threads, NULL, NULL, NULL};
+  wv_render_opts ro = {.threads = o->threads};
   wv_image r_start = {0}, r_fit = {0}, cmp = {0};
   char path[4096], pphoto[4096], pstart[4096], pfit[4096];
   wv_scene start_scene = *job->scene; /* the start seen through the same camera blur as the fit */
@@ -185,7 +186,7 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
                    .drape_png = drape ? pdrape : NULL,
                    .drape_note = note[0] ? note : NULL};
   /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
-  wv_view_opts vo = {&st->params, fit_scene, pphoto, job->title};
+  wv_view_opts vo = {.params = &st->params, .scene = fit_scene, .photo = pphoto, .title = job->title};
   snprintf(path, sizeof path, "%s/viewer.html", dir);
   if (!rc) rc = wv_view_write(path, &vo, err);
   snprintf(path, sizeof path, "%s/report.html", dir);
@@ -439,69 +440,6 @@ wv_status wv_fit_job_read(const char *dir, wv_fit_record_job *rec, wv_error *err
   return st;
 }
 
-#ifndef WOVEN_MODEL_DIR
-#define WOVEN_MODEL_DIR "models"
-#endif
-
-/* models/fabricnet-<scene>.bin, in $WOVEN_MODEL_DIR or the source tree's models/. */
-static void default_model(const wv_scene *s, char *buf, size_t cap) {
-  const char *d = getenv("WOVEN_MODEL_DIR");
-  snprintf(buf, cap, "%s/fabricnet-%s.bin", d && *d ? d : WOVEN_MODEL_DIR, s->name);
-}
-
-void wv_estimate_free(wv_estimate *e) {
-  wv_image_free(&e->photo);
-  wv_descriptor_free(e->desc);
-  e->desc = NULL;
-}
-
-wv_status wv_estimate_run(const wv_estimate_opts *o, wv_estimate *e, wv_error *err) {
-  double t0 = omp_get_wtime();
-  memset(e, 0, sizeof *e);
-  wv_status rc = wv_scene_load(o->scene, &e->scene, err);
-  if (rc) return rc;
-  wv_params probe; /* the pattern is checked before the slow steps */
-  if (o->pattern && (rc = wv_params_default(o->pattern, &probe, err))) return rc;
-  if (o->pattern && !strcmp(o->pattern, "custom"))
-    return wv_fail(err, WV_ERR_INVALID, "the pattern must be a built-in pattern, not 'custom'");
-  char mpath[4096];
-  if (o->model)
-    snprintf(mpath, sizeof mpath, "%s", o->model);
-  else
-    default_model(&e->scene, mpath, sizeof mpath);
-  struct stat sb;
-  if (!o->model && stat(mpath, &sb) != 0)
-    return wv_fail(err, WV_ERR_IO,
-                   "no default model for scene '%s' (%s); train one with 'woven dataset' and "
-                   "'woven train' (docs/fabricnet.md) and pass --model",
-                   e->scene.name, mpath);
-  wv_fabricnet net;
-  if ((rc = wv_fabricnet_load(mpath, &net, err))) return rc;
-  if (!(rc = wv_descriptor_create(o->descriptor ? o->descriptor : "default", o->weights, &e->desc, err)) &&
-      !(rc = wv_fabricnet_check(&net, mpath, wv_descriptor_name(e->desc), wv_descriptor_size(e->desc),
-                                o->any_scene ? NULL : &e->scene, err)))
-    rc = wv_photo_load(o->photo, &e->scene, &o->crop, &e->photo, &e->info, err);
-  float y[WV_NET_OUT];
-  if (!rc && !o->pattern) {
-    e->chosen = 1;
-    if (!(rc = wv_fabricnet_predict_pattern(&net, e->desc, &e->scene, &e->photo, NULL, y, &e->choice, err))) {
-      e->params = e->choice.params[e->choice.best];
-      wv_pattern_choice_scene(&e->choice, &e->scene, e->choice.best, &e->scene); /* the cloth's orientation */
-    }
-  } else if (!rc) {
-    float *feat = malloc(sizeof(float) * (size_t)net.n_in);
-    if (!feat)
-      rc = wv_fail(err, WV_ERR_NOMEM, "out of memory");
-    else if (!(rc = wv_fabricnet_predict(&net, e->desc, &e->photo, feat, y, NULL, err)))
-      rc = wv_fabricnet_params(&net, y, o->pattern, &e->params, err);
-    free(feat);
-  }
-  wv_fabricnet_free(&net);
-  if (rc) wv_estimate_free(e);
-  e->seconds = omp_get_wtime() - t0;
-  return rc;
-}
-
 void wv_capture_fit_opts(const wv_pattern_choice *pc, int align_given, wv_fit_opts *o) {
   if (!pc || !pc->lattice.found) return;
   if (!align_given && o->align_radius > WV_CAPTURE_ALIGN_RADIUS) o->align_radius = WV_CAPTURE_ALIGN_RADIUS;
@@ -518,10 +456,10 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
   memcpy(job.inputs, inputs, sizeof inputs);
   wv_status rc = wv_fit_job_check_dir(&job, err);
   if (rc) return rc;
-  wv_scene probe; /* the fit's size limits, before the network runs */
-  if ((rc = wv_scene_load(o->estimate.scene, &probe, err)) || (rc = wv_fit_check_sizes(&probe, NULL, &o->fit, err)))
+  wv_scene scene; /* loaded once: the fit's size limits are checked before the network runs */
+  if ((rc = wv_scene_load(o->estimate.scene, &scene, err)) || (rc = wv_fit_check_sizes(&scene, NULL, &o->fit, err)))
     return rc;
-  if ((rc = wv_estimate_run(&o->estimate, est, err))) return rc;
+  if ((rc = wv_estimate_run_scene(&o->estimate, &scene, est, err))) return rc;
   if (o->on_estimate) o->on_estimate(o->progress.user, est);
   char *network = wv_params_to_json(&est->params), *nl = network ? realloc(network, strlen(network) + 2) : NULL;
   if (nl) strcat(nl, "\n"), network = nl; /* as wv_params_write writes it */

@@ -8,11 +8,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdint.h>
 #include <strings.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
+#include "io/json_file.h"
 #include "util/json.h"
 #include "woven/batch.h"
 #include "woven/io.h"
@@ -97,6 +99,49 @@ static wv_status list_file(const char *list, wv_batch_item **items, int *n, int 
   return st;
 }
 
+/* Names the batch's own files take in DIR: a photo may not be captured into one. */
+static int reserved_name(const char *name) {
+  return !strcmp(name, "summary.json") || !strcmp(name, "summary.html") || !strncmp(name, "woven.lock", 10) ||
+         wv_is_temp_name(name);
+}
+
+static uint64_t name_hash(const char *s) {
+  uint64_t h = 1469598103934665603ULL; /* FNV-1a */
+  for (; *s; s++) h = (h ^ (unsigned char)*s) * 1099511628211ULL;
+  return h;
+}
+
+/* Every photo gets its own output directory: reserved names are refused, and
+ * duplicates found with a hash set (open addressing, at most half full). */
+static wv_status check_names(const char *list, const wv_batch_item *items, int n, wv_error *err) {
+  size_t cap = 16;
+  while (cap < 2 * (size_t)n) cap *= 2;
+  int *slot = malloc(cap * sizeof *slot);
+  if (!slot) return wv_fail(err, WV_ERR_NOMEM, "%s: out of memory for the photo list", list);
+  for (size_t i = 0; i < cap; i++) slot[i] = -1;
+  wv_status st = WV_OK;
+  for (int i = 0; i < n && !st; i++) {
+    if (reserved_name(items[i].name)) {
+      st = wv_fail(err, WV_ERR_INVALID, "%s: %s would be captured into '%s', a name the batch keeps for its own files "
+                   "(summary.json, summary.html, woven.lock*); rename the photo", list, items[i].photo, items[i].name);
+      break;
+    }
+    for (size_t k = name_hash(items[i].name) & (cap - 1);; k = (k + 1) & (cap - 1)) {
+      if (slot[k] < 0) {
+        slot[k] = i;
+        break;
+      }
+      if (!strcmp(items[slot[k]].name, items[i].name)) {
+        st = wv_fail(err, WV_ERR_INVALID, "%s: %s and %s would both be captured into '%s'; rename one", list,
+                     items[slot[k]].photo, items[i].photo, items[i].name);
+        break;
+      }
+    }
+  }
+  free(slot);
+  return st;
+}
+
 wv_status wv_batch_list(const char *list, wv_batch_item **items, int *n, wv_error *err) {
   *items = NULL, *n = 0;
   int cap = 0;
@@ -105,11 +150,7 @@ wv_status wv_batch_list(const char *list, wv_batch_item **items, int *n, wv_erro
   wv_status st = S_ISDIR(sb.st_mode) ? list_dir(list, items, n, &cap, err) : list_file(list, items, n, &cap, err);
   if (!st && *n == 0)
     st = wv_fail(err, WV_ERR_INVALID, "%s: no photos (a directory of .png/.jpg/.exr files, or a file of paths)", list);
-  for (int i = 0; i < *n && !st; i++)
-    for (int j = i + 1; j < *n && !st; j++)
-      if (!strcmp((*items)[i].name, (*items)[j].name))
-        st = wv_fail(err, WV_ERR_INVALID, "%s: %s and %s would both be captured into '%s'; rename one", list,
-                     (*items)[i].photo, (*items)[j].photo, (*items)[i].name);
+  if (!st) st = check_names(list, *items, *n, err);
   if (st) free(*items), *items = NULL, *n = 0;
   return st;
 }
@@ -289,7 +330,8 @@ wv_status wv_batch_run(const wv_dist *d, const wv_batch_opts *o, wv_batch_summar
       st = wv_fail(err, WV_ERR_IO, "%s: cannot create the output directory: %s", o->dir, strerror(errno));
     else if (!(st = wv_dir_lock_acquire(o->dir, &lock, note, note_cap, err)) && (!mkdir_ok(path) || !mkdir_ok(work)))
       st = wv_fail(err, WV_ERR_IO, "%s: cannot create a directory: %s", work, strerror(errno));
-    if (!st) wv_remove_stale_temps(path, NULL), wv_remove_stale_temps(o->dir, NULL);
+    /* what killed runs left: temporary files of records, of captures and of the summary */
+    if (!st) wv_remove_stale_temps(path, NULL), wv_remove_stale_temps(work, NULL), wv_remove_stale_temps(o->dir, NULL);
   }
   int st0 = st;
   wv_dist_bcast_ints(d, &st0, 1);

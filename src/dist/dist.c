@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "woven/dist.h"
+#include "woven/io.h"
 
 #ifdef WOVEN_HAVE_MPI
 #include <mpi.h>
@@ -136,8 +137,9 @@ wv_status wv_dist_share(const wv_dist *d, int n, int (*done)(void *user, int k),
 
 /* "host pid" from a lock file; 0 when it cannot be read or parsed. */
 static int read_lock(const char *path, char *text, size_t cap, char *host, size_t hcap, long *pid) {
-  FILE *f = fopen(path, "r");
-  if (!f) return 0;
+  FILE *f;
+  wv_error e;
+  if (wv_fopen_regular(path, &f, &e)) return 0; /* a FIFO or device is no lock of ours */
   size_t len = fread(text, 1, cap - 1, f);
   fclose(f);
   text[len] = 0;
@@ -175,7 +177,10 @@ wv_status wv_dir_lock_acquire(const char *dir, wv_dir_lock *lk, char *note, size
    * fails when the lock exists, atomically, also on NFS). */
   snprintf(tmp, sizeof tmp, "%s.%ld.tmp", lk->path, (long)getpid());
   for (int attempt = 0; attempt < 4; attempt++) {
-    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    /* a new file of ours: never through a link, never over an existing file (one left
+     * by an earlier process of this pid is removed; unlink removes a link itself) */
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (fd < 0 && errno == EEXIST && unlink(tmp) == 0) fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
     if (fd < 0) return wv_fail(err, WV_ERR_IO, "%s: cannot create the lock file: %s", tmp, strerror(errno));
     ssize_t w = write(fd, mine, strlen(mine));
     close(fd);

@@ -5,17 +5,21 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "util/colour.h"
 #include "woven/emitters.h"
 
 #define PI_F 3.14159265358979f
 #define PI 3.14159265358979323846
 
-static float lum(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
-
 void wv_envmap_free(wv_envmap *e) {
   if (!e) return;
   free(e->rgb), free(e->cdf_row), free(e->cdf_col);
   memset(e, 0, sizeof *e);
+}
+
+size_t wv_envmap_bytes(int w, int h) {
+  if (w < 0 || h < 0) return (size_t)-1;
+  return ((size_t)w * h * 3 + (size_t)(h + 1) + (size_t)h * (w + 1)) * sizeof(float) + (size_t)(h + 1) * sizeof(double);
 }
 
 wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, double rot_deg, const char *name,
@@ -41,6 +45,12 @@ wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, dou
       return wv_fail(err, WV_ERR_FORMAT, "%s: pixel %zu has a negative, NaN or infinite value", name, i / 3);
     }
     e->rgb[i] = (float)(v * strength);
+    /* after the scaling: a finite value times the strength can overflow */
+    if (!(e->rgb[i] <= WV_ENV_MAX_RADIANCE)) {
+      wv_envmap_free(e);
+      return wv_fail(err, WV_ERR_FORMAT, "%s: pixel %zu's radiance %g times the strength %g is above %g", name, i / 3,
+                     (double)v, strength, WV_ENV_MAX_RADIANCE);
+    }
   }
   double total = 0;
   e->cdf_row[0] = 0;
@@ -55,7 +65,8 @@ wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, dou
     float *cdf = e->cdf_col + (size_t)y * (w + 1);
     cdf[0] = 0;
     for (int x = 0; x < w; x++) {
-      acc += lum(e->rgb + ((size_t)y * w + x) * 3) * s;
+      const float *c = e->rgb + ((size_t)y * w + x) * 3;
+      acc += wv_luminance_f(c[0], c[1], c[2]) * s;
       cdf[x + 1] = (float)acc;
     }
     for (int x = 1; x <= w; x++) cdf[x] = acc > 0 ? (float)(cdf[x] / acc) : (float)x / w;

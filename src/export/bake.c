@@ -9,8 +9,8 @@
 #include "export/export_internal.h"
 #include "export/std_model.h"
 #include "io/io_internal.h"
+#include "util/colour.h"
 #include "woven/export.h"
-#include "woven/scene.h"
 
 #define MAX_DIRS 256
 #define PI_D 3.14159265358979323846
@@ -215,8 +215,12 @@ static float q8(float v) { return (float)wv_io_quantise(v, 255u) / 255.0f; }
 
 wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, wv_error *err) {
   memset(b, 0, sizeof *b);
-  wv_bake_opts def;
-  if (!o) wv_bake_opts_default(&def), o = &def;
+  wv_bake_opts def, use = o ? *o : (wv_bake_opts){0};
+  wv_bake_opts_default(&def); /* 0 in a field takes its default */
+  if (!use.texture_size) use.texture_size = def.texture_size;
+  if (!use.samples) use.samples = def.samples;
+  if (!use.directions) use.directions = def.directions;
+  o = &use;
   if (o->texture_size < 8 || o->texture_size > 1024)
     return wv_fail(err, WV_ERR_INVALID, "texture size %d is outside 8..1024", o->texture_size);
   if (o->samples < 1 || o->samples > 8)
@@ -243,9 +247,6 @@ wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, 
   double tw = ym->weave.cols * (double)ym->spacing[WV_WARP], th = ym->weave.rows * (double)ym->spacing[WV_WEFT];
   b->tile_mm[0] = tw, b->tile_mm[1] = th;
   b->directions = M;
-  wv_scene srgb_scene; /* only its encoding: the sensor's sRGB curve, written once in scene/ */
-  memset(&srgb_scene, 0, sizeof srgb_scene);
-  srgb_scene.encoding = WV_ENC_SRGB;
   double sq_res = 0, sq_tgt = 0;
   int threads = o->threads > 0 ? o->threads : omp_get_max_threads();
 #pragma omp parallel num_threads(threads) reduction(+ : sq_res, sq_tgt)
@@ -293,8 +294,8 @@ wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, 
         float *sh = wv_image_px(&b->sheen, tx, ty);
         const float *ad = s.q[2] >= 0 ? t->across : t->along;
         for (int c = 0; c < 3; c++) {
-          bc[c] = q8(wv_encode(&srgb_scene, s.base[c]));
-          sh[c] = q8(wv_encode(&srgb_scene, s.sheen[c]));
+          bc[c] = q8(wv_srgb_encode_f(s.base[c]));
+          sh[c] = q8(wv_srgb_encode_f(s.sheen[c]));
           nm[c] = q8(0.5f * nrm[c] + 0.5f);
         }
         sh[3] = q8(s.q[3]);
@@ -306,8 +307,8 @@ wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, 
         float ql = sqrtf(qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2]);
         float qd[2] = {2 * an[0] - 1, 2 * an[1] - 1}, qdl = sqrtf(qd[0] * qd[0] + qd[1] * qd[1]);
         for (int c = 0; c < 3; c++) {
-          q.base[c] = wv_decode(&srgb_scene, bc[c]);
-          q.sheen[c] = wv_decode(&srgb_scene, sh[c]);
+          q.base[c] = wv_srgb_decode_f(bc[c]);
+          q.sheen[c] = wv_srgb_decode_f(sh[c]);
           q.n[c] = ql > 0 ? qn[c] / ql : (c == 2);
         }
         q.metallic = mr[2], q.roughness = mr[1], q.aniso = an[2], q.sheen_roughness = sh[3];

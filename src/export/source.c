@@ -33,3 +33,15 @@ wv_status wv_source_load(const char *path, wv_source *src, wv_error *err) {
   if (!src->has_photo) src->photo[0] = '\0';
   return WV_OK;
 }
+
+int wv_source_inputs(const char *path, const wv_source *src, char names[4][4096], const char **paths) {
+  static const char *const own[] = {"params.json", "scene.json", "photo.png"};
+  int n = 0;
+  snprintf(names[n], sizeof names[n], "%s", path);
+  paths[n] = names[n], n++;
+  for (int i = 0; src->is_fit && i < 3; i++) {
+    snprintf(names[n], sizeof names[n], "%s/%s", path, own[i]);
+    paths[n] = names[n], n++;
+  }
+  return n;
+}

@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fit/fit_internal.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
 #include "woven/render.h"
@@ -190,7 +189,7 @@ static void fit_phases(const phase_data *pd, int n, double theta[2][N_COEF]) {
 
 /* Renders p in scene sc at SPP. */
 static wv_status render(const wv_scene *sc, const wv_params *p, int threads, wv_image *img, wv_error *err) {
-  wv_render_opts ro = {SPP, threads, NULL, NULL, NULL};
+  wv_render_opts ro = {.spp = SPP, .threads = threads};
   return wv_render(sc, p, &ro, img, NULL, err);
 }
 
@@ -348,7 +347,7 @@ wv_status wv_fit_distort(wv_fit_state *st, const wv_scene *s, const wv_image *ph
       rc = estimate(&cur, photo, dp, wp, basis, &st->params, o->distort_degree, threads, theta, &now, err);
     else { /* the last estimate: measured alone */
       wv_image img = {0};
-      wv_render_opts ro = {SPP, threads, NULL, NULL, NULL};
+      wv_render_opts ro = {.spp = SPP, .threads = threads};
       if (!(rc = wv_render(&cur, &st->params, &ro, &img, NULL, err))) rc = wv_ssim(photo, &img, WV_SSIM_RGB, &now, err);
       wv_image_free(&img);
     }

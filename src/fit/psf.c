@@ -1,7 +1,7 @@
 /* woven: the camera blur of a photo, measured from its spectrum. A photo's weave
  * spectrum falls toward high frequencies (optics, demosaicing) where a render's stays
  * flat; the blur whose render's spectrum has the photo's shape is the camera's. The blur
- * itself is the sensor's (wv_psf_apply, src/scene/response.c). */
+ * itself is the sensor's (wv_psf_apply, src/sensor/response.c). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,7 +21,7 @@ wv_status wv_psf_estimate(const wv_scene *s, const wv_image *photo, const wv_par
   wv_scene sc = *s;
   sc.psf_sigma = 0;
   sc.spp = WV_PSF_SPP; /* sampling noise would flatten the render's spectrum */
-  wv_render_opts ro = {sc.spp, threads, NULL, NULL, NULL};
+  wv_render_opts ro = {.spp = sc.spp, .threads = threads};
   wv_image cap = {0}, rad = {0};
   float *sp = malloc(sizeof(float) * (size_t)n * n * 2), *sr = sp ? sp + (size_t)n * n : NULL;
   if (!sp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur's estimate");

@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fit/fit_internal.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
 #include "woven/render.h"
@@ -116,11 +115,11 @@ static wv_status level_init(level *l, const wv_scene *full, const wv_image *phot
   memset(l, 0, sizeof *l);
   int w = full->width < size ? full->width : size, h = full->height < size ? full->height : size;
   w -= (full->width - w) % 2, h -= (full->height - h) % 2; /* centred on whole pixels */
-  wv_fit_centre_window(full, w, h, &l->win);
+  wv_scene_centre_window(full, w, h, &l->win);
   l->win.spp = o->iter_spp;
   l->max_shift = (w < h ? w : h) / 4;
-  l->ro = (wv_render_opts){l->win.spp, o->threads, NULL, NULL, NULL};
-  wv_status rc = wv_fit_centre_crop(photo, w, h, &l->ref, err);
+  l->ro = (wv_render_opts){.spp = l->win.spp, .threads = o->threads};
+  wv_status rc = wv_image_centre_crop(photo, w, h, &l->ref, err);
   if (!rc) rc = pc_init(&l->pc, w, h, err);
   if (rc) {
     wv_image_free(&l->ref);
@@ -163,18 +162,6 @@ static wv_status measure(level *l, const wv_scene *win, const wv_params *p, cons
 
 static int in_range(const double d[2]) {
   return d[0] >= WV_DENSITY_MIN && d[0] <= WV_DENSITY_MAX && d[1] >= WV_DENSITY_MIN && d[1] <= WV_DENSITY_MAX;
-}
-
-void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out) {
-  *out = *s;
-  out->fabric_offset[0] += st->offset_mm[0];
-  out->fabric_offset[1] += st->offset_mm[1];
-  if (st->psf_done) out->psf_sigma = st->psf_sigma;
-  if (st->distort_extent_mm > 0) {
-    out->distort_extent_mm = st->distort_extent_mm;
-    for (int k = 0; k < 2; k++)
-      for (int t = 0; t < WV_DISTORT_TERMS; t++) out->distort[k][t] += st->distort[k][t];
-  }
 }
 
 #define MAX_THREADS 16

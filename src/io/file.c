@@ -38,6 +38,78 @@ wv_status wv_io_check_image(const char *path, const wv_image *img, wv_error *err
   return WV_OK;
 }
 
+/* ---- excerpts of files in messages ---- */
+
+void wv_printable_excerpt(const char *s, char *out, size_t len) {
+  if (!len) return;
+  size_t n = 0, i = 0;
+  for (; s && s[i] && n + 1 < len; i++) {
+    unsigned char c = (unsigned char)s[i];
+    out[n++] = c >= 0x20 && c < 0x7f ? (char)c : '?';
+  }
+  out[n] = 0;
+  if (s && s[i] && len > 4) memcpy(out + len - 4, "...", 4);
+}
+
+void wv_error_excerpt(wv_error *err, size_t keep) {
+  if (!err) return;
+  char *near = strstr(err->msg, " near '");
+  if (!near) return;
+  char *text = near + 7, *end = strrchr(text, '\'');
+  if (!end) return;
+  *end = 0;
+  char ex[WV_EXCERPT_CHARS + 4], tail[sizeof err->msg];
+  snprintf(tail, sizeof tail, "%s", end + 1);
+  if (keep > WV_EXCERPT_CHARS) keep = WV_EXCERPT_CHARS;
+  wv_printable_excerpt(text, ex, keep + 1 < sizeof ex ? keep + 1 : sizeof ex);
+  if (keep) snprintf(near, sizeof err->msg - (size_t)(near - err->msg), " near '%s'%s", ex, tail);
+  else snprintf(near, sizeof err->msg - (size_t)(near - err->msg), "%s", tail);
+}
+
+/* ---- opening a file to read ---- */
+
+wv_status wv_open_regular(const char *path, int *fd, struct stat *st, wv_error *err) {
+  char eb[128];
+  struct stat sb;
+  *fd = -1;
+  if (!path) return wv_fail(err, WV_ERR_INVALID, "missing path");
+  int f = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+  if (f < 0) return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path, wv_io_strerror(errno, eb, sizeof eb));
+  if (fstat(f, &sb) != 0) {
+    int e = errno;
+    close(f);
+    return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path, wv_io_strerror(e, eb, sizeof eb));
+  }
+  if (!S_ISREG(sb.st_mode)) {
+    close(f);
+    if (S_ISDIR(sb.st_mode)) return wv_fail(err, WV_ERR_IO, "%s: is a directory", path);
+    return wv_fail(err, WV_ERR_IO, "%s: not a regular file", path);
+  }
+  int fl = fcntl(f, F_GETFL);
+  if (fl < 0 || fcntl(f, F_SETFL, fl & ~O_NONBLOCK) != 0) {
+    int e = errno;
+    close(f);
+    return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path, wv_io_strerror(e, eb, sizeof eb));
+  }
+  if (st) *st = sb;
+  *fd = f;
+  return WV_OK;
+}
+
+wv_status wv_fopen_regular(const char *path, FILE **fp, wv_error *err) {
+  char eb[128];
+  int fd;
+  *fp = NULL;
+  wv_status s = wv_open_regular(path, &fd, NULL, err);
+  if (s != WV_OK) return s;
+  if (!(*fp = fdopen(fd, "rb"))) {
+    int e = errno;
+    close(fd);
+    return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path, wv_io_strerror(e, eb, sizeof eb));
+  }
+  return WV_OK;
+}
+
 /* ---- whole-file read ---- */
 
 wv_status wv_read_file(const char *path, char **data, size_t *len, wv_error *err) {
@@ -49,16 +121,11 @@ wv_status wv_read_file_max(const char *path, size_t max, char **data, size_t *le
   if (!path || !data) return wv_fail(err, WV_ERR_INVALID, "wv_read_file: missing path or output");
   *data = NULL;
   if (len) *len = 0;
-  int fd = open(path, O_RDONLY | O_CLOEXEC);
-  if (fd < 0)
-    return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path,
-                   wv_io_strerror(errno, eb, sizeof eb));
+  int fd;
   struct stat st;
-  int have_st = fstat(fd, &st) == 0;
-  if (have_st && S_ISDIR(st.st_mode)) {
-    close(fd);
-    return wv_fail(err, WV_ERR_IO, "%s: is a directory", path);
-  }
+  wv_status os = wv_open_regular(path, &fd, &st, err);
+  if (os != WV_OK) return os;
+  int have_st = 1;
   if (have_st && S_ISREG(st.st_mode) && (unsigned long long)st.st_size > max) {
     close(fd);
     return wv_fail(err, WV_ERR_NOMEM, "%s: file of %lld bytes is over the limit of %zu bytes for this kind of file",

@@ -22,28 +22,6 @@ static image_format detect(const unsigned char *m, size_t n) {
   return FMT_UNKNOWN;
 }
 
-/* Opens path for reading as a stdio stream, refusing directories up front
- * (on Linux they open fine and only fail at the first read). */
-static wv_status open_image(const char *path, FILE **fp, wv_error *err) {
-  char eb[128];
-  int fd = open(path, O_RDONLY | O_CLOEXEC);
-  if (fd < 0)
-    return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path,
-                   wv_io_strerror(errno, eb, sizeof eb));
-  struct stat st;
-  if (fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
-    close(fd);
-    return wv_fail(err, WV_ERR_IO, "%s: is a directory", path);
-  }
-  *fp = fdopen(fd, "rb");
-  if (!*fp) {
-    int e = errno;
-    close(fd);
-    return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path, wv_io_strerror(e, eb, sizeof eb));
-  }
-  return WV_OK;
-}
-
 /* Reads the first bytes and rewinds, so decoders see the whole file. */
 static wv_status sniff(const char *path, FILE *fp, image_format *fmt, wv_error *err) {
   unsigned char magic[8];
@@ -66,7 +44,7 @@ wv_status wv_image_read(const char *path, wv_image *img, wv_image_info *info, wv
   if (!path || !img) return wv_fail(err, WV_ERR_INVALID, "wv_image_read: missing path or image");
   *img = (wv_image){0};
   FILE *fp = NULL;
-  wv_status s = open_image(path, &fp, err);
+  wv_status s = wv_fopen_regular(path, &fp, err);
   if (s != WV_OK) return s;
   image_format fmt = FMT_UNKNOWN;
   s = sniff(path, fp, &fmt, err);

@@ -179,9 +179,9 @@ static uint32_t be32(const unsigned char *b) {
 
 wv_status wv_png_check(const char *path, wv_error *err) {
   static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  char eb[128];
-  FILE *f = fopen(path, "rb");
-  if (!f) return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path, wv_io_strerror(errno, eb, sizeof eb));
+  FILE *f;
+  wv_status os = wv_fopen_regular(path, &f, err);
+  if (os != WV_OK) return os;
   unsigned char h[8], buf[1 << 14];
   wv_status st = WV_OK;
   int chunks = 0, idat = 0, end = 0;

@@ -1,6 +1,8 @@
 /* The shading kernel's non-inline parts: preparing a fabric (parameters in
- * the kernel's float form, the glint table, the weave's packed cells) and the
- * entry points wv_kernel_shade / wv_kernel_shade8 (kernel/kernel.h). */
+ * the kernel's float form, the glint table, the weave's packed cells), the
+ * entry points wv_kernel_shade / wv_kernel_shade8 (kernel/kernel.h) and the
+ * public per-point yarn evaluation (wv_yarn_eval, woven/yarn.h: the kernel's
+ * geometry in scalar float, plus the height the maps need). */
 #include "kernel/kernel.h"
 
 #include <math.h>
@@ -96,4 +98,28 @@ void wv_kernel_shade8(const wv_fabric *f, const float x[8], const float y[8], co
     rad[k] = wv_sel(up, rad[k], wv_splat8(0.0f));
     memcpy(out[k], &rad[k], sizeof rad[k]);
   }
+}
+
+void wv_yarn_eval(const wv_yarn_model *m, float x, float y, wv_yarn_point *out) {
+  wv_yarn_cell_f c;
+  wv_yarn_locate_f(m, x, y, &c);
+  out->segment = wv_yarn_segment_f(m, &c);
+  if (!c.lit) { /* gap between yarns narrower than their spacing */
+    out->type = -1;
+    out->n[0] = 0, out->n[1] = 0, out->n[2] = 1;
+    out->t[0] = 0, out->t[1] = 1, out->t[2] = 0;
+    out->height = 0, out->u = 0, out->v = 0, out->beta = 0;
+    return;
+  }
+  wv_shade_params_f P;
+  wv_shade_params_from_yarn(m, &P);
+  wv_yarn_frame_f f;
+  wv_yarn_shape_f(m, &P, &c, &f, NULL);
+  wv_to_fabric_f(c.warp, f.n, out->n);
+  wv_to_fabric_f(c.warp, f.t, out->t);
+  /* Height: circular cross-section plus an arc along the yarn whose end slope is umax. */
+  float rho = m->sin_umax > 1e-6f ? c.half_len / m->sin_umax : 0.0f;
+  out->height = f.beta * (c.half_w * wv_cos_hp_f(f.v) + rho * (wv_cos_hp_f(f.u) - m->cos_umax));
+  out->type = c.warp ? WV_WARP : WV_WEFT;
+  out->u = f.u, out->v = f.v, out->beta = f.beta;
 }

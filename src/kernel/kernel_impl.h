@@ -97,6 +97,24 @@ WV_INLINE void WV_FN(wv_dnormalize)(const WV_L w[3], WV_L il, const WV_L dv[3], 
   for (int i = 0; i < 3; i++) out[i] = (dv[i] - w[i] * wd) * il;
 }
 
+/* u = m / |m| for m = (x, y, z), or the unit vector (fx, fy, fz) where m vanishes
+ * (|m|^2 < 1e-24); with du, d u along each of the np directions dm[p] (0 where u
+ * was replaced). */
+WV_INLINE void WV_FN(wv_unit_or)(WV_L x, WV_L y, WV_L z, float fx, float fy, float fz, WV_L u[3], int np,
+                                 const WV_L dm[][3], WV_L du[][3]) {
+  WV_L l2 = x * x + y * y + z * z;
+  WV_M gone = l2 < 1e-24f;
+  x = wv_sel(gone, WV_B(fx), x), y = wv_sel(gone, WV_B(fy), y), z = wv_sel(gone, WV_B(fz), z);
+  l2 = wv_sel(gone, WV_B(1), l2);
+  WV_L il = 1.0f / wv_sqrt(l2);
+  u[0] = x * il, u[1] = y * il, u[2] = z * il;
+  if (du)
+    for (int p = 0; p < np; p++) {
+      WV_FN(wv_dnormalize)(u, il, dm[p], du[p]);
+      for (int i = 0; i < 3; i++) du[p][i] = wv_sel(gone, WV_B(0), du[p][i]);
+    }
+}
+
 /* The frame at angles u (along the yarn) and v (around it), twist psi, after
  * scaling by the segment's bs; du and dbs: d u / d u_max and d bs / d beta. */
 WV_INLINE void WV_FN(wv_yarn_bend)(WV_L u, WV_L du, WV_L v, WV_L bs, WV_L dbs, WV_R sp, WV_R cp,
@@ -115,32 +133,14 @@ WV_INLINE void WV_FN(wv_yarn_bend)(WV_L u, WV_L du, WV_L v, WV_L bs, WV_L dbs, W
   WV_L nx = bs * n0, ny = bs * n1, nz = n2;
   WV_L dmn[2][3] = {{dbs * n0, dbs * n1, WV_B(0)}, /* d(nx = bs n0, ny = bs n1, nz = n2) / d beta */
                     {WV_B(0), bs * dn1_u, dn2_u}}; /*                                  / d u_max */
-  WV_L ln2 = nx * nx + ny * ny + nz * nz;
-  WV_M flat = ln2 < 1e-24f; /* yarn silhouette flattened completely: face up */
-  nx = wv_sel(flat, WV_B(0), nx), ny = wv_sel(flat, WV_B(0), ny), nz = wv_sel(flat, WV_B(1), nz);
-  ln2 = wv_sel(flat, WV_B(1), ln2);
-  WV_L il = 1.0f / wv_sqrt(ln2);
-  f->n[0] = nx * il, f->n[1] = ny * il, f->n[2] = nz * il;
-  if (df) /* d(n = m / |m|), 0 where the normal was replaced */
-    for (int p = 0; p < 2; p++) {
-      WV_FN(wv_dnormalize)(f->n, il, dmn[p], df->dn[p]);
-      for (int i = 0; i < 3; i++) df->dn[p][i] = wv_sel(flat, WV_B(0), df->dn[p][i]);
-    }
+  /* yarn silhouette flattened completely: face up */
+  WV_FN(wv_unit_or)(nx, ny, nz, 0, 0, 1, f->n, 2, dmn, df ? df->dn : NULL);
   WV_L tx = t0, ty = t1, tz = bs * t2;
   WV_L dmt[3][3] = {{WV_B(0), WV_B(0), dbs * t2},        /* d(tx = t0, ty = t1, tz = bs t2) / d beta */
                     {WV_B(0), dt1_u, bs * dt2_u},        /*                                / d u_max */
                     {dt0_p, dt1_p, bs * dt2_p}};         /*                                / d psi */
-  WV_L lt2 = tx * tx + ty * ty + tz * tz;
-  WV_M up = lt2 < 1e-24f; /* fiber along z at beta 0: any in-plane tangent is valid */
-  tx = wv_sel(up, WV_B(0), tx), ty = wv_sel(up, WV_B(1), ty), tz = wv_sel(up, WV_B(0), tz);
-  lt2 = wv_sel(up, WV_B(1), lt2);
-  WV_L it = 1.0f / wv_sqrt(lt2);
-  f->t[0] = tx * it, f->t[1] = ty * it, f->t[2] = tz * it;
-  if (df) /* d(t = m_t / |m_t|), 0 where the tangent was replaced */
-    for (int p = 0; p < 3; p++) {
-      WV_FN(wv_dnormalize)(f->t, it, dmt[p], df->dt[p]);
-      for (int i = 0; i < 3; i++) df->dt[p][i] = wv_sel(up, WV_B(0), df->dt[p][i]);
-    }
+  /* fiber along z at beta 0: any in-plane tangent is valid */
+  WV_FN(wv_unit_or)(tx, ty, tz, 0, 1, 0, f->t, 3, dmt, df ? df->dt : NULL);
 }
 
 /* The frame of the yarn in cell c: the segment's noise, the angles u and v, the bent cylinder. */

@@ -123,8 +123,12 @@ WV_INLINE wv_f8 wv_abs_8(wv_f8 x) { return (wv_f8)((wv_i8)x & 0x7fffffff); }
 
 /* floor as an integer: without SSE4.1 floorf is a library call or a long
  * sequence; a truncating conversion and one correction give the same integer.
- * Scalar: 64 bits, any |x| < 2^62. Vector: 32 bits, |x| < 2^31 (callers check). */
+ * Scalar: 64 bits, |x| < 2^62 (clamped to +-4e18 beyond, NaN to -4e18). Vector: 32 bits, |x| < 2^31 (callers check). */
 WV_INLINE int64_t wv_floori_f(float x) {
+  /* clamped first: converting a float beyond the integer's range (or NaN) is
+   * undefined; values within it are untouched */
+  if (!(x > -4.0e18f)) x = -4.0e18f;
+  if (x > 4.0e18f) x = 4.0e18f;
   long long i = (long long)x;
   return i - (x < (float)i);
 }

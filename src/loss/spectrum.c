@@ -7,10 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "util/colour.h"
 #include "woven/loss.h"
 
-/* Rec. 709 luminance weights, as the SSIM and the registration use. */
-static const float LUMA[3] = {0.2126f, 0.7152f, 0.0722f};
+/* The luminance weights in float (the gradient of wv_luminance_f). */
+static const float LUMA[3] = {(float)WV_LUMA_R, (float)WV_LUMA_G, (float)WV_LUMA_B};
 
 struct wv_spectrum_loss {
   int w, h;          /* image size */
@@ -41,7 +42,7 @@ static void windowed_luma(wv_spectrum_loss *s, const wv_image *img) {
   for (int y = 0; y < n; y++)
     for (int x = 0; x < n; x++) {
       const float *c = wv_image_px(img, s->x0 + x, s->y0 + y);
-      float v = LUMA[0] * c[0] + LUMA[1] * c[1] + LUMA[2] * c[2];
+      float v = wv_luminance_f(c[0], c[1], c[2]);
       s->u[(size_t)y * n + x] = v;
       m += v;
     }

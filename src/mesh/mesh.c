@@ -65,11 +65,17 @@ wv_status wv_mesh_validate(const wv_mesh *m, const char *name, int need_uv, wv_e
       float p = m->pos[3 * v + i], n = m->nrm[3 * v + i];
       if (!isfinite(p) || !isfinite(n))
         return wv_fail(err, WV_ERR_FORMAT, "%s: vertex %d has a NaN or infinite position or normal", name, v);
+      if (fabsf(p) > WV_MESH_MAX_COORD)
+        return wv_fail(err, WV_ERR_FORMAT, "%s: vertex %d has a coordinate of %g mm, outside -%g..%g", name, v, p,
+                       WV_MESH_MAX_COORD, WV_MESH_MAX_COORD);
       if (p < lo[i]) lo[i] = p;
       if (p > hi[i]) hi[i] = p;
     }
     if (m->uv && (!isfinite(m->uv[2 * v]) || !isfinite(m->uv[2 * v + 1])))
       return wv_fail(err, WV_ERR_FORMAT, "%s: vertex %d has a NaN or infinite UV", name, v);
+    if (m->uv && (fabsf(m->uv[2 * v]) > WV_MESH_MAX_UV || fabsf(m->uv[2 * v + 1]) > WV_MESH_MAX_UV))
+      return wv_fail(err, WV_ERR_FORMAT, "%s: vertex %d has a UV of (%g, %g), outside -%g..%g", name, v,
+                     m->uv[2 * v], m->uv[2 * v + 1], WV_MESH_MAX_UV, WV_MESH_MAX_UV);
   }
   double diag2 = 0;
   for (int i = 0; i < 3; i++) diag2 += (hi[i] - lo[i]) * (hi[i] - lo[i]);
@@ -181,24 +187,26 @@ wv_status wv_mesh_transform(wv_mesh *m, const double A[9], const double b[3], wv
   return WV_OK;
 }
 
+/* assimp's message, which may quote the file: printable characters only, cut short. */
+static const char *ai_error(char *buf, size_t len) {
+  wv_printable_excerpt(aiGetErrorString(), buf, len);
+  return buf;
+}
+
 wv_status wv_mesh_load(const char *path, size_t limit, int need_uv, wv_mesh *m, wv_error *err) {
   memset(m, 0, sizeof *m);
   if (!limit) limit = (size_t)WV_MESH_DEFAULT_LIMIT_MB << 20;
-  struct stat sb;
-  if (stat(path, &sb) != 0) return wv_fail(err, WV_ERR_IO, "%s: cannot open mesh: %s", path, strerror(errno));
-  if (!S_ISREG(sb.st_mode)) return wv_fail(err, WV_ERR_IO, "%s: not a regular file", path);
-  if ((size_t)sb.st_size > limit)
-    return wv_fail(err, WV_ERR_NOMEM, "%s: the mesh file (%lld MB) is larger than the memory limit of %zu MB", path,
-                   (long long)(sb.st_size >> 20), limit >> 20);
-  if (sb.st_size == 0) return wv_fail(err, WV_ERR_FORMAT, "%s: empty file, not a mesh", path);
+  wv_status cs = wv_mesh_check_file(path, limit, err);
+  if (cs) return cs;
   unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
                    aiProcess_PreTransformVertices | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
   /* The faces are checked on a first reading without post-processing: assimp's
    * post-processing steps trust the readers' vertex indices and abort on some out of
    * range (and a failed aiApplyPostProcessing frees its scene twice, so the file is
    * simply read again with the steps). */
+  char why[128];
   const struct aiScene *sc = aiImportFile(path, 0);
-  if (!sc) return wv_fail(err, WV_ERR_FORMAT, "%s: not a readable mesh: %s", path, aiGetErrorString());
+  if (!sc) return wv_fail(err, WV_ERR_FORMAT, "%s: not a readable mesh: %s", path, ai_error(why, sizeof why));
   for (unsigned i = 0; i < sc->mNumMeshes; i++) {
     const struct aiMesh *am = sc->mMeshes[i];
     for (unsigned f = 0; f < am->mNumFaces; f++) {
@@ -215,7 +223,7 @@ wv_status wv_mesh_load(const char *path, size_t limit, int need_uv, wv_mesh *m, 
   }
   aiReleaseImport(sc);
   sc = aiImportFile(path, flags);
-  if (!sc) return wv_fail(err, WV_ERR_FORMAT, "%s: not a readable mesh: %s", path, aiGetErrorString());
+  if (!sc) return wv_fail(err, WV_ERR_FORMAT, "%s: not a readable mesh: %s", path, ai_error(why, sizeof why));
   long long nv = 0, nt = 0;
   int with_uv = 1;
   for (unsigned i = 0; i < sc->mNumMeshes; i++) {

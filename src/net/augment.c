@@ -5,7 +5,8 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "woven/fabricnet.h"
+#include "util/colour.h"
+#include "woven/dataset.h"
 #include "woven/imgops.h"
 #include "woven/io.h"
 #include "woven/nn.h"
@@ -44,13 +45,13 @@ wv_status wv_camera_augment(const wv_scene *s, const wv_image *radiance, uint64_
   for (size_t i = 0; i < np; i++) {
     const float *p = radiance->data + i * radiance->c;
     for (int c = 0; c < 3; c++) rad.data[3 * i + c] = p[radiance->c >= 3 ? c : 0];
-    mean += 0.2126 * rad.data[3 * i] + 0.7152 * rad.data[3 * i + 1] + 0.0722 * rad.data[3 * i + 2];
+    mean += wv_luminance_d(rad.data[3 * i], rad.data[3 * i + 1], rad.data[3 * i + 2]);
   }
   mean = mean / (double)np + 1e-12;
   /* Glints: fibres that mirror the light into a pixel; brighter pixels sparkle more. */
   for (size_t i = 0; i < np; i++) {
     float *p = rad.data + 3 * i;
-    double lum = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    double lum = wv_luminance_d(p[0], p[1], p[2]);
     double u = uni(&r, 0, 1), g = uni(&r, 1.5, 1.5 + AUG_GLINT_GAIN);
     if (u < glint * lum / mean)
       for (int c = 0; c < 3; c++) p[c] = (float)(p[c] * g);

@@ -10,8 +10,8 @@
 #include <sys/stat.h>
 
 #include "util/note.h"
+#include "woven/dataset.h"
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
 #include "woven/io.h"
 #include "woven/render.h"
 

@@ -8,11 +8,14 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <zlib.h>
 
+#include "util/half.h"
 #include "util/hash.h"
+#include "io/json_file.h"
 #include "util/json.h"
+#include "woven/dataset.h"
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
 #include "woven/imgops.h"
 #include "woven/io.h"
 #include "woven/render.h"
@@ -137,7 +140,7 @@ wv_status wv_dataset_make_sample(const char *dir, const wv_dataset_info *info, i
   wv_params p;
   wv_status st = wv_dataset_sample_params(info, k, &p, err);
   if (st) return st;
-  wv_render_opts ro = {info->spp, render_threads, NULL, NULL, fp};
+  wv_render_opts ro = {.spp = info->spp, .threads = render_threads, .footprints = fp};
   wv_image img = {0}, rad = {0};
   if ((st = wv_render(&info->scene, &p, &ro, &img, info->augment ? &rad : NULL, err))) return st;
   if (info->augment) {
@@ -183,7 +186,7 @@ wv_status wv_dataset_write_features(const char *path, const float *x, int n, wv_
   memcpy(b, "WVFT", 4);
   put_u32(b + 4, 1);
   put_u32(b + 8, (uint32_t)n);
-  put_u32(b + 12, wv_crc32(0, b + 16, 2 * (size_t)n));
+  put_u32(b + 12, crc32_z(0, b + 16, 2 * (size_t)n));
   wv_status st = wv_write_file_atomic(path, b, len, err);
   free(b);
   return st;
@@ -206,7 +209,7 @@ wv_status wv_dataset_read_features(const char *path, int n, uint16_t *out, wv_er
       size_t got = fread(b, 1, 2 * (size_t)n, f);
       if (got != 2 * (size_t)n || fgetc(f) != EOF)
         st = wv_fail(err, WV_ERR_FORMAT, "%s: truncated or oversized feature file", path);
-      else if (wv_crc32(0, b, 2 * (size_t)n) != get_u32(h + 12))
+      else if (crc32_z(0, b, 2 * (size_t)n) != get_u32(h + 12))
         st = wv_fail(err, WV_ERR_FORMAT, "%s: checksum mismatch (corrupt feature file)", path);
       else
         for (int i = 0; i < n; i++) out[i] = (uint16_t)(b[2 * i] | b[2 * i + 1] << 8);

@@ -4,7 +4,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <zlib.h>
 
+#include "util/half.h"
 #include "woven/descriptor.h"
 #include "woven/fabricnet.h"
 #include "woven/io.h"
@@ -53,40 +55,6 @@ wv_status wv_fabricnet_params(const wv_fabricnet *n, const float *y, const char 
   return wv_params_validate(p, err);
 }
 
-/* ---- half floats, CRC-32 ---- */
-
-uint16_t wv_f32_to_f16(float f) {
-  uint32_t x;
-  memcpy(&x, &f, 4);
-  uint16_t sign = (uint16_t)((x >> 16) & 0x8000);
-  uint32_t ax = x & 0x7fffffff;
-  if (ax >= 0x7f800000) return sign | (ax > 0x7f800000 ? 0x7e00 : 0x7bff); /* NaN stays NaN; inf saturates */
-  if (ax >= 0x477ff000) return sign | 0x7bff;                               /* rounds past 65504: saturate */
-  if (ax < 0x33000001) return sign;                                         /* below half the smallest subnormal */
-  int e = (int)(ax >> 23) - 127;
-  uint32_t m = (ax & 0x7fffff) | 0x800000;
-  int shift = e < -14 ? 13 + (-14 - e) : 13; /* subnormals keep fewer bits */
-  uint32_t r = m >> shift, rem = m & ((1u << shift) - 1), half = 1u << (shift - 1);
-  if (rem > half || (rem == half && (r & 1))) r++; /* round to nearest even */
-  if (e < -14) return sign | (uint16_t)r;           /* may carry into the smallest normal: still right */
-  return sign | (uint16_t)((((uint32_t)(e + 15)) << 10) + (r - 0x400)); /* a mantissa carry bumps the exponent */
-}
-
-/* Byte-at-a-time table, built on the stack per call (1 kB, a few microseconds): no
- * global state, and fast enough for the 64 MB checkpoints. */
-uint32_t wv_crc32(uint32_t crc, const void *data, size_t n) {
-  uint32_t tab[256];
-  for (uint32_t i = 0; i < 256; i++) {
-    uint32_t c = i;
-    for (int k = 0; k < 8; k++) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1)));
-    tab[i] = c;
-  }
-  const unsigned char *b = data;
-  crc = ~crc;
-  for (size_t i = 0; i < n; i++) crc = tab[(crc ^ b[i]) & 0xff] ^ (crc >> 8);
-  return ~crc;
-}
-
 /* ---- the network ---- */
 
 static size_t tensor_len(const wv_fabricnet *n, int i) {
@@ -133,7 +101,7 @@ static wv_status alloc_net(wv_fabricnet *n, wv_error *err) {
 
 static uint32_t scene_crc(const wv_scene *s) {
   char *j = wv_scene_to_json(s);
-  uint32_t c = j ? wv_crc32(0, j, strlen(j)) : 0;
+  uint32_t c = j ? crc32_z(0, (const unsigned char *)j, strlen(j)) : 0;
   free(j);
   return c;
 }
@@ -325,8 +293,8 @@ static uint32_t classes_crc(int k) {
   uint32_t c = 0;
   for (int i = 0; i < k; i++) {
     const char *name = wv_weave_builtin_name(i);
-    c = wv_crc32(c, name ? name : "", name ? strlen(name) : 0);
-    c = wv_crc32(c, "\n", 1);
+    c = crc32_z(c, (const unsigned char *)(name ? name : ""), name ? strlen(name) : 0);
+    c = crc32_z(c, (const unsigned char *)"\n", 1);
   }
   return c;
 }
@@ -386,8 +354,8 @@ static wv_status save(const char *path, const wv_fabricnet *n, int kind, const f
     putf(p + 24, ts->best_val);
     p += TRAINSTATE_BYTES;
   }
-  put32(b + L2->pl_crc, wv_crc32(0, b + HDR, pl));
-  put32(b + L2->hdr_crc, wv_crc32(0, b, L2->hdr_crc));
+  put32(b + L2->pl_crc, crc32_z(0, b + HDR, pl));
+  put32(b + L2->hdr_crc, crc32_z(0, b, L2->hdr_crc));
   wv_status st = wv_write_file_atomic(path, b, len, err);
   free(b);
   return st;
@@ -426,7 +394,7 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
   const layout *lay = version == 1 ? &LAYOUT_V1 : &LAYOUT_V2;
   const size_t HDR = lay->hdr;
   if (len < HDR) BAD("%s: truncated %s (%zu bytes, header is %zu)", path, what, len, HDR);
-  if (get32(b + lay->hdr_crc) != wv_crc32(0, b, lay->hdr_crc)) BAD("%s: header checksum mismatch (corrupt file)", path);
+  if (get32(b + lay->hdr_crc) != crc32_z(0, b, lay->hdr_crc)) BAD("%s: header checksum mismatch (corrupt file)", path);
   if (get32(b + 12) != (uint32_t)kind) {
     if (get32(b + 12) != KIND_MODEL && get32(b + 12) != KIND_CHECKPOINT)
       BAD("%s: unknown FabricNet file kind %u (1 is a model, 2 a training checkpoint)", path, get32(b + 12));
@@ -460,7 +428,7 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
         (unsigned long long)get64(b + lay->pl_size), pl);
   if (len < HDR + pl) BAD("%s: truncated (%zu of %zu bytes)", path, len, HDR + pl);
   if (len > HDR + pl) BAD("%s: %zu unexpected bytes after the payload", path, len - HDR - pl);
-  if (get32(b + lay->pl_crc) != wv_crc32(0, b + HDR, pl)) BAD("%s: payload checksum mismatch (corrupt file)", path);
+  if (get32(b + lay->pl_crc) != crc32_z(0, b + HDR, pl)) BAD("%s: payload checksum mismatch (corrupt file)", path);
   if ((st = alloc_net(n, err))) goto done;
   const unsigned char *p = b + HDR;
   for (int i = 0; i < n->n_in; i++, p += 4) n->mean[i] = getf(p);

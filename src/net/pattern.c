@@ -9,10 +9,10 @@
 #include <string.h>
 
 #include "woven/descriptor.h"
-#include "woven/fabricnet.h"
 #include "woven/fit.h"
 #include "woven/imgops.h"
 #include "woven/loss.h"
+#include "woven/pattern.h"
 #include "woven/render.h"
 
 void wv_pattern_opts_default(wv_pattern_opts *o) {
@@ -34,7 +34,7 @@ void wv_pattern_opts_default(wv_pattern_opts *o) {
  * spp, through the fit's image loss (Gram and pixel terms, the criterion's own pixel weight). */
 static wv_status loss_of(wv_image_loss *loss, const wv_scene *sc, const wv_pattern_opts *o, int i,
                          wv_pattern_choice *out, wv_error *err) {
-  wv_render_opts ro = {sc->spp, o->threads, NULL, NULL, NULL};
+  wv_render_opts ro = {.spp = sc->spp, .threads = o->threads};
   wv_image img = {0};
   wv_scene si;
   wv_pattern_choice_scene(out, sc, i, &si);

@@ -13,9 +13,10 @@
 #include <sys/stat.h>
 
 #include "util/hash.h"
-#include "woven/fabricnet.h"
+#include "woven/dataset.h"
 #include "woven/io.h"
 #include "woven/nn.h"
+#include "woven/train.h"
 #include "woven/weave.h"
 
 void wv_train_opts_default(wv_train_opts *o) {

@@ -150,15 +150,21 @@ static void split(int n, int tid, int nth, int *a, int *b) {
   *a = (int)((long)n * tid / nth), *b = (int)((long)n * (tid + 1) / nth);
 }
 
+/* The calling thread's input channels [c0, c1) and output channels [m0, m1). */
+static void thread_share(const wv_nn_conv2d *cv, int *c0, int *c1, int *m0, int *m1) {
+  int tid = omp_get_thread_num(), nth = omp_get_num_threads();
+  split(cv->c, tid, nth, c0, c1);
+  split(cv->oc, tid, nth, m0, m1);
+}
+
 static void forward_shared(const wv_nn_conv2d *cv, const float *x, const float *w, const float *b,
                            float *y, float *col) {
   int kk = cv->c * cv->k * cv->k, npos = cv->oh * cv->ow, k2 = cv->k * cv->k;
   int len = shared_len(cv), pw = is_pointwise(cv);
 #pragma omp parallel num_threads(cv->nthreads)
   {
-    int tid = omp_get_thread_num(), nth = omp_get_num_threads(), c0, c1, m0, m1;
-    split(cv->c, tid, nth, &c0, &c1);
-    split(cv->oc, tid, nth, &m0, &m1);
+    int c0, c1, m0, m1;
+    thread_share(cv, &c0, &c1, &m0, &m1);
     for (int img = 0; img < cv->n; img++) {
       const float *xi = x + (size_t)img * cv->c * cv->h * cv->w;
       float *yi = y + (size_t)img * cv->oc * npos;
@@ -192,9 +198,8 @@ static void backward_shared(const wv_nn_conv2d *cv, const float *x, const float 
   int len = shared_len(cv), pw = is_pointwise(cv);
 #pragma omp parallel num_threads(cv->nthreads)
   {
-    int tid = omp_get_thread_num(), nth = omp_get_num_threads(), c0, c1, m0, m1;
-    split(cv->c, tid, nth, &c0, &c1);
-    split(cv->oc, tid, nth, &m0, &m1);
+    int c0, c1, m0, m1;
+    thread_share(cv, &c0, &c1, &m0, &m1);
     int r0 = c0 * k2, r1 = c1 * k2;
     for (int img = 0; img < cv->n; img++) {
       const float *xi = x + (size_t)img * cv->c * cv->h * cv->w;

@@ -146,20 +146,24 @@ void wv_nn_sigmoid_backward(float *dx, const float *y, const float *dy, size_t n
   for (size_t i = 0; i < n; i++) dx[i] += dy[i] * y[i] * (1.0f - y[i]);
 }
 
-float wv_nn_l1_forward(const float *pred, const float *target, size_t n) {
+double wv_nn_l1(const float *a, const float *b, size_t n, int float_diff, float *grad, float g) {
   double s = 0.0;
-  for (size_t i = 0; i < n; i++) s += fabs((double)pred[i] - target[i]);
-  return n ? (float)(s / n) : 0.0f;
+  for (size_t i = 0; i < n; i++) {
+    double d = float_diff ? (double)(a[i] - b[i]) : (double)a[i] - b[i];
+    s += fabs(d);
+    if (grad) grad[i] += d > 0 ? g : (d < 0 ? -g : 0.0f);
+  }
+  return s;
+}
+
+float wv_nn_l1_forward(const float *pred, const float *target, size_t n) {
+  return n ? (float)(wv_nn_l1(pred, target, n, 0, NULL, 0.0f) / n) : 0.0f;
 }
 
 void wv_nn_l1_backward(float *dpred, const float *pred, const float *target, float dloss,
                        size_t n) {
   if (!n) return;
-  float g = dloss / (float)n;
-  for (size_t i = 0; i < n; i++) {
-    float d = pred[i] - target[i];
-    dpred[i] += d > 0.0f ? g : (d < 0.0f ? -g : 0.0f);
-  }
+  wv_nn_l1(pred, target, n, 0, dpred, dloss / (float)n);
 }
 
 float wv_nn_softmax_xent_forward(float *prob, const float *logits, const int *labels, int batch, int k) {

@@ -2,16 +2,17 @@
 #include "woven/params.h"
 
 #include <jansson.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "util/hash.h"
+#include "io/json_file.h"
 #include "util/json.h"
 #include "woven/io.h"
 
-#define DEG (3.14159265358979323846 / 180.0)
 
 /* Ranges of SPEC section 5. */
 typedef struct {
@@ -119,75 +120,32 @@ wv_status wv_params_validate(const wv_params *p, wv_error *err) {
 
 /* ---- JSON reading: every key known, every value typed, messages name the key. ---- */
 
-static wv_status get_number(json_t *v, const char *key, double *out, wv_error *err) {
-  if (!json_is_number(v))
-    return wv_fail(err, WV_ERR_INVALID, "'%s' must be a number", key);
-  *out = json_number_value(v);
-  return WV_OK;
+static const char *const YARNS[] = {"warp", "weft", NULL};
+
+/* root[key] as {"warp": .., "weft": ..}, n numbers each (n = 3: an RGB array, or one
+ * number for grey). Absent keys keep the defaults; the ranges are wv_params_validate's,
+ * which also checks parameters made in code. */
+static wv_status get_pair(json_t *root, const char *key, int n, double *warp, double *weft, wv_error *err) {
+  double *out[2] = {warp, weft};
+  json_t *o;
+  wv_status st = wv_json_object(root, NULL, key, YARNS, 0, &o, err);
+  for (int y = 0; y < 2 && !st; y++)
+    st = n == 1 ? wv_json_number(o, key, YARNS[y], WV_JSON_FINITE, 0, out[y], err)
+                : wv_json_numbers(o, key, YARNS[y], n, WV_JSON_FINITE, WV_JSON_ONE_FOR_ALL, out[y], err);
+  return st;
 }
 
-static wv_status get_pair(json_t *root, const char *key, double out[2], wv_error *err) {
-  json_t *o = json_object_get(root, key);
-  if (!o) return WV_OK; /* keep the default */
-  if (!json_is_object(o))
-    return wv_fail(err, WV_ERR_INVALID, "'%s' must be an object {\"warp\": .., \"weft\": ..}", key);
-  const char *k;
-  json_t *v;
-  json_object_foreach(o, k, v) {
-    char name[64];
-    snprintf(name, sizeof name, "%s.%s", key, k);
-    int y = !strcmp(k, "warp") ? 0 : !strcmp(k, "weft") ? 1 : -1;
-    if (y < 0) return wv_fail(err, WV_ERR_INVALID, "unknown key '%s' (expected warp or weft)", name);
-    wv_status st = get_number(v, name, &out[y], err);
-    if (st) return st;
-  }
-  return WV_OK;
-}
-
-static wv_status get_rgb_pair(json_t *root, const char *key, double out[2][3], wv_error *err) {
-  json_t *o = json_object_get(root, key);
-  if (!o) return WV_OK;
-  if (!json_is_object(o))
-    return wv_fail(err, WV_ERR_INVALID, "'%s' must be an object {\"warp\": [r,g,b], \"weft\": [r,g,b]}", key);
-  const char *k;
-  json_t *v;
-  json_object_foreach(o, k, v) {
-    int y = !strcmp(k, "warp") ? 0 : !strcmp(k, "weft") ? 1 : -1;
-    if (y < 0) return wv_fail(err, WV_ERR_INVALID, "unknown key '%s.%s' (expected warp or weft)", key, k);
-    if (json_is_number(v)) { /* a grey value is accepted as r = g = b */
-      out[y][0] = out[y][1] = out[y][2] = json_number_value(v);
-      continue;
-    }
-    if (!json_is_array(v) || json_array_size(v) != 3)
-      return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be an array of 3 numbers", key, k);
-    for (int c = 0; c < 3; c++) {
-      char name[64];
-      snprintf(name, sizeof name, "%s.%s[%d]", key, k, c);
-      wv_status st = get_number(json_array_get(v, c), name, &out[y][c], err);
-      if (st) return st;
-    }
-  }
-  return WV_OK;
-}
-
-static const char *KNOWN_KEYS[] = {"pattern", "weave", "density", "heightfield", "diffuse", "specular",
-                                   "roughness", "twist_deg", "inclination_deg", "diffuse_blend",
-                                   "noise_level", "thickness", "yarn_width", "seed", "specular_noise",
-                                   "comment", NULL};
+static const char *const KNOWN_KEYS[] = {
+    "pattern",    "weave",     "density",         "heightfield",   "diffuse",     "specular",
+    "roughness",  "twist_deg", "inclination_deg", "diffuse_blend", "noise_level", "thickness",
+    "yarn_width", "seed",      "specular_noise",  "comment",       NULL};
 
 static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
-  if (!json_is_object(root)) return wv_fail(err, WV_ERR_INVALID, "top level must be a JSON object");
-  const char *k;
-  json_t *v;
-  json_object_foreach(root, k, v) {
-    int known = 0;
-    for (int i = 0; KNOWN_KEYS[i]; i++) known |= !strcmp(k, KNOWN_KEYS[i]);
-    if (!known) return wv_fail(err, WV_ERR_INVALID, "unknown key '%s'", k);
-  }
-  json_t *pat = json_object_get(root, "pattern");
-  if (!json_is_string(pat)) return wv_fail(err, WV_ERR_INVALID, "'pattern' must be a string");
-  const char *name = json_string_value(pat);
+  const char *name = NULL;
   wv_status st;
+  if ((st = wv_json_only_keys(root, NULL, KNOWN_KEYS, err)) ||
+      (st = wv_json_string(root, NULL, "pattern", WV_JSON_REQUIRED, &name, err)))
+    return st;
   if (!strcmp(name, "custom")) {
     wv_params_default("plain", p, err);
     snprintf(p->pattern, sizeof p->pattern, "custom");
@@ -211,52 +169,43 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
       return wv_fail(err, WV_ERR_INVALID, "'weave' is only allowed with \"pattern\": \"custom\"");
     wv_params_default(name, p, err);
   }
-  if ((st = get_pair(root, "density", p->density, err))) return st;
-  if ((st = get_pair(root, "heightfield", p->heightfield, err))) return st;
-  if ((st = get_pair(root, "roughness", p->roughness, err))) return st;
-  if ((st = get_rgb_pair(root, "diffuse", p->diffuse, err))) return st;
-  if ((st = get_rgb_pair(root, "specular", p->specular, err))) return st;
-  struct {
-    const char *key;
-    double *dst;
-  } scalars[] = {{"twist_deg", &p->twist_deg}, {"inclination_deg", &p->inclination_deg},
-                 {"diffuse_blend", &p->diffuse_blend}, {"thickness", &p->thickness},
-                 {"yarn_width", &p->yarn_width}};
-  for (size_t i = 0; i < sizeof scalars / sizeof scalars[0]; i++) {
-    json_t *x = json_object_get(root, scalars[i].key);
-    if (x && (st = get_number(x, scalars[i].key, scalars[i].dst, err))) return st;
-  }
-  json_t *x;
-  if ((st = wv_json_int(root, NULL, "noise_level", 0, 10, 0, &p->noise_level, err))) return st;
-  if ((x = json_object_get(root, "seed"))) {
-    if (!json_is_integer(x)) return wv_fail(err, WV_ERR_INVALID, "'seed' must be an integer");
-    p->seed = (int64_t)json_integer_value(x);
-  }
-  if ((x = json_object_get(root, "specular_noise"))) {
-    if (!json_is_boolean(x)) return wv_fail(err, WV_ERR_INVALID, "'specular_noise' must be true or false");
-    p->specular_noise = json_is_true(x);
-  }
+  long long seed = p->seed;
+  if ((st = get_pair(root, "density", 1, &p->density[0], &p->density[1], err)) ||
+      (st = get_pair(root, "heightfield", 1, &p->heightfield[0], &p->heightfield[1], err)) ||
+      (st = get_pair(root, "roughness", 1, &p->roughness[0], &p->roughness[1], err)) ||
+      (st = get_pair(root, "diffuse", 3, p->diffuse[0], p->diffuse[1], err)) ||
+      (st = get_pair(root, "specular", 3, p->specular[0], p->specular[1], err)) ||
+      (st = wv_json_number(root, NULL, "twist_deg", WV_JSON_FINITE, 0, &p->twist_deg, err)) ||
+      (st = wv_json_number(root, NULL, "inclination_deg", WV_JSON_FINITE, 0, &p->inclination_deg, err)) ||
+      (st = wv_json_number(root, NULL, "diffuse_blend", WV_JSON_FINITE, 0, &p->diffuse_blend, err)) ||
+      (st = wv_json_number(root, NULL, "thickness", WV_JSON_FINITE, 0, &p->thickness, err)) ||
+      (st = wv_json_number(root, NULL, "yarn_width", WV_JSON_FINITE, 0, &p->yarn_width, err)) ||
+      (st = wv_json_int(root, NULL, "noise_level", 0, 10, 0, &p->noise_level, err)) ||
+      (st = wv_json_integer(root, NULL, "seed", LLONG_MIN, LLONG_MAX, 0, &seed, err)) ||
+      (st = wv_json_bool(root, NULL, "specular_noise", 0, &p->specular_noise, err)))
+    return st;
+  p->seed = (int64_t)seed;
   return wv_params_validate(p, err);
 }
 
-wv_status wv_params_parse(const char *text, const char *source, wv_params *p, wv_error *err) {
-  json_error_t je;
-  json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
-  if (!root)
-    return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", source, je.line, je.column, je.text);
+/* parse_root, then root freed; messages start with source. */
+static wv_status from_root(json_t *root, const char *source, wv_params *p, wv_error *err) {
   wv_status st = parse_root(root, p, err);
   json_decref(root);
   if (st) wv_error_prefix(err, "%s", source);
   return st;
 }
 
+wv_status wv_params_parse(const char *text, const char *source, wv_params *p, wv_error *err) {
+  json_t *root;
+  wv_status st = wv_json_parse_object(text, source, &root, err);
+  return st ? st : from_root(root, source, p, err);
+}
+
 wv_status wv_params_read(const char *path, wv_params *p, wv_error *err) {
-  char *text;
-  wv_status st = wv_json_read_text(path, &text, err);
-  if (st) return st;
-  st = wv_params_parse(text, path, p, err);
-  free(text);
-  return st;
+  json_t *root;
+  wv_status st = wv_json_load_object(path, &root, err);
+  return st ? st : from_root(root, path, p, err);
 }
 
 static json_t *rgb(const double v[3]) {
@@ -307,23 +256,6 @@ wv_status wv_params_write(const char *path, const wv_params *p, wv_error *err) {
   st = wv_write_file_atomic(path, t, n + 1, err);
   free(t);
   return st;
-}
-
-wv_status wv_params_yarn_model(const wv_params *p, wv_yarn_model *m, wv_error *err) {
-  memset(m, 0, sizeof *m);
-  wv_status st = wv_params_weave(p, &m->weave, err);
-  if (st) return st;
-  for (int y = 0; y < 2; y++) {
-    m->spacing[y] = (float)(25.4 / p->density[y]);
-    m->beta[y] = (float)p->heightfield[y];
-  }
-  m->umax = (float)(p->inclination_deg * DEG);
-  m->psi = (float)(p->twist_deg * DEG);
-  m->width = (float)p->yarn_width;
-  m->noise_level = p->noise_level;
-  m->seed = (uint64_t)p->seed;
-  wv_yarn_model_update(m);
-  return WV_OK;
 }
 
 static double *param_slot(wv_params *p, int id) {

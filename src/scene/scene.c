@@ -8,6 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "scene/scene_json.h"
+#include "io/json_file.h"
 #include "util/json.h"
 #include "woven/io.h"
 
@@ -36,66 +38,51 @@ static const char *PRESET_FLAT45 =
     "  \"falloff\": {\"type\": \"gaussian\", \"sigma_px\": 450}\n"
     "}\n";
 
-static wv_status num(json_t *o, const char *obj, const char *key, double *out, int required, wv_error *err) {
-  json_t *v = json_object_get(o, key);
-  if (!v) {
-    if (required) return wv_fail(err, WV_ERR_INVALID, "missing '%s.%s'", obj, key);
-    return WV_OK;
-  }
-  if (!json_is_number(v)) return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be a number", obj, key);
-  *out = json_number_value(v);
-  if (!isfinite(*out)) return wv_fail(err, WV_ERR_INVALID, "'%s.%s' is not finite", obj, key);
-  return WV_OK;
-}
+/* Numbers are read as any finite value (WV_JSON_FINITE): the ranges are wv_scene_validate's,
+ * which also checks scenes made in code. */
 
-static wv_status vec(json_t *o, const char *obj, const char *key, double *out, int n, int required,
-                     wv_error *err) {
-  json_t *v = json_object_get(o, key);
-  if (!v) {
-    if (required) return wv_fail(err, WV_ERR_INVALID, "missing '%s.%s'", obj, key);
-    return WV_OK;
-  }
-  if (!json_is_array(v) || (int)json_array_size(v) != n)
-    return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be an array of %d numbers", obj, key, n);
-  for (int i = 0; i < n; i++) {
-    json_t *x = json_array_get(v, i);
-    if (!json_is_number(x)) return wv_fail(err, WV_ERR_INVALID, "'%s.%s[%d]' must be a number", obj, key, i);
-    out[i] = json_number_value(x);
-  }
-  return WV_OK;
-}
+static const char *const K_RESPONSE[] = {"exposure", "clip", "encoding", "gamma", "psf_sigma_px", NULL};
+static const char *const K_RESPONSE_NO_PSF[] = {"exposure", "clip", "encoding", "gamma", NULL};
+static const char *const K_FALLOFF[] = {"type", "sigma_px", NULL};
 
-/* Reject keys the program does not know: a typo must not silently change a capture. */
-static wv_status only_keys(json_t *o, const char *obj, const char *const *keys, wv_error *err) {
-  if (!json_is_object(o)) return wv_fail(err, WV_ERR_INVALID, "'%s' must be an object", obj);
-  const char *k;
-  json_t *v;
-  json_object_foreach(o, k, v) {
-    int ok = 0;
-    for (int i = 0; keys[i]; i++) ok |= !strcmp(k, keys[i]);
-    if (!ok) return wv_fail(err, WV_ERR_INVALID, "unknown key '%s%s%s'", obj, *obj ? "." : "", k);
-  }
+wv_status wv_scene_read_response(json_t *root, int psf, wv_scene *s, wv_error *err) {
+  static const wv_json_enum enc[] = {{"srgb", WV_ENC_SRGB}, {"gamma", WV_ENC_GAMMA}, {"linear", WV_ENC_LINEAR}, {0}};
+  static const wv_json_enum type[] = {{"gaussian", 1}, {"none", 0}, {0}};
+  json_t *o;
+  int e = WV_ENC_SRGB;
+  wv_status st;
+  s->exposure = 1, s->clip = 1, s->gamma = 2.2, s->psf_sigma = 0, s->falloff = 0, s->falloff_sigma = 0;
+  if ((st = wv_json_object(root, NULL, "response", psf ? K_RESPONSE : K_RESPONSE_NO_PSF, 0, &o, err)) ||
+      (st = wv_json_number(o, "response", "exposure", WV_JSON_FINITE, 0, &s->exposure, err)) ||
+      (st = wv_json_number(o, "response", "clip", WV_JSON_FINITE, 0, &s->clip, err)) ||
+      (st = wv_json_number(o, "response", "gamma", WV_JSON_FINITE, 0, &s->gamma, err)) ||
+      (st = wv_json_number(o, "response", "psf_sigma_px", WV_JSON_FINITE, 0, &s->psf_sigma, err)) ||
+      (st = wv_json_enum_of(o, "response", "encoding", enc, 0, &e, err)))
+    return st;
+  s->encoding = (wv_encoding)e;
+  if ((st = wv_json_object(root, NULL, "falloff", K_FALLOFF, 0, &o, err))) return st;
+  if (o && (st = wv_json_enum_of(o, "falloff", "type", type, WV_JSON_REQUIRED, &s->falloff, err))) return st;
+  if (s->falloff &&
+      (st = wv_json_number(o, "falloff", "sigma_px", WV_JSON_FINITE, WV_JSON_REQUIRED, &s->falloff_sigma, err)))
+    return st;
   return WV_OK;
-}
-
-static wv_status get_int(json_t *o, const char *obj, const char *key, int *out, int lo, int hi, int required,
-                         wv_error *err) {
-  return wv_json_int(o, obj, key, lo, hi, required, out, err);
 }
 
 static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
-  static const char *top[] = {"name", "comment", "image", "camera", "sample", "light", "response", "falloff", NULL};
-  static const char *k_img[] = {"width", "height", "spp", NULL};
-  static const char *k_cam[] = {"position_mm", "look_at_mm", "up", "vfov_deg", NULL};
-  static const char *k_smp[] = {"shape", "radius_mm", "warp", "rotation_deg", "skew_deg", "offset_mm", "mm_per_unit",
-                                 "distortion", NULL};
-  static const char *k_dis[] = {"extent_mm", "x", "y", NULL};
-  static const char *k_lig[] = {"position_mm", "intensity", NULL};
-  static const char *k_rsp[] = {"exposure", "clip", "encoding", "gamma", "psf_sigma_px", NULL};
-  static const char *k_fal[] = {"type", "sigma_px", NULL};
+  static const char *const top[] = {"name",  "comment",  "image",   "camera", "sample",
+                                    "light", "response", "falloff", NULL};
+  static const char *const k_img[] = {"width", "height", "spp", NULL};
+  static const char *const k_cam[] = {"position_mm", "look_at_mm", "up", "vfov_deg", NULL};
+  static const char *const k_smp[] = {"shape",     "radius_mm",   "warp",       "rotation_deg", "skew_deg",
+                                      "offset_mm", "mm_per_unit", "distortion", NULL};
+  static const char *const k_dis[] = {"extent_mm", "x", "y", NULL};
+  static const char *const k_lig[] = {"position_mm", "intensity", NULL};
+  static const wv_json_enum shapes[] = {{"cylinder", WV_SHAPE_CYLINDER}, {"plane", WV_SHAPE_PLANE}, {0}};
+  static const wv_json_enum warps[] = {{"along_axis", 1}, {"around_axis", 0}, {0}};
   wv_status st;
+  json_t *o;
   memset(s, 0, sizeof *s);
-  if ((st = only_keys(r, "", top, err))) return st;
+  if ((st = wv_json_only_keys(r, "", top, err))) return st;
   json_t *nm = json_object_get(r, "name");
   snprintf(s->name, sizeof s->name, "%s", json_is_string(nm) ? json_string_value(nm) : "custom");
   /* a name cut to fit ends on a whole UTF-8 character, so that it can be written back */
@@ -106,97 +93,60 @@ static wv_status parse_root(json_t *r, wv_scene *s, wv_error *err) {
     s->name[nl] = '\0';
   }
 
-  json_t *o = json_object_get(r, "image");
-  if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'image'");
-  if ((st = only_keys(o, "image", k_img, err))) return st;
-  if ((st = get_int(o, "image", "width", &s->width, 1, WV_SCENE_MAX_SIDE, 1, err))) return st;
-  if ((st = get_int(o, "image", "height", &s->height, 1, WV_SCENE_MAX_SIDE, 1, err))) return st;
   s->spp = 64;
-  if ((st = get_int(o, "image", "spp", &s->spp, 1, WV_SCENE_MAX_SPP, 0, err))) return st;
+  if ((st = wv_json_object(r, NULL, "image", k_img, WV_JSON_REQUIRED, &o, err)) ||
+      (st = wv_json_int(o, "image", "width", 1, WV_SCENE_MAX_SIDE, WV_JSON_REQUIRED, &s->width, err)) ||
+      (st = wv_json_int(o, "image", "height", 1, WV_SCENE_MAX_SIDE, WV_JSON_REQUIRED, &s->height, err)) ||
+      (st = wv_json_int(o, "image", "spp", 1, WV_SCENE_MAX_SPP, 0, &s->spp, err)))
+    return st;
 
-  o = json_object_get(r, "camera");
-  if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'camera'");
-  if ((st = only_keys(o, "camera", k_cam, err))) return st;
   s->cam_up[1] = 1;
-  if ((st = vec(o, "camera", "position_mm", s->cam_pos, 3, 1, err))) return st;
-  if ((st = vec(o, "camera", "look_at_mm", s->cam_look_at, 3, 1, err))) return st;
-  if ((st = vec(o, "camera", "up", s->cam_up, 3, 0, err))) return st;
-  if ((st = num(o, "camera", "vfov_deg", &s->vfov_deg, 1, err))) return st;
+  if ((st = wv_json_object(r, NULL, "camera", k_cam, WV_JSON_REQUIRED, &o, err)) ||
+      (st = wv_json_numbers(o, "camera", "position_mm", 3, WV_JSON_FINITE, WV_JSON_REQUIRED, s->cam_pos, err)) ||
+      (st = wv_json_numbers(o, "camera", "look_at_mm", 3, WV_JSON_FINITE, WV_JSON_REQUIRED, s->cam_look_at, err)) ||
+      (st = wv_json_numbers(o, "camera", "up", 3, WV_JSON_FINITE, 0, s->cam_up, err)) ||
+      (st = wv_json_number(o, "camera", "vfov_deg", WV_JSON_FINITE, WV_JSON_REQUIRED, &s->vfov_deg, err)))
+    return st;
 
-  o = json_object_get(r, "sample");
-  if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'sample'");
-  if ((st = only_keys(o, "sample", k_smp, err))) return st;
-  json_t *shape = json_object_get(o, "shape");
-  const char *sh = json_is_string(shape) ? json_string_value(shape) : "";
-  if (!strcmp(sh, "cylinder")) {
-    s->shape = WV_SHAPE_CYLINDER;
+  int shape = 0;
+  if ((st = wv_json_object(r, NULL, "sample", k_smp, WV_JSON_REQUIRED, &o, err)) ||
+      (st = wv_json_enum_of(o, "sample", "shape", shapes, WV_JSON_REQUIRED, &shape, err)))
+    return st;
+  s->shape = (wv_shape_type)shape;
+  if (s->shape == WV_SHAPE_CYLINDER) {
     if (json_object_get(o, "skew_deg"))
       return wv_fail(err, WV_ERR_INVALID, "'sample.skew_deg' applies to a plane, not a cylinder");
     if (json_object_get(o, "distortion"))
       return wv_fail(err, WV_ERR_INVALID, "'sample.distortion' applies to a plane, not a cylinder");
-    if ((st = num(o, "sample", "radius_mm", &s->radius, 1, err))) return st;
     s->warp_along_axis = 1;
-    json_t *w = json_object_get(o, "warp");
-    if (w) {
-      const char *ws = json_is_string(w) ? json_string_value(w) : "";
-      if (!strcmp(ws, "along_axis")) s->warp_along_axis = 1;
-      else if (!strcmp(ws, "around_axis")) s->warp_along_axis = 0;
-      else return wv_fail(err, WV_ERR_INVALID, "'sample.warp' must be \"along_axis\" or \"around_axis\"");
-    }
-  } else if (!strcmp(sh, "plane")) {
-    s->shape = WV_SHAPE_PLANE;
-    if ((st = num(o, "sample", "rotation_deg", &s->rotation_deg, 0, err))) return st;
-    if ((st = num(o, "sample", "skew_deg", &s->skew_deg, 0, err))) return st;
-    json_t *d = json_object_get(o, "distortion");
-    if (d) {
-      if ((st = only_keys(d, "sample.distortion", k_dis, err))) return st;
-      if ((st = num(d, "sample.distortion", "extent_mm", &s->distort_extent_mm, 1, err)) ||
-          (st = vec(d, "sample.distortion", "x", s->distort[0], WV_DISTORT_TERMS, 1, err)) ||
-          (st = vec(d, "sample.distortion", "y", s->distort[1], WV_DISTORT_TERMS, 1, err)))
-        return st;
-    }
+    if ((st = wv_json_number(o, "sample", "radius_mm", WV_JSON_FINITE, WV_JSON_REQUIRED, &s->radius, err)) ||
+        (st = wv_json_enum_of(o, "sample", "warp", warps, 0, &s->warp_along_axis, err)))
+      return st;
   } else {
-    return wv_fail(err, WV_ERR_INVALID, "'sample.shape' must be \"cylinder\" or \"plane\"");
+    json_t *d;
+    if ((st = wv_json_number(o, "sample", "rotation_deg", WV_JSON_FINITE, 0, &s->rotation_deg, err)) ||
+        (st = wv_json_number(o, "sample", "skew_deg", WV_JSON_FINITE, 0, &s->skew_deg, err)) ||
+        (st = wv_json_object(o, "sample", "distortion", k_dis, 0, &d, err)))
+      return st;
+    if (d && ((st = wv_json_number(d, "sample.distortion", "extent_mm", WV_JSON_FINITE, WV_JSON_REQUIRED,
+                                   &s->distort_extent_mm, err)) ||
+              (st = wv_json_numbers(d, "sample.distortion", "x", WV_DISTORT_TERMS, WV_JSON_FINITE, WV_JSON_REQUIRED,
+                                    s->distort[0], err)) ||
+              (st = wv_json_numbers(d, "sample.distortion", "y", WV_DISTORT_TERMS, WV_JSON_FINITE, WV_JSON_REQUIRED,
+                                    s->distort[1], err))))
+      return st;
   }
-  if ((st = vec(o, "sample", "offset_mm", s->fabric_offset, 2, 0, err))) return st;
   s->mm_per_unit = 1;
-  if ((st = num(o, "sample", "mm_per_unit", &s->mm_per_unit, 0, err))) return st;
+  if ((st = wv_json_numbers(o, "sample", "offset_mm", 2, WV_JSON_FINITE, 0, s->fabric_offset, err)) ||
+      (st = wv_json_number(o, "sample", "mm_per_unit", WV_JSON_FINITE, 0, &s->mm_per_unit, err)))
+    return st;
 
-  o = json_object_get(r, "light");
-  if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'light'");
-  if ((st = only_keys(o, "light", k_lig, err))) return st;
-  if ((st = vec(o, "light", "position_mm", s->light_pos, 3, 1, err))) return st;
-  if ((st = num(o, "light", "intensity", &s->light_intensity, 1, err))) return st;
+  if ((st = wv_json_object(r, NULL, "light", k_lig, WV_JSON_REQUIRED, &o, err)) ||
+      (st = wv_json_numbers(o, "light", "position_mm", 3, WV_JSON_FINITE, WV_JSON_REQUIRED, s->light_pos, err)) ||
+      (st = wv_json_number(o, "light", "intensity", WV_JSON_FINITE, WV_JSON_REQUIRED, &s->light_intensity, err)))
+    return st;
 
-  s->exposure = 1, s->clip = 1, s->encoding = WV_ENC_SRGB, s->gamma = 2.2;
-  o = json_object_get(r, "response");
-  if (o) {
-    if ((st = only_keys(o, "response", k_rsp, err))) return st;
-    if ((st = num(o, "response", "exposure", &s->exposure, 0, err))) return st;
-    if ((st = num(o, "response", "clip", &s->clip, 0, err))) return st;
-    if ((st = num(o, "response", "gamma", &s->gamma, 0, err))) return st;
-    if ((st = num(o, "response", "psf_sigma_px", &s->psf_sigma, 0, err))) return st;
-    json_t *e = json_object_get(o, "encoding");
-    if (e) {
-      const char *es = json_is_string(e) ? json_string_value(e) : "";
-      if (!strcmp(es, "srgb")) s->encoding = WV_ENC_SRGB;
-      else if (!strcmp(es, "gamma")) s->encoding = WV_ENC_GAMMA;
-      else if (!strcmp(es, "linear")) s->encoding = WV_ENC_LINEAR;
-      else return wv_fail(err, WV_ERR_INVALID, "'response.encoding' must be \"srgb\", \"gamma\" or \"linear\"");
-    }
-  }
-  o = json_object_get(r, "falloff");
-  if (o) {
-    if ((st = only_keys(o, "falloff", k_fal, err))) return st;
-    json_t *t = json_object_get(o, "type");
-    const char *ts = json_is_string(t) ? json_string_value(t) : "";
-    if (!strcmp(ts, "gaussian")) {
-      s->falloff = 1;
-      if ((st = num(o, "falloff", "sigma_px", &s->falloff_sigma, 1, err))) return st;
-    } else if (strcmp(ts, "none")) {
-      return wv_fail(err, WV_ERR_INVALID, "'falloff.type' must be \"gaussian\" or \"none\"");
-    }
-  }
+  if ((st = wv_scene_read_response(r, 1, s, err))) return st;
   return wv_scene_validate(s, err);
 }
 
@@ -207,6 +157,23 @@ static wv_status check_vec(const double *v, int n, const char *key, double lim, 
     if (!(v[i] >= -lim && v[i] <= lim))
       return wv_fail(err, WV_ERR_INVALID, "'%s[%d]' = %s is outside %s..%s", key, i, wv_num_str(v[i], a),
                      wv_num_str(-lim, b), wv_num_str(lim, c));
+  return WV_OK;
+}
+
+wv_status wv_scene_check_response(const wv_scene *s, wv_error *err) {
+  char a[32];
+  if (!(s->exposure > 0 && s->exposure <= 1e6))
+    return wv_fail(err, WV_ERR_INVALID, "'response.exposure' = %s must be in (0, 1000000]", wv_num_str(s->exposure, a));
+  if (!(s->clip >= -1e6 && s->clip <= 1e6))
+    return wv_fail(err, WV_ERR_INVALID, "'response.clip' = %s is outside -1000000..1000000", wv_num_str(s->clip, a));
+  if (s->encoding == WV_ENC_GAMMA && !(s->gamma > 0.1 && s->gamma < 10))
+    return wv_fail(err, WV_ERR_INVALID, "'response.gamma' = %s is outside (0.1, 10)", wv_num_str(s->gamma, a));
+  if (!(s->psf_sigma >= 0 && s->psf_sigma <= WV_PSF_MAX_SIGMA))
+    return wv_fail(err, WV_ERR_INVALID, "'response.psf_sigma_px' = %s is outside 0..%g", wv_num_str(s->psf_sigma, a),
+                   WV_PSF_MAX_SIGMA);
+  if (s->falloff && !(s->falloff_sigma > 0 && s->falloff_sigma <= 1e9))
+    return wv_fail(err, WV_ERR_INVALID, "'falloff.sigma_px' = %s must be in (0, 1e+09]",
+                   wv_num_str(s->falloff_sigma, a));
   return WV_OK;
 }
 
@@ -260,19 +227,7 @@ wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
                    wv_num_str(s->mm_per_unit, a));
   if (!(s->light_intensity >= 0 && s->light_intensity <= 1e15))
     return wv_fail(err, WV_ERR_INVALID, "'light.intensity' = %s is outside 0..1e+15", wv_num_str(s->light_intensity, a));
-  if (!(s->exposure > 0 && s->exposure <= 1e6))
-    return wv_fail(err, WV_ERR_INVALID, "'response.exposure' = %s must be in (0, 1000000]", wv_num_str(s->exposure, a));
-  if (!(s->clip >= -1e6 && s->clip <= 1e6))
-    return wv_fail(err, WV_ERR_INVALID, "'response.clip' = %s is outside -1000000..1000000", wv_num_str(s->clip, a));
-  if (s->encoding == WV_ENC_GAMMA && !(s->gamma > 0.1 && s->gamma < 10))
-    return wv_fail(err, WV_ERR_INVALID, "'response.gamma' = %s is outside (0.1, 10)", wv_num_str(s->gamma, a));
-  if (!(s->psf_sigma >= 0 && s->psf_sigma <= WV_PSF_MAX_SIGMA))
-    return wv_fail(err, WV_ERR_INVALID, "'response.psf_sigma_px' = %s is outside 0..%g", wv_num_str(s->psf_sigma, a),
-                   WV_PSF_MAX_SIGMA);
-  if (s->falloff && !(s->falloff_sigma > 0 && s->falloff_sigma <= 1e9))
-    return wv_fail(err, WV_ERR_INVALID, "'falloff.sigma_px' = %s must be in (0, 1e+09]",
-                   wv_num_str(s->falloff_sigma, a));
-  return WV_OK;
+  return wv_scene_check_response(s, err);
 }
 
 int wv_scene_distorted(const wv_scene *s) {
@@ -290,24 +245,24 @@ void wv_scene_distortion_at(const wv_scene *s, double x, double y, double d[2]) 
   for (int i = 0; i < WV_DISTORT_TERMS; i++) d[0] += s->distort[0][i] * t[i], d[1] += s->distort[1][i] * t[i];
 }
 
-wv_status wv_scene_parse(const char *text, const char *source, wv_scene *s, wv_error *err) {
-  json_error_t je;
-  json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
-  if (!root) return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", source, je.line, je.column, je.text);
-  wv_status st = json_is_object(root) ? parse_root(root, s, err)
-                                      : wv_fail(err, WV_ERR_INVALID, "top level must be a JSON object");
+/* parse_root, then root freed; messages start with source. */
+static wv_status from_root(json_t *root, const char *source, wv_scene *s, wv_error *err) {
+  wv_status st = parse_root(root, s, err);
   json_decref(root);
   if (st) wv_error_prefix(err, "%s", source);
   return st;
 }
 
+wv_status wv_scene_parse(const char *text, const char *source, wv_scene *s, wv_error *err) {
+  json_t *root;
+  wv_status st = wv_json_parse_object(text, source, &root, err);
+  return st ? st : from_root(root, source, s, err);
+}
+
 wv_status wv_scene_read(const char *path, wv_scene *s, wv_error *err) {
-  char *text;
-  wv_status st = wv_json_read_text(path, &text, err);
-  if (st) return st;
-  st = wv_scene_parse(text, path, s, err);
-  free(text);
-  return st;
+  json_t *root;
+  wv_status st = wv_json_load_object(path, &root, err);
+  return st ? st : from_root(root, path, s, err);
 }
 
 wv_status wv_scene_preset(const char *name, wv_scene *s, wv_error *err) {

@@ -93,8 +93,8 @@ static void eval_edits(const wv_world_material *m, float u, float v, fabric_edit
   for (int i = 0; i < m->nedits; i++) {
     const wv_edit_map *em = &m->edits[i];
     float val[3], mask[3] = {1, 1, 1};
-    wv_edit_lookup(&em->map, u, v, val);
-    if (em->mask.data) wv_edit_lookup(&em->mask, u, v, mask);
+    wv_edit_lookup(em->map, u, v, val);
+    if (em->mask) wv_edit_lookup(em->mask, u, v, mask);
     float a = fminf(fmaxf(mask[0], 0.0f), 1.0f);
     for (int c = 0; c < 3; c++) val[c] *= em->gain;
     for (int y = 0; y < 2; y++) {

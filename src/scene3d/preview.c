@@ -12,7 +12,7 @@ wv_status wv_scene3d_render_file(const char *scene_path, const wv_params *params
   wv_world *w = NULL;
   st = wv_world_load(&s, params, o->threads, &w, err);
   if (!st) {
-    wv_scene3d_opts ro = {o->spp, o->threads, NULL, NULL};
+    wv_scene3d_opts ro = {.spp = o->spp, .threads = o->threads};
     st = wv_scene3d_render(&s, w, &ro, capture, NULL, NULL, err);
   }
   wv_world_free(w);

@@ -13,77 +13,18 @@
 #include "woven/emitters.h"
 #include "woven/io.h"
 #include "woven/mesh.h"
+#include "scene/scene_json.h"
+#include "io/json_file.h"
+#include "util/json.h"
+
+#define BIG 1e7 /* coordinates in mm: 10 km */
+#define REQ WV_JSON_REQUIRED
+#define RGB (WV_JSON_REQUIRED | WV_JSON_ONE_FOR_ALL) /* a colour: three numbers or one grey */
 
 typedef struct {
   const char *base;
   wv_error *err;
 } ctx;
-
-/* Refuses keys not in the NULL-terminated list; o must be an object. */
-static wv_status keys_ok(json_t *o, const char *where, const char *const *allowed, wv_error *err) {
-  if (!json_is_object(o)) return wv_fail(err, WV_ERR_INVALID, "'%s' must be an object", where);
-  const char *k;
-  json_t *v;
-  json_object_foreach(o, k, v) {
-    int known = 0;
-    for (const char *const *a = allowed; *a && !known; a++) known = !strcmp(*a, k);
-    if (!known) return wv_fail(err, WV_ERR_INVALID, "unknown key '%s.%s'", where, k);
-  }
-  return WV_OK;
-}
-
-/* A number in [lo, hi] (required, or left alone when absent). */
-static wv_status number(json_t *o, const char *where, const char *key, int required, double lo, double hi, double *out,
-                        wv_error *err) {
-  json_t *v = json_object_get(o, key);
-  if (!v) return required ? wv_fail(err, WV_ERR_INVALID, "missing '%s.%s'", where, key) : WV_OK;
-  double x = json_is_number(v) ? json_number_value(v) : NAN;
-  if (!json_is_number(v) || !(x >= lo && x <= hi))
-    return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be a number in %g..%g", where, key, lo, hi);
-  *out = x;
-  return WV_OK;
-}
-
-static wv_status integer(json_t *o, const char *where, const char *key, long lo, long hi, int *out, wv_error *err) {
-  json_t *v = json_object_get(o, key);
-  if (!v) return WV_OK;
-  json_int_t x = json_is_integer(v) ? json_integer_value(v) : lo - 1;
-  if (x < lo || x > hi) return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be an integer in %ld..%ld", where, key, lo, hi);
-  *out = (int)x;
-  return WV_OK;
-}
-
-/* n finite numbers (a single number is also accepted for a colour when grey_ok). */
-static wv_status numbers(json_t *o, const char *where, const char *key, int n, int required, int grey_ok, double lo,
-                         double hi, double *out, wv_error *err) {
-  json_t *v = json_object_get(o, key);
-  if (!v) return required ? wv_fail(err, WV_ERR_INVALID, "missing '%s.%s'", where, key) : WV_OK;
-  if (grey_ok && json_is_number(v)) {
-    double x = json_number_value(v);
-    if (!(x >= lo && x <= hi)) return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be in %g..%g", where, key, lo, hi);
-    for (int i = 0; i < n; i++) out[i] = x;
-    return WV_OK;
-  }
-  if (!json_is_array(v) || (int)json_array_size(v) != n)
-    return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be an array of %d numbers", where, key, n);
-  for (int i = 0; i < n; i++) {
-    json_t *x = json_array_get(v, (size_t)i);
-    double d = json_is_number(x) ? json_number_value(x) : NAN;
-    if (!(d >= lo && d <= hi))
-      return wv_fail(err, WV_ERR_INVALID, "'%s.%s[%d]' must be a number in %g..%g", where, key, i, lo, hi);
-    out[i] = d;
-  }
-  return WV_OK;
-}
-
-static wv_status string(json_t *o, const char *where, const char *key, int required, const char **out, wv_error *err) {
-  json_t *v = json_object_get(o, key);
-  if (!v) return required ? wv_fail(err, WV_ERR_INVALID, "missing '%s.%s'", where, key) : WV_OK;
-  if (!json_is_string(v) || !json_string_length(v))
-    return wv_fail(err, WV_ERR_INVALID, "'%s.%s' must be a non-empty string", where, key);
-  *out = json_string_value(v);
-  return WV_OK;
-}
 
 /* base/rel, or rel when absolute or without a base (malloc'ed). */
 static char *resolve(const char *base, const char *rel) {
@@ -97,7 +38,7 @@ static char *resolve(const char *base, const char *rel) {
 
 static wv_status path_of(json_t *o, const char *where, const char *key, const ctx *c, char **out) {
   const char *rel = NULL;
-  wv_status st = string(o, where, key, 1, &rel, c->err);
+  wv_status st = wv_json_string(o, where, key, REQ | WV_JSON_NONEMPTY, &rel, c->err);
   if (st) return st;
   if (!(*out = resolve(c->base, rel))) return wv_fail(c->err, WV_ERR_NOMEM, "out of memory");
   return WV_OK;
@@ -109,17 +50,16 @@ static double norm3(double v[3]) {
   return l;
 }
 
-#define BIG 1e7 /* coordinates in mm: 10 km */
-
-static wv_status parse_camera(json_t *o, wv_scene3d *s, wv_error *err) {
+static wv_status parse_camera(json_t *r, wv_scene3d *s, wv_error *err) {
   static const char *const k[] = {"position_mm", "look_at_mm", "up", "vfov_deg", NULL};
   wv_status st;
-  if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'camera'");
+  json_t *o;
   s->cam_up[1] = 1;
-  if ((st = keys_ok(o, "camera", k, err)) || (st = numbers(o, "camera", "position_mm", 3, 1, 0, -BIG, BIG, s->cam_pos, err)) ||
-      (st = numbers(o, "camera", "look_at_mm", 3, 1, 0, -BIG, BIG, s->cam_look_at, err)) ||
-      (st = numbers(o, "camera", "up", 3, 0, 0, -BIG, BIG, s->cam_up, err)) ||
-      (st = number(o, "camera", "vfov_deg", 1, 0.01, 179, &s->vfov_deg, err)))
+  if ((st = wv_json_object(r, NULL, "camera", k, REQ, &o, err)) ||
+      (st = wv_json_numbers(o, "camera", "position_mm", 3, -BIG, BIG, REQ, s->cam_pos, err)) ||
+      (st = wv_json_numbers(o, "camera", "look_at_mm", 3, -BIG, BIG, REQ, s->cam_look_at, err)) ||
+      (st = wv_json_numbers(o, "camera", "up", 3, -BIG, BIG, 0, s->cam_up, err)) ||
+      (st = wv_json_number(o, "camera", "vfov_deg", 0.01, 179, REQ, &s->vfov_deg, err)))
     return st;
   double f[3], u[3] = {s->cam_up[0], s->cam_up[1], s->cam_up[2]}, x[3];
   for (int i = 0; i < 3; i++) f[i] = s->cam_look_at[i] - s->cam_pos[i];
@@ -129,19 +69,19 @@ static wv_status parse_camera(json_t *o, wv_scene3d *s, wv_error *err) {
   return WV_OK;
 }
 
-static wv_status parse_env(json_t *o, const ctx *c, wv_scene3d *s) {
+static wv_status parse_env(json_t *r, const ctx *c, wv_scene3d *s) {
   static const char *const k[] = {"builtin", "file", "uniform", "strength", "rotation_deg", "width", "visible", NULL};
   wv_error *err = c->err;
   wv_status st;
+  json_t *o;
   s->env_strength = 1, s->env_width = 512, s->env_visible = 1;
-  if (!o) return WV_OK;
-  if ((st = keys_ok(o, "environment", k, err))) return st;
+  if ((st = wv_json_object(r, NULL, "environment", k, 0, &o, err)) || !o) return st;
   int kinds = !!json_object_get(o, "builtin") + !!json_object_get(o, "file") + !!json_object_get(o, "uniform");
   if (kinds != 1)
     return wv_fail(err, WV_ERR_INVALID, "'environment' needs exactly one of 'builtin', 'file' or 'uniform'");
   if (json_object_get(o, "builtin")) {
     const char *n = NULL;
-    if ((st = string(o, "environment", "builtin", 1, &n, err))) return st;
+    if ((st = wv_json_string(o, "environment", "builtin", REQ | WV_JSON_NONEMPTY, &n, err))) return st;
     if (!wv_env_is_builtin(n))
       return wv_fail(err, WV_ERR_INVALID, "'environment.builtin' = '%s': expected studio, sky or white", n);
     s->env = WV_ENV_BUILTIN;
@@ -151,14 +91,12 @@ static wv_status parse_env(json_t *o, const ctx *c, wv_scene3d *s) {
     if ((st = path_of(o, "environment", "file", c, &s->env_path))) return st;
   } else {
     s->env = WV_ENV_UNIFORM;
-    if ((st = numbers(o, "environment", "uniform", 3, 1, 1, 0, 1e6, s->env_color, err))) return st;
+    if ((st = wv_json_numbers(o, "environment", "uniform", 3, 0, 1e6, RGB, s->env_color, err))) return st;
   }
-  json_t *vis = json_object_get(o, "visible");
-  if (vis && !json_is_boolean(vis)) return wv_fail(err, WV_ERR_INVALID, "'environment.visible' must be true or false");
-  if (vis) s->env_visible = json_is_true(vis);
-  if ((st = number(o, "environment", "strength", 0, 0, 1e6, &s->env_strength, err)) ||
-      (st = number(o, "environment", "rotation_deg", 0, -3600, 3600, &s->env_rotation_deg, err)) ||
-      (st = integer(o, "environment", "width", 16, 8192, &s->env_width, err)))
+  if ((st = wv_json_bool(o, "environment", "visible", 0, &s->env_visible, err)) ||
+      (st = wv_json_number(o, "environment", "strength", 0, 1e6, 0, &s->env_strength, err)) ||
+      (st = wv_json_number(o, "environment", "rotation_deg", -3600, 3600, 0, &s->env_rotation_deg, err)) ||
+      (st = wv_json_int(o, "environment", "width", 16, 8192, 0, &s->env_width, err)))
     return st;
   return WV_OK;
 }
@@ -168,41 +106,45 @@ static wv_status parse_light(json_t *o, const char *where, wv_light3d *l, wv_err
   static const char *const ks[] = {"type", "position_mm", "look_at_mm", "intensity", "cone_deg", "blend_deg", NULL};
   static const char *const kd[] = {"type", "direction", "irradiance", NULL};
   static const char *const ka[] = {"type", "position_mm", "look_at_mm", "size_mm", "radiance", NULL};
-  const char *type = NULL;
+  static const wv_json_enum types[] = {{"point", WV_LIGHT_POINT},
+                                       {"spot", WV_LIGHT_SPOT},
+                                       {"directional", WV_LIGHT_DIRECTIONAL},
+                                       {"area", WV_LIGHT_AREA},
+                                       {0}};
+  int type = 0;
   wv_status st;
   if (!json_is_object(o)) return wv_fail(err, WV_ERR_INVALID, "'%s' must be an object", where);
-  if ((st = string(o, where, "type", 1, &type, err))) return st;
+  if ((st = wv_json_enum_of(o, where, "type", types, REQ, &type, err))) return st;
+  l->type = (wv_light_type)type;
   double at[3];
-  if (!strcmp(type, "point")) {
-    l->type = WV_LIGHT_POINT;
-    if ((st = keys_ok(o, where, kp, err)) || (st = numbers(o, where, "position_mm", 3, 1, 0, -BIG, BIG, l->pos, err)) ||
-        (st = numbers(o, where, "intensity", 3, 1, 1, 0, 1e12, l->color, err)))
+  if (l->type == WV_LIGHT_POINT) {
+    if ((st = wv_json_only_keys(o, where, kp, err)) ||
+        (st = wv_json_numbers(o, where, "position_mm", 3, -BIG, BIG, REQ, l->pos, err)) ||
+        (st = wv_json_numbers(o, where, "intensity", 3, 0, 1e12, RGB, l->color, err)))
       return st;
-  } else if (!strcmp(type, "spot")) {
-    l->type = WV_LIGHT_SPOT;
+  } else if (l->type == WV_LIGHT_SPOT) {
     l->cone_deg = 30, l->blend_deg = 5;
-    if ((st = keys_ok(o, where, ks, err)) || (st = numbers(o, where, "position_mm", 3, 1, 0, -BIG, BIG, l->pos, err)) ||
-        (st = numbers(o, where, "look_at_mm", 3, 1, 0, -BIG, BIG, at, err)) ||
-        (st = numbers(o, where, "intensity", 3, 1, 1, 0, 1e12, l->color, err)) ||
-        (st = number(o, where, "cone_deg", 0, 0.1, 89.9, &l->cone_deg, err)) ||
-        (st = number(o, where, "blend_deg", 0, 0, 89.9, &l->blend_deg, err)))
+    if ((st = wv_json_only_keys(o, where, ks, err)) ||
+        (st = wv_json_numbers(o, where, "position_mm", 3, -BIG, BIG, REQ, l->pos, err)) ||
+        (st = wv_json_numbers(o, where, "look_at_mm", 3, -BIG, BIG, REQ, at, err)) ||
+        (st = wv_json_numbers(o, where, "intensity", 3, 0, 1e12, RGB, l->color, err)) ||
+        (st = wv_json_number(o, where, "cone_deg", 0.1, 89.9, 0, &l->cone_deg, err)) ||
+        (st = wv_json_number(o, where, "blend_deg", 0, 89.9, 0, &l->blend_deg, err)))
       return st;
     if (l->blend_deg > l->cone_deg) l->blend_deg = l->cone_deg;
-  } else if (!strcmp(type, "directional")) {
-    l->type = WV_LIGHT_DIRECTIONAL;
-    if ((st = keys_ok(o, where, kd, err)) || (st = numbers(o, where, "direction", 3, 1, 0, -BIG, BIG, l->dir, err)) ||
-        (st = numbers(o, where, "irradiance", 3, 1, 1, 0, 1e9, l->color, err)))
+  } else if (l->type == WV_LIGHT_DIRECTIONAL) {
+    if ((st = wv_json_only_keys(o, where, kd, err)) ||
+        (st = wv_json_numbers(o, where, "direction", 3, -BIG, BIG, REQ, l->dir, err)) ||
+        (st = wv_json_numbers(o, where, "irradiance", 3, 0, 1e9, RGB, l->color, err)))
       return st;
     if (norm3(l->dir) < 1e-12) return wv_fail(err, WV_ERR_INVALID, "'%s.direction' is zero", where);
-  } else if (!strcmp(type, "area")) {
-    l->type = WV_LIGHT_AREA;
-    if ((st = keys_ok(o, where, ka, err)) || (st = numbers(o, where, "position_mm", 3, 1, 0, -BIG, BIG, l->pos, err)) ||
-        (st = numbers(o, where, "look_at_mm", 3, 1, 0, -BIG, BIG, at, err)) ||
-        (st = numbers(o, where, "size_mm", 2, 1, 0, 1e-3, 1e6, l->size, err)) ||
-        (st = numbers(o, where, "radiance", 3, 1, 1, 0, 1e9, l->color, err)))
-      return st;
   } else {
-    return wv_fail(err, WV_ERR_INVALID, "'%s.type' = '%s': expected point, spot, directional or area", where, type);
+    if ((st = wv_json_only_keys(o, where, ka, err)) ||
+        (st = wv_json_numbers(o, where, "position_mm", 3, -BIG, BIG, REQ, l->pos, err)) ||
+        (st = wv_json_numbers(o, where, "look_at_mm", 3, -BIG, BIG, REQ, at, err)) ||
+        (st = wv_json_numbers(o, where, "size_mm", 2, 1e-3, 1e6, REQ, l->size, err)) ||
+        (st = wv_json_numbers(o, where, "radiance", 3, 0, 1e9, RGB, l->color, err)))
+      return st;
   }
   if (l->type == WV_LIGHT_SPOT || l->type == WV_LIGHT_AREA) {
     for (int i = 0; i < 3; i++) l->dir[i] = at[i] - l->pos[i];
@@ -231,13 +173,14 @@ static wv_status parse_material(json_t *o, const char *name, const ctx *c, wv_ma
   if (json_object_get(o, "fabric")) {
     m->kind = WV_MAT_FABRIC;
     m->uv_mm[0] = m->uv_mm[1] = 1;
-    if ((st = keys_ok(o, where, kf, err)) || (st = path_of(o, where, "fabric", c, &m->params_path)) ||
-        (st = numbers(o, where, "uv_mm", 2, 0, 1, 1e-6, 1e7, m->uv_mm, err)) ||
-        (st = numbers(o, where, "uv_offset_mm", 2, 0, 0, -BIG, BIG, m->uv_offset_mm, err)))
+    if ((st = wv_json_only_keys(o, where, kf, err)) || (st = path_of(o, where, "fabric", c, &m->params_path)) ||
+        (st = wv_json_numbers(o, where, "uv_mm", 2, 1e-6, 1e7, WV_JSON_ONE_FOR_ALL, m->uv_mm, err)) ||
+        (st = wv_json_numbers(o, where, "uv_offset_mm", 2, -BIG, BIG, 0, m->uv_offset_mm, err)))
       return st;
   } else if (json_object_get(o, "lambert")) {
     m->kind = WV_MAT_LAMBERT;
-    if ((st = keys_ok(o, where, kl, err)) || (st = numbers(o, where, "lambert", 3, 1, 1, 0, 1, m->albedo, err)))
+    if ((st = wv_json_only_keys(o, where, kl, err)) ||
+        (st = wv_json_numbers(o, where, "lambert", 3, 0, 1, RGB, m->albedo, err)))
       return st;
   } else {
     return wv_fail(err, WV_ERR_INVALID, "'%s' needs 'fabric' (a parameter file) or 'lambert' (a colour)", where);
@@ -254,9 +197,10 @@ static wv_status parse_transform(json_t *o, const char *where, wv_object3d *ob, 
   ob->A[0] = ob->A[4] = ob->A[8] = 1;
   memset(ob->b, 0, sizeof ob->b);
   if (!o) return WV_OK;
-  if ((st = keys_ok(o, where, k, err)) || (st = numbers(o, where, "scale", 3, 0, 1, -1e6, 1e6, sc, err)) ||
-      (st = numbers(o, where, "rotate_deg", 3, 0, 0, -3600, 3600, r, err)) ||
-      (st = numbers(o, where, "translate_mm", 3, 0, 0, -BIG, BIG, ob->b, err)))
+  if ((st = wv_json_only_keys(o, where, k, err)) ||
+      (st = wv_json_numbers(o, where, "scale", 3, -1e6, 1e6, WV_JSON_ONE_FOR_ALL, sc, err)) ||
+      (st = wv_json_numbers(o, where, "rotate_deg", 3, -3600, 3600, 0, r, err)) ||
+      (st = wv_json_numbers(o, where, "translate_mm", 3, -BIG, BIG, 0, ob->b, err)))
     return st;
   if (!(fabs(sc[0] * sc[1] * sc[2]) > 1e-12)) return wv_fail(err, WV_ERR_INVALID, "'%s.scale' must not be zero", where);
   double M[9] = {sc[0], 0, 0, 0, sc[1], 0, 0, 0, sc[2]};
@@ -280,12 +224,12 @@ static wv_status parse_object(json_t *o, const char *where, const ctx *c, wv_sce
   static const char *const kc[] = {"centre_mm", "radius_mm", "length_mm", "segments", NULL};
   wv_error *err = c->err;
   wv_status st;
-  if ((st = keys_ok(o, where, k, err))) return st;
+  if ((st = wv_json_only_keys(o, where, k, err))) return st;
   int kinds = !!json_object_get(o, "mesh") + !!json_object_get(o, "quad") + !!json_object_get(o, "sphere") +
               !!json_object_get(o, "cylinder");
   if (kinds != 1) return wv_fail(err, WV_ERR_INVALID, "'%s' needs exactly one of mesh, quad, sphere, cylinder", where);
   const char *mat = NULL;
-  if ((st = string(o, where, "material", 1, &mat, err))) return st;
+  if ((st = wv_json_string(o, where, "material", REQ | WV_JSON_NONEMPTY, &mat, err))) return st;
   if ((ob->material = find_material(s, mat)) < 0)
     return wv_fail(err, WV_ERR_INVALID, "'%s.material': no material named '%s'", where, mat);
   char sub[96];
@@ -297,29 +241,32 @@ static wv_status parse_object(json_t *o, const char *where, const ctx *c, wv_sce
     ob->kind = WV_OBJ_QUAD;
     snprintf(sub, sizeof sub, "%s.quad", where);
     ob->eu[0] = 1, ob->ev[1] = 1, ob->resolution = 1;
-    if ((st = keys_ok(g, sub, kq, err)) || (st = numbers(g, sub, "centre_mm", 3, 1, 0, -BIG, BIG, ob->centre, err)) ||
-        (st = numbers(g, sub, "u_axis", 3, 0, 0, -BIG, BIG, ob->eu, err)) ||
-        (st = numbers(g, sub, "v_axis", 3, 0, 0, -BIG, BIG, ob->ev, err)) ||
-        (st = numbers(g, sub, "size_mm", 2, 1, 0, 1e-6, BIG, ob->size, err)) ||
-        (st = integer(g, sub, "cells", 1, 1024, &ob->resolution, err)))
+    if ((st = wv_json_only_keys(g, sub, kq, err)) ||
+        (st = wv_json_numbers(g, sub, "centre_mm", 3, -BIG, BIG, REQ, ob->centre, err)) ||
+        (st = wv_json_numbers(g, sub, "u_axis", 3, -BIG, BIG, 0, ob->eu, err)) ||
+        (st = wv_json_numbers(g, sub, "v_axis", 3, -BIG, BIG, 0, ob->ev, err)) ||
+        (st = wv_json_numbers(g, sub, "size_mm", 2, 1e-6, BIG, REQ, ob->size, err)) ||
+        (st = wv_json_int(g, sub, "cells", 1, 1024, 0, &ob->resolution, err)))
       return st;
   } else if ((g = json_object_get(o, "sphere"))) {
     ob->kind = WV_OBJ_SPHERE;
     snprintf(sub, sizeof sub, "%s.sphere", where);
     ob->resolution = 96;
-    if ((st = keys_ok(g, sub, ksph, err)) || (st = numbers(g, sub, "centre_mm", 3, 1, 0, -BIG, BIG, ob->centre, err)) ||
-        (st = number(g, sub, "radius_mm", 1, 1e-6, BIG, &ob->radius, err)) ||
-        (st = integer(g, sub, "segments", 3, 4096, &ob->resolution, err)))
+    if ((st = wv_json_only_keys(g, sub, ksph, err)) ||
+        (st = wv_json_numbers(g, sub, "centre_mm", 3, -BIG, BIG, REQ, ob->centre, err)) ||
+        (st = wv_json_number(g, sub, "radius_mm", 1e-6, BIG, REQ, &ob->radius, err)) ||
+        (st = wv_json_int(g, sub, "segments", 3, 4096, 0, &ob->resolution, err)))
       return st;
   } else {
     g = json_object_get(o, "cylinder");
     ob->kind = WV_OBJ_CYLINDER;
     snprintf(sub, sizeof sub, "%s.cylinder", where);
     ob->resolution = 1024;
-    if ((st = keys_ok(g, sub, kc, err)) || (st = numbers(g, sub, "centre_mm", 3, 1, 0, -BIG, BIG, ob->centre, err)) ||
-        (st = number(g, sub, "radius_mm", 1, 1e-6, BIG, &ob->radius, err)) ||
-        (st = number(g, sub, "length_mm", 1, 1e-6, BIG, &ob->length, err)) ||
-        (st = integer(g, sub, "segments", 3, 8192, &ob->resolution, err)))
+    if ((st = wv_json_only_keys(g, sub, kc, err)) ||
+        (st = wv_json_numbers(g, sub, "centre_mm", 3, -BIG, BIG, REQ, ob->centre, err)) ||
+        (st = wv_json_number(g, sub, "radius_mm", 1e-6, BIG, REQ, &ob->radius, err)) ||
+        (st = wv_json_number(g, sub, "length_mm", 1e-6, BIG, REQ, &ob->length, err)) ||
+        (st = wv_json_int(g, sub, "segments", 3, 8192, 0, &ob->resolution, err)))
       return st;
   }
   snprintf(sub, sizeof sub, "%s.transform", where);
@@ -328,63 +275,28 @@ static wv_status parse_object(json_t *o, const char *where, const ctx *c, wv_sce
 
 static wv_status parse_edit(json_t *o, const char *where, const ctx *c, wv_scene3d *s, wv_edit3d *e) {
   static const char *const k[] = {"material", "apply", "map", "mask", "gain", NULL};
-  static const char *const ops[] = {"diffuse_multiply", "diffuse_replace", "heightfield", "roughness"};
+  static const wv_json_enum ops[] = {{"diffuse_multiply", WV_EDIT_DIFFUSE_MULTIPLY},
+                                     {"diffuse_replace", WV_EDIT_DIFFUSE_REPLACE},
+                                     {"heightfield", WV_EDIT_HEIGHTFIELD},
+                                     {"roughness", WV_EDIT_ROUGHNESS},
+                                     {0}};
   wv_error *err = c->err;
-  const char *mat = NULL, *op = NULL;
+  const char *mat = NULL;
+  int op = 0;
   wv_status st;
-  if ((st = keys_ok(o, where, k, err)) || (st = string(o, where, "material", 1, &mat, err)) ||
-      (st = string(o, where, "apply", 1, &op, err)))
+  if ((st = wv_json_only_keys(o, where, k, err)) ||
+      (st = wv_json_string(o, where, "material", REQ | WV_JSON_NONEMPTY, &mat, err)) ||
+      (st = wv_json_enum_of(o, where, "apply", ops, REQ, &op, err)))
     return st;
+  e->op = (wv_edit_op)op;
   e->material = find_material(s, mat);
   if (e->material < 0) return wv_fail(err, WV_ERR_INVALID, "'%s.material': no material named '%s'", where, mat);
   if (s->materials[e->material].kind != WV_MAT_FABRIC)
     return wv_fail(err, WV_ERR_INVALID, "'%s.material': '%s' is not a fabric", where, mat);
-  int found = -1;
-  for (int i = 0; i < 4; i++)
-    if (!strcmp(op, ops[i])) found = i;
-  if (found < 0)
-    return wv_fail(err, WV_ERR_INVALID,
-                   "'%s.apply' = '%s': expected diffuse_multiply, diffuse_replace, heightfield or roughness", where, op);
-  e->op = (wv_edit_op)found;
   e->gain = 1;
-  if ((st = path_of(o, where, "map", c, &e->map)) || (st = number(o, where, "gain", 0, 0, 1e3, &e->gain, err)))
+  if ((st = path_of(o, where, "map", c, &e->map)) || (st = wv_json_number(o, where, "gain", 0, 1e3, 0, &e->gain, err)))
     return st;
   if (json_object_get(o, "mask") && (st = path_of(o, where, "mask", c, &e->mask))) return st;
-  return WV_OK;
-}
-
-/* The capture scenes' response and falloff blocks, into s->response. */
-static wv_status parse_response(json_t *r, json_t *f, wv_scene *out, wv_error *err) {
-  static const char *const kr[] = {"exposure", "clip", "encoding", "gamma", NULL};
-  static const char *const kf[] = {"type", "sigma_px", NULL};
-  static const char *const enc[] = {"linear", "srgb", "gamma"};
-  wv_status st;
-  out->exposure = 1, out->clip = 1, out->encoding = WV_ENC_SRGB, out->gamma = 2.2;
-  if (r) {
-    const char *e = NULL;
-    if ((st = keys_ok(r, "response", kr, err)) || (st = number(r, "response", "exposure", 0, 1e-9, 1e9, &out->exposure, err)) ||
-        (st = number(r, "response", "clip", 0, -1e9, 1e9, &out->clip, err)) ||
-        (st = number(r, "response", "gamma", 0, 0.1, 10, &out->gamma, err)) ||
-        (st = string(r, "response", "encoding", 0, &e, err)))
-      return st;
-    if (e) {
-      int k = -1;
-      for (int i = 0; i < 3; i++)
-        if (!strcmp(e, enc[i])) k = i;
-      if (k < 0) return wv_fail(err, WV_ERR_INVALID, "'response.encoding' must be \"srgb\", \"gamma\" or \"linear\"");
-      out->encoding = (wv_encoding)k;
-    }
-  }
-  if (f) {
-    const char *t = NULL;
-    if ((st = keys_ok(f, "falloff", kf, err)) || (st = string(f, "falloff", "type", 1, &t, err))) return st;
-    if (!strcmp(t, "gaussian")) {
-      out->falloff = 1;
-      if ((st = number(f, "falloff", "sigma_px", 1, 1e-3, 1e9, &out->falloff_sigma, err))) return st;
-    } else if (strcmp(t, "none")) {
-      return wv_fail(err, WV_ERR_INVALID, "'falloff.type' must be \"gaussian\" or \"none\"");
-    }
-  }
   return WV_OK;
 }
 
@@ -409,20 +321,19 @@ static wv_status parse_root(json_t *r, const ctx *c, wv_scene3d *s) {
   static const char *const kl[] = {"mesh_mb", NULL};
   wv_error *err = c->err;
   wv_status st;
-  if ((st = keys_ok(r, "", top, err))) return st;
   const char *nm = "scene";
-  if ((st = string(r, "", "name", 0, &nm, err))) return st;
-  snprintf(s->name, sizeof s->name, "%s", nm);
-  json_t *o = json_object_get(r, "image");
-  if (!o) return wv_fail(err, WV_ERR_INVALID, "missing 'image'");
-  s->spp = WV_SCENE3D_DEFAULT_SPP;
-  if ((st = keys_ok(o, "image", ki, err)) || (st = integer(o, "image", "width", 1, WV_SCENE_MAX_SIDE, &s->width, err)) ||
-      (st = integer(o, "image", "height", 1, WV_SCENE_MAX_SIDE, &s->height, err)) ||
-      (st = integer(o, "image", "spp", 1, WV_SCENE_MAX_SPP, &s->spp, err)))
+  json_t *o;
+  if ((st = wv_json_only_keys(r, "", top, err)) || (st = wv_json_string(r, NULL, "name", WV_JSON_NONEMPTY, &nm, err)))
     return st;
-  if (!s->width || !s->height) return wv_fail(err, WV_ERR_INVALID, "'image' needs 'width' and 'height'");
-  if ((st = parse_camera(json_object_get(r, "camera"), s, err))) return st;
-  if ((st = parse_env(json_object_get(r, "environment"), c, s))) return st;
+  snprintf(s->name, sizeof s->name, "%s", nm);
+  s->spp = WV_SCENE3D_DEFAULT_SPP;
+  if ((st = wv_json_object(r, NULL, "image", ki, REQ, &o, err)) ||
+      (st = wv_json_int(o, "image", "width", 1, WV_SCENE_MAX_SIDE, REQ, &s->width, err)) ||
+      (st = wv_json_int(o, "image", "height", 1, WV_SCENE_MAX_SIDE, REQ, &s->height, err)) ||
+      (st = wv_json_int(o, "image", "spp", 1, WV_SCENE_MAX_SPP, 0, &s->spp, err)))
+    return st;
+  if ((st = parse_camera(r, s, err))) return st;
+  if ((st = parse_env(r, c, s))) return st;
 
   json_t *a = json_object_get(r, "lights");
   if ((st = array_of(a, "lights", sizeof *s->lights, (void **)&s->lights, &s->nlights, err))) return st;
@@ -463,19 +374,19 @@ static wv_status parse_root(json_t *r, const ctx *c, wv_scene3d *s) {
     if ((st = parse_edit(e, w, c, s, &s->edits[i]))) return st;
   }
   s->max_bounces = 3, s->yarn_samples = WV_SCENE3D_DEFAULT_YARN_SAMPLES, s->seed = 1;
-  if ((o = json_object_get(r, "render"))) {
-    double seed = 1;
-    if ((st = keys_ok(o, "render", kr, err)) || (st = integer(o, "render", "max_bounces", 0, 64, &s->max_bounces, err)) ||
-        (st = integer(o, "render", "yarn_samples", 1, 64, &s->yarn_samples, err)) ||
-        (st = number(o, "render", "seed", 0, 0, 2147483647.0, &seed, err)))
-      return st;
-    s->seed = (uint64_t)seed;
-  }
-  if ((st = parse_response(json_object_get(r, "response"), json_object_get(r, "falloff"), &s->response, err)))
+  double seed = 1;
+  if ((st = wv_json_object(r, NULL, "render", kr, 0, &o, err)) ||
+      (st = wv_json_int(o, "render", "max_bounces", 0, 64, 0, &s->max_bounces, err)) ||
+      (st = wv_json_int(o, "render", "yarn_samples", 1, 64, 0, &s->yarn_samples, err)) ||
+      (st = wv_json_number(o, "render", "seed", 0, 2147483647.0, 0, &seed, err)))
+    return st;
+  s->seed = (uint64_t)seed;
+  /* the capture scenes' response, without the camera blur (this renderer applies none) */
+  if ((st = wv_scene_read_response(r, 0, &s->response, err)) || (st = wv_scene_check_response(&s->response, err)))
     return st;
   double mb = WV_MESH_DEFAULT_LIMIT_MB;
-  if ((o = json_object_get(r, "limits")) &&
-      ((st = keys_ok(o, "limits", kl, err)) || (st = number(o, "limits", "mesh_mb", 1, 1, 1 << 20, &mb, err))))
+  if ((st = wv_json_object(r, NULL, "limits", kl, 0, &o, err)) ||
+      (o && (st = wv_json_number(o, "limits", "mesh_mb", 1, 1 << 20, REQ, &mb, err))))
     return st;
   s->mesh_limit_bytes = (size_t)(mb * 1048576.0);
   /* the response's capture scene: only the image size, exposure, clip, encoding and falloff are used */
@@ -498,12 +409,11 @@ void wv_scene3d_free(wv_scene3d *s) {
 wv_status wv_scene3d_parse(const char *text, const char *source, const char *base_dir, wv_scene3d *s,
                            wv_error *err) {
   memset(s, 0, sizeof *s);
-  json_error_t je;
-  json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &je);
-  if (!root) return wv_fail(err, WV_ERR_FORMAT, "%s:%d:%d: malformed JSON: %s", source, je.line, je.column, je.text);
+  json_t *root;
+  wv_status st = wv_json_parse_object(text, source, &root, err);
+  if (st) return st;
   ctx c = {base_dir, err};
-  wv_status st = json_is_object(root) ? parse_root(root, &c, s)
-                                      : wv_fail(err, WV_ERR_INVALID, "the top level must be a JSON object");
+  st = parse_root(root, &c, s);
   json_decref(root);
   if (st) {
     wv_error_prefix(err, "%s", source);
@@ -515,8 +425,7 @@ wv_status wv_scene3d_parse(const char *text, const char *source, const char *bas
 wv_status wv_scene3d_read(const char *path, wv_scene3d *s, wv_error *err) {
   memset(s, 0, sizeof *s);
   char *text;
-  size_t len;
-  wv_status st = wv_read_file(path, &text, &len, err);
+  wv_status st = wv_json_read_text(path, &text, err);
   if (st) return st;
   char *base = strdup(path);
   if (!base) {
@@ -525,9 +434,29 @@ wv_status wv_scene3d_read(const char *path, wv_scene3d *s, wv_error *err) {
   }
   char *slash = strrchr(base, '/');
   if (slash) *(slash == base ? slash + 1 : slash) = '\0';
-  if (strlen(text) != len) st = wv_fail(err, WV_ERR_FORMAT, "%s: file contains a NUL byte; not a JSON text", path);
-  else st = wv_scene3d_parse(text, path, slash ? base : NULL, s, err);
+  st = wv_scene3d_parse(text, path, slash ? base : NULL, s, err);
+  if (st) wv_error_excerpt(err, WV_EXCERPT_CHARS); /* the user named it as a scene: a short excerpt at most */
   free(base);
   free(text);
   return st;
+}
+
+int wv_scene3d_inputs(const wv_scene3d *s, const char **paths, int cap) {
+  int n = 0;
+#define ADD(p) \
+  do { \
+    if (p) { \
+      if (n < cap) paths[n] = (p); \
+      n++; \
+    } \
+  } while (0)
+  for (int i = 0; i < s->nmaterials; i++) ADD(s->materials[i].params_path);
+  for (int i = 0; i < s->nobjects; i++) ADD(s->objects[i].path);
+  for (int i = 0; i < s->nedits; i++) {
+    ADD(s->edits[i].map);
+    ADD(s->edits[i].mask);
+  }
+  if (s->env == WV_ENV_FILE) ADD(s->env_path);
+#undef ADD
+  return n;
 }

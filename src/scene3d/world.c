@@ -3,11 +3,14 @@
  * fabric parameter files (prepared for shading), edit maps and masks (checked
  * for format, type and size) and the environment. Owns wv_world. */
 #include <math.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "scene3d/world_internal.h"
+#include "util/colour.h"
 #include "woven/io.h"
 
 void wv_world_free(wv_world *w) {
@@ -15,9 +18,10 @@ void wv_world_free(wv_world *w) {
   for (int i = 0; i < w->nobjects; i++) wv_mesh_free(&w->meshes[i]);
   for (int i = 0; i < w->nmats; i++) {
     free(w->mats[i].fab);
-    for (int e = 0; e < w->mats[i].nedits; e++) wv_image_free(&w->mats[i].edits[e].map), wv_image_free(&w->mats[i].edits[e].mask);
     free(w->mats[i].edits);
   }
+  for (int i = 0; i < w->nimages; i++) wv_image_free(&w->images[i].img);
+  free(w->images);
   wv_tracer_free(w->tracer);
   wv_envmap_free(&w->env);
   free(w->meshes), free(w->material), free(w->mats);
@@ -44,19 +48,33 @@ void wv_edit_lookup(const wv_image *img, float u, float v, float out[3]) {
   }
 }
 
-static float srgb_decode(float y) { return y <= 0.04045f ? y / 12.92f : powf((y + 0.055f) / 1.055f, 2.4f); }
+/* Memory of one job (meshes, tracer, maps, environment) against its limit. */
+typedef struct {
+  size_t used, limit;
+} budget;
+
+static wv_status spend(budget *b, size_t bytes, const char *what, wv_error *err) {
+  if (bytes > b->limit - b->used)
+    return wv_fail(err, WV_ERR_NOMEM, "%s: the scene needs more than its memory limit of %zu MB (%zu MB used before "
+                   "it, %zu MB for it)", what, b->limit >> 20, b->used >> 20, bytes >> 20);
+  b->used += bytes;
+  return WV_OK;
+}
+
+static size_t image_bytes(const wv_image *img) { return (size_t)img->w * img->h * (size_t)img->c * sizeof(float); }
 
 /* PNG or EXR only (JPEG is lossy and has no linear form): checked by the magic bytes. */
 static wv_status read_map(const char *path, int grey, int colour, wv_image *img, wv_error *err) {
   unsigned char magic[4] = {0};
-  FILE *f = fopen(path, "rb");
-  if (!f) return wv_fail(err, WV_ERR_IO, "%s: cannot open edit map", path);
+  FILE *f;
+  wv_status st = wv_fopen_regular(path, &f, err);
+  if (st) return st;
   size_t n = fread(magic, 1, 4, f);
   fclose(f);
   int png = n == 4 && magic[0] == 0x89 && magic[1] == 'P', exr = n == 4 && magic[0] == 0x76 && magic[1] == 0x2f;
   if (!png && !exr) return wv_fail(err, WV_ERR_FORMAT, "%s: an edit map must be a PNG or EXR image", path);
   wv_image_info info;
-  wv_status st = wv_image_read(path, img, &info, err);
+  st = wv_image_read(path, img, &info, err);
   if (st) return st;
   if (grey && info.channels_in_file > 2) {
     for (size_t i = 0; i < (size_t)img->w * img->h; i++) {
@@ -74,21 +92,55 @@ static wv_status read_map(const char *path, int grey, int colour, wv_image *img,
       wv_image_free(img);
       return wv_fail(err, WV_ERR_FORMAT, "%s: has a negative, NaN or infinite value", path);
     }
-    if (colour && png) img->data[i] = srgb_decode(v); /* 8/16-bit colour maps are sRGB */
+    if (v > WV_SCENE3D_MAX_MAP_VALUE) {
+      wv_image_free(img);
+      return wv_fail(err, WV_ERR_FORMAT, "%s: pixel %zu has the value %g, above %g", path, i / 3, v,
+                     WV_SCENE3D_MAX_MAP_VALUE);
+    }
+    if (colour && png) img->data[i] = wv_srgb_decode_f(v); /* 8/16-bit colour maps are sRGB */
   }
   return WV_OK;
 }
 
-static wv_status load_edit(const wv_edit3d *e, wv_edit_map *m, wv_error *err) {
+/* The map at path, read once per file (by device and inode) and reading (grey, colour). */
+static wv_status get_map(wv_world *w, budget *b, const char *path, int grey, int colour, const wv_image **out,
+                         wv_error *err) {
+  int fd;
+  struct stat sb;
+  wv_status st = wv_open_regular(path, &fd, &sb, err);
+  if (st) return st;
+  close(fd);
+  for (int i = 0; i < w->nimages; i++) {
+    const wv_world_image *im = &w->images[i];
+    if (im->dev == (unsigned long long)sb.st_dev && im->ino == (unsigned long long)sb.st_ino && im->grey == grey &&
+        im->colour == colour) {
+      *out = &im->img;
+      return WV_OK;
+    }
+  }
+  wv_world_image *im = &w->images[w->nimages];
+  memset(im, 0, sizeof *im);
+  if ((st = read_map(path, grey, colour, &im->img, err))) return st;
+  if ((st = spend(b, image_bytes(&im->img), path, err))) {
+    wv_image_free(&im->img);
+    return st;
+  }
+  im->dev = (unsigned long long)sb.st_dev, im->ino = (unsigned long long)sb.st_ino, im->grey = grey, im->colour = colour;
+  w->nimages++;
+  *out = &im->img;
+  return WV_OK;
+}
+
+static wv_status load_edit(wv_world *w, budget *b, const wv_edit3d *e, wv_edit_map *m, wv_error *err) {
   m->op = e->op;
   m->gain = (float)e->gain;
   int colour = e->op == WV_EDIT_DIFFUSE_MULTIPLY || e->op == WV_EDIT_DIFFUSE_REPLACE;
-  wv_status st = read_map(e->map, !colour, colour, &m->map, err);
+  wv_status st = get_map(w, b, e->map, !colour, colour, &m->map, err);
   if (st || !e->mask) return st;
-  if ((st = read_map(e->mask, 1, 0, &m->mask, err))) return st;
-  if (m->mask.w != m->map.w || m->mask.h != m->map.h)
-    return wv_fail(err, WV_ERR_FORMAT, "%s: the mask is %d x %d but its map %s is %d x %d", e->mask, m->mask.w,
-                   m->mask.h, e->map, m->map.w, m->map.h);
+  if ((st = get_map(w, b, e->mask, 1, 0, &m->mask, err))) return st;
+  if (m->mask->w != m->map->w || m->mask->h != m->map->h)
+    return wv_fail(err, WV_ERR_FORMAT, "%s: the mask is %d x %d but its map %s is %d x %d", e->mask, m->mask->w,
+                   m->mask->h, e->map, m->map->w, m->map->h);
   return WV_OK;
 }
 
@@ -101,7 +153,10 @@ static wv_status load_material(const wv_material3d *src, const wv_params *overri
   wv_params p;
   wv_status st;
   if (override) p = *override;
-  else if ((st = wv_params_read(src->params_path, &p, err))) return st;
+  else if ((st = wv_params_read(src->params_path, &p, err))) {
+    wv_error_excerpt(err, 0); /* named by the scene, not by the user: none of its text */
+    return st;
+  }
   if (!(m->fab = malloc(sizeof *m->fab))) return wv_fail(err, WV_ERR_NOMEM, "out of memory for a fabric");
   if ((st = wv_fabric_prepare(&p, m->fab, err)))
     wv_error_prefix(err, "%s", override ? "--params" : src->params_path);
@@ -136,7 +191,10 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
   w->meshes = calloc((size_t)s->nobjects, sizeof *w->meshes);
   w->material = calloc((size_t)s->nobjects, sizeof *w->material);
   w->mats = calloc((size_t)s->nmaterials, sizeof *w->mats);
-  if (!w->meshes || !w->material || !w->mats) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  w->images = s->nedits ? calloc(2 * (size_t)s->nedits, sizeof *w->images) : NULL;
+  if (!w->meshes || !w->material || !w->mats || (s->nedits && !w->images)) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  /* one budget for everything the job holds: maps, meshes, the tracer, the environment */
+  budget b = {0, s->mesh_limit_bytes ? s->mesh_limit_bytes : (size_t)WV_MESH_DEFAULT_LIMIT_MB << 20};
   for (int i = 0; i < s->nmaterials && !st; i++, w->nmats++)
     st = load_material(&s->materials[i], override, &w->mats[i], err);
   for (int i = 0; i < s->nmaterials && !st; i++) { /* edits, grouped by material */
@@ -144,16 +202,13 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
     for (int e = 0; e < s->nedits; e++) m->nedits += s->edits[e].material == i;
     if (m->nedits && !(m->edits = calloc((size_t)m->nedits, sizeof *m->edits))) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
     for (int e = 0, k = 0; e < s->nedits && !st; e++)
-      if (s->edits[e].material == i) st = load_edit(&s->edits[e], &m->edits[k++], err);
+      if (s->edits[e].material == i) st = load_edit(w, &b, &s->edits[e], &m->edits[k++], err);
   }
-  size_t used = 0, limit = s->mesh_limit_bytes ? s->mesh_limit_bytes : (size_t)WV_MESH_DEFAULT_LIMIT_MB << 20;
   for (int i = 0; i < s->nobjects && !st; i++, w->nobjects++) {
     w->material[i] = s->objects[i].material;
-    st = make_mesh(s, &s->objects[i], limit - used, &w->meshes[i], err);
-    if (!st) used += wv_mesh_bytes(w->meshes[i].nv, w->meshes[i].nt);
-    if (!st && used > limit)
-      st = wv_fail(err, WV_ERR_NOMEM, "the scene's meshes need %zu MB, above the memory limit of %zu MB", used >> 20,
-                   limit >> 20);
+    st = make_mesh(s, &s->objects[i], b.limit - b.used, &w->meshes[i], err);
+    if (!st) st = spend(&b, wv_mesh_bytes(w->meshes[i].nv, w->meshes[i].nt),
+                        s->objects[i].path ? s->objects[i].path : "a built-in shape", err);
   }
   if (!st) {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -169,7 +224,7 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
     }
     w->scene_radius = 0.5f * sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                    (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    if (list) st = wv_tracer_create(list, s->nobjects, threads, limit - used, &w->tracer, err);
+    if (list) st = wv_tracer_create(list, s->nobjects, threads, b.limit - b.used, &w->tracer, err);
     free(list);
   }
   if (!st && s->env != WV_ENV_NONE) {
@@ -184,6 +239,8 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
     } else if (!(st = wv_image_alloc(&img, 4, 2, 3, err))) {
       for (int i = 0; i < 24; i++) img.data[i] = (float)s->env_color[i % 3];
     }
+    /* the image while read, then the map's radiance and its two sampling tables */
+    if (!st) st = spend(&b, image_bytes(&img) + wv_envmap_bytes(img.w, img.h), name, err);
     if (!st) st = wv_envmap_init(&w->env, &img, s->env_strength, s->env_rotation_deg, name, err);
     w->has_env = !st;
     wv_image_free(&img);

@@ -12,8 +12,8 @@
 
 typedef struct {
   wv_edit_op op;
-  wv_image map;  /* linear values (sRGB PNG colour maps decoded) */
-  wv_image mask; /* empty when the edit applies everywhere */
+  const wv_image *map;  /* linear values (sRGB PNG colour maps decoded); owned by wv_world.images */
+  const wv_image *mask; /* NULL when the edit applies everywhere */
   float gain;
 } wv_edit_map;
 
@@ -26,12 +26,22 @@ typedef struct {
   int nedits;
 } wv_world_material;
 
+/* An edit map or mask read once, however many edits name it (the same file, by
+ * device and inode, read the same way). */
+typedef struct {
+  wv_image img;
+  unsigned long long dev, ino;
+  int grey, colour;
+} wv_world_image;
+
 struct wv_world {
   wv_mesh *meshes; /* one per object */
   int *material;   /* per object */
   int nobjects;
   wv_world_material *mats;
   int nmats;
+  wv_world_image *images; /* edit maps and masks */
+  int nimages;
   wv_tracer *tracer;
   int has_env;
   wv_envmap env;

@@ -15,7 +15,7 @@ float wv_encode(const wv_scene *s, float x) { return wv_encode_f(s, x); }
 float wv_decode(const wv_scene *s, float y) {
   if (y <= 0.0f) return 0.0f;
   switch (s->encoding) {
-    case WV_ENC_SRGB: return y <= 0.04045f ? y / 12.92f : powf((y + 0.055f) / 1.055f, 2.4f);
+    case WV_ENC_SRGB: return wv_srgb_decode_f(y);
     case WV_ENC_GAMMA: return powf(y, (float)s->gamma);
     default: return y;
   }
@@ -24,7 +24,7 @@ float wv_decode(const wv_scene *s, float y) {
 double wv_encode_slope(const wv_scene *s, double x) {
   if (x <= 0.0) return 0.0;
   switch (s->encoding) {
-    case WV_ENC_SRGB: return x <= 0.0031308 ? 12.92 : 1.055 / 2.4 * pow(x, 1.0 / 2.4 - 1.0); /* d(wv_encode) */
+    case WV_ENC_SRGB: return wv_srgb_encode_slope(x);
     case WV_ENC_GAMMA: return pow(x, 1.0 / s->gamma - 1.0) / s->gamma;
     default: return 1.0;
   }

@@ -6,8 +6,7 @@
 WV_INLINE WV_R WV_FN(wv_encode)(const wv_scene *s, WV_R x) {
   if (x <= 0) return 0;
   switch (s->encoding) {
-    case WV_ENC_SRGB:
-      return x <= (WV_R)0.0031308 ? (WV_R)12.92 * x : (WV_R)1.055 * wv_pow(x, (WV_R)1 / (WV_R)2.4) - (WV_R)0.055;
+    case WV_ENC_SRGB: return WV_FN(wv_srgb_encode)(x);
     case WV_ENC_GAMMA: return wv_pow(x, (WV_R)(1.0 / s->gamma));
     default: return x;
   }

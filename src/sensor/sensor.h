@@ -10,7 +10,7 @@
 
 #include "kernel/kernel.h"
 #include "shape/shape.h"
-#include "woven/render.h"
+#include "util/colour.h"
 #include "woven/scene.h"
 
 /* The scene's geometry prepared for tracing. */
@@ -24,8 +24,6 @@ typedef struct {
 } wv_camera_rig;
 
 void wv_rig_prepare(const wv_scene *s, wv_camera_rig *rig);
-/* wv_rig_prepare plus opt's footprint cache, refused if made for another geometry. */
-wv_status wv_rig_prepare_opts(const wv_scene *s, const wv_render_opts *opt, wv_camera_rig *rig, wv_error *err);
 
 #define WV_LANE WV_LANE_F
 #include "kernel/lane_begin.h"

@@ -1,11 +1,11 @@
 /* The forward integrator: wv_render (woven/render.h), rows in parallel
- * through the 8-wide row loop (integrator/rows.c), then the sensor response;
+ * through the 8-wide row loop (render/rows.c), then the sensor response;
  * and wv_render_setup, which every render starts with. */
 #include "woven/render.h"
 
 #include <omp.h>
 
-#include "integrator/integrator.h"
+#include "render/render_internal.h"
 
 wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, int w, int h,
                           wv_fabric *fab, int *spp, wv_error *err) {

@@ -1,9 +1,9 @@
-/* The integrators' shared parts: what every render starts with, and the
- * 8-wide loop over a row's samples (integrator/rows.c) that both the forward
- * renderer (forward.c) and the gradient renderer (gradient.c) run. Internal
- * to the library. */
-#ifndef WOVEN_INTEGRATOR_H
-#define WOVEN_INTEGRATOR_H
+/* The renderers' shared parts: what every render starts with, the camera rig
+ * with the render's footprints (footprints.c), and the 8-wide loop over a row's
+ * samples (render/rows.c) that both the forward renderer (forward.c) and the
+ * gradient renderer (gradient.c) run. Internal to the library. */
+#ifndef WOVEN_RENDER_INTERNAL_H
+#define WOVEN_RENDER_INTERNAL_H
 
 #include "kernel/kernel.h"
 #include "sampler/sampler.h"
@@ -16,6 +16,9 @@
  * spp resolved (opt's, else the scene's) and the w x h x spp sample limit checked. */
 wv_status wv_render_setup(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, int w, int h,
                           wv_fabric *fab, int *spp, wv_error *err);
+
+/* wv_rig_prepare plus opt's footprint cache, refused if made for another geometry. */
+wv_status wv_rig_prepare_opts(const wv_scene *s, const wv_render_opts *opt, wv_camera_rig *rig, wv_error *err);
 
 /* A pixel's sums: sample s is added to row s mod 8 (in sample order) and the
  * rows are added in a fixed tree at the end (WV_ACC_TREE): every path adds the

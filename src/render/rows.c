@@ -13,7 +13,7 @@
  * whatever the packing. */
 #include <string.h>
 
-#include "integrator/integrator.h"
+#include "render/render_internal.h"
 
 #define CHUNK 8 /* pixels per chunk: CHUNK * t tail samples always fill whole vectors */
 #define PAD 16  /* per-pixel arrays hold CHUNK entries and room for an 8-wide load from any of them */

@@ -1,12 +1,13 @@
 /* Image comparison metrics: SSIM, mean absolute difference, and the weave's spectrum
  * (the luminance detail, its log power spectrum and the weave-spectrum correlation). */
 #include "woven/metrics.h"
-#include "fit/fit_internal.h"
 
 #include <fftw3.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "util/colour.h"
 
 #define WIN 11
 #define RAD 5
@@ -70,8 +71,8 @@ wv_status wv_ssim(const wv_image *a, const wv_image *b, wv_ssim_mode mode, doubl
       if (planes == 3 || a->c < 3) {
         pa[i] = x[p], pb[i] = y[p];
       } else {
-        pa[i] = 0.2126 * x[0] + 0.7152 * x[1] + 0.0722 * x[2];
-        pb[i] = 0.2126 * y[0] + 0.7152 * y[1] + 0.0722 * y[2];
+        pa[i] = wv_luminance_d(x[0], x[1], x[2]);
+        pb[i] = wv_luminance_d(y[0], y[1], y[2]);
       }
     }
     total += ssim_plane(pa, pb, a->w, a->h, buf);
@@ -111,7 +112,7 @@ wv_status wv_image_detail_window(const wv_image *img, int x0, int y0, int w, int
   for (int y = 0; y < h; y++)
     for (int x = 0; x < w; x++) {
       const float *c = wv_image_px(img, x0 + x, y0 + y);
-      out[(size_t)y * w + x] = img->c >= 3 ? 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2] : c[0];
+      out[(size_t)y * w + x] = img->c >= 3 ? wv_luminance_f(c[0], c[1], c[2]) : c[0];
     }
   wv_status st = wv_blur_plane(out, blur, w, h, 1, WV_DETAIL_SIGMA, err);
   if (st) {

@@ -5,6 +5,8 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "woven/nn.h"
+
 wv_status wv_image_alloc(wv_image *img, int w, int h, int c, wv_error *err) {
   img->data = NULL;
   img->w = img->h = img->c = 0;
@@ -31,9 +33,7 @@ void wv_image_free(wv_image *img) {
 double wv_image_mad(const wv_image *a, const wv_image *b) {
   if (a->w != b->w || a->h != b->h || a->c != b->c) return -1.0;
   size_t n = (size_t)a->w * a->h * a->c;
-  double s = 0;
-  for (size_t i = 0; i < n; i++) s += fabs((double)a->data[i] - b->data[i]);
-  return n ? s / n : 0.0;
+  return n ? wv_nn_l1(a->data, b->data, n, 0, NULL, 0.0f) / n : 0.0;
 }
 
 double wv_image_mean(const wv_image *a) {

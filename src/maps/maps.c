@@ -9,6 +9,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "util/colour.h"
 #include "util/hash.h"
 #include "woven/io.h"
 #include "woven/yarn.h"
@@ -61,11 +62,6 @@ wv_status wv_maps_generate(const wv_params *p, int size, wv_maps *m, wv_error *e
   return WV_OK;
 }
 
-static float srgb(float x) {
-  if (x <= 0) return 0;
-  return x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
-}
-
 /* The 8-bit form of a map: how each kind is encoded into [0,1]. */
 static wv_status write_png_map(const char *path, const wv_image *src, int kind, double hmax, wv_error *err) {
   wv_image tmp;
@@ -76,7 +72,7 @@ static wv_status write_png_map(const char *path, const wv_image *src, int kind, 
     float v = src->data[i];
     switch (kind) {
       case 0: v = 0.5f * v + 0.5f; break;                        /* vectors */
-      case 1: v = srgb(v); break;                                 /* albedo */
+      case 1: v = wv_srgb_encode_f(v); break;                     /* albedo */
       case 2: v = hmax > 0 ? (float)(v / hmax) : 0.0f; break;     /* height */
       default: break;                                             /* ids, roughness */
     }

@@ -4,6 +4,9 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
+
+#include "woven/nn.h"
 
 /* ---- area downsampling ---- */
 
@@ -94,13 +97,9 @@ static size_t count(const wv_image *im) { return (size_t)im->w * im->h * im->c; 
 double wv_image_l1(const wv_image *a, const wv_image *b, wv_image *da) {
   if (a->w != b->w || a->h != b->h || a->c != b->c) return -1.0;
   size_t n = count(a);
-  double sum = 0.0, inv = 1.0 / (double)n;
-  for (size_t i = 0; i < n; i++) {
-    double d = (double)a->data[i] - (double)b->data[i];
-    sum += fabs(d);
-    if (da) da->data[i] = d > 0 ? (float)inv : d < 0 ? (float)-inv : 0.0f;
-  }
-  return sum * inv;
+  double inv = 1.0 / (double)n;
+  if (da) memset(da->data, 0, n * sizeof *da->data);
+  return wv_nn_l1(a->data, b->data, n, 0, da ? da->data : NULL, (float)inv) * inv;
 }
 
 /* ---- 8-bit quantisation ---- */

@@ -1,7 +1,7 @@
 /* The gradient integrator, the differentiable renderer: capture and dL/dtheta
  * in one pass (woven/grad.h).
  *
- * Per pixel, the 8-wide row loop (integrator/rows.c; gradient_double.c in
+ * Per pixel, the 8-wide row loop (render/rows.c; gradient_double.c in
  * double) returns the radiance and, per yarn
  * type, the sums radiance is linear in (specular and diffuse factors) with
  * their derivatives with respect to the non-linear parameters. The sensor
@@ -19,7 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "integrator/integrator.h"
+#include "render/render_internal.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 

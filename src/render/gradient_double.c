@@ -4,7 +4,7 @@
  * and shading kernel as the float path, in their scalar and double flavours. */
 #include <string.h>
 
-#include "integrator/integrator.h"
+#include "render/render_internal.h"
 
 void wv_grad_pixel_d(const wv_camera_rig *rig, const wv_fabric *fab, const wv_shade_params_d *P, int px, int py,
                      int spp, wv_grad_pixel *out) {

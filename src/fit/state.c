@@ -1,0 +1,39 @@
+/* The fit's state (include/woven/fit.h): making and freeing it, and the scene it
+ * settles on (the registration's offset, the camera blur, the distortion). The
+ * optimiser, the registration, the distortion and the checkpoints all use these;
+ * nothing here calls them back. */
+#include "woven/fit.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "util/hash.h"
+
+wv_status wv_fit_state_init(wv_fit_state *st, const wv_params *start, const wv_fit_opts *o, wv_error *err) {
+  memset(st, 0, sizeof *st);
+  wv_status s = wv_params_validate(start, err);
+  if (s) return s;
+  st->start = st->params = *start;
+  st->rng = wv_mix64(o->seed ^ 0x666974ULL);
+  st->log_cap = o->iters > 0 ? o->iters : 1;
+  st->log = calloc((size_t)st->log_cap, sizeof *st->log);
+  if (!st->log) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the fit log");
+  return WV_OK;
+}
+
+void wv_fit_state_free(wv_fit_state *st) {
+  free(st->log);
+  st->log = NULL;
+}
+
+void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out) {
+  *out = *s;
+  out->fabric_offset[0] += st->offset_mm[0];
+  out->fabric_offset[1] += st->offset_mm[1];
+  if (st->psf_done) out->psf_sigma = st->psf_sigma;
+  if (st->distort_extent_mm > 0) {
+    out->distort_extent_mm = st->distort_extent_mm;
+    for (int k = 0; k < 2; k++)
+      for (int t = 0; t < WV_DISTORT_TERMS; t++) out->distort[k][t] += st->distort[k][t];
+  }
+}

@@ -1,0 +1,82 @@
+/* woven: FabricNet's estimate of a photo (woven/estimate.h): the scene's default model or
+ * the one given, checked against the descriptor and the scene, run on the photo, with
+ * the pattern given or chosen over the built-in library. */
+#include "woven/estimate.h"
+
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "woven/fabricnet.h"
+
+#ifndef WOVEN_MODEL_DIR
+#define WOVEN_MODEL_DIR "models"
+#endif
+
+/* models/fabricnet-<scene>.bin, in $WOVEN_MODEL_DIR or the source tree's models/. */
+static void default_model(const wv_scene *s, char *buf, size_t cap) {
+  const char *d = getenv("WOVEN_MODEL_DIR");
+  snprintf(buf, cap, "%s/fabricnet-%s.bin", d && *d ? d : WOVEN_MODEL_DIR, s->name);
+}
+
+void wv_estimate_free(wv_estimate *e) {
+  wv_image_free(&e->photo);
+  wv_descriptor_free(e->desc);
+  e->desc = NULL;
+}
+
+wv_status wv_estimate_run(const wv_estimate_opts *o, wv_estimate *e, wv_error *err) {
+  wv_scene s;
+  memset(e, 0, sizeof *e);
+  wv_status rc = wv_scene_load(o->scene, &s, err);
+  return rc ? rc : wv_estimate_run_scene(o, &s, e, err);
+}
+
+wv_status wv_estimate_run_scene(const wv_estimate_opts *o, const wv_scene *s, wv_estimate *e, wv_error *err) {
+  double t0 = omp_get_wtime();
+  memset(e, 0, sizeof *e);
+  e->scene = *s;
+  wv_status rc;
+  wv_params probe; /* the pattern is checked before the slow steps */
+  if (o->pattern && (rc = wv_params_default(o->pattern, &probe, err))) return rc;
+  if (o->pattern && !strcmp(o->pattern, "custom"))
+    return wv_fail(err, WV_ERR_INVALID, "the pattern must be a built-in pattern, not 'custom'");
+  char mpath[4096];
+  if (o->model)
+    snprintf(mpath, sizeof mpath, "%s", o->model);
+  else
+    default_model(&e->scene, mpath, sizeof mpath);
+  struct stat sb;
+  if (!o->model && stat(mpath, &sb) != 0)
+    return wv_fail(err, WV_ERR_IO,
+                   "no default model for scene '%s' (%s); train one with 'woven dataset' and "
+                   "'woven train' (docs/fabricnet.md) and pass --model",
+                   e->scene.name, mpath);
+  wv_fabricnet net;
+  if ((rc = wv_fabricnet_load(mpath, &net, err))) return rc;
+  if (!(rc = wv_descriptor_create(o->descriptor ? o->descriptor : "default", o->weights, &e->desc, err)) &&
+      !(rc = wv_fabricnet_check(&net, mpath, wv_descriptor_name(e->desc), wv_descriptor_size(e->desc),
+                                o->any_scene ? NULL : &e->scene, err)))
+    rc = wv_photo_load(o->photo, &e->scene, &o->crop, &e->photo, &e->info, err);
+  float y[WV_NET_OUT];
+  if (!rc && !o->pattern) {
+    e->chosen = 1;
+    if (!(rc = wv_fabricnet_predict_pattern(&net, e->desc, &e->scene, &e->photo, NULL, y, &e->choice, err))) {
+      e->params = e->choice.params[e->choice.best];
+      wv_pattern_choice_scene(&e->choice, &e->scene, e->choice.best, &e->scene); /* the cloth's orientation */
+    }
+  } else if (!rc) {
+    float *feat = malloc(sizeof(float) * (size_t)net.n_in);
+    if (!feat)
+      rc = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+    else if (!(rc = wv_fabricnet_predict(&net, e->desc, &e->photo, feat, y, NULL, err)))
+      rc = wv_fabricnet_params(&net, y, o->pattern, &e->params, err);
+    free(feat);
+  }
+  wv_fabricnet_free(&net);
+  if (rc) wv_estimate_free(e);
+  e->seconds = omp_get_wtime() - t0;
+  return rc;
+}
