@@ -172,7 +172,8 @@ static void test_fit_stops(void **state) {
   o.align_radius = o.register_radius = o.distort_degree = 0;
   o.colour_split = 0;
   o.psf_sigma = 0;
-  assert_int_equal(o.patience, WV_FIT_PATIENCE);
+  assert_int_equal(o.patience, WV_FIT_PATIENCE); /* off by default */
+  o.patience = 10;
   o.schedule = 1; /* both stages: the rule ends each */
   wv_error err = {0};
   wv_fit_state a, b;
