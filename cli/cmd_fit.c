@@ -98,6 +98,12 @@ const cli_opt CLI_FIT_OPTS[] = {
     CLI_O_INT("--iter-scale", NULL, capture_args, fit.iter_scale, 1, WV_FIT_MAX_ITER_SCALE, "N",
               "iterate on the image downscaled N times (default 1); the final\nrender and SSIM use the scene's full "
               "resolution and spp"),
+    CLI_O_FLAG("--schedule", capture_args, fit.schedule,
+               "iterate first on the centre window of half of each side, then on\nthe whole image"),
+    CLI_O_CLEAR("--no-schedule", capture_args, fit.schedule, "every iteration on the whole image (the default)"),
+    CLI_O_INT("--patience", NULL, capture_args, fit.patience, 0, WV_FIT_MAX_ITERS, "N",
+              "end a stage when its smoothed loss has not fallen by 1% in N\niterations; the last stage's end "
+              "ends the iterations (default 10;\n0 = run every iteration)"),
     CLI_O_CUSTOM("--seed", capture_args, fit.seed, 0, INT_MAX, parse_seed, "N", "the seed of the discrete steps"),
     CLI_O_CUSTOM("--align-radius", capture_args, fit.align_radius, 0, WV_FIT_MAX_ALIGN_RADIUS, parse_align, "N",
                  "after the iterations, search each density +-N yarns/inch for the\nbest SSIM in a centre window "
@@ -138,7 +144,8 @@ static const cli_cmd CMD = {
     "fit",
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
-    "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--align-radius N]\n"
+    "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--[no-]schedule]\n"
+    "                 [--patience N] [--align-radius N]\n"
     "                 [--register-radius N] [--distort-degree N] [--w-struct X] [--w-colour X] [--colour-split]\n"
     "                 [--camera-blur auto|measured|S]\n"
     "                 [--seed N] [--threads N] [--drape S.json|none]\n"

@@ -77,6 +77,12 @@ static void test_fit_improves(void **state) {
   wv_image_free(&photo);
 }
 
+/* A callback that stops the fit after *user iterations (as a kill would). */
+static int stop_at(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
+  (void)o;
+  return st->iter >= *(const int *)user;
+}
+
 /* 6 + 6 iterations through a checkpoint file equal 12 straight, bit for bit,
  * including the discrete search. */
 static void test_resume_equals_straight(void **state) {
@@ -97,14 +103,12 @@ static void test_resume_equals_straight(void **state) {
   int tried = 0;
   for (int i = 0; i < 12; i++) tried += a.log[i].discrete_tried;
   assert_true(tried > 0);
-  /* interrupted after 6 */
-  wv_fit_opts o6 = o;
-  o6.iters = 6;
-  o6.align_radius = 0; /* as if killed: a fit that stops early never reaches the alignment */
-  o6.register_radius = 0; /* nor the registration */
-  o6.distort_degree = 0;  /* nor the distortion */
+  /* interrupted after 6, as if killed (the caller stops it: fewer iterations would be
+   * another schedule) */
+  int six = 6;
   assert_int_equal(wv_fit_state_init(&b, &start, &o, &err), WV_OK);
-  assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o6, NULL, NULL, &err), WV_OK);
+  assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o, stop_at, &six, &err), WV_OK);
+  assert_int_equal(b.iter, 6);
   const char *dir = tu_tmpdir("fit_resume");
   char path[256];
   snprintf(path, sizeof path, "%s/checkpoint.json", dir);
@@ -126,6 +130,90 @@ static void test_resume_equals_straight(void **state) {
   fclose(f);
   assert_int_not_equal(wv_fit_checkpoint_read(path, &b, &o2, name, sizeof name, &err), WV_OK);
   assert_non_null(strstr(err.msg, path));
+  wv_descriptor_free(d);
+  wv_image_free(&photo);
+}
+
+/* The stopping rule on a log: a loss falling 3% an iteration has not converged; once flat,
+ * it has after `patience` iterations; a small fall (0.5% over the patience) counts as flat,
+ * a larger one (3%) does not. */
+static void test_stopping_rule(void **state) {
+  (void)state;
+  wv_fit_record log[80];
+  memset(log, 0, sizeof log);
+  for (int i = 0; i < 80; i++) log[i].loss = i < 30 ? pow(0.97, i) : pow(0.97, 30);
+  for (int to = 1; to <= 30; to++) assert_false(wv_fit_converged(log, 0, to, 10));
+  int stop = 0;
+  for (int to = 1; to <= 80 && !stop; to++)
+    if (wv_fit_converged(log, 0, to, 10)) stop = to;
+  print_message("a loss flat after 30 iterations: converged after %d\n", stop);
+  assert_true(stop > 30 && stop <= 30 + 10 + WV_FIT_SMOOTH);
+  assert_false(wv_fit_converged(log, 0, 80, 0)); /* patience 0: never */
+  assert_false(wv_fit_converged(log, 40, 50, 10)); /* too few iterations in the stage */
+  for (int i = 0; i < 80; i++) log[i].loss = 1 - 0.0005 * i; /* 0.5% in 10 iterations */
+  assert_true(wv_fit_converged(log, 0, 60, 10));
+  for (int i = 0; i < 80; i++) log[i].loss = pow(0.997, i); /* 3% in 10 iterations */
+  assert_false(wv_fit_converged(log, 0, 60, 10));
+}
+
+/* A fit that starts at the target stops long before its 200 iterations (the rule ends
+ * each stage), and not with patience 0; stopped by its caller and resumed through a
+ * checkpoint it stops at the same iteration with the same parameters. */
+
+static void test_fit_stops(void **state) {
+  (void)state;
+  wv_scene s;
+  wv_params tp;
+  wv_image photo;
+  wv_descriptor *d;
+  setup(&s, &tp, &photo, &d);
+  wv_fit_opts o;
+  opts(&o, 200);
+  o.align_radius = o.register_radius = o.distort_degree = 0;
+  o.colour_split = 0;
+  o.psf_sigma = 0;
+  assert_int_equal(o.patience, WV_FIT_PATIENCE); /* off by default */
+  o.patience = 10;
+  o.schedule = 1; /* both stages: the rule ends each */
+  wv_error err = {0};
+  wv_fit_state a, b;
+  assert_int_equal(wv_fit_state_init(&a, &tp, &o, &err), WV_OK);
+  if (wv_fit_run(&a, &s, &photo, d, &o, NULL, NULL, &err)) fail_msg("%s", err.msg);
+  int from = -1;
+  assert_int_equal(wv_fit_stage(&a, &o, &from), 2);
+  assert_true(wv_fit_finished(&a, &o));
+  print_message("from the target: stopped after %d iterations (last stage from %d)\n", a.iter, from);
+  assert_true(a.iter < 100);
+  assert_true(from > 0 && from < a.iter); /* two stages */
+  assert_true(wv_fit_converged(a.log, from, a.iter, o.patience));
+  assert_false(wv_fit_converged(a.log, from, a.iter - 1, o.patience)); /* it stopped at once */
+  /* stopped by the caller half-way, written, read and continued */
+  int half = a.iter / 2;
+  assert_int_equal(wv_fit_state_init(&b, &tp, &o, &err), WV_OK);
+  assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o, stop_at, &half, &err), WV_OK);
+  assert_int_equal(b.iter, half);
+  assert_false(wv_fit_finished(&b, &o));
+  const char *dir = tu_tmpdir("fit_stops");
+  char path[256];
+  snprintf(path, sizeof path, "%s/checkpoint.json", dir);
+  assert_int_equal(wv_fit_checkpoint_write(path, &b, &o, "default", &err), WV_OK);
+  wv_fit_state_free(&b);
+  wv_fit_opts o2;
+  char name[32];
+  if (wv_fit_checkpoint_read(path, &b, &o2, name, sizeof name, &err)) fail_msg("%s", err.msg);
+  assert_int_equal(o2.schedule, 1);
+  assert_int_equal(o2.patience, o.patience);
+  assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o2, NULL, NULL, &err), WV_OK);
+  assert_int_equal(b.iter, a.iter);
+  assert_memory_equal(&a.params, &b.params, sizeof a.params);
+  wv_fit_state_free(&b);
+  /* without the rule every iteration runs */
+  o.patience = 0;
+  assert_int_equal(wv_fit_state_init(&b, &tp, &o, &err), WV_OK);
+  o.iters = 3 * a.iter / 2; /* enough to pass where the rule stopped */
+  assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o, NULL, NULL, &err), WV_OK);
+  assert_int_equal(b.iter, o.iters);
+  wv_fit_state_free(&a), wv_fit_state_free(&b);
   wv_descriptor_free(d);
   wv_image_free(&photo);
 }
@@ -387,6 +475,7 @@ static void test_limits(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fit_improves), cmocka_unit_test(test_resume_equals_straight),
+                                     cmocka_unit_test(test_stopping_rule), cmocka_unit_test(test_fit_stops),
                                      cmocka_unit_test(test_photo_load), cmocka_unit_test(test_psf_estimate),
                                      cmocka_unit_test(test_psf_fitted), cmocka_unit_test(test_colour_split),
                                      cmocka_unit_test(test_colour_split_sees_shading),

@@ -47,12 +47,25 @@ typedef struct {
                        * photo (wv_psf_estimate) unless the scene gives one; >= 0: this sigma */
   int psf_fit;        /* 1: a measured blur is then fitted with the parameters, by its gradient (1);
                        * 0: it stays as measured. A given blur is never fitted. */
+  int schedule;       /* 1: a first stage iterates on the centre window of 1/WV_FIT_WINDOW_DIV of
+                       * each side (when the fit holds it) for at most WV_FIT_WINDOW_SHARE of the
+                       * iterations, the second on the whole image; 0 (default): one stage, the whole image */
+  int patience;       /* the stopping rule (wv_fit_converged): a stage ends when its smoothed loss has not
+                       * fallen by WV_FIT_MIN_GAIN in this many iterations, and the last stage ends the
+                       * iterations (default 0: every stage runs to its limit) */
 } wv_fit_opts;
 
 void wv_fit_opts_default(wv_fit_opts *o);
 #define WV_FIT_PSF_AUTO -1.0
 #define WV_FIT_W_STRUCT 0.002 /* the structure term's weight (docs/fit.md: how it was chosen) */
 #define WV_FIT_W_COLOUR 0.1   /* the detail-colour term's weight (docs/fit.md: how it was chosen) */
+
+/* The schedule (docs/fit.md, "Schedule and stopping rule"). */
+#define WV_FIT_WINDOW_DIV 2      /* the first stage's window: this fraction of each side */
+#define WV_FIT_WINDOW_SHARE 0.3  /* ... for at most this share of the iterations */
+#define WV_FIT_SMOOTH 5          /* the smoothed loss: the mean of this many consecutive losses */
+#define WV_FIT_MIN_GAIN 0.01     /* a relative fall of the smoothed loss that counts as progress */
+#define WV_FIT_PATIENCE 0        /* the default patience: off, every iteration runs (--patience 10 stops early) */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000
@@ -85,6 +98,14 @@ typedef struct {
   double render, gradient, descriptor, discrete, registration, distortion, total;
 } wv_fit_timing;
 
+/* The stopping rule on the iterations from .. to - 1 of log (one stage): S_j, the mean of
+ * the WV_FIT_SMOOTH losses ending at j (all within the stage), has not fallen in the last
+ * `patience` iterations: the least S_j there is not below (1 - WV_FIT_MIN_GAIN) times the
+ * least S_j before them. Needs at least patience + WV_FIT_SMOOTH iterations; 0 when
+ * patience <= 0. It reads the losses alone, so a resumed fit stops where a straight one
+ * does. */
+int wv_fit_converged(const wv_fit_record *log, int from, int to, int patience);
+
 /* Everything needed to continue a fit: parameters, Adam moments, RNG, history. */
 typedef struct {
   wv_params start, params;
@@ -113,13 +134,22 @@ typedef struct {
 } wv_fit_state;
 
 wv_status wv_fit_state_init(wv_fit_state *st, const wv_params *start, const wv_fit_opts *o, wv_error *err);
+
+/* The schedule's stage after st->iter iterations, replayed from the log (wv_fit_converged
+ * on each stage): 0 the window's stage, 1 the whole image's (with o->schedule 0 the only one is
+ * 1), 2 the iterations are over (o->iters reached, or the last stage converged). *from
+ * (may be NULL): the first iteration of the stage (when over, of the last one). */
+int wv_fit_stage(const wv_fit_state *st, const wv_fit_opts *o, int *from);
+/* The iterations are over: wv_fit_stage is 2. */
+int wv_fit_finished(const wv_fit_state *st, const wv_fit_opts *o);
 void wv_fit_state_free(wv_fit_state *st);
 
 /* Called after every iteration (may be NULL); return nonzero to stop early. */
 typedef int (*wv_fit_callback)(void *user, const wv_fit_state *st, const wv_fit_opts *o);
 
 /* Runs iterations st->iter .. o->iters - 1 against photo (the scene's size, as
- * wv_photo_load gives it), then the density alignment: the Gram loss cannot see
+ * wv_photo_load gives it), or fewer when the stopping rule ends them (wv_fit_stage), then
+ * the density alignment: the Gram loss cannot see
  * where yarns are, only what they look like, so a density a few yarns/inch off
  * costs it nothing while it shifts every yarn in the picture. After the last
  * iteration the warp and weft densities are searched, one at a time, on the

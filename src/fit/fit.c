@@ -50,6 +50,42 @@ void wv_fit_beta_prior(const char *pattern, double *mu, double *sigma) {
   else *mu = 1.0, *sigma = 1.0;
 }
 
+int wv_fit_converged(const wv_fit_record *log, int from, int to, int patience) {
+  int first = from + WV_FIT_SMOOTH - 1; /* the first iteration with a whole window in the stage */
+  if (patience <= 0 || to - patience <= first) return 0;
+  double before = INFINITY, recent = INFINITY;
+  for (int j = first; j < to; j++) {
+    double m = 0;
+    for (int k = j - WV_FIT_SMOOTH + 1; k <= j; k++) m += log[k].loss;
+    m /= WV_FIT_SMOOTH;
+    if (j < to - patience) before = m < before ? m : before;
+    else recent = m < recent ? m : recent;
+  }
+  return !(recent < (1 - WV_FIT_MIN_GAIN) * before);
+}
+
+/* The last iteration (exclusive) the stage may reach. */
+static int stage_limit(const wv_fit_opts *o, int stage) {
+  return stage == 0 ? (int)(o->iters * WV_FIT_WINDOW_SHARE) : o->iters;
+}
+
+/* The stage after iteration `done` (iterations from .. done - 1 in the stage so far): the
+ * next one when the stage reached its limit or converged. */
+static int stage_after(const wv_fit_record *log, const wv_fit_opts *o, int stage, int *from, int done) {
+  while (stage < 2 && (done >= stage_limit(o, stage) || wv_fit_converged(log, *from, done, o->patience)))
+    if (++stage < 2) *from = done;
+  return stage;
+}
+
+int wv_fit_stage(const wv_fit_state *st, const wv_fit_opts *o, int *from) {
+  int f = 0, stage = stage_after(st->log, o, o->schedule ? 0 : 1, &f, 0);
+  for (int i = 1; i <= st->iter && stage < 2; i++) stage = stage_after(st->log, o, stage, &f, i);
+  if (from) *from = f;
+  return stage;
+}
+
+int wv_fit_finished(const wv_fit_state *st, const wv_fit_opts *o) { return wv_fit_stage(st, o, NULL) == 2; }
+
 /* What stays fixed during a fit: the target at the iteration resolution. */
 typedef struct {
   wv_scene scene;
@@ -59,6 +95,7 @@ typedef struct {
   const wv_fit_opts *o;
   wv_fit_timing *timing;
   wv_footprints *fp; /* the iteration scene's camera geometry, made once */
+  wv_fit_opts wopts; /* a window's options (o points here) */
 } fit_ctx;
 
 static void ctx_free(fit_ctx *c) {
@@ -69,8 +106,10 @@ static void ctx_free(fit_ctx *c) {
 
 static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, wv_descriptor *d, int scale,
                           int spp, const wv_fit_opts *o, wv_fit_timing *timing, wv_error *err) {
+  wv_fit_opts keep = c->wopts; /* o may point to it */
   memset(c, 0, sizeof *c);
-  c->o = o, c->timing = timing;
+  c->wopts = keep;
+  c->o = o == &c->wopts ? &c->wopts : o, c->timing = timing;
   wv_fit_opts so = *o;
   so.iter_scale = scale;
   wv_status st = wv_fit_check_sizes(s, d, &so, err);
@@ -373,6 +412,40 @@ static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
   return rc;
 }
 
+/* The first stage's window: the centre of the scene, 1/WV_FIT_WINDOW_DIV of each side, the
+ * same pixels as the whole image there; the whole image when the window would be too small
+ * for the fit. */
+static void stage_window(const wv_scene *s, const wv_descriptor *d, const wv_fit_opts *o, int *w, int *h) {
+  *w = s->width / WV_FIT_WINDOW_DIV, *h = s->height / WV_FIT_WINDOW_DIV;
+  *w -= (s->width - *w) % 2, *h -= (s->height - *h) % 2; /* centred on whole pixels */
+  wv_scene win;
+  wv_scene_centre_window(s, *w, *h, &win);
+  if (wv_fit_check_sizes(&win, d, o, NULL)) *w = s->width, *h = s->height;
+}
+
+/* The context of a stage: 0 the centre window, 1 the whole image. */
+static wv_status stage_ctx(fit_ctx *c, int stage, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
+                           const wv_fit_opts *o, wv_fit_timing *timing, wv_error *err) {
+  int w = s->width, h = s->height;
+  if (stage == 0) stage_window(s, d, o, &w, &h);
+  if (w == s->width && h == s->height) return ctx_init(c, s, photo, d, o->iter_scale, o->iter_spp, o, timing, err);
+  wv_scene win;
+  wv_image pw;
+  wv_scene_centre_window(s, w, h, &win);
+  wv_status rc = wv_image_centre_crop(photo, w, h, &pw, err);
+  if (rc) return rc;
+  /* the pixel term's cells as large as the whole image's (there they are the centre cells):
+   * smaller ones would fit the window's light to a detail the whole image's term ignores */
+  c->wopts = *o;
+  c->wopts.down_w = (o->down_w * w + s->width / 2) / s->width;
+  c->wopts.down_h = (o->down_h * h + s->height / 2) / s->height;
+  if (c->wopts.down_w < 1) c->wopts.down_w = 1;
+  if (c->wopts.down_h < 1) c->wopts.down_h = 1;
+  rc = ctx_init(c, &win, &pw, d, o->iter_scale, o->iter_spp, &c->wopts, timing, err);
+  wv_image_free(&pw);
+  return rc;
+}
+
 wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
                      const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err) {
   wv_status vs = wv_fit_opts_validate(o, err);
@@ -382,10 +455,19 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     if (!nl) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the fit log");
     st->log = nl, st->log_cap = o->iters;
   }
-  if (st->iter < o->iters) st->aligned = st->registered = st->distorted = 0; /* more iterations: align again after them */
-  fit_ctx c;
+  int from = 0, stage = wv_fit_stage(st, o, &from);
+  if (stage < 2) st->aligned = st->registered = st->distorted = 0; /* more iterations: align again after them */
+  /* One context per stage (the coarse one and the full one), each made once: the photo's
+   * side of the loss and the camera geometry do not change between iterations. */
+  fit_ctx cx[2];
+  int made[2] = {0, 0};
+  double scale = o->iter_scale;
+  memset(cx, 0, sizeof cx);
   double t_start = omp_get_wtime();
-  wv_status rc = ctx_init(&c, s, photo, d, o->iter_scale, o->iter_spp, o, &st->timing, err);
+  wv_status rc = wv_fit_check_sizes(s, d, o, err);
+  if (!rc && (photo->w != s->width || photo->h != s->height))
+    rc = wv_fail(err, WV_ERR_INVALID, "the photo is %d x %d but the scene renders %d x %d", photo->w, photo->h,
+                 s->width, s->height);
   if (!rc && !st->psf_done) {
     /* the camera blur: given by the options or the scene, else measured on the start */
     double tp = omp_get_wtime();
@@ -401,26 +483,58 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     st->psf_fit = o->psf_fit && o->psf_sigma < 0 && !(s->psf_sigma > 0) && st->psf_sigma > 0;
     st->timing.discrete += omp_get_wtime() - tp;
   }
-  double scale = o->iter_scale > 1 ? o->iter_scale : 1;
   wv_scene sb; /* the scene with the fit's camera blur */
   wv_fit_scene(st, s, &sb);
-  c.scene.psf_sigma = sb.psf_sigma / scale;
   if (!rc && st->iter == 0 && o->colour_split && o->iters > 0) {
+    /* at the full iteration scale: the split reads the colours of single yarns */
     double td = omp_get_wtime();
     wv_fit_timing saved = st->timing;
-    rc = colour_split(&c, st, err);
+    if (!(rc = stage_ctx(&cx[1], 1, s, photo, d, o, &st->timing, err))) {
+      made[1] = 1;
+      cx[1].scene.psf_sigma = sb.psf_sigma / scale;
+      rc = colour_split(&cx[1], st, err);
+    }
     st->timing.render = saved.render, st->timing.descriptor = saved.descriptor; /* counted as a discrete step */
     st->timing.discrete += omp_get_wtime() - td;
   }
-  while (!rc && st->iter < o->iters) {
+  while (!rc && stage < 2) {
+    int k = stage > 0;
+    fit_ctx *c = &cx[k];
+    if (!made[k]) {
+      if ((rc = stage_ctx(c, k, s, photo, d, o, &st->timing, err))) break;
+      made[k] = 1;
+    }
+    c->scene.psf_sigma = (st->psf_done ? st->psf_sigma : s->psf_sigma) / scale;
     wv_fit_record rec = {0};
     rec.iter = st->iter;
     double g[WV_P_COUNT] = {0};
     double dpsf = 0;
-    if ((rc = evaluate(&c, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, err))) break;
+    if ((rc = evaluate(c, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, err))) break;
+    int t = st->iter + 1;
+    /* Discrete search: a random step is kept only if it lowers the loss. It is compared with
+     * this iteration's render (the parameters the gradient was taken at), so it costs one
+     * forward render; the continuous parameters then take their Adam step from there (the
+     * discrete ones are not among them). */
+    if (o->discrete_every > 0 && t % o->discrete_every == 0) {
+      double td = omp_get_wtime();
+      wv_fit_timing saved = st->timing;
+      wv_params trial = st->params;
+      if (discrete_step(&trial, &st->rng, st->iter, o->iters, o->density_steps)) {
+        wv_fit_record alt = {0};
+        if ((rc = evaluate(c, &trial, &alt, NULL, NULL, err))) break;
+        rec.discrete_tried = 1;
+        if (alt.loss < rec.loss) {
+          st->params = trial;
+          rec.discrete_kept = 1;
+        }
+      }
+      /* account the search as its own item, not as render/descriptor time */
+      double spent = omp_get_wtime() - td;
+      st->timing.render = saved.render, st->timing.descriptor = saved.descriptor;
+      st->timing.discrete += spent;
+    }
     /* Adam in normalised coordinates z = (theta - lo) / (hi - lo), projected onto [0, 1];
      * z is remade from the parameters every step, so a resumed fit repeats this exactly. */
-    int t = st->iter + 1;
     float z[WV_P_COUNT], gz[WV_P_COUNT];
     for (int i = 0; i < WV_P_COUNT; i++) {
       double lo, hi;
@@ -446,50 +560,32 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
                        .weight_decay = 0.0f, .t = st->iter, .m = &st->psf_m, .v = &st->psf_v};
       wv_nn_adam_step_box(&a1, &zs, &gs, 0.0f, 1.0f);
       st->psf_sigma = zs * WV_PSF_RANGE;
-      c.scene.psf_sigma = st->psf_sigma / scale;
-    }
-    /* Discrete search: keep a random step only if it lowers the loss. */
-    if (o->discrete_every > 0 && t % o->discrete_every == 0) {
-      double td = omp_get_wtime();
-      wv_fit_timing saved = st->timing;
-      wv_params trial = st->params;
-      if (discrete_step(&trial, &st->rng, st->iter, o->iters, o->density_steps)) {
-        wv_fit_record cur = {0}, alt = {0};
-        if ((rc = evaluate(&c, &st->params, &cur, NULL, NULL, err))) break;
-        if ((rc = evaluate(&c, &trial, &alt, NULL, NULL, err))) break;
-        rec.discrete_tried = 1;
-        if (alt.loss < cur.loss) {
-          st->params = trial;
-          rec.discrete_kept = 1;
-        }
-      }
-      /* account the search as its own item, not as render/descriptor time */
-      double spent = omp_get_wtime() - td;
-      st->timing.render = saved.render, st->timing.descriptor = saved.descriptor;
-      st->timing.discrete += spent;
     }
     st->log[st->iter] = rec;
     st->iter++;
+    stage = stage_after(st->log, o, stage, &from, st->iter);
     st->timing.total += omp_get_wtime() - t_start;
     t_start = omp_get_wtime();
     if (cb && cb(user, st, o)) break;
   }
-  ctx_free(&c);
+  for (int k = 0; k < 2; k++)
+    if (made[k]) ctx_free(&cx[k]);
   wv_fit_scene(st, s, &sb); /* the blur as fitted; the offset as given (the alignment comes before the registration) */
   sb.fabric_offset[0] = s->fabric_offset[0], sb.fabric_offset[1] = s->fabric_offset[1];
-  if (!rc && st->iter >= o->iters && !st->aligned && o->align_radius > 0) {
+  int over = !rc && stage == 2;
+  if (over && !st->aligned && o->align_radius > 0) {
     double ta = omp_get_wtime();
     rc = align_densities(st, &sb, photo, o, err);
     st->timing.discrete += omp_get_wtime() - ta;
     st->timing.total += omp_get_wtime() - ta;
   }
-  if (!rc && st->iter >= o->iters && !st->registered && o->register_radius > 0) {
+  if (!rc && over && !st->registered && o->register_radius > 0) {
     double ta = omp_get_wtime();
     rc = wv_fit_register(st, s, photo, o, err);
     st->timing.registration += omp_get_wtime() - ta;
     st->timing.total += omp_get_wtime() - ta;
   }
-  if (!rc && st->iter >= o->iters && !st->distorted && o->distort_degree > 0) {
+  if (!rc && over && !st->distorted && o->distort_degree > 0) {
     double ta = omp_get_wtime();
     rc = wv_fit_distort(st, s, photo, o, err);
     st->timing.distortion += omp_get_wtime() - ta;

@@ -30,6 +30,8 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->distort_degree = 3;
   o->psf_sigma = WV_FIT_PSF_AUTO;
   o->psf_fit = 1;
+  o->schedule = 0; /* the window stage did not keep the real photos' quality (docs/fit.md) */
+  o->patience = WV_FIT_PATIENCE;
 }
 
 /* Every option's range, in one table: wv_fit_opts_validate and the checkpoint
@@ -64,6 +66,8 @@ static const opt_range OPT_RANGES[] = {
     OPT(density_steps, 'i', 0, 1, 2),
     OPT(psf_sigma, 'd', WV_FIT_PSF_AUTO, WV_PSF_MAX_SIGMA, 2),
     OPT(psf_fit, 'i', 0, 1, 2),
+    OPT(schedule, 'i', 0, 1, 2),
+    OPT(patience, 'i', 0, WV_FIT_MAX_ITERS, 2),
 };
 #undef OPT
 #define N_OPTS (sizeof OPT_RANGES / sizeof OPT_RANGES[0])
@@ -119,5 +123,7 @@ json_t *wv_fit_opts_json(const wv_fit_opts *o) {
   json_object_set_new(j, "colour_split", json_integer(o->colour_split));
   json_object_set_new(j, "density_steps", json_integer(o->density_steps));
   json_object_set_new(j, "psf_fit", json_integer(o->psf_fit));
+  json_object_set_new(j, "schedule", json_integer(o->schedule));
+  json_object_set_new(j, "patience", json_integer(o->patience));
   return j;
 }

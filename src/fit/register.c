@@ -169,13 +169,21 @@ static int in_range(const double d[2]) {
 /* One window size, one copy per thread (renders and FFTs run one per thread:
  * the windows are too small to split across threads). */
 typedef struct {
+  double d[2], score, shift[2];
+} scored;
+
+typedef struct {
   level lv[MAX_THREADS];
   int n;
   wv_footprints *fp; /* the window's camera geometry, shared */
+  scored *seen;      /* every density pair scored in this window: a climb's neighbourhoods overlap */
+  int nseen, capseen;
 } level_set;
 
 static void set_free(level_set *ls) {
   for (int i = 0; i < ls->n; i++) level_free(&ls->lv[i]);
+  free(ls->seen);
+  ls->seen = NULL, ls->nseen = ls->capseen = 0;
   ls->n = 0;
   wv_footprints_free(ls->fp);
   ls->fp = NULL;
@@ -202,17 +210,47 @@ static wv_status set_init(level_set *ls, const wv_scene *full, const wv_image *p
   return WV_OK;
 }
 
-/* Scores of count density pairs (out of range: -3), in parallel. */
+/* The score of d scored before in this window, or NULL. A score depends on the densities
+ * alone (the same render, the same photo window), so it is never made twice. */
+static const scored *seen_find(const level_set *ls, const double d[2]) {
+  for (int i = 0; i < ls->nseen; i++)
+    if (ls->seen[i].d[0] == d[0] && ls->seen[i].d[1] == d[1]) return &ls->seen[i];
+  return NULL;
+}
+
+/* Scores of count density pairs (out of range: -3), in parallel; those scored before are
+ * taken from ls->seen. */
 static wv_status eval_many(level_set *ls, const wv_params *base, const double (*d)[2], int count, double *out,
                            wv_error *err) {
   wv_status rc = WV_OK;
+  char *todo = malloc((size_t)count + 1);
+  double(*sh)[2] = malloc(sizeof *sh * ((size_t)count + 1));
+  if (!todo || !sh) free(todo), free(sh), todo = NULL;
+  if (!todo) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration");
+  int fresh = 0;
+  for (int i = 0; i < count; i++) {
+    const scored *sc = count <= 64 ? seen_find(ls, d[i]) : NULL; /* the climbs' few, not the grids */
+    todo[i] = !sc;
+    fresh += !sc;
+    if (sc) out[i] = sc->score;
+  }
+  if (count <= 64 && ls->nseen + fresh > ls->capseen) {
+    int cap = 2 * (ls->nseen + fresh) + 64;
+    scored *ns = realloc(ls->seen, sizeof *ns * (size_t)cap);
+    if (!ns) {
+      free(todo), free(sh);
+      return wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration");
+    }
+    ls->seen = ns, ls->capseen = cap;
+  }
 #pragma omp parallel for schedule(dynamic, 1) num_threads(ls->n)
   for (int i = 0; i < count; i++) {
+    if (!todo[i]) continue;
     level *l = &ls->lv[omp_get_thread_num()];
     out[i] = -3;
     if (!in_range(d[i])) continue;
     wv_error e = {0};
-    wv_status r = score(l, base, d[i], &out[i], NULL, &e);
+    wv_status r = score(l, base, d[i], &out[i], sh[i], &e);
     if (r) {
 #pragma omp critical(wv_register_error)
       if (!rc) {
@@ -221,6 +259,10 @@ static wv_status eval_many(level_set *ls, const wv_params *base, const double (*
       }
     }
   }
+  if (!rc && count <= 64)
+    for (int i = 0; i < count; i++)
+      if (todo[i]) ls->seen[ls->nseen++] = (scored){{d[i][0], d[i][1]}, out[i], {sh[i][0], sh[i][1]}};
+  free(todo), free(sh);
   return rc;
 }
 
@@ -321,18 +363,19 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
   double mid_best = -2, mid[2] = {cur[0], cur[1]};
   for (int c = 0; c < nc && !rc; c++) {
     double d[2] = {cand[c][0], cand[c][1]}, v;
-    if ((rc = score(&S[1].lv[0], base, d, &v, NULL, err))) break;
+    if ((rc = eval_many(&S[1], base, (const double(*)[2])d, 1, &v, err))) break;
     if ((rc = hill_climb(&S[1], base, mid_steps, 3, d, &v, err))) break;
     if (v > mid_best) mid_best = v, mid[0] = d[0], mid[1] = d[1];
   }
   /* 3. In the large window, then the whole image (a tenth of a yarn/inch is a
    * yarn of drift across 500 pixels): the last tenths, then the shift. */
   cur[0] = mid[0], cur[1] = mid[1];
-  if (!rc) rc = score(&S[2].lv[0], base, cur, &best, NULL, err);
+  if (!rc) rc = eval_many(&S[2], base, (const double(*)[2])cur, 1, &best, err);
   if (!rc) rc = hill_climb(&S[2], base, fine_steps, 2, cur, &best, err);
-  if (!rc) rc = score(top, base, cur, &best, NULL, err);
+  if (!rc) rc = eval_many(&S[3], base, (const double(*)[2])cur, 1, &best, err);
   if (!rc) rc = hill_climb(&S[3], base, fine_steps + 2, 1, cur, &best, err);
-  if (!rc) rc = score(top, base, cur, &best, shift, err);
+  const scored *at = rc ? NULL : seen_find(&S[3], cur); /* the best's shift, from its score */
+  if (at) shift[0] = at->shift[0], shift[1] = at->shift[1], best = at->score;
   /* The shift becomes a fabric offset through the local map pixel -> fabric at
    * the centre: photo(x) ~ render(x - shift) means fabric(x) must become
    * fabric(x - shift). */
