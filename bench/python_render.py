@@ -1,7 +1,8 @@
 """Overhead of woven.torch.render over the same C calls made directly (libwoven.so's flat
 interface through ctypes, in one process): forward alone, forward with the derivative
 record, and forward + backward, at 512 x 512 (the flat45 rig), 4 spp, 2 threads.
-Prints JSON: the median milliseconds of each and the overhead ratios (torch / C - 1).
+Prints JSON: the median milliseconds of each and the overhead (the median over pairs, run
+in turn, of torch / C, minus 1).
 
     PYTHONPATH=python WOVEN_LIBRARY=build/libwoven.so /usr/bin/python3 bench/python_render.py [--reps N]
 """
@@ -22,14 +23,22 @@ from woven._lib import call, dptr, fptr, lib
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def median_ms(fn, reps):
-    fn()  # warm up (first touch of the buffers, thread pool)
-    t = []
+def ms(fn):
+    t0 = time.perf_counter()
+    fn()
+    return (time.perf_counter() - t0) * 1e3
+
+
+def paired(c_fn, t_fn, reps):
+    """The C call and the torch call in turn, reps pairs after a warm-up of each: the
+    median of each and the median of the per-pair ratios, which holds when the machine's
+    speed drifts."""
+    c_fn(), t_fn()  # warm up (first touch of the buffers, thread pool)
+    c, t = [], []
     for _ in range(reps):
-        t0 = time.perf_counter()
-        fn()
-        t.append((time.perf_counter() - t0) * 1e3)
-    return statistics.median(t)
+        c.append(ms(c_fn))
+        t.append(ms(t_fn))
+    return statistics.median(c), statistics.median(t), statistics.median(b / a for a, b in zip(c, t))
 
 
 def main():
@@ -80,8 +89,8 @@ def main():
     for name, c_fn, t_fn in (("forward", c_forward, t_forward),
                              ("forward_record", lambda: c_record(False), t_record),
                              ("forward_backward", lambda: c_record(True), t_both)):
-        c_ms, t_ms = median_ms(c_fn, a.reps), median_ms(t_fn, a.reps)
-        res[name] = {"c_ms": round(c_ms, 3), "torch_ms": round(t_ms, 3), "overhead": round(t_ms / c_ms - 1, 4)}
+        c_ms, t_ms, ratio = paired(c_fn, t_fn, a.reps)
+        res[name] = {"c_ms": round(c_ms, 3), "torch_ms": round(t_ms, 3), "overhead": round(ratio - 1, 4)}
     print(json.dumps(res, indent=2))
 
 
