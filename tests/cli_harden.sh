@@ -161,6 +161,7 @@ for k in fifo_map fifo_env fifo_fab; do
 done
 check "FIFO as scene file" 3 "fifo: not a regular file" -- timeout 20 "$WOVEN" scene "$H/fifo" -o "$T/m.png" "${S[@]}"
 check "FIFO as compare photo" 3 "fifo: not a regular file" -- timeout 20 "$WOVEN" compare "$H/fifo" "$T/photo.png"
+check "FIFO as VGG-19 weights" 3 "fifo: is not a regular file" -- timeout 20 "$WOVEN" fit "$SRC/examples/photo_twill_cylinder.png" --scene cylinder --pattern twill --descriptor vgg19 --vgg19-weights "$H/fifo" -o "$T/fitfifo" --iters 1
 check "fabric that is not JSON: none of its text" 4 "/etc/passwd:1:4: malformed JSON" -- "$WOVEN" scene "$H/s_passwd.json" -o "$T/m.png" "${S[@]}"
 grep -q "near" "$T/err" && fail "a fabric named by a scene is quoted: $(cat "$T/err")"
 truncate -s 65M "$H/big.json"

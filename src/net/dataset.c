@@ -193,8 +193,9 @@ wv_status wv_dataset_write_features(const char *path, const float *x, int n, wv_
 }
 
 wv_status wv_dataset_read_features(const char *path, int n, uint16_t *out, wv_error *err) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return wv_fail(err, WV_ERR_IO, "%s: cannot open", path);
+  FILE *f;
+  wv_status ost = wv_fopen_regular(path, &f, err);
+  if (ost) return ost;
   unsigned char h[16];
   wv_status st = WV_OK;
   if (fread(h, 1, 16, f) != 16 || memcmp(h, "WVFT", 4) || get_u32(h + 4) != 1) {

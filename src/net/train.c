@@ -95,8 +95,9 @@ static wv_status write_loss_csv(const char *path, const wv_train_epoch *r, int n
 /* Rows of loss.csv up to epoch 'upto' (a resume keeps the history the checkpoint covers).
  * Files of earlier versions hold only the first three columns. */
 static int read_loss_csv(const char *path, wv_train_epoch *r, int upto) {
-  FILE *f = fopen(path, "r");
-  if (!f) return 0;
+  FILE *f;
+  wv_error ignored;
+  if (wv_fopen_regular(path, &f, &ignored)) return 0;
   char line[256];
   int n = 0;
   while (fgets(line, sizeof line, f) && n < upto) {

@@ -9,6 +9,8 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/types.h>
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "woven/nn.h"
 
@@ -128,8 +130,13 @@ static wv_status parse_entry(const char *path, const char *key, json_t *v, uint6
 
 wv_status wv_st_open(wv_safetensors *st, const char *path, wv_error *err) {
   memset(st, 0, sizeof *st);
-  FILE *f = fopen(path, "rb");
-  if (!f) return wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+  int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC); /* a FIFO must not block the open */
+  FILE *f = fd < 0 ? NULL : fdopen(fd, "rb");
+  if (!f) {
+    wv_status e = wv_fail(err, WV_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    if (fd >= 0) close(fd);
+    return e;
+  }
   struct stat sb; /* a directory opens, then reports a nonsensical size */
   int have = fstat(fileno(f), &sb) == 0;
   if (!have || !S_ISREG(sb.st_mode)) {
