@@ -85,6 +85,18 @@ static int stop_at(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
 
 /* 6 + 6 iterations through a checkpoint file equal 12 straight, bit for bit,
  * including the discrete search. */
+/* A fit stopped by its caller: its checkpoint written to path (in the temporary
+ * folder tmp), the state freed, then read back into st and o2 (the descriptor's name
+ * into name). */
+static void checkpoint_round_trip(const char *tmp, char path[256], wv_fit_state *st, const wv_fit_opts *o,
+                                  wv_fit_opts *o2, char *name, size_t cap) {
+  wv_error err = {0};
+  snprintf(path, 256, "%s/checkpoint.json", tu_tmpdir(tmp));
+  assert_int_equal(wv_fit_checkpoint_write(path, st, o, "default", &err), WV_OK);
+  wv_fit_state_free(st);
+  if (wv_fit_checkpoint_read(path, st, o2, name, cap, &err)) fail_msg("%s", err.msg);
+}
+
 static void test_resume_equals_straight(void **state) {
   (void)state;
   wv_scene s;
@@ -109,14 +121,9 @@ static void test_resume_equals_straight(void **state) {
   assert_int_equal(wv_fit_state_init(&b, &start, &o, &err), WV_OK);
   assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o, stop_at, &six, &err), WV_OK);
   assert_int_equal(b.iter, 6);
-  const char *dir = tu_tmpdir("fit_resume");
-  char path[256];
-  snprintf(path, sizeof path, "%s/checkpoint.json", dir);
-  assert_int_equal(wv_fit_checkpoint_write(path, &b, &o, "default", &err), WV_OK);
-  wv_fit_state_free(&b);
   wv_fit_opts o2;
-  char name[32];
-  if (wv_fit_checkpoint_read(path, &b, &o2, name, sizeof name, &err)) fail_msg("%s", err.msg);
+  char name[32], path[256];
+  checkpoint_round_trip("fit_resume", path, &b, &o, &o2, name, sizeof name);
   assert_string_equal(name, "default");
   assert_int_equal(b.iter, 6);
   assert_int_equal(o2.iters, 12);
@@ -193,14 +200,9 @@ static void test_fit_stops(void **state) {
   assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o, stop_at, &half, &err), WV_OK);
   assert_int_equal(b.iter, half);
   assert_false(wv_fit_finished(&b, &o));
-  const char *dir = tu_tmpdir("fit_stops");
-  char path[256];
-  snprintf(path, sizeof path, "%s/checkpoint.json", dir);
-  assert_int_equal(wv_fit_checkpoint_write(path, &b, &o, "default", &err), WV_OK);
-  wv_fit_state_free(&b);
   wv_fit_opts o2;
-  char name[32];
-  if (wv_fit_checkpoint_read(path, &b, &o2, name, sizeof name, &err)) fail_msg("%s", err.msg);
+  char name[32], path[256];
+  checkpoint_round_trip("fit_stops", path, &b, &o, &o2, name, sizeof name);
   assert_int_equal(o2.schedule, 1);
   assert_int_equal(o2.patience, o.patience);
   assert_int_equal(wv_fit_run(&b, &s, &photo, d, &o2, NULL, NULL, &err), WV_OK);
