@@ -104,6 +104,8 @@ const cli_opt CLI_FIT_OPTS[] = {
     CLI_O_INT("--patience", NULL, capture_args, fit.patience, 0, WV_FIT_MAX_ITERS, "N",
               "end a stage when its smoothed loss has not fallen by 1% in N\niterations; the last stage's end "
               "ends the iterations (default 10;\n0 = run every iteration)"),
+    CLI_O_CLEAR("--no-noise-sweep", capture_args, fit.noise_sweep,
+                "leave the noise level to the discrete steps (by default every level\nis tried when the iterations end)"),
     CLI_O_CUSTOM("--seed", capture_args, fit.seed, 0, INT_MAX, parse_seed, "N", "the seed of the discrete steps"),
     CLI_O_CUSTOM("--align-radius", capture_args, fit.align_radius, 0, WV_FIT_MAX_ALIGN_RADIUS, parse_align, "N",
                  "after the iterations, search each density +-N yarns/inch for the\nbest SSIM in a centre window "
@@ -145,7 +147,7 @@ static const cli_cmd CMD = {
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
     "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--[no-]schedule]\n"
-    "                 [--patience N] [--align-radius N]\n"
+    "                 [--patience N] [--no-noise-sweep] [--align-radius N]\n"
     "                 [--register-radius N] [--distort-degree N] [--w-struct X] [--w-colour X] [--colour-split]\n"
     "                 [--camera-blur auto|measured|S]\n"
     "                 [--seed N] [--threads N] [--drape S.json|none]\n"

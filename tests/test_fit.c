@@ -179,7 +179,8 @@ static void test_fit_stops(void **state) {
   o.align_radius = o.register_radius = o.distort_degree = 0;
   o.colour_split = 0;
   o.psf_sigma = 0;
-  assert_int_equal(o.patience, WV_FIT_PATIENCE); /* off by default */
+  assert_int_equal(o.patience, WV_FIT_PATIENCE); /* on by default */
+  assert_true(WV_FIT_PATIENCE > 0);
   o.patience = 10;
   o.schedule = 1; /* both stages: the rule ends each */
   wv_error err = {0};
@@ -475,6 +476,43 @@ static void test_limits(void **state) {
   wv_descriptor_free(d);
 }
 
+/* The noise level comes back by the sweep at the iterations' end: from a start at level 0,
+ * a target of level 6 (its segments' heights spread +-60%) is found within one level, and
+ * without the sweep (nor discrete steps) the level stays where it started. */
+static void test_noise_sweep(void **state) {
+  (void)state;
+  wv_scene s;
+  small_scene(&s);
+  wv_params tp;
+  target(&tp);
+  tp.noise_level = 6;
+  tp.heightfield[WV_WARP] = tp.heightfield[WV_WEFT] = 1.5;
+  wv_image photo;
+  wv_render_opts ro = {0};
+  assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
+  wv_descriptor *d;
+  assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
+  wv_params start = tp;
+  start.noise_level = 0;
+  for (int sweep = 1; sweep >= 0; sweep--) {
+    wv_fit_opts o;
+    opts(&o, 2);
+    o.discrete_every = 0, o.colour_split = 0, o.psf_sigma = 0, o.patience = 0;
+    o.align_radius = o.register_radius = o.distort_degree = 0;
+    o.noise_sweep = sweep;
+    wv_fit_state st;
+    wv_error err = {0};
+    assert_int_equal(wv_fit_state_init(&st, &start, &o, &err), WV_OK);
+    if (wv_fit_run(&st, &s, &photo, d, &o, NULL, NULL, &err)) fail_msg("%s", err.msg);
+    print_message("sweep %d: noise level %d (target 6)\n", sweep, st.params.noise_level);
+    if (sweep) assert_true(abs(st.params.noise_level - 6) <= 1);
+    else assert_int_equal(st.params.noise_level, 0);
+    wv_fit_state_free(&st);
+  }
+  wv_descriptor_free(d);
+  wv_image_free(&photo);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fit_improves), cmocka_unit_test(test_resume_equals_straight),
                                      cmocka_unit_test(test_stopping_rule), cmocka_unit_test(test_fit_stops),
@@ -482,6 +520,6 @@ int main(void) {
                                      cmocka_unit_test(test_psf_fitted), cmocka_unit_test(test_colour_split),
                                      cmocka_unit_test(test_colour_split_sees_shading),
                                      cmocka_unit_test(test_colour_split_matches_hues),
-                                     cmocka_unit_test(test_limits)};
+                                     cmocka_unit_test(test_limits), cmocka_unit_test(test_noise_sweep)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -50,9 +50,11 @@ typedef struct {
   int schedule;       /* 1: a first stage iterates on the centre window of 1/WV_FIT_WINDOW_DIV of
                        * each side (when the fit holds it) for at most WV_FIT_WINDOW_SHARE of the
                        * iterations, the second on the whole image; 0 (default): one stage, the whole image */
+  int noise_sweep;    /* 1: when the iterations end, every noise level 0..10 is rendered and the one with
+                       * the lowest loss kept (1); 0: the noise level moves by the discrete steps alone */
   int patience;       /* the stopping rule (wv_fit_converged): a stage ends when its smoothed loss has not
                        * fallen by WV_FIT_MIN_GAIN in this many iterations, and the last stage ends the
-                       * iterations (default 0: every stage runs to its limit) */
+                       * iterations (WV_FIT_PATIENCE; 0: every stage runs to its limit, `iters` in all) */
 } wv_fit_opts;
 
 void wv_fit_opts_default(wv_fit_opts *o);
@@ -65,7 +67,7 @@ void wv_fit_opts_default(wv_fit_opts *o);
 #define WV_FIT_WINDOW_SHARE 0.3  /* ... for at most this share of the iterations */
 #define WV_FIT_SMOOTH 5          /* the smoothed loss: the mean of this many consecutive losses */
 #define WV_FIT_MIN_GAIN 0.01     /* a relative fall of the smoothed loss that counts as progress */
-#define WV_FIT_PATIENCE 0        /* the default patience: off, every iteration runs (--patience 10 stops early) */
+#define WV_FIT_PATIENCE 10       /* the default patience (0: every iteration runs; docs/measurements.md) */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000

@@ -412,6 +412,26 @@ static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
   return rc;
 }
 
+/* The noise level by exhaustion: the loss of every level 0..10 with the other parameters as
+ * they are, the lowest kept (the current level on a tie). The level scales each yarn
+ * segment's height by its own random factor, so a cloth's irregularity shows only in
+ * statistics that one random step of +-1, judged by one noisy loss, rarely climbs far
+ * along; the renders share their samples, so the losses differ by the level alone. */
+static wv_status noise_sweep(fit_ctx *c, wv_fit_state *st, wv_error *err) {
+  double best = INFINITY;
+  int best_q = st->params.noise_level;
+  for (int q = 0; q <= 10; q++) {
+    wv_params trial = st->params;
+    trial.noise_level = q;
+    wv_fit_record rec = {0};
+    wv_status rc = evaluate(c, &trial, &rec, NULL, NULL, err);
+    if (rc) return rc;
+    if (rec.loss < best || (rec.loss == best && q == st->params.noise_level)) best = rec.loss, best_q = q;
+  }
+  st->params.noise_level = best_q;
+  return WV_OK;
+}
+
 /* The first stage's window: the centre of the scene, 1/WV_FIT_WINDOW_DIV of each side, the
  * same pixels as the whole image there; the whole image when the window would be too small
  * for the fit. */
@@ -564,6 +584,14 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     st->log[st->iter] = rec;
     st->iter++;
     stage = stage_after(st->log, o, stage, &from, st->iter);
+    if (stage == 2 && o->noise_sweep) { /* the iterations' end: before the checkpoint that records it */
+      double td = omp_get_wtime();
+      wv_fit_timing saved = st->timing;
+      c->scene.psf_sigma = (st->psf_done ? st->psf_sigma : s->psf_sigma) / scale;
+      if ((rc = noise_sweep(c, st, err))) break;
+      st->timing.render = saved.render, st->timing.descriptor = saved.descriptor;
+      st->timing.discrete += omp_get_wtime() - td;
+    }
     st->timing.total += omp_get_wtime() - t_start;
     t_start = omp_get_wtime();
     if (cb && cb(user, st, o)) break;
