@@ -289,6 +289,7 @@ static void test_back_lit(void **state) {
   wv_image dc, cap;
   double g[WV_P_COUNT];
   p.yarn_width = 0.7;
+  wv_image_free(&red);
   render_params("flat45-back", &p, 64, 8, 0, &red);
   assert_int_equal(wv_scene_preset("flat45-back", &s, &err), WV_OK);
   crop_scene(&s, 64, 64);
