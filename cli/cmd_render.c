@@ -20,7 +20,7 @@ typedef struct {
 
 static const cli_opt RENDER_OPTS[] = {
     CLI_O_STR("--params", NULL, render_args, params, "P.json", "the fabric parameters"),
-    CLI_O_STR("--scene", NULL, render_args, scene, "S", "a scene file, cylinder (default) or flat45"),
+    CLI_O_STR("--scene", NULL, render_args, scene, "S", "a scene file, cylinder (default), flat45 or flat45-back"),
     CLI_O_STR("--output", "-o", render_args, out, "OUT",
      "OUT.png: the image as the scene's camera records it (exposure, clip,\ncolour encoding, falloff mask), 8-bit; "
      "compare it with a photo taken\nin that rig. OUT.exr: linear radiance (32-bit float), before the\ncamera response"),

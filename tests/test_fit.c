@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <jansson.h>
+
 #include "testutil.h"
 #include "woven/descriptor.h"
 #include "woven/fit.h"
@@ -131,6 +133,26 @@ static void test_resume_equals_straight(void **state) {
   assert_memory_equal(&a.params, &b.params, sizeof a.params);
   for (int i = 0; i < 12; i++) assert_true(a.log[i].loss == b.log[i].loss);
   wv_fit_state_free(&a), wv_fit_state_free(&b);
+  /* a version 1 checkpoint (Adam's moments of the reflection model's parameters only) still
+   * reads: the same moments, 0 for the transmission colours */
+  wv_fit_state c, v1;
+  assert_int_equal(wv_fit_checkpoint_read(path, &c, &o2, name, sizeof name, &err), WV_OK);
+  json_t *root = json_load_file(path, 0, NULL);
+  assert_non_null(root);
+  json_object_set_new(root, "version", json_integer(1));
+  for (int k = 0; k < 2; k++) {
+    json_t *m = json_object_get(root, k ? "adam_v" : "adam_m");
+    while (json_array_size(m) > WV_P_REFLECT_COUNT) json_array_remove(m, json_array_size(m) - 1);
+  }
+  assert_int_equal(json_dump_file(root, path, 0), 0);
+  json_decref(root);
+  assert_int_equal(wv_fit_checkpoint_read(path, &v1, &o2, name, sizeof name, &err), WV_OK);
+  for (int i = 0; i < WV_P_COUNT; i++) {
+    assert_true(v1.adam_m[i] == (i < WV_P_REFLECT_COUNT ? c.adam_m[i] : 0.0f));
+    assert_true(v1.adam_v[i] == (i < WV_P_REFLECT_COUNT ? c.adam_v[i] : 0.0f));
+  }
+  assert_true(c.adam_v[0] != 0.0f);
+  wv_fit_state_free(&c), wv_fit_state_free(&v1);
   /* a damaged checkpoint is refused with its name */
   FILE *f = fopen(path, "w");
   fputs("{\"kind\": \"woven-fit-checkpoint\", \"version\": 1}", f);

@@ -1,6 +1,7 @@
 /* The differentiable renderer: analytic gradients against central finite
  * differences (double-precision kernel), the float path against the double one,
- * the capture against wv_render, exact zeros, range edges, determinism. */
+ * the capture against wv_render, exact zeros, range edges, determinism; with the
+ * light in front (cylinder, flat45) and behind the cloth (flat45-back). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -60,7 +61,13 @@ static void fd_check(const wv_scene *s, const wv_params *p, int x0, int y0, int 
       print_error("%s %s at %g: analytic %.9e, finite difference %.9e, relative error %.2e\n", s->name,
                   wv_param_name(i), wv_param_get(p, i), e[i].analytic, e[i].numeric, e[i].rel_err);
     assert_true(e[i].rel_err < 1e-3);
-    assert_true(e[i].analytic != 0.0); /* a random adjoint sees every parameter */
+    /* A random adjoint sees every parameter of the model the scene shows, and nothing of
+     * the other: transmission colours in front light, diffuse albedos in back light. */
+    int kt = i >= WV_P_KT_WARP_R && i <= WV_P_KT_WEFT_B, kd = i >= WV_P_KD_WARP_R && i <= WV_P_KD_WEFT_B;
+    if (wv_scene_transmits(s) ? kd : kt)
+      assert_true(e[i].analytic == 0.0 && e[i].numeric == 0.0);
+    else
+      assert_true(e[i].analytic != 0.0);
     if (e[i].rel_err > stats->worst[i]) stats->worst[i] = e[i].rel_err;
   }
   stats->checks++;
@@ -73,17 +80,18 @@ static void fd_check(const wv_scene *s, const wv_params *p, int x0, int y0, int 
 static void test_finite_differences(void **state) {
   (void)state;
   static const char *patterns[] = {"twill", "satin", "plain", "satin90"};
-  static const char *scenes[] = {"cylinder", "flat45"};
+  static const char *scenes[] = {"cylinder", "flat45", "flat45-back"};
   tu_rng r = {42};
   fd_stats st;
   memset(&st, 0, sizeof st);
-  for (int k = 0; k < 2; k++) {
+  for (int k = 0; k < 3; k++) {
     wv_scene s = preset(scenes[k]);
     for (int j = 0; j < 4; j++) {
       wv_params p;
       random_params(patterns[j], &r, &p);
       p.noise_level = j % 2 ? 3 : 0;
       p.specular_noise = j % 2;
+      if (k == 2 && j >= 2) p.yarn_width = 0.8; /* open gaps, and gaps beside a yarn over the crossing one */
       fd_check(&s, &p, s.width / 2 - 24, s.height / 2 - 16, 48, 32, 12, &r, &st);
     }
   }
@@ -101,11 +109,12 @@ static void test_finite_differences(void **state) {
 static void test_float_matches_double(void **state) {
   (void)state;
   tu_rng r = {7};
-  static const char *scenes[] = {"cylinder", "flat45"};
-  for (int k = 0; k < 2; k++) {
+  static const char *scenes[] = {"cylinder", "flat45", "flat45-back"};
+  for (int k = 0; k < 3; k++) {
     wv_scene s = preset(scenes[k]);
     wv_params p;
     random_params(k ? "satin" : "twill", &r, &p);
+    if (k == 2) p.yarn_width = 0.85;
     wv_grad_opts gf = {.x0 = s.width / 2 - 32, .y0 = s.height / 2 - 16, .width = 64, .height = 32}, gd = gf;
     gd.double_precision = 1;
     wv_render_opts o = {0};
@@ -143,13 +152,14 @@ static wv_scene small_scene(const char *name, int w, int h, int spp) {
  * full-image gradient is the sum of the gradients of windows that tile it. */
 static void test_capture_and_windows(void **state) {
   (void)state;
-  static const char *scenes[] = {"cylinder", "flat45"};
+  static const char *scenes[] = {"cylinder", "flat45", "flat45-back"};
   tu_rng r = {99};
-  for (int k = 0; k < 2; k++) {
+  for (int k = 0; k < 3; k++) {
     wv_scene s = small_scene(scenes[k], 96, k ? 96 : 36, 8);
     wv_params p;
     random_params("twill", &r, &p);
     p.noise_level = 2;
+    if (k == 2) p.yarn_width = 0.7, p.density[0] = p.density[1] = 20; /* gaps a pixel wide: the glow */
     wv_error err;
     wv_image ref, cap, dc, win;
     assert_int_equal(wv_render(&s, &p, NULL, &ref, NULL, &err), WV_OK);
@@ -259,16 +269,73 @@ static void test_exact_zeros(void **state) {
   wv_image_free(&dc);
 }
 
+/* With the light behind the cloth: what transmitted light does not depend on gets exactly zero. */
+static void test_exact_zeros_back(void **state) {
+  (void)state;
+  tu_rng r = {6};
+  wv_scene s = preset("flat45-back");
+  wv_params p;
+  random_params("twill", &r, &p);
+  p.noise_level = 2;
+  wv_image dc;
+  wv_error err;
+  assert_int_equal(wv_image_alloc(&dc, 40, 24, 3, &err), WV_OK);
+  double g[WV_P_COUNT];
+  for (int dbl = 0; dbl < 2; dbl++) {
+    /* Adjoint on red only; the diffuse albedos (reflection) never matter here. */
+    fill_random(&dc, &r);
+    for (int i = 0; i < 40 * 24; i++) dc.data[3 * i + 1] = dc.data[3 * i + 2] = 0;
+    grad_window(&s, &p, &dc, dbl, g);
+    for (int y = 0; y < 2; y++) {
+      for (int c = 0; c < 3; c++) assert_true(g[WV_P_KD_WARP_R + 3 * y + c] == 0.0);
+      for (int c = 1; c < 3; c++) {
+        assert_true(g[WV_P_KT_WARP_R + 3 * y + c] == 0.0);
+        assert_true(g[WV_P_KS_WARP_R + 3 * y + c] == 0.0);
+      }
+    }
+    assert_true(g[WV_P_KT_WARP_R] != 0.0 && g[WV_P_KT_WEFT_R] != 0.0 && g[WV_P_KS_WEFT_R] != 0.0);
+    fill_random(&dc, &r);
+    /* No specular albedo: roughness and twist do not matter. */
+    wv_params q = p;
+    memset(q.specular, 0, sizeof q.specular);
+    grad_window(&s, &q, &dc, dbl, g);
+    assert_true(g[WV_P_ALPHA_WARP] == 0.0 && g[WV_P_ALPHA_WEFT] == 0.0 && g[WV_P_TWIST_DEG] == 0.0);
+    assert_true(g[WV_P_BETA_WARP] != 0.0 && g[WV_P_KT_WEFT_G] != 0.0);
+    /* No transmission colour: the blend (of the diffuse transmission) does not matter. */
+    q = p;
+    memset(q.transmission, 0, sizeof q.transmission);
+    grad_window(&s, &q, &dc, dbl, g);
+    assert_true(g[WV_P_BLEND] == 0.0);
+    assert_true(g[WV_P_KT_WARP_B] != 0.0 && g[WV_P_ALPHA_WEFT] != 0.0);
+    /* Warp only, no gaps: no weft parameter matters. With gaps, light passes the crossing
+     * weft between the warp yarns: its transmission colour matters, its shape does not. */
+    q = p;
+    snprintf(q.pattern, sizeof q.pattern, "custom");
+    q.custom_rows = 1;
+    snprintf(q.custom[0], sizeof q.custom[0], "1");
+    grad_window(&s, &q, &dc, dbl, g);
+    int weft[] = {WV_P_BETA_WEFT, WV_P_KT_WEFT_R, WV_P_KT_WEFT_G, WV_P_KT_WEFT_B, WV_P_KS_WEFT_R,
+                  WV_P_KS_WEFT_G, WV_P_KS_WEFT_B, WV_P_ALPHA_WEFT};
+    for (size_t i = 0; i < sizeof weft / sizeof weft[0]; i++) assert_true(g[weft[i]] == 0.0);
+    assert_true(g[WV_P_BETA_WARP] != 0.0 && g[WV_P_ALPHA_WARP] != 0.0);
+    q.yarn_width = 0.6;
+    grad_window(&s, &q, &dc, dbl, g);
+    assert_true(g[WV_P_KT_WEFT_R] != 0.0 && g[WV_P_KT_WEFT_B] != 0.0);
+    assert_true(g[WV_P_BETA_WEFT] == 0.0 && g[WV_P_ALPHA_WEFT] == 0.0 && g[WV_P_KS_WEFT_R] == 0.0);
+  }
+  wv_image_free(&dc);
+}
+
 /* Gradients stay finite at both ends of every range (in float and double). */
 static void test_range_edges(void **state) {
   (void)state;
   tu_rng r = {11};
-  static const char *scenes[] = {"cylinder", "flat45"};
+  static const char *scenes[] = {"cylinder", "flat45", "flat45-back"};
   wv_image dc;
   wv_error err;
   assert_int_equal(wv_image_alloc(&dc, 24, 16, 3, &err), WV_OK);
   fill_random(&dc, &r);
-  for (int k = 0; k < 2; k++) {
+  for (int k = 0; k < 3; k++) {
     wv_scene s = preset(scenes[k]);
     for (int i = 0; i < WV_P_COUNT; i++)
       for (int end = 0; end < 2; end++) {
@@ -500,6 +567,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_finite_differences), cmocka_unit_test(test_float_matches_double),
       cmocka_unit_test(test_capture_and_windows), cmocka_unit_test(test_exact_zeros),
+      cmocka_unit_test(test_exact_zeros_back),
       cmocka_unit_test(test_range_edges),        cmocka_unit_test(test_deterministic),
       cmocka_unit_test(test_chain_with_downsampling), cmocka_unit_test(test_record),
       cmocka_unit_test(test_camera_blur),        cmocka_unit_test(test_camera_blur_sigma),

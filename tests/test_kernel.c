@@ -1,8 +1,9 @@
 /* The shading kernel (src/kernel/kernel_impl.h): its 8-wide flavour against
- * the scalar one bit for bit (values and derivative sums, on yarns, in gaps,
- * with noise and glints, and past the 8-wide integer range where lanes fall
- * back to scalar); its derivative sums per sample against central differences
- * of the double flavour; the public entry points. */
+ * the scalar one bit for bit (values, open gaps and derivative sums, on yarns,
+ * in gaps, with noise and glints, the light in front, behind and both in one
+ * vector, and past the 8-wide integer range where lanes fall back to scalar);
+ * its derivative sums per sample against central differences of the double
+ * flavour, reflected and transmitted; the public entry points. */
 #include <math.h>
 #include <string.h>
 
@@ -36,7 +37,7 @@ static void test_scalar_equals_8wide(void **state) {
   tu_rng r = {3};
   static wv_fabric f;
   wv_params p;
-  int fallbacks = 0, gaps = 0;
+  int fallbacks = 0, gaps = 0, through = 0, open = 0;
   for (int k = 0; k < 10; k++) {
     fabric(k, &p, &f);
     for (int rep = 0; rep < 200; rep++) {
@@ -46,6 +47,9 @@ static void test_scalar_equals_8wide(void **state) {
       for (int i = 0; i < 8; i++) {
         float wi[3], wo[3];
         above(&r, wi), above(&r, wo);
+        /* the light behind the cloth: in every lane, or in every other lane */
+        int below = rep % 3 == 1 || (rep % 3 == 2 && i % 2);
+        if (below) wi[2] = -wi[2];
         wv_dirs_make_f(wi, wo, (float)(0.5 + tu_rnd(&r)), &d1[i]);
         for (int c = 0; c < 3; c++) d8.wi[c][i] = d1[i].wi[c], d8.wo[c][i] = d1[i].wo[c], d8.h[c][i] = d1[i].h[c];
         d8.mi[i] = d1[i].mi, d8.mo[i] = d1[i].mo, d8.light[i] = d1[i].light;
@@ -53,17 +57,21 @@ static void test_scalar_equals_8wide(void **state) {
         double scale = rep % 17 == 0 && i == 3 ? 3e6 : 40.0;
         x[i] = (float)(scale * (2 * tu_rnd(&r) - 1)), y[i] = (float)(scale * (2 * tu_rnd(&r) - 1));
       }
-      wv_f8 rad8[3];
+      wv_f8 rad8[3], open8;
       wv_shade_grad_8 g8;
-      wv_shade_8(&f, &f.P, &d8, x, y, rad8, &g8);
+      wv_shade_ex_8(&f, &f.P, &d8, x, y, rad8, &g8, &open8);
       wv_yarn_cell_8 cell;
       wv_yarn_locate_8(&f.ym, x, y, &cell);
       fallbacks += !wv_all(cell.ok);
       for (int i = 0; i < 8; i++) {
-        float rad1[3];
+        float rad1[3], open1;
         wv_shade_grad_f g1;
-        wv_shade_f(&f, &f.P, &d1[i], x[i], y[i], rad1, &g1);
+        wv_shade_ex_f(&f, &f.P, &d1[i], x[i], y[i], rad1, &g1, &open1);
         for (int c = 0; c < 3; c++) assert_true(memcmp(&rad1[c], &rad8[c][i], sizeof(float)) == 0);
+        assert_true(memcmp(&open1, &open8[i], sizeof(float)) == 0);
+        assert_true(open1 == 0.0f || (open1 == 1.0f && d1[i].mi < 0 && rad1[0] == 0.0f));
+        through += d1[i].mi < 0 && rad1[0] > 0.0f;
+        open += open1 == 1.0f;
         assert_int_equal(g1.warp != 0, g8.warp[i] != 0);
         for (int j = 0; j < WV_J_COUNT; j++) assert_true(memcmp(&g1.J[j], &g8.J[j][i], sizeof(float)) == 0);
         gaps += rad1[0] == 0.0f;
@@ -74,7 +82,7 @@ static void test_scalar_equals_8wide(void **state) {
       }
     }
   }
-  assert_true(fallbacks > 0 && gaps > 0); /* both paths seen */
+  assert_true(fallbacks > 0 && gaps > 0 && through > 0 && open > 0); /* every path seen */
 }
 
 /* The public entry points agree with each other and with the directions' horizon rule. */
@@ -121,12 +129,13 @@ static void test_sample_derivatives(void **state) {
   tu_rng r = {21};
   static wv_fabric f;
   wv_params p;
-  int checked = 0;
+  int checked = 0, through = 0;
   for (int k = 0; k < 6; k++) {
     fabric(k, &p, &f);
-    for (int rep = 0; rep < 60; rep++) {
+    for (int rep = 0; rep < 120; rep++) {
       float wi[3], wo[3];
       above(&r, wi), above(&r, wo);
+      if (rep % 2) wi[2] = -wi[2]; /* the light behind the cloth: the transmission */
       wv_dirs_f df;
       wv_dirs_make_f(wi, wo, 1.0f, &df);
       wv_dirs_d d;
@@ -139,6 +148,7 @@ static void test_sample_derivatives(void **state) {
       wv_shade_grad_d g;
       wv_shade_d(&f, &P, &d, x, y, rad, &g);
       if (g.J[WV_J_DF] == 0.0) continue; /* a gap */
+      through += d.mi < 0;
       int ty = g.warp ? WV_WARP : WV_WEFT;
       /* parameter, slot of S's derivative, slot of DF's derivative (-1: none) */
       struct {
@@ -176,7 +186,7 @@ static void test_sample_derivatives(void **state) {
       wv_shade_params_double(&p, &P);
     }
   }
-  assert_true(checked > 1000);
+  assert_true(checked > 2000 && through > 200);
 }
 
 int main(void) {

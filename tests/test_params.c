@@ -49,6 +49,44 @@ static void test_parse_and_round_trip(void **state) {
   }
 }
 
+static void expect_bad(const char *text, wv_status code, const char *needle);
+
+/* Version 1 files (no "version", no "transmission") read with k_t = k_d / 2; files are
+ * written as version 2 with the transmission colours; a newer version is refused. */
+static void test_versions(void **state) {
+  (void)state;
+  wv_params p, q;
+  wv_error err = {0};
+  assert_int_equal(wv_params_parse(GOOD, "v1.json", &p, &err), WV_OK);
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) assert_true(p.transmission[y][c] == 0.5 * p.diffuse[y][c]);
+  char *text = wv_params_to_json(&p);
+  assert_non_null(strstr(text, "\"version\": 2"));
+  assert_non_null(strstr(text, "\"transmission\""));
+  assert_int_equal(wv_params_parse(text, "v2.json", &q, &err), WV_OK);
+  free(text);
+  assert_memory_equal(&p, &q, sizeof p);
+  /* given colours are kept, whatever the diffuse albedo; "version": 1 reads too */
+  assert_int_equal(wv_params_parse("{\"version\": 2, \"pattern\": \"plain\", \"diffuse\": {\"warp\": 0.8},"
+                                   " \"transmission\": {\"warp\": [0.1, 0.2, 0.3], \"weft\": 0.05}}",
+                                   "t.json", &q, &err),
+                   WV_OK);
+  assert_true(q.transmission[WV_WARP][1] == 0.2 && q.transmission[WV_WEFT][2] == 0.05);
+  assert_int_equal(wv_params_parse("{\"version\": 1, \"pattern\": \"plain\", \"diffuse\": {\"weft\": 0.8}}", "t.json",
+                                   &q, &err),
+                   WV_OK);
+  assert_true(q.transmission[WV_WEFT][0] == 0.4 && q.transmission[WV_WARP][0] == 0.25);
+  wv_params_default("satin", &q, NULL);
+  assert_true(q.transmission[WV_WARP][1] == 0.25); /* the prior mean: half of k_d = 0.5 */
+  expect_bad("{\"version\": 3, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
+  expect_bad("{\"version\": 0, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
+  expect_bad("{\"version\": 1.5, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
+  expect_bad("{\"pattern\": \"twill\", \"transmission\": {\"weft\": [0.1, 1.2, 0]}}", WV_ERR_INVALID,
+             "transmission.weft");
+  expect_bad("{\"pattern\": \"twill\", \"transmission\": {\"warp\": [0.1]}}", WV_ERR_INVALID,
+             "transmission.warp");
+}
+
 static void test_param_vector(void **state) {
   (void)state;
   wv_params p;
@@ -64,6 +102,11 @@ static void test_param_vector(void **state) {
   assert_int_equal(wv_params_validate(&p, NULL), WV_OK);
   assert_true(p.diffuse[WV_WEFT][1] == 0.5);
   assert_true(p.roughness[WV_WEFT] == 0.505);
+  /* the transmission colours come after the reflection model's parameters */
+  assert_int_equal(WV_P_REFLECT_COUNT, 19);
+  assert_int_equal(WV_P_COUNT, 25);
+  assert_string_equal(wv_param_name(WV_P_KT_WEFT_B), "transmission.weft[2]");
+  assert_true(p.transmission[WV_WEFT][2] == 0.5);
 }
 
 /* Each bad text must fail with the given code and a message containing 'needle'. */
@@ -109,8 +152,8 @@ static void test_bad_params(void **state) {
 
 static void test_scenes(void **state) {
   (void)state;
-  const char *names[] = {"cylinder", "flat45"};
-  for (int i = 0; i < 2; i++) {
+  const char *names[] = {"cylinder", "flat45", "flat45-back"};
+  for (int i = 0; i < 3; i++) {
     wv_scene a, b;
     wv_error err = {0};
     char path[512];
@@ -151,6 +194,19 @@ static void test_scenes(void **state) {
   assert_int_equal(s.width, 512);
   assert_int_equal(s.encoding, WV_ENC_GAMMA);
   assert_true(s.falloff && s.falloff_sigma == 450);
+  assert_true(s.glow_radiance == 0 && !wv_scene_transmits(&s));
+  /* the back-lit rig: flat45 with the light behind the cloth and the gap glow */
+  wv_scene b;
+  assert_int_equal(wv_scene_load("flat45-back", &b, &err), WV_OK);
+  assert_true(wv_scene_transmits(&b));
+  assert_true(b.light_pos[2] == -9 && b.light_pos[0] == 0 && b.light_intensity == 300);
+  assert_true(b.glow_radiance == 8 && b.glow_sigma == 20);
+  b.light_pos[2] = s.light_pos[2], b.light_pos[1] = s.light_pos[1], b.glow_radiance = b.glow_sigma = 0;
+  memcpy(b.name, s.name, sizeof b.name);
+  assert_memory_equal(&b, &s, sizeof b); /* otherwise flat45 */
+  wv_scene_preset("cylinder", &b, NULL);
+  b.light_pos[2] = -100;
+  assert_false(wv_scene_transmits(&b)); /* a cylinder never transmits */
 }
 
 static void expect_bad_scene(const char *text, wv_status code, const char *needle) {
@@ -204,6 +260,18 @@ static void test_bad_scenes(void **state) {
   expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE ", " LIGHT
                    ", \"response\": {\"encoding\": \"log\"}}",
                    WV_ERR_INVALID, "response.encoding");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE ", " LIGHT
+                   ", \"response\": {\"gap_glow\": {\"radiance\": -1, \"sigma_px\": 20}}}",
+                   WV_ERR_INVALID, "response.gap_glow.radiance");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE ", " LIGHT
+                   ", \"response\": {\"gap_glow\": {\"radiance\": 8, \"sigma_px\": 0}}}",
+                   WV_ERR_INVALID, "response.gap_glow.sigma_px");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE ", " LIGHT
+                   ", \"response\": {\"gap_glow\": {\"radiance\": 8}}}",
+                   WV_ERR_INVALID, "response.gap_glow.sigma_px");
+  expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, " CAM ", " PLANE ", " LIGHT
+                   ", \"response\": {\"gap_glow\": {\"radiance\": 8, \"sigma_px\": 20, \"colour\": 1}}}",
+                   WV_ERR_INVALID, "colour");
   expect_bad_scene("{\"image\": {\"width\": 10, \"height\": 10}, \"camera\": {\"position_mm\": [0,0,8], "
                    "\"look_at_mm\": [0,0,0], \"vfov_deg\": 200}, " PLANE ", " LIGHT "}",
                    WV_ERR_INVALID, "vfov_deg");
@@ -232,6 +300,11 @@ static void test_prior_samples(void **state) {
           assert_true(p.specular[y][c] >= p.diffuse[y][c] - 1e-12);
       }
       grey_like += p.diffuse[0][0] == p.diffuse[0][1] && p.diffuse[0][1] == p.diffuse[0][2];
+      for (int y = 0; y < 2; y++) { /* transmission: the diffuse colour times one factor in 0.1..0.9 */
+        double f = p.diffuse[y][0] > 0 ? p.transmission[y][0] / p.diffuse[y][0] : 0.5;
+        assert_true(f >= 0.1 && f <= 0.9);
+        for (int c = 0; c < 3; c++) assert_true(fabs(p.transmission[y][c] - f * p.diffuse[y][c]) < 1e-12);
+      }
       same_colour += !memcmp(p.diffuse[0], p.diffuse[1], sizeof p.diffuse[0]);
       assert_true(p.noise_level >= 0 && p.noise_level <= 5);
     }
@@ -248,11 +321,21 @@ static void test_prior_samples(void **state) {
     assert_true(grey_like > 15 && grey_like < 90);     /* about 10% of 400 */
     assert_true(same_colour > 80 && same_colour < 170); /* about 30% */
   }
+  /* the transmission colours were added without changing any earlier draw */
+  wv_params p;
+  wv_params_sample_prior("twill", 7, &p, NULL);
+  assert_true(p.heightfield[0] == 1.7358562399228419 && p.diffuse[1][2] == 0.44830148950692383);
+  assert_true(p.roughness[1] == 0.79454175580912723 && p.inclination_deg == 24.30283196905037);
+  assert_true(p.seed == 1054995969 && p.density[0] == 98);
+  wv_params_sample_prior("satin90", 123, &p, NULL);
+  assert_true(p.heightfield[0] == 0.51354726608763324 && p.diffuse[1][2] == 0.31611276570360347);
+  assert_true(p.seed == 2058691208 && p.density[0] == 60);
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_parse_and_round_trip), cmocka_unit_test(test_param_vector),
-                                     cmocka_unit_test(test_bad_params), cmocka_unit_test(test_scenes),
+                                     cmocka_unit_test(test_bad_params), cmocka_unit_test(test_versions),
+                                     cmocka_unit_test(test_scenes),
                                      cmocka_unit_test(test_bad_scenes), cmocka_unit_test(test_prior_samples)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

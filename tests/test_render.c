@@ -1,5 +1,6 @@
 /* Forward renderer: determinism, convergence of the default spp, the twill90
- * symmetry of the maps, golden images. */
+ * symmetry of the maps, light through the cloth (flat45-back) and its maps,
+ * golden images. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -200,6 +201,139 @@ static void test_maps_tile(void **state) {
   wv_maps_free(&a), wv_maps_free(&b);
 }
 
+/* Mean of the capture's channel c (c = 3: all three) over the centred square of side n. */
+static double centre_mean(const wv_image *im, int n, int c) {
+  double sum = 0;
+  int x0 = (im->w - n) / 2, y0 = (im->h - n) / 2;
+  for (int y = y0; y < y0 + n; y++)
+    for (int x = x0; x < x0 + n; x++)
+      for (int k = 0; k < 3; k++)
+        if (c == 3 || k == c) sum += wv_image_px(im, x, y)[k];
+  return sum / ((double)n * n * (c == 3 ? 3 : 1));
+}
+
+/* The brightest value of the centred square of side n. */
+static double centre_max(const wv_image *im, int n) {
+  double m = 0;
+  int x0 = (im->w - n) / 2, y0 = (im->h - n) / 2;
+  for (int y = y0; y < y0 + n; y++)
+    for (int x = x0; x < x0 + n; x++)
+      for (int k = 0; k < 3; k++) m = fmax(m, wv_image_px(im, x, y)[k]);
+  return m;
+}
+
+/* A centred size x size window of a preset; glow > 0 sets the gap glow's radiance. */
+static void render_params(const char *scene, const wv_params *p, int size, int spp, double glow, wv_image *out) {
+  wv_scene s;
+  wv_error err = {0};
+  assert_int_equal(wv_scene_preset(scene, &s, &err), WV_OK);
+  crop_scene(&s, size, size);
+  if (glow > 0) s.glow_radiance = glow;
+  wv_render_opts o = {.spp = spp};
+  if (wv_render(&s, p, &o, out, NULL, &err)) fail_msg("%s", err.msg);
+}
+
+/* The back-lit rig (flat45-back): light passes where the front-lit rig without its
+ * light is black; open gaps show the light itself (the gap glow), brighter where
+ * the gaps are wider than a pixel (a lower density); the colour is the
+ * transmission colour's. */
+static void test_back_lit(void **state) {
+  (void)state;
+  wv_params p;
+  wv_params_default("twill", &p, NULL);
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) p.specular[y][c] = 0.1, p.diffuse[y][c] = 0.4, p.transmission[y][c] = 0.3;
+  wv_image front, back;
+  wv_scene s;
+  wv_error err = {0};
+  assert_int_equal(wv_scene_preset("flat45", &s, &err), WV_OK);
+  crop_scene(&s, 96, 96);
+  s.light_intensity = 0; /* the front light off */
+  wv_render_opts o = {.spp = 8};
+  assert_int_equal(wv_render(&s, &p, &o, &front, NULL, &err), WV_OK);
+  render_params("flat45-back", &p, 96, 8, 0, &back);
+  assert_true(centre_mean(&front, 96, 3) == 0.0);
+  assert_true(centre_mean(&back, 96, 3) > 0.1);
+  wv_image_free(&front);
+  /* no open gap at full yarn width: no glow; gaps (yarn width 0.7, open area 9%) glow */
+  wv_image gaps, wide;
+  p.yarn_width = 0.7;
+  render_params("flat45-back", &p, 96, 8, 0, &gaps);
+  double glow8 = centre_mean(&gaps, 8, 3);
+  assert_true(glow8 > centre_mean(&back, 8, 3) + 0.05);
+  /* at 30 yarns per inch a gap is two pixels wide: some pixels see it whole (a glow of
+   * radiance 0.5, below the clip: at 8 the centre clips either way) */
+  wv_image_free(&gaps);
+  render_params("flat45-back", &p, 96, 8, 0.5, &gaps);
+  p.density[0] = p.density[1] = 30;
+  render_params("flat45-back", &p, 96, 8, 0.5, &wide);
+  print_message("back-lit: no gaps %.3f, gaps %.3f (centre 8 px); brightest of the centre 16 px: 140/85 yarns per "
+                "inch %.3f, 30 %.3f\n", centre_mean(&back, 8, 3), glow8, centre_max(&gaps, 16), centre_max(&wide, 16));
+  assert_true(centre_max(&wide, 16) > centre_max(&gaps, 16) + 0.05);
+  assert_true(fabs(centre_mean(&wide, 32, 3) - centre_mean(&gaps, 32, 3)) < 0.1); /* the same open area */
+  wv_image_free(&back), wv_image_free(&gaps), wv_image_free(&wide);
+  /* the colour follows the transmission colour (red through the yarns, then blue) */
+  wv_image red, blue;
+  p.yarn_width = 1;
+  for (int y = 0; y < 2; y++) {
+    p.transmission[y][0] = 0.6, p.transmission[y][1] = p.transmission[y][2] = 0.05;
+  }
+  render_params("flat45-back", &p, 64, 8, 0, &red);
+  for (int y = 0; y < 2; y++) {
+    p.transmission[y][2] = 0.6, p.transmission[y][0] = p.transmission[y][1] = 0.05;
+  }
+  render_params("flat45-back", &p, 64, 8, 0, &blue);
+  assert_true(centre_mean(&red, 64, 0) > 2 * centre_mean(&red, 64, 2));
+  assert_true(centre_mean(&blue, 64, 2) > 2 * centre_mean(&blue, 64, 0));
+  /* the forward renderer and the gradient renderer's capture agree, glow included */
+  wv_image dc, cap;
+  double g[WV_P_COUNT];
+  p.yarn_width = 0.7;
+  wv_image_free(&red);
+  render_params("flat45-back", &p, 64, 8, 0, &red);
+  assert_int_equal(wv_scene_preset("flat45-back", &s, &err), WV_OK);
+  crop_scene(&s, 64, 64);
+  assert_int_equal(wv_image_alloc(&dc, 64, 64, 3, &err), WV_OK);
+  memset(dc.data, 0, sizeof(float) * 64 * 64 * 3);
+  assert_int_equal(wv_render_grad(&s, &p, &o, &dc, g, &cap, &err), WV_OK);
+  assert_memory_equal(cap.data, red.data, sizeof(float) * 64 * 64 * 3);
+  wv_image_free(&red), wv_image_free(&blue), wv_image_free(&dc), wv_image_free(&cap);
+}
+
+/* The transmission and open-area maps: the open area is (1 - w)^2 of the tile (no yarn
+ * of either kind), dark in the transmission map; elsewhere the transmission map is the
+ * yarn's k_t, dimmed by the cloth's thickness. */
+static void test_maps_transmission(void **state) {
+  (void)state;
+  wv_params p;
+  wv_params_default("twill", &p, NULL);
+  p.yarn_width = 0.8;
+  for (int c = 0; c < 3; c++) p.transmission[WV_WARP][c] = 0.2 + 0.1 * c, p.transmission[WV_WEFT][c] = 0.6;
+  wv_maps m;
+  assert_int_equal(wv_maps_generate(&p, 256, &m, NULL), WV_OK);
+  double open = 0, t = 0;
+  int n = 256 * 256, warp = 0;
+  for (int i = 0; i < n; i++) {
+    const float *o = m.open.data + 3 * i, *kt = m.transmission.data + 3 * i, *id = m.yarn_id.data + 3 * i;
+    open += o[0];
+    assert_true(o[0] == 0.0f || o[0] == 1.0f);
+    if (o[0] == 1.0f) {
+      assert_true(kt[0] == 0.0f && kt[1] == 0.0f && kt[2] == 0.0f && id[0] == 0.0f && id[1] == 0.0f);
+      continue;
+    }
+    for (int c = 0; c < 3; c++) assert_true(kt[c] > 0.0f && kt[c] <= 0.6f + 1e-6f);
+    if (id[0] == 1.0f) { /* on a warp yarn: its colour, dimmed alike in every channel */
+      assert_true(kt[0] <= 0.2f + 1e-6f && kt[0] >= 0.2f / 3);
+      assert_true(fabsf(kt[2] / kt[0] - 2.0f) < 1e-4f);
+      warp++;
+    }
+    t += kt[1];
+  }
+  assert_true(fabs(open / n - 0.04) < 0.005);
+  assert_true(warp > n / 4 && t > 0);
+  wv_maps_free(&m);
+}
+
 /* Golden images guard against unintended changes of the forward model. The
  * cases reach every shading path: whole vectors of one pixel's samples (16 spp),
  * vectors packed with several pixels' samples (3 spp, and 12 = one vector and
@@ -221,7 +355,9 @@ static void test_golden(void **state) {
                {"flat45", "satin90", "flat45_satin90", 16, 0},
                {"cylinder", "twill", "cylinder_twill_wide_spp12", 12, 1},
                {"flat45", "satin", "flat45_satin_spp3", 3, 1},
-               {"flat45", "plain", "flat45_plain_far", 8, 2}};
+               {"flat45", "plain", "flat45_plain_far", 8, 2},
+               {"flat45-back", "satin", "flat45-back_satin", 16, 0},
+               {"flat45-back", "twill", "flat45-back_twill_gaps", 12, 1}};
   int update = getenv("WOVEN_UPDATE_GOLDEN") != NULL;
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     wv_scene s;
@@ -261,6 +397,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_deterministic), cmocka_unit_test(test_footprints_cache),
                                      cmocka_unit_test(test_default_spp_converged),
                                      cmocka_unit_test(test_twill90_is_mirrored_twill), cmocka_unit_test(test_maps_tile),
+                                     cmocka_unit_test(test_back_lit), cmocka_unit_test(test_maps_transmission),
                                      cmocka_unit_test(test_golden)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

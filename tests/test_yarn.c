@@ -1,5 +1,6 @@
 /* Bent-cylinder geometry (the shading kernel's): n.t = 0 and unit vectors
- * everywhere, heightfield scaling as SPEC section 3 writes it, noise per segment. */
+ * everywhere, heightfield scaling as SPEC section 3 writes it, noise per segment,
+ * the open gaps and the cloth's thickness that light through the cloth meets. */
 #include <math.h>
 
 #include "kernel/kernel.h"
@@ -118,9 +119,49 @@ static void test_noise_per_segment(void **state) {
   assert_true(hi - lo > 0.5 * p.heightfield[0]);
 }
 
+/* Light through the cloth: open where neither kind of yarn covers the point, (1 - w)^2 of
+ * the fabric; elsewhere it passes the visible yarn, or beside it the crossing one; the
+ * thickness is one or two chords of circular cross-sections. */
+static void test_open_area(void **state) {
+  (void)state;
+  const char *pats[] = {"plain", "twill", "satin90"};
+  const double widths[] = {1.0, 0.9, 0.6};
+  for (int k = 0; k < 3; k++) {
+    wv_params p;
+    wv_params_default(pats[k], &p, NULL);
+    p.yarn_width = widths[k];
+    p.density[WV_WARP] = 97, p.density[WV_WEFT] = 61;
+    wv_yarn_model m;
+    assert_int_equal(wv_params_yarn_model(&p, &m, NULL), WV_OK);
+    int n = 0, open = 0, beside = 0;
+    for (int i = 0; i < 300; i++)
+      for (int j = 0; j < 300; j++) {
+        wv_yarn_point yp;
+        wv_yarn_eval(&m, (float)(0.01 * i + 0.0013), (float)(-0.01 * j - 0.0007), &yp);
+        n++;
+        assert_true(yp.open == (yp.through < 0));
+        assert_true(yp.thickness >= 0.0f && yp.thickness <= 2.0f);
+        if (yp.type >= 0) { /* on a yarn: the light passes it */
+          assert_int_equal(yp.through, yp.type);
+          assert_true(yp.thickness > 0.0f);
+        } else if (!yp.open) { /* beside it: the crossing yarn, one chord */
+          assert_true(yp.through >= 0 && yp.thickness > 0.0f && yp.thickness <= 1.0f);
+          beside++;
+        } else {
+          assert_true(yp.thickness == 0.0f);
+        }
+        open += yp.open;
+      }
+    double w = widths[k], want = (1 - w) * (1 - w);
+    assert_true(fabs((double)open / n - want) < 0.01);
+    assert_true(w == 1.0 ? beside == 0 && open == 0 : beside > 0 && open > 0);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_frame_orthonormal),
                                      cmocka_unit_test(test_scale_matches_spec_formula),
-                                     cmocka_unit_test(test_eval_everywhere), cmocka_unit_test(test_noise_per_segment)};
+                                     cmocka_unit_test(test_eval_everywhere), cmocka_unit_test(test_noise_per_segment),
+                                     cmocka_unit_test(test_open_area)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

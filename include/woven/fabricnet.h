@@ -28,7 +28,8 @@
 #include "woven/params.h"
 #include "woven/scene.h"
 
-#define WV_NET_OUT (2 + WV_P_COUNT) /* 21 */
+#define WV_NET_OUT (2 + WV_P_REFLECT_COUNT) /* 21: the reflection model's parameters (the transmission
+                                              * colours take their prior mean, wv_params_transmission_default) */
 #define WV_NET_HIDDEN 256
 #define WV_NET_SLOPE 0.01f          /* LeakyReLU slope (PyTorch's default) */
 #define WV_NET_CLIP 10.0f         /* standardised features are clipped to +-10 */

@@ -18,6 +18,9 @@ typedef struct {
   wv_image diffuse;   /* k_d, linear RGB */
   wv_image specular;  /* k_s, linear RGB */
   wv_image roughness; /* alpha (grey) */
+  wv_image transmission; /* light through the cloth at normal incidence: k_t of the yarn it passes times the
+                          * diffuse transmittance of the cloth's thickness there, linear RGB; 0 in an open gap */
+  wv_image open;      /* 1 in an open gap (no yarn of either kind: light passes straight through), else 0 (grey) */
   double tile_mm[2];  /* physical width and height of one tile, mm */
   double height_max;  /* largest height value, mm */
 } wv_maps;

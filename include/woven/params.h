@@ -18,6 +18,7 @@ typedef struct {
   double heightfield[2];             /* beta: 0..2 */
   double diffuse[2][3];              /* k_d RGB: 0..1 */
   double specular[2][3];             /* k_s RGB: 0..1 */
+  double transmission[2][3];         /* k_t RGB: 0..1, diffuse transmission colour (light through the yarn) */
   double roughness[2];               /* alpha: 0.01..1 */
   double twist_deg;                  /* psi: -60..60 */
   double inclination_deg;            /* u_max: 5..70 */
@@ -29,12 +30,19 @@ typedef struct {
   int specular_noise;                /* 1: glints U_s on (default); 0: U_s = 1 */
 } wv_params;
 
+/* The parameter file's format version: 2 adds "transmission" (files without the key,
+ * version 1, read with k_t at its default, wv_params_transmission_default). */
+#define WV_PARAMS_VERSION 2
+
 /* Prior mean of a built-in pattern (also the fit's start without a network). */
 wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err);
 /* A random draw from the dataset prior of SPEC section 5 for a built-in pattern
  * (the 90-degree patterns mirror their base: warp and weft ranges swapped, twist
  * negated). Deterministic in seed. */
 wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *p, wv_error *err);
+/* The transmission colour's default (and prior mean): half the diffuse albedo, k_t = k_d / 2
+ * per yarn type and channel: light through a yarn takes the yarn's colour. */
+void wv_params_transmission_default(wv_params *p);
 
 /* Every value in range, pattern known; the message names the key. */
 wv_status wv_params_validate(const wv_params *p, wv_error *err);
@@ -46,7 +54,9 @@ char *wv_params_to_json(const wv_params *p);
 wv_status wv_params_write(const char *path, const wv_params *p, wv_error *err);
 
 /* The continuous parameters, in a fixed order (the differentiable renderer's and
- * the fit's vector). Values are in the file's units (angles in degrees). */
+ * the fit's vector). Values are in the file's units (angles in degrees). The
+ * reflection model's come first (WV_P_REFLECT_COUNT of them: what a front-lit
+ * photo shows, and FabricNet predicts); the transmission colours follow. */
 typedef enum {
   WV_P_BETA_WARP, WV_P_BETA_WEFT,
   WV_P_KD_WARP_R, WV_P_KD_WARP_G, WV_P_KD_WARP_B,
@@ -55,8 +65,11 @@ typedef enum {
   WV_P_KS_WEFT_R, WV_P_KS_WEFT_G, WV_P_KS_WEFT_B,
   WV_P_ALPHA_WARP, WV_P_ALPHA_WEFT,
   WV_P_UMAX_DEG, WV_P_BLEND, WV_P_TWIST_DEG,
+  WV_P_KT_WARP_R, WV_P_KT_WARP_G, WV_P_KT_WARP_B,
+  WV_P_KT_WEFT_R, WV_P_KT_WEFT_G, WV_P_KT_WEFT_B,
   WV_P_COUNT
 } wv_param_id;
+#define WV_P_REFLECT_COUNT WV_P_KT_WARP_R /* 19 */
 
 const char *wv_param_name(int id);              /* e.g. "diffuse.warp[1]" */
 void wv_param_range(int id, double *lo, double *hi);

@@ -43,6 +43,11 @@ typedef struct {
   double falloff_sigma;
   double psf_sigma;     /* camera blur: Gaussian point-spread function of this sigma in pixels on
                          * the radiance, before exposure (0: none; docs/scenes.md) */
+  /* The light seen straight through the gaps between yarns, out of focus (a light behind a
+   * plane sample): wherever a sample's line of sight crosses an open gap it adds a radiance of
+   * glow_radiance * exp(-d^2 / glow_sigma^2), d in pixels from the image centre (the falloff
+   * mask's form). 0: none. */
+  double glow_radiance, glow_sigma;
 } wv_scene;
 
 /* Limits on what a scene may request (memory and time guards). */
@@ -52,13 +57,15 @@ typedef struct {
 #define WV_SCENE_MAX_MM 1e6        /* |coordinate| of the camera, look-at, up and light: 1 km */
 #define WV_SCENE_MAX_SKEW 15.0 /* |sample.skew_deg|, degrees */
 #define WV_SCENE_MAX_OFFSET_MM 1e4 /* |sample.offset_mm|: any offset is equivalent to one within a weave repeat */
+#define WV_SCENE_MAX_GLOW 1e6      /* response.gap_glow.radiance */
 
 wv_status wv_scene_parse(const char *json, const char *source, wv_scene *s, wv_error *err);
 wv_status wv_scene_read(const char *path, wv_scene *s, wv_error *err);
 wv_status wv_scene_validate(const wv_scene *s, wv_error *err);
-/* The presets, built in (identical to scenes/cylinder.json and scenes/flat45.json). */
+/* The presets, built in (identical to scenes/cylinder.json, scenes/flat45.json and
+ * scenes/flat45-back.json). */
 wv_status wv_scene_preset(const char *name, wv_scene *s, wv_error *err);
-/* "cylinder" / "flat45" name a preset; anything else is read as a file. */
+/* "cylinder" / "flat45" / "flat45-back" name a preset; anything else is read as a file. */
 wv_status wv_scene_load(const char *name_or_path, wv_scene *s, wv_error *err);
 char *wv_scene_to_json(const wv_scene *s);
 /* The displacement (mm) of s's distortion at plane point (x, y) (scene units); 0 without one. */
@@ -70,6 +77,10 @@ void wv_scene_distortion_at(const wv_scene *s, double x, double y, double d[2]);
    (t)[5] = (t)[2] * (a), (t)[6] = (t)[2] * (b), (t)[7] = (t)[3] * (b), (t)[8] = (t)[4] * (b))
 /* 1 when s has a distortion (a nonzero term). */
 int wv_scene_distorted(const wv_scene *s);
+/* 1 when the scene renders light through the cloth: a plane sample with the light behind
+ * it (light z < 0, the camera in front). The light is then on the far side of every point,
+ * and the fabric transmits (docs/model.md); otherwise it reflects. */
+int wv_scene_transmits(const wv_scene *s);
 
 /* Sensor response: capture = mask * encode(clip(exposure * radiance)). In place allowed.
  * (Its adjoint is applied inside the gradient renderer, woven/grad.h.) The camera blur is

@@ -44,7 +44,20 @@ typedef struct {
   float u, v;        /* inclination along and angle around the yarn (radians) */
   float beta;        /* the segment's heightfield scaling after noise U_n */
   uint64_t segment;  /* identity of the visible segment (hash) */
+  /* Light through the cloth (docs/model.md): the yarn it passes (the visible one, or in
+   * a gap beside it the crossing yarn underneath; -1 where no yarn covers the point: an
+   * open gap, open = 1) and the cloth's local thickness there in yarn diameters (the
+   * chords of the yarns' circular cross-sections, each in 0..1, summed over both). */
+  int through;
+  int open;
+  float thickness;
 } wv_yarn_point;
+
+/* The cloth's diffuse transmittance where the light crosses an optical thickness tau
+ * of yarn (the parameters' thickness T times wv_yarn_point.thickness): the two-stream
+ * transmittance of a conservatively scattering slab, 1 / (1 + tau / 2)
+ * (docs/model.md). Any arithmetic type (the renderer's 8-wide lanes too). */
+#define WV_CLOTH_TRANSMITTANCE(tau) (1.0f / (1.0f + 0.5f * (tau)))
 
 /* Fabric row/column of a point: rows grow toward -y, columns toward +x.
  * Evaluated by the shading kernel's geometry (src/kernel/), in scalar float. */

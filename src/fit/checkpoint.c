@@ -29,7 +29,7 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
                                   const char *descriptor_name, wv_error *err) {
   json_t *root = json_object();
   json_object_set_new(root, "kind", json_string("woven-fit-checkpoint"));
-  json_object_set_new(root, "version", json_integer(1));
+  json_object_set_new(root, "version", json_integer(2)); /* 2: Adam's moments of every WV_P_COUNT parameter */
   json_object_set_new(root, "descriptor", json_string(descriptor_name));
   json_object_set_new(root, "iter", json_integer(st->iter));
   json_object_set_new(root, "aligned", json_boolean(st->aligned));
@@ -106,9 +106,12 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
                                  char *descriptor_name, size_t name_cap, wv_error *err) {
   wv_status rc;
   json_t *kind = json_object_get(root, "kind");
-  if (!json_is_string(kind) || strcmp(json_string_value(kind), "woven-fit-checkpoint") ||
-      !json_is_integer(json_object_get(root, "version")) || json_integer_value(json_object_get(root, "version")) != 1)
-    return wv_fail(err, WV_ERR_FORMAT, "not a woven fit checkpoint (version 1)");
+  json_t *ver = json_object_get(root, "version");
+  if (!json_is_string(kind) || strcmp(json_string_value(kind), "woven-fit-checkpoint") || !json_is_integer(ver) ||
+      json_integer_value(ver) < 1 || json_integer_value(ver) > 2)
+    return wv_fail(err, WV_ERR_FORMAT, "not a woven fit checkpoint (version 1 or 2)");
+  /* version 1: moments of the reflection model's parameters only (the others start at 0) */
+  int nm = json_integer_value(ver) == 1 ? WV_P_REFLECT_COUNT : WV_P_COUNT;
   wv_fit_opts_default(o);
   o->register_radius = 0; /* absent in checkpoints older than the registration */
   o->w_struct = 0, o->colour_split = 0; /* absent before the structure term: a resume stays without it */
@@ -123,9 +126,9 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   if ((rc = read_params_obj(root, path, "start", &start, err))) return rc;
   if ((rc = wv_fit_state_init(st, &start, o, err))) return rc;
   if ((rc = read_params_obj(root, path, "params", &st->params, err))) return rc;
-  double am[WV_P_COUNT], av[WV_P_COUNT];
-  if ((rc = read_darray(root, "adam_m", am, WV_P_COUNT, -1e30, 1e30, err))) return rc;
-  if ((rc = read_darray(root, "adam_v", av, WV_P_COUNT, 0, 1e30, err))) return rc;
+  double am[WV_P_COUNT] = {0}, av[WV_P_COUNT] = {0};
+  if ((rc = read_darray(root, "adam_m", am, nm, -1e30, 1e30, err))) return rc;
+  if ((rc = read_darray(root, "adam_v", av, nm, 0, 1e30, err))) return rc;
   for (int i = 0; i < WV_P_COUNT; i++) st->adam_m[i] = (float)am[i], st->adam_v[i] = (float)av[i];
   /* The RNG state is written as exactly 16 hex digits. */
   json_t *jr = json_object_get(root, "rng");

@@ -566,7 +566,9 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     wv_nn_adam adam = {.n = WV_P_COUNT, .lr = (float)o->lr, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f,
                        .weight_decay = 0.0f, .t = st->iter, .m = st->adam_m, .v = st->adam_v};
     wv_nn_adam_step_box(&adam, z, gz, 0.0f, 1.0f);
-    for (int i = 0; i < WV_P_COUNT; i++) {
+    /* a front-lit scene shows nothing of the transmission colours: they keep their values exactly */
+    int np = wv_scene_transmits(s) ? WV_P_COUNT : WV_P_REFLECT_COUNT;
+    for (int i = 0; i < np; i++) {
       double lo, hi;
       wv_param_range(i, &lo, &hi);
       wv_param_set(&st->params, i, lo + z[i] * (hi - lo));

@@ -40,6 +40,7 @@ wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
     for (int c = 0; c < 3; c++) {
       P->kd[t][c] = (float)p->diffuse[t][c];
       P->ks[t][c] = (float)p->specular[t][c];
+      P->kt[t][c] = (float)p->transmission[t][c];
     }
     wv_shade_params_set_roughness(P, t, (float)p->roughness[t]);
   }
@@ -69,7 +70,8 @@ void wv_shade_params_double(const wv_params *p, wv_shade_params_d *P) {
     P->ia2m1[t] = 1.0 / (a * a) - 1.0;
     P->pia[t] = 3.14159265358979323846 * a;
     P->ia[t] = 1.0 / a;
-    for (int c = 0; c < 3; c++) P->kd[t][c] = p->diffuse[t][c], P->ks[t][c] = p->specular[t][c];
+    for (int c = 0; c < 3; c++)
+      P->kd[t][c] = p->diffuse[t][c], P->ks[t][c] = p->specular[t][c], P->kt[t][c] = p->transmission[t][c];
   }
   P->sin_psi = sin(p->twist_deg * DEG), P->cos_psi = cos(p->twist_deg * DEG);
   P->noise = 0.1 * (double)p->noise_level;
@@ -104,6 +106,14 @@ void wv_yarn_eval(const wv_yarn_model *m, float x, float y, wv_yarn_point *out) 
   wv_yarn_cell_f c;
   wv_yarn_locate_f(m, x, y, &c);
   out->segment = wv_yarn_segment_f(m, &c);
+  wv_shade_params_f P;
+  wv_shade_params_from_yarn(m, &P);
+  float lv, lh;
+  wv_cloth_chords_f(&P, &c, &lv, &lh);
+  int vis = c.warp ? WV_WARP : WV_WEFT;
+  out->open = !c.lit && !c.cov;
+  out->through = c.lit ? vis : c.cov ? 1 - vis : -1;
+  out->thickness = lv + lh;
   if (!c.lit) { /* gap between yarns narrower than their spacing */
     out->type = -1;
     out->n[0] = 0, out->n[1] = 0, out->n[2] = 1;
@@ -111,8 +121,6 @@ void wv_yarn_eval(const wv_yarn_model *m, float x, float y, wv_yarn_point *out) 
     out->height = 0, out->u = 0, out->v = 0, out->beta = 0;
     return;
   }
-  wv_shade_params_f P;
-  wv_shade_params_from_yarn(m, &P);
   wv_yarn_frame_f f;
   wv_yarn_shape_f(m, &P, &c, &f, NULL);
   wv_to_fabric_f(c.warp, f.n, out->n);
@@ -120,6 +128,6 @@ void wv_yarn_eval(const wv_yarn_model *m, float x, float y, wv_yarn_point *out) 
   /* Height: circular cross-section plus an arc along the yarn whose end slope is umax. */
   float rho = m->sin_umax > 1e-6f ? c.half_len / m->sin_umax : 0.0f;
   out->height = f.beta * (c.half_w * wv_cos_hp_f(f.v) + rho * (wv_cos_hp_f(f.u) - m->cos_umax));
-  out->type = c.warp ? WV_WARP : WV_WEFT;
+  out->type = vis;
   out->u = f.u, out->v = f.v, out->beta = f.beta;
 }

@@ -18,7 +18,8 @@
  * normal, x the fabric's x direction. out[c] = f_r(wi, wo) mu_i per RGB channel
  * (specular k_s U_s f_s mu_i plus diffuse k_d f_d mu_i): multiply by the
  * light's irradiance I / r^2 for radiance. 0 where wi or wo is below the
- * surface or the point falls in a gap between yarns. wv_kernel_shade8 shades
+ * surface or the point falls in a gap between yarns (these entry points
+ * reflect only; the capture rig's renderer also transmits, docs/model.md). wv_kernel_shade8 shades
  * eight points at once (SIMD; out[c][i] is point i, bit-identical to
  * wv_kernel_shade on each). f comes from wv_fabric_prepare(params).
  *
@@ -39,7 +40,9 @@
 
 /* What the gradient renderer sums per yarn type and pixel (times the light):
  * radiance of channel c = sum over types y of ks[y][c] S + kd[y][c] DF, and
- * the derivatives of S and DF with respect to the non-linear parameters. */
+ * the derivatives of S and DF with respect to the non-linear parameters. With
+ * the light behind the cloth the same sums hold the transmission: S the
+ * specular's, DF the diffuse's, whose albedo is then kt[y][c]. */
 enum {
   WV_J_S,        /* specular factor f_s mu_i / k_s (with the glint) */
   WV_J_DF,       /* diffuse factor f_d mu_i / k_d */
@@ -68,6 +71,7 @@ enum { WV_T_BETA, WV_T_UMAX, WV_T_PSI };
     R noise;                   /* 0.1 Q */                                                           \
     R alpha[2], k[2], ia2m1[2], pia[2], ia[2]; /* alpha, 1 - alpha^2, 1/alpha^2 - 1, pi alpha, 1/alpha */ \
     R kd[2][3], ks[2][3];      /* albedos */                                                         \
+    R kt[2][3];                /* transmission colours */                                            \
     R blend, thickness;        /* diffuse blend w, SpongeCake thickness T */                         \
   }
 typedef WV_SHADE_PARAMS(float) wv_shade_params_f;

@@ -1,6 +1,7 @@
 /* The shading model, written once: yarn geometry (SPEC section 3), SGGX /
- * SpongeCake specular and blended Lambert diffuse (section 4), and their
- * derivatives with respect to the continuous parameters. A lane template (see
+ * SpongeCake specular and blended Lambert diffuse (section 4), light through the
+ * cloth (the specular's transmission, a diffuse transmission and the open gaps;
+ * docs/model.md), and their derivatives with respect to the continuous parameters. A lane template (see
  * kernel/lanes.h), instantiated by kernel/kernel.h as wv_*_f (float),
  * wv_*_8 (8-wide) and wv_*_d (double shading, float positions).
  *
@@ -37,6 +38,8 @@ typedef struct {
   WV_P a, l;         /* mm across the yarn from its centre line, along it from the float's centre */
   WV_P len;          /* float length L in cells */
   WV_P half_w, half_len; /* half the yarn's width and the float's half length, mm */
+  WV_P a_h;          /* mm across the crossing yarn underneath (the other type) from its centre line */
+  WV_M cov;          /* the crossing yarn covers the point (|a_h| <= its w/2): not an open gap */
 } WV_FN(wv_yarn_cell);
 
 WV_INLINE void WV_FN(wv_yarn_locate)(const wv_yarn_model *m, WV_P x, WV_P y, WV_FN(wv_yarn_cell) * c) {
@@ -61,6 +64,9 @@ WV_INLINE void WV_FN(wv_yarn_locate)(const wv_yarn_model *m, WV_P x, WV_P y, WV_
   c->half_w = WV_FN(wv_pickp)(c->warp, 0.5f * dx * m->width, 0.5f * dy * m->width);
   c->half_len = 0.5f * L * WV_FN(wv_pickp)(c->warp, dy, dx);
   c->lit = wv_not(wv_abs(c->a) > c->half_w); /* |a| > w/2: a gap narrower than the spacing */
+  /* the crossing yarn runs the other way, under the visible one: light passes it too */
+  c->a_h = wv_sel(c->warp, (fr - 0.5f) * dy, (fc - 0.5f) * dx);
+  c->cov = wv_not(wv_abs(c->a_h) > WV_FN(wv_pickp)(c->warp, 0.5f * dy * m->width, 0.5f * dx * m->width));
 }
 
 /* v, or v mod period when the identities repeat (tiled maps). */
@@ -248,6 +254,64 @@ WV_INLINE WV_L WV_FN(wv_diffuse)(WV_L ni, WV_L mi, WV_R blend, WV_L *d_ni, WV_L 
   return diff;
 }
 
+/* phi(y) = (1 - e^-y) / y and, when asked, phi'(y) = (e^-y (1 + y) - 1) / y^2, for
+ * y >= 0: their Taylor series below 0.5 (where the closed forms cancel), which
+ * stop below 1e-9 of the value there. */
+WV_INLINE WV_L WV_FN(wv_phi)(WV_L y, WV_L *dphi) {
+  const WV_R c2 = (WV_R)1 / 2, c3 = (WV_R)1 / 6, c4 = (WV_R)1 / 24, c5 = (WV_R)1 / 120, c6 = (WV_R)1 / 720,
+             c7 = (WV_R)1 / 5040, c8 = (WV_R)1 / 40320, c9 = (WV_R)1 / 362880, c10 = (WV_R)1 / 3628800;
+  WV_M small = y < 0.5f;
+  WV_L yb = wv_sel(small, WV_B(1), y), ey = wv_exp(-yb);
+  WV_L ps = 1.0f - y * (c2 - y * (c3 - y * (c4 - y * (c5 - y * (c6 - y * (c7 - y * (c8 - y * (c9 - y * c10))))))));
+  /* d(phi = sum_k (-y)^k / (k + 1)!) = sum_k>=1 (-1)^k k y^(k-1) / (k + 1)! */
+  if (dphi) {
+    WV_L dps = -c2 + y * (2 * c3 - y * (3 * c4 - y * (4 * c5 - y * (5 * c6 - y * (6 * c7 - y * (7 * c8 -
+               y * (8 * c9 - y * 9 * c10)))))));
+    *dphi = wv_sel(small, dps, (ey * (1.0f + yb) - 1.0f) / (yb * yb));
+  }
+  return wv_sel(small, ps, (1.0f - ey) / yb);
+}
+
+/* SpongeCake single scattering through the slab (light entering its far side and
+ * leaving toward the viewer; the transmission of Tang et al. 2024), times |mu_i|,
+ * without k_s, times g, for a slab of optical thickness tl:
+ *   spec_t = g D(h) E / (4 mo),  E = (e^(-tl b) - e^(-tl a)) / (a - b),
+ *   a = sigma(wi) / |mu_i|, b = sigma(wo) / mu_o,
+ * written E = tl e^(-tl m) phi(tl |a - b|), m = min(a, b): no cancellation, and
+ * tl e^(-tl a) at a = b. ami = |mu_i|; the rest as wv_spongecake. */
+WV_INLINE WV_L WV_FN(wv_spongecake_t)(WV_L ti, WV_L to, WV_L th, WV_L ami, WV_L mo, WV_L alpha, WV_L k, WV_L ia2m1,
+                                      WV_L pia, WV_L ia, WV_L tl, WV_L g, WV_FN(wv_spec_partials) * S) {
+  WV_L si = WV_FN(wv_sggx_sigma)(k, ti), so = WV_FN(wv_sggx_sigma)(k, to);
+  /* d(si = sqrt(1 - k ti^2)) as in wv_spongecake */
+  WV_L isi = wv_sel(si > 0.0f, 1.0f / si, WV_B(0)), iso = wv_sel(so > 0.0f, 1.0f / so, WV_B(0));
+  WV_L si_ti = -k * ti * isi, si_al = alpha * ti * ti * isi, so_to = -k * to * iso, so_al = alpha * to * to * iso;
+  WV_L a = si / ami, b = so / mo;
+  /* d(a = si / |mu_i|), d(b = so / mo) */
+  WV_L a_ti = si_ti / ami, a_al = si_al / ami, b_to = so_to / mo, b_al = so_al / mo;
+  WV_M ab = a >= b;
+  WV_L mn = wv_sel(ab, b, a), dl = wv_sel(ab, a - b, b - a);
+  WV_L em = wv_exp(-tl * mn), dphi = WV_B(0);
+  WV_L E = tl * em * WV_FN(wv_phi)(tl * dl, S ? &dphi : NULL);
+  WV_L q = WV_FN(wv_sggx_q)(ia2m1, th);
+  /* d(q = 1 + (1/alpha^2 - 1) th^2) as in wv_spongecake */
+  WV_L q_th = 2.0f * ia2m1 * th, q_al = -2.0f * th * th * ia * ia * ia;
+  WV_L D = WV_FN(wv_sggx_D)(pia, q);
+  /* d(D = 1 / (pi alpha q^2)) / D = -2 dq / q - dalpha / alpha */
+  WV_L lD_q = -2.0f / q, lD_al = -ia;
+  WV_L K = g * D / (4.0f * mo);
+  WV_L spec = K * E;
+  if (S) {
+    /* d(E = tl e^(-tl m) phi(tl |a - b|)): by the larger of a, b tl^2 e^(-tl m) phi',
+     * by the smaller -tl E minus that */
+    WV_L EL = tl * tl * em * dphi, ES = -tl * E - EL;
+    WV_L E_a = wv_sel(ab, EL, ES), E_b = wv_sel(ab, ES, EL);
+    /* d(spec = K E), K = g D / (4 mo) */
+    S->ti = K * E_a * a_ti, S->to = K * E_b * b_to, S->th = spec * lD_q * q_th;
+    S->alpha = K * (E_a * a_al + E_b * b_al) + spec * (lD_q * q_al + lD_al);
+  }
+  return spec;
+}
+
 /* ============================ the sample ============================ */
 
 /* Light and view at the shaded points, fabric tangent frame (z = macro normal):
@@ -290,32 +354,24 @@ WV_INLINE WV_L WV_FN(wv_glint)(const wv_fabric *fab, WV_P x, WV_P y) {
 
 #if WV_LANE == WV_LANE_8
 WV_INLINE void wv_shade_lanewise_8(const wv_fabric *fab, const wv_shade_params_f *P, const wv_dirs_8 *d, wv_f8 x,
-                                   wv_f8 y, wv_f8 rad[3], wv_shade_grad_8 *G);
+                                   wv_f8 y, wv_f8 rad[3], wv_shade_grad_8 *G, wv_f8 *open);
 #endif
 
-/* Radiance of the points (x, y) mm under the light and view d: per channel in
- * rad (0 in a gap). With G, also what the gradient sums. */
-WV_INLINE void WV_FN(wv_shade)(const wv_fabric *fab, const K_PARAMS *P, const WV_FN(wv_dirs) * d, WV_P x, WV_P y,
-                               WV_L rad[3], WV_FN(wv_shade_grad) * G) {
+/* Light reflected by the yarn in cell c (the light in front: d->mi > 0): per
+ * channel in rad (0 in a gap). With G, also what the gradient sums. */
+WV_INLINE void WV_FN(wv_shade_refl)(const wv_fabric *fab, const K_PARAMS *P, const WV_FN(wv_dirs) * d, WV_P x,
+                                    WV_P y, const WV_FN(wv_yarn_cell) * c, WV_L rad[3], WV_FN(wv_shade_grad) * G) {
   const wv_yarn_model *m = &fab->ym;
-  WV_FN(wv_yarn_cell) c;
-  WV_FN(wv_yarn_locate)(m, x, y, &c);
-#if WV_LANE == WV_LANE_8
-  if (!wv_all(c.ok)) { /* beyond 32-bit cell indices: lane by lane in scalar float */
-    wv_shade_lanewise_8(fab, P, d, x, y, rad, G);
-    return;
-  }
-#endif
   if (G) {
-    G->warp = c.warp;
+    G->warp = c->warp;
     for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = WV_B(0);
   }
   for (int ch = 0; ch < 3; ch++) rad[ch] = WV_B(0);
-  if (!wv_any(c.lit)) return;
-  const WV_M warp = c.warp;
+  if (!wv_any(c->lit)) return;
+  const WV_M warp = c->warp;
   WV_FN(wv_yarn_frame) f;
   WV_FN(wv_yarn_dframe) df;
-  WV_FN(wv_yarn_shape)(m, P, &c, &f, G ? &df : NULL);
+  WV_FN(wv_yarn_shape)(m, P, c, &f, G ? &df : NULL);
 
   /* the directions in the yarn's frame */
   WV_L wi[3], wo[3], h[3];
@@ -340,7 +396,7 @@ WV_INLINE void WV_FN(wv_shade)(const wv_fabric *fab, const K_PARAMS *P, const WV
   for (int ch = 0; ch < 3; ch++) {
     WV_L ks = WV_FN(wv_pick)(warp, P->ks[WV_WARP][ch], P->ks[WV_WEFT][ch]);
     WV_L kd = WV_FN(wv_pick)(warp, P->kd[WV_WARP][ch], P->kd[WV_WEFT][ch]);
-    rad[ch] = wv_sel(c.lit, d->light * (ks * spec + kd * diff), WV_B(0));
+    rad[ch] = wv_sel(c->lit, d->light * (ks * spec + kd * diff), WV_B(0));
   }
   if (!G) return;
 
@@ -362,21 +418,166 @@ WV_INLINE void WV_FN(wv_shade)(const wv_fabric *fab, const K_PARAMS *P, const WV
   J[WV_J_S_BETA] = ds[WV_T_BETA], J[WV_J_S_ALPHA] = S.alpha, J[WV_J_S_UMAX] = ds[WV_T_UMAX];
   J[WV_J_S_PSI] = ds[WV_T_PSI], J[WV_J_DF_BETA] = dd[WV_T_BETA], J[WV_J_DF_UMAX] = dd[WV_T_UMAX];
   J[WV_J_DF_BLEND] = diff_w;
-  for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(c.lit, d->light * J[j], WV_B(0));
+  for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(c->lit, d->light * J[j], WV_B(0));
+}
+
+/* The cloth's local thickness at the point, in yarn diameters: the chord of the
+ * visible yarn's circular cross-section (cos v, 0 in a gap beside it) in lv, and
+ * of the crossing yarn's underneath in lh (0 where it does not cover the point).
+ * Positions only: no continuous parameter moves them. */
+WV_INLINE void WV_FN(wv_cloth_chords)(const K_PARAMS *P, const WV_FN(wv_yarn_cell) * c, WV_L *lv, WV_L *lh) {
+  const WV_M warp = c->warp;
+  WV_L v = WV_LP(c->a) * WV_FN(wv_pick)(warp, P->vsc[WV_WARP], P->vsc[WV_WEFT]);
+  WV_L vh = WV_LP(c->a_h) * WV_FN(wv_pick)(warp, P->vsc[WV_WEFT], P->vsc[WV_WARP]);
+  WV_L cv = wv_cos(v), ch = wv_cos(vh); /* |v|, |vh| <= pi/2 where used */
+  *lv = wv_sel(c->lit & (cv > 0.0f), cv, WV_B(0));
+  *lh = wv_sel(c->cov & (ch > 0.0f), ch, WV_B(0));
+}
+
+/* Light from behind the cloth (d->mi < 0) seen through it at the points of cell
+ * c: per channel in rad, 1 in open where the line of sight crosses an open gap
+ * (no yarn of either kind: the light itself is seen there, which the camera adds
+ * as the scene's gap glow), and with G what the gradient sums: the same sums as
+ * for reflection (J_S the specular transmission, J_DF the diffuse transmission)
+ * for the yarn type the light passes (G->warp). On the visible yarn:
+ *   k_s S_t + k_t F_t,  S_t = g D(h) E(T lv) / (4 mu_o) t(T lh),
+ *   F_t = (w max(0, n_back.wi) + (1 - w) |mu_i|) / pi t(T (lv + lh)),
+ * t(tau) = 1 / (1 + tau / 2) the diffuse transmittance of a slab of optical
+ * thickness tau; in a gap beside it, over the crossing yarn: k_t F_t with the
+ * macro normal. */
+WV_INLINE void WV_FN(wv_shade_trans)(const wv_fabric *fab, const K_PARAMS *P, const WV_FN(wv_dirs) * d, WV_P x,
+                                     WV_P y, const WV_FN(wv_yarn_cell) * c, WV_L rad[3], WV_L *open,
+                                     WV_FN(wv_shade_grad) * G) {
+  const wv_yarn_model *m = &fab->ym;
+  const WV_M warp = c->warp, lit = c->lit;
+  const WV_M tw = (lit & warp) | (wv_not(lit) & wv_not(warp)); /* the yarn the light passes is warp */
+  const WV_M opn = wv_not(lit) & wv_not(c->cov);
+  if (open) *open = wv_sel(opn, WV_B(1), WV_B(0));
+  if (G) {
+    G->warp = tw;
+    for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = WV_B(0);
+  }
+  for (int ch = 0; ch < 3; ch++) rad[ch] = WV_B(0);
+  if (wv_all(opn)) return;
+  WV_L lv, lh;
+  WV_FN(wv_cloth_chords)(P, c, &lv, &lh);
+  WV_L tl = P->thickness * lv, th_all = P->thickness * (lv + lh);
+  WV_L Ah = WV_CLOTH_TRANSMITTANCE(P->thickness * lh), A = WV_CLOTH_TRANSMITTANCE(th_all);
+  WV_L ami = -d->mi; /* |mu_i| */
+
+  /* on the visible yarn: its frame, the specular transmission and the underside's normal */
+  WV_L spec = WV_B(0), ni = ami; /* in a gap beside the visible yarn: the macro normal */
+  WV_L ds[3] = {WV_B(0), WV_B(0), WV_B(0)}, dn_wi[2] = {WV_B(0), WV_B(0)}, s_al = WV_B(0);
+  if (wv_any(lit)) {
+    WV_FN(wv_yarn_frame) f;
+    WV_FN(wv_yarn_dframe) df;
+    WV_FN(wv_yarn_shape)(m, P, c, &f, G ? &df : NULL);
+    WV_L wi[3], wo[3], h[3];
+    WV_FN(wv_to_local)(warp, d->wi, wi);
+    WV_FN(wv_to_local)(warp, d->wo, wo);
+    WV_FN(wv_to_local)(warp, d->h, h);
+    WV_L ti = f.t[0] * wi[0] + f.t[1] * wi[1] + f.t[2] * wi[2];
+    WV_L to = f.t[0] * wo[0] + f.t[1] * wo[1] + f.t[2] * wo[2];
+    WV_L th = f.t[0] * h[0] + f.t[1] * h[1] + f.t[2] * h[2];
+    /* the yarn's underside, where the light enters: n_back = (n_x, -n_y, -n_z) in the yarn's frame */
+    ni = wv_sel(lit, wi[0] * f.n[0] - wi[1] * f.n[1] - wi[2] * f.n[2], ami);
+    WV_L alpha = WV_FN(wv_pick)(warp, P->alpha[WV_WARP], P->alpha[WV_WEFT]);
+    WV_L k = WV_FN(wv_pick)(warp, P->k[WV_WARP], P->k[WV_WEFT]);
+    WV_L ia2m1 = WV_FN(wv_pick)(warp, P->ia2m1[WV_WARP], P->ia2m1[WV_WEFT]);
+    WV_L pia = WV_FN(wv_pick)(warp, P->pia[WV_WARP], P->pia[WV_WEFT]);
+    WV_L ia = WV_FN(wv_pick)(warp, P->ia[WV_WARP], P->ia[WV_WEFT]);
+    WV_FN(wv_spec_partials) S;
+    spec = WV_FN(wv_spongecake_t)(ti, to, th, ami, d->mo, alpha, k, ia2m1, pia, ia, tl,
+                                  WV_FN(wv_glint)(fab, x, y) * Ah, G ? &S : NULL);
+    spec = wv_sel(lit, spec, WV_B(0));
+    if (G) { /* the chain rule, as for reflection; the underside's normal through ni */
+      for (int p = 0; p < 3; p++) {
+        const WV_L *dt = df.dt[p];
+        WV_L dti = dt[0] * wi[0] + dt[1] * wi[1] + dt[2] * wi[2];
+        WV_L dto = dt[0] * wo[0] + dt[1] * wo[1] + dt[2] * wo[2];
+        WV_L dth = dt[0] * h[0] + dt[1] * h[1] + dt[2] * h[2];
+        ds[p] = wv_sel(lit, S.ti * dti + S.to * dto + S.th * dth, WV_B(0)); /* d spec */
+      }
+      for (int p = 0; p < 2; p++) { /* d(ni = wi.n_back) */
+        const WV_L *dn = df.dn[p];
+        dn_wi[p] = wv_sel(lit, wi[0] * dn[0] - wi[1] * dn[1] - wi[2] * dn[2], WV_B(0));
+      }
+      s_al = wv_sel(lit, S.alpha, WV_B(0));
+    }
+  }
+  WV_L diff_ni = WV_B(0), diff_w = WV_B(0);
+  WV_L diff = WV_FN(wv_diffuse)(ni, ami, P->blend, G ? &diff_ni : NULL, G ? &diff_w : NULL) * A;
+  for (int ch = 0; ch < 3; ch++) {
+    WV_L ks = WV_FN(wv_pick)(warp, P->ks[WV_WARP][ch], P->ks[WV_WEFT][ch]);
+    WV_L kt = WV_FN(wv_pick)(tw, P->kt[WV_WARP][ch], P->kt[WV_WEFT][ch]);
+    rad[ch] = wv_sel(opn, WV_B(0), d->light * (ks * spec + kt * diff));
+  }
+  if (!G) return;
+  WV_L dd[2]; /* d(diff = diffuse(ni) A) */
+  for (int p = 0; p < 2; p++) dd[p] = diff_ni * dn_wi[p] * A;
+  WV_L J[WV_J_COUNT];
+  J[WV_J_S] = spec, J[WV_J_DF] = diff;
+  J[WV_J_S_BETA] = ds[WV_T_BETA], J[WV_J_S_ALPHA] = s_al, J[WV_J_S_UMAX] = ds[WV_T_UMAX];
+  J[WV_J_S_PSI] = ds[WV_T_PSI], J[WV_J_DF_BETA] = dd[WV_T_BETA], J[WV_J_DF_UMAX] = dd[WV_T_UMAX];
+  J[WV_J_DF_BLEND] = diff_w * A;
+  for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(opn, WV_B(0), d->light * J[j]);
+}
+
+/* Radiance of the points (x, y) mm under the light and view d: per channel in
+ * rad (0 in a gap), reflected where the light is in front (d->mi > 0) and
+ * transmitted where it is behind (d->mi < 0). With G, also what the gradient
+ * sums; with open, 1 where the line of sight crosses an open gap with the light
+ * behind (else 0). */
+WV_INLINE void WV_FN(wv_shade_ex)(const wv_fabric *fab, const K_PARAMS *P, const WV_FN(wv_dirs) * d, WV_P x, WV_P y,
+                                  WV_L rad[3], WV_FN(wv_shade_grad) * G, WV_L *open) {
+  const wv_yarn_model *m = &fab->ym;
+  WV_FN(wv_yarn_cell) c;
+  WV_FN(wv_yarn_locate)(m, x, y, &c);
+#if WV_LANE == WV_LANE_8
+  if (!wv_all(c.ok)) { /* beyond 32-bit cell indices: lane by lane in scalar float */
+    wv_shade_lanewise_8(fab, P, d, x, y, rad, G, open);
+    return;
+  }
+#endif
+  const WV_M back = d->mi < 0.0f;
+  if (!wv_any(back)) {
+    if (open) *open = WV_B(0);
+    WV_FN(wv_shade_refl)(fab, P, d, x, y, &c, rad, G);
+    return;
+  }
+  WV_FN(wv_shade_trans)(fab, P, d, x, y, &c, rad, open, G);
+  if (wv_all(back)) return;
+  /* light in front of some points and behind others: each lane takes its side */
+  WV_L rr[3];
+  WV_FN(wv_shade_grad) GR;
+  WV_FN(wv_shade_refl)(fab, P, d, x, y, &c, rr, G ? &GR : NULL);
+  for (int ch = 0; ch < 3; ch++) rad[ch] = wv_sel(back, rad[ch], rr[ch]);
+  if (open) *open = wv_sel(back, *open, WV_B(0));
+  if (G) {
+    G->warp = wv_seli(back, G->warp, GR.warp);
+    for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(back, G->J[j], GR.J[j]);
+  }
+}
+
+/* wv_shade_ex without the open gaps. */
+WV_INLINE void WV_FN(wv_shade)(const wv_fabric *fab, const K_PARAMS *P, const WV_FN(wv_dirs) * d, WV_P x, WV_P y,
+                               WV_L rad[3], WV_FN(wv_shade_grad) * G) {
+  WV_FN(wv_shade_ex)(fab, P, d, x, y, rad, G, NULL);
 }
 
 #if WV_LANE == WV_LANE_8
 /* wv_shade_8 one lane at a time with the scalar float kernel (64-bit cells). */
 WV_INLINE void wv_shade_lanewise_8(const wv_fabric *fab, const wv_shade_params_f *P, const wv_dirs_8 *d, wv_f8 x,
-                                   wv_f8 y, wv_f8 rad[3], wv_shade_grad_8 *G) {
+                                   wv_f8 y, wv_f8 rad[3], wv_shade_grad_8 *G, wv_f8 *open) {
   for (int i = 0; i < WV_LANES; i++) {
     wv_dirs_f di;
     for (int k = 0; k < 3; k++) di.wi[k] = d->wi[k][i], di.wo[k] = d->wo[k][i], di.h[k] = d->h[k][i];
     di.mi = d->mi[i], di.mo = d->mo[i], di.light = d->light[i];
-    float r[3];
+    float r[3], o;
     wv_shade_grad_f g;
-    wv_shade_f(fab, P, &di, x[i], y[i], r, G ? &g : NULL);
+    wv_shade_ex_f(fab, P, &di, x[i], y[i], r, G ? &g : NULL, &o);
     for (int k = 0; k < 3; k++) rad[k][i] = r[k];
+    if (open) (*open)[i] = o;
     if (G) {
       G->warp[i] = g.warp ? -1 : 0;
       for (int j = 0; j < WV_J_COUNT; j++) G->J[j][i] = g.J[j];

@@ -15,7 +15,8 @@
 #include "woven/yarn.h"
 
 void wv_maps_free(wv_maps *m) {
-  wv_image *all[] = {&m->normal, &m->tangent, &m->yarn_id, &m->height, &m->diffuse, &m->specular, &m->roughness};
+  wv_image *all[] = {&m->normal,    &m->tangent,   &m->yarn_id,      &m->height, &m->diffuse,
+                     &m->specular,  &m->roughness, &m->transmission, &m->open};
   for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) wv_image_free(all[i]);
 }
 
@@ -28,7 +29,8 @@ wv_status wv_maps_generate(const wv_params *p, int size, wv_maps *m, wv_error *e
   if ((st = wv_params_yarn_model(p, &ym, err))) return st;
   ym.period_rows = ym.weave.rows;
   ym.period_cols = ym.weave.cols;
-  wv_image *all[] = {&m->normal, &m->tangent, &m->yarn_id, &m->height, &m->diffuse, &m->specular, &m->roughness};
+  wv_image *all[] = {&m->normal,    &m->tangent,   &m->yarn_id,      &m->height, &m->diffuse,
+                     &m->specular,  &m->roughness, &m->transmission, &m->open};
   for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
     if ((st = wv_image_alloc(all[i], size, size, 3, err))) {
       wv_maps_free(m);
@@ -48,6 +50,8 @@ wv_status wv_maps_generate(const wv_params *p, int size, wv_maps *m, wv_error *e
       float *id = wv_image_px(&m->yarn_id, px, py), *h = wv_image_px(&m->height, px, py);
       float *kd = wv_image_px(&m->diffuse, px, py), *ks = wv_image_px(&m->specular, px, py);
       float *a = wv_image_px(&m->roughness, px, py);
+      float *kt = wv_image_px(&m->transmission, px, py), *op = wv_image_px(&m->open, px, py);
+      float tr = WV_CLOTH_TRANSMITTANCE((float)p->thickness * yp.thickness);
       for (int c = 0; c < 3; c++) n[c] = yp.n[c], t[c] = yp.t[c], h[c] = yp.height;
       if (yp.height > hmax) hmax = yp.height;
       int ty = yp.type;
@@ -56,6 +60,8 @@ wv_status wv_maps_generate(const wv_params *p, int size, wv_maps *m, wv_error *e
         kd[c] = ty < 0 ? 0.0f : (float)p->diffuse[ty][c];
         ks[c] = ty < 0 ? 0.0f : (float)p->specular[ty][c];
         a[c] = ty < 0 ? 1.0f : (float)p->roughness[ty];
+        kt[c] = yp.through < 0 ? 0.0f : (float)p->transmission[yp.through][c] * tr;
+        op[c] = (float)yp.open;
       }
     }
   m->height_max = hmax;
@@ -87,7 +93,8 @@ static wv_status write_png_map(const char *path, const wv_image *src, int kind, 
 static const char *const MAP_FILES[] = {"normal.png",    "normal.exr",  "tangent.png",  "tangent.exr",
                                         "yarn_id.png",   "yarn_id.exr", "height.png",   "height.exr",
                                         "diffuse.png",   "diffuse.exr", "specular.png", "specular.exr",
-                                        "roughness.png", "roughness.exr", "maps.json",  NULL};
+                                        "roughness.png", "roughness.exr", "transmission.png", "transmission.exr",
+                                        "open.png",      "open.exr",    "maps.json",    NULL};
 
 wv_status wv_maps_write(const wv_maps *m, const char *dir, const char *format, wv_error *err) {
   int png = !strcmp(format, "png") || !strcmp(format, "both");
@@ -99,7 +106,7 @@ wv_status wv_maps_write(const wv_maps *m, const char *dir, const char *format, w
     int kind;
   } maps[] = {{"normal", &m->normal, 0},     {"tangent", &m->tangent, 0},   {"yarn_id", &m->yarn_id, 3},
               {"height", &m->height, 2},     {"diffuse", &m->diffuse, 1},   {"specular", &m->specular, 1},
-              {"roughness", &m->roughness, 3}};
+              {"roughness", &m->roughness, 3}, {"transmission", &m->transmission, 1}, {"open", &m->open, 3}};
   wv_outdir od;
   wv_status st = wv_outdir_begin(&od, dir, MAP_FILES, err);
   if (st) return st;
@@ -115,11 +122,12 @@ wv_status wv_maps_write(const wv_maps *m, const char *dir, const char *format, w
     }
   }
   json_t *o = json_pack(
-      "{s:i,s:i,s:[f,f],s:f,s:{s:s,s:s,s:s,s:s,s:s,s:s,s:s}}", "width", m->normal.w, "height", m->normal.h,
+      "{s:i,s:i,s:[f,f],s:f,s:{s:s,s:s,s:s,s:s,s:s,s:s,s:s,s:s,s:s}}", "width", m->normal.w, "height", m->normal.h,
       "tile_mm", m->tile_mm[0], m->tile_mm[1], "height_max_mm", m->height_max, "png_encoding", "normal",
       "0.5*n+0.5, tangent space (x right along the weft, y up along the warp, z out)", "tangent",
       "0.5*t+0.5, same frame, sign arbitrary", "yarn_id", "R warp, G weft, B per-segment random", "height",
-      "height / height_max_mm", "diffuse", "sRGB", "specular", "sRGB", "roughness", "SGGX alpha, linear");
+      "height / height_max_mm", "diffuse", "sRGB", "specular", "sRGB", "roughness", "SGGX alpha, linear", "transmission",
+      "sRGB, k_t times the cloth's diffuse transmittance", "open", "1 in an open gap (light straight through), linear");
   char *text = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
   json_decref(o);
   snprintf(path, sizeof path, "%s/maps.json", od.tmp);

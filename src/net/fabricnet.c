@@ -52,6 +52,7 @@ wv_status wv_fabricnet_params(const wv_fabricnet *n, const float *y, const char 
     else
       wv_param_set(p, k - 2, v);
   }
+  wv_params_transmission_default(p); /* not predicted: the prior mean given the predicted colour */
   return wv_params_validate(p, err);
 }
 

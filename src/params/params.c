@@ -23,6 +23,7 @@ static const range R_DENSITY = {"density", WV_DENSITY_MIN, WV_DENSITY_MAX};
 static const range R_BETA = {"heightfield", 0, 2};
 static const range R_KD = {"diffuse", 0, 1};
 static const range R_KS = {"specular", 0, 1};
+static const range R_KT = {"transmission", 0, 1};
 static const range R_ALPHA = {"roughness", 0.01, 1};
 static const range R_TWIST = {"twist_deg", -60, 60};
 static const range R_UMAX = {"inclination_deg", 5, 70};
@@ -66,6 +67,7 @@ wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err) {
       p->diffuse[y][c] = 0.5;
       p->specular[y][c] = 0.5;
     }
+  wv_params_transmission_default(p);
   p->diffuse_blend = 0.5;
   p->noise_level = 2;
   p->thickness = 2.0;
@@ -73,6 +75,11 @@ wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err) {
   p->seed = 1;
   p->specular_noise = 1;
   return WV_OK;
+}
+
+void wv_params_transmission_default(wv_params *p) {
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) p->transmission[y][c] = 0.5 * p->diffuse[y][c];
 }
 
 static wv_status check(const range *r, const char *sub, double v, wv_error *err) {
@@ -106,6 +113,7 @@ wv_status wv_params_validate(const wv_params *p, wv_error *err) {
     for (int c = 0; c < 3; c++) {
       if ((st = check(&R_KD, yn[y], p->diffuse[y][c], err))) return st;
       if ((st = check(&R_KS, yn[y], p->specular[y][c], err))) return st;
+      if ((st = check(&R_KT, yn[y], p->transmission[y][c], err))) return st;
     }
   }
   if ((st = check(&R_TWIST, NULL, p->twist_deg, err))) return st;
@@ -136,14 +144,16 @@ static wv_status get_pair(json_t *root, const char *key, int n, double *warp, do
 }
 
 static const char *const KNOWN_KEYS[] = {
-    "pattern",    "weave",     "density",         "heightfield",   "diffuse",     "specular",
-    "roughness",  "twist_deg", "inclination_deg", "diffuse_blend", "noise_level", "thickness",
-    "yarn_width", "seed",      "specular_noise",  "comment",       NULL};
+    "version",   "pattern",     "weave",          "density",         "heightfield",   "diffuse",
+    "specular",  "transmission", "roughness",     "twist_deg",       "inclination_deg", "diffuse_blend",
+    "noise_level", "thickness", "yarn_width",     "seed",            "specular_noise",  "comment", NULL};
 
 static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
   const char *name = NULL;
+  int version = 1;
   wv_status st;
   if ((st = wv_json_only_keys(root, NULL, KNOWN_KEYS, err)) ||
+      (st = wv_json_int(root, NULL, "version", 1, WV_PARAMS_VERSION, 0, &version, err)) ||
       (st = wv_json_string(root, NULL, "pattern", WV_JSON_REQUIRED, &name, err)))
     return st;
   if (!strcmp(name, "custom")) {
@@ -175,6 +185,7 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
       (st = get_pair(root, "roughness", 1, &p->roughness[0], &p->roughness[1], err)) ||
       (st = get_pair(root, "diffuse", 3, p->diffuse[0], p->diffuse[1], err)) ||
       (st = get_pair(root, "specular", 3, p->specular[0], p->specular[1], err)) ||
+      (st = get_pair(root, "transmission", 3, p->transmission[0], p->transmission[1], err)) ||
       (st = wv_json_number(root, NULL, "twist_deg", WV_JSON_FINITE, 0, &p->twist_deg, err)) ||
       (st = wv_json_number(root, NULL, "inclination_deg", WV_JSON_FINITE, 0, &p->inclination_deg, err)) ||
       (st = wv_json_number(root, NULL, "diffuse_blend", WV_JSON_FINITE, 0, &p->diffuse_blend, err)) ||
@@ -185,6 +196,8 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
       (st = wv_json_bool(root, NULL, "specular_noise", 0, &p->specular_noise, err)))
     return st;
   p->seed = (int64_t)seed;
+  /* a file without the key (every version 1 file): the yarn's colour, from its diffuse albedo */
+  if (!json_object_get(root, "transmission")) wv_params_transmission_default(p);
   return wv_params_validate(p, err);
 }
 
@@ -214,6 +227,7 @@ static json_t *rgb(const double v[3]) {
 
 char *wv_params_to_json(const wv_params *p) {
   json_t *o = json_object();
+  json_object_set_new(o, "version", json_integer(WV_PARAMS_VERSION));
   json_object_set_new(o, "pattern", json_string(p->pattern));
   if (!strcmp(p->pattern, "custom")) {
     json_t *a = json_array();
@@ -226,6 +240,8 @@ char *wv_params_to_json(const wv_params *p) {
   json_object_set_new(o, "diffuse", json_pack("{s:o,s:o}", "warp", rgb(p->diffuse[0]), "weft", rgb(p->diffuse[1])));
   json_object_set_new(o, "specular",
                       json_pack("{s:o,s:o}", "warp", rgb(p->specular[0]), "weft", rgb(p->specular[1])));
+  json_object_set_new(o, "transmission",
+                      json_pack("{s:o,s:o}", "warp", rgb(p->transmission[0]), "weft", rgb(p->transmission[1])));
   json_object_set_new(o, "roughness", json_pack("{s:f,s:f}", "warp", p->roughness[0], "weft", p->roughness[1]));
   json_object_set_new(o, "twist_deg", json_real(p->twist_deg));
   json_object_set_new(o, "inclination_deg", json_real(p->inclination_deg));
@@ -265,7 +281,8 @@ static double *param_slot(wv_params *p, int id) {
   if (id <= WV_P_ALPHA_WEFT) return &p->roughness[id - WV_P_ALPHA_WARP];
   if (id == WV_P_UMAX_DEG) return &p->inclination_deg;
   if (id == WV_P_BLEND) return &p->diffuse_blend;
-  return &p->twist_deg;
+  if (id == WV_P_TWIST_DEG) return &p->twist_deg;
+  return &p->transmission[(id - WV_P_KT_WARP_R) / 3][(id - WV_P_KT_WARP_R) % 3];
 }
 
 double wv_param_get(const wv_params *p, int id) { return *param_slot((wv_params *)p, id); }
@@ -278,7 +295,8 @@ void wv_param_range(int id, double *lo, double *hi) {
                    : id <= WV_P_ALPHA_WEFT ? &R_ALPHA
                    : id == WV_P_UMAX_DEG ? &R_UMAX
                    : id == WV_P_BLEND ? &R_BLEND
-                                      : &R_TWIST;
+                   : id == WV_P_TWIST_DEG ? &R_TWIST
+                                          : &R_KT;
   *lo = r->lo, *hi = r->hi;
 }
 
@@ -287,7 +305,9 @@ const char *wv_param_name(int id) {
       "heightfield.warp", "heightfield.weft", "diffuse.warp[0]", "diffuse.warp[1]", "diffuse.warp[2]",
       "diffuse.weft[0]",  "diffuse.weft[1]",  "diffuse.weft[2]", "specular.warp[0]", "specular.warp[1]",
       "specular.warp[2]", "specular.weft[0]", "specular.weft[1]", "specular.weft[2]", "roughness.warp",
-      "roughness.weft",   "inclination_deg",  "diffuse_blend",   "twist_deg"};
+      "roughness.weft",   "inclination_deg",  "diffuse_blend",   "twist_deg",       "transmission.warp[0]",
+      "transmission.warp[1]", "transmission.warp[2]", "transmission.weft[0]", "transmission.weft[1]",
+      "transmission.weft[2]"};
   return id >= 0 && id < WV_P_COUNT ? names[id] : "?";
 }
 
@@ -339,5 +359,12 @@ wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *
   int q = (int)floor(uni(&r, 0, 6));
   p->noise_level = q > 5 ? 5 : q;
   p->seed = (int64_t)(wv_mix64(r + 1) >> 33);
+  /* Transmission: the diffuse colour times a factor uniform in 0.1..0.9 per yarn type (mean
+   * 1/2: the default), from a stream of its own so that every draw above is as before. */
+  uint64_t rt = wv_mix64(seed ^ 0x7472616e73ULL);
+  for (int y = 0; y < 2; y++) {
+    double f = uni(&rt, 0.1, 0.9);
+    for (int c = 0; c < 3; c++) p->transmission[y][c] = f * p->diffuse[y][c];
+  }
   return wv_params_validate(p, err);
 }

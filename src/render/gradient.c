@@ -23,37 +23,42 @@
 
 #define DEG (3.14159265358979323846 / 180.0)
 
-/* The albedos the adjoint pass weighs the per-type sums with. */
+/* The albedos the adjoint pass weighs the per-type sums with; with the light behind
+ * the cloth (transmit) the diffuse sums are the diffuse transmission's, weighed by kt. */
 typedef struct {
-  double kd[2][3], ks[2][3];
+  double kd[2][3], ks[2][3], kt[2][3];
+  int transmit;
 } wv_grad_model;
 
 /* In float mode the floats the forward renderer uses, widened exactly. */
 static void albedos_from_fabric(const wv_fabric *f, wv_grad_model *g) {
   for (int y = 0; y < 2; y++)
-    for (int c = 0; c < 3; c++) g->kd[y][c] = f->P.kd[y][c], g->ks[y][c] = f->P.ks[y][c];
+    for (int c = 0; c < 3; c++) g->kd[y][c] = f->P.kd[y][c], g->ks[y][c] = f->P.ks[y][c], g->kt[y][c] = f->P.kt[y][c];
 }
 static void albedos_from_double(const wv_shade_params_d *P, wv_grad_model *g) {
   for (int y = 0; y < 2; y++)
-    for (int c = 0; c < 3; c++) g->kd[y][c] = P->kd[y][c], g->ks[y][c] = P->ks[y][c];
+    for (int c = 0; c < 3; c++) g->kd[y][c] = P->kd[y][c], g->ks[y][c] = P->ks[y][c], g->kt[y][c] = P->kt[y][c];
 }
 
 /* Gradient slots per type, for the linear parameters. */
 static const int KD_ID[2] = {WV_P_KD_WARP_R, WV_P_KD_WEFT_R};
 static const int KS_ID[2] = {WV_P_KS_WARP_R, WV_P_KS_WEFT_R};
+static const int KT_ID[2] = {WV_P_KT_WARP_R, WV_P_KT_WEFT_R};
 static const int BETA_ID[2] = {WV_P_BETA_WARP, WV_P_BETA_WEFT};
 static const int ALPHA_ID[2] = {WV_P_ALPHA_WARP, WV_P_ALPHA_WEFT};
 
 /* Add a pixel's contribution given gr[c] = dL/dradiance_c. */
 static void accumulate(const wv_grad_model *gm, const double JJ[2][WV_J_COUNT], const double gr[3], double *g) {
+  const int *DF_ID = gm->transmit ? KT_ID : KD_ID;
+  const double(*kdf)[3] = gm->transmit ? gm->kt : gm->kd; /* the diffuse sums' albedo */
   for (int y = 0; y < 2; y++) {
     const double *J = JJ[y];
     double ws = 0, wd = 0; /* dL/dS and dL/dDF of this type */
     for (int c = 0; c < 3; c++) {
-      g[KD_ID[y] + c] += gr[c] * J[WV_J_DF];
+      g[DF_ID[y] + c] += gr[c] * J[WV_J_DF];
       g[KS_ID[y] + c] += gr[c] * J[WV_J_S];
       ws += gr[c] * gm->ks[y][c];
-      wd += gr[c] * gm->kd[y][c];
+      wd += gr[c] * kdf[y][c];
     }
     g[BETA_ID[y]] += ws * J[WV_J_S_BETA] + wd * J[WV_J_DF_BETA];
     g[ALPHA_ID[y]] += ws * J[WV_J_S_ALPHA];
@@ -220,6 +225,7 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
   } else {
     albedos_from_fabric(&fab, &gm);
   }
+  gm.transmit = rig.transmit;
 
   double *rows = NULL;
   wv_grad_record *rec = NULL;

@@ -26,6 +26,7 @@ typedef struct {
   uint64_t hash[PAD];           /* sampler state */
   uint32_t keyx[PAD], keyy[PAD];
   wv_f8 acc[CHUNK][3];          /* the pixels' sums: lane r = row r */
+  wv_f8 open[CHUNK];            /* with the light behind: the samples that see it through an open gap */
   wv_f8 J[CHUNK][2][WV_J_COUNT];
 } chunk;
 
@@ -97,25 +98,29 @@ WV_INLINE void shade_block(const wv_camera_rig *rig, const wv_fabric *fab, chunk
     live &= ~traced | h.hit;
   }
   if (!wv_any(live)) return;
-  /* lanes without a sample: a harmless point and direction, result dropped */
-  const wv_f8 zero = wv_splat8(0.0f), one = wv_splat8(1.0f);
+  /* lanes without a sample: a harmless point and direction (the light on the side of
+   * the others), result dropped */
+  const wv_f8 zero = wv_splat8(0.0f), one = wv_splat8(1.0f), li = wv_splat8(rig->transmit ? -1.0f : 1.0f);
   x = wv_sel(live, x, zero), y = wv_sel(live, y, zero);
   for (int k = 0; k < 3; k++) {
     wv_f8 up = k == 2 ? one : zero;
-    d.wi[k] = wv_sel(live, d.wi[k], up), d.wo[k] = wv_sel(live, d.wo[k], up), d.h[k] = wv_sel(live, d.h[k], up);
+    d.wi[k] = wv_sel(live, d.wi[k], k == 2 ? li : zero), d.wo[k] = wv_sel(live, d.wo[k], up);
+    d.h[k] = wv_sel(live, d.h[k], up);
   }
-  d.mi = wv_sel(live, d.mi, one), d.mo = wv_sel(live, d.mo, one), d.light = wv_sel(live, d.light, zero);
+  d.mi = wv_sel(live, d.mi, li), d.mo = wv_sel(live, d.mo, one), d.light = wv_sel(live, d.light, zero);
 
-  wv_f8 rad[3];
+  wv_f8 rad[3], open = zero;
   wv_shade_grad_8 G;
-  wv_shade_8(fab, &fab->P, &d, x, y, rad, grad ? &G : NULL);
+  wv_shade_ex_8(fab, &fab->P, &d, x, y, rad, grad ? &G : NULL, rig->transmit ? &open : NULL);
   for (int c = 0; c < 3; c++) rad[c] = wv_sel(live, rad[c], zero);
+  open = wv_sel(live, open, zero);
   if (grad)
     for (int j = 0; j < WV_J_COUNT; j++) G.J[j] = wv_sel(live, G.J[j], zero);
 
   if (uniform) {
     int i = slot[0];
     for (int c = 0; c < 3; c++) C->acc[i][c] += rad[c];
+    if (rig->transmit) C->open[i] += open;
     if (grad)
       for (int j = 0; j < WV_J_COUNT; j++) {
         C->J[i][WV_WARP][j] += wv_sel(G.warp, G.J[j], zero);
@@ -126,6 +131,7 @@ WV_INLINE void shade_block(const wv_camera_rig *rig, const wv_fabric *fab, chunk
   for (unsigned bits = wv_bits_8(live); bits; bits &= bits - 1) {
     int k = __builtin_ctz(bits), i = slot[k], r = s[k] % WV_ACC_ROWS;
     for (int c = 0; c < 3; c++) C->acc[i][c][r] += rad[c][k];
+    if (rig->transmit) C->open[i][r] += open[k];
     if (grad) {
       int ty = G.warp[k] ? WV_WARP : WV_WEFT;
       for (int j = 0; j < WV_J_COUNT; j++) C->J[i][ty][j][r] += G.J[j][k];
@@ -163,6 +169,10 @@ WV_INLINE void render_chunk(const wv_camera_rig *rig, const wv_fabric *fab, chun
   for (int i = 0; i < n; i++) {
     float tot[3];
     for (int c = 0; c < 3; c++) tot[c] = tree8(C->acc[i][c]) / (float)spp;
+    if (rig->transmit) { /* the light seen through the open gaps, out of focus (wv_gap_glow) */
+      float glow = wv_gap_glow(rig, px0 + i, py) * (tree8(C->open[i]) / (float)spp);
+      for (int c = 0; c < 3; c++) tot[c] += glow;
+    }
     if (rad)
       for (int c = 0; c < 3; c++) rad[i][c] = tot[c];
     if (gp) {

@@ -13,7 +13,8 @@
 #include "util/json.h"
 #include "woven/io.h"
 
-/* The presets. scenes/cylinder.json and scenes/flat45.json hold the same text (a test checks they agree). */
+/* The presets. scenes/cylinder.json, scenes/flat45.json and scenes/flat45-back.json hold the same
+ * text (a test checks they agree). */
 static const char *PRESET_CYLINDER =
     "{\n"
     "  \"name\": \"cylinder\",\n"
@@ -38,12 +39,26 @@ static const char *PRESET_FLAT45 =
     "  \"falloff\": {\"type\": \"gaussian\", \"sigma_px\": 450}\n"
     "}\n";
 
+static const char *PRESET_FLAT45_BACK =
+    "{\n"
+    "  \"name\": \"flat45-back\",\n"
+    "  \"comment\": \"The flat45 camera, sample and response with the front light off and a point light of the same intensity behind the cloth, on the camera's axis 9 units below it (the transmission photos *_T.png of shared/data/real-flat). The light seen straight through a gap between yarns is out of focus: 8 times a Gaussian of sigma 20 px centred on the image.\",\n"
+    "  \"image\": {\"width\": 512, \"height\": 512, \"spp\": 64},\n"
+    "  \"camera\": {\"position_mm\": [0, 0, 8], \"look_at_mm\": [0, 0, 0], \"up\": [0, 1, 0], \"vfov_deg\": 53},\n"
+    "  \"sample\": {\"shape\": \"plane\", \"rotation_deg\": 0, \"offset_mm\": [0, 0], \"mm_per_unit\": 8},\n"
+    "  \"light\": {\"position_mm\": [0, 0, -9], \"intensity\": 300},\n"
+    "  \"response\": {\"exposure\": 1, \"clip\": 1, \"encoding\": \"gamma\", \"gamma\": 2.2,\n"
+    "               \"gap_glow\": {\"radiance\": 8, \"sigma_px\": 20}},\n"
+    "  \"falloff\": {\"type\": \"gaussian\", \"sigma_px\": 450}\n"
+    "}\n";
+
 /* Numbers are read as any finite value (WV_JSON_FINITE): the ranges are wv_scene_validate's,
  * which also checks scenes made in code. */
 
-static const char *const K_RESPONSE[] = {"exposure", "clip", "encoding", "gamma", "psf_sigma_px", NULL};
+static const char *const K_RESPONSE[] = {"exposure", "clip", "encoding", "gamma", "psf_sigma_px", "gap_glow", NULL};
 static const char *const K_RESPONSE_NO_PSF[] = {"exposure", "clip", "encoding", "gamma", NULL};
 static const char *const K_FALLOFF[] = {"type", "sigma_px", NULL};
+static const char *const K_GLOW[] = {"radiance", "sigma_px", NULL};
 
 wv_status wv_scene_read_response(json_t *root, int psf, wv_scene *s, wv_error *err) {
   static const wv_json_enum enc[] = {{"srgb", WV_ENC_SRGB}, {"gamma", WV_ENC_GAMMA}, {"linear", WV_ENC_LINEAR}, {0}};
@@ -52,6 +67,7 @@ wv_status wv_scene_read_response(json_t *root, int psf, wv_scene *s, wv_error *e
   int e = WV_ENC_SRGB;
   wv_status st;
   s->exposure = 1, s->clip = 1, s->gamma = 2.2, s->psf_sigma = 0, s->falloff = 0, s->falloff_sigma = 0;
+  s->glow_radiance = 0, s->glow_sigma = 0;
   if ((st = wv_json_object(root, NULL, "response", psf ? K_RESPONSE : K_RESPONSE_NO_PSF, 0, &o, err)) ||
       (st = wv_json_number(o, "response", "exposure", WV_JSON_FINITE, 0, &s->exposure, err)) ||
       (st = wv_json_number(o, "response", "clip", WV_JSON_FINITE, 0, &s->clip, err)) ||
@@ -60,6 +76,14 @@ wv_status wv_scene_read_response(json_t *root, int psf, wv_scene *s, wv_error *e
       (st = wv_json_enum_of(o, "response", "encoding", enc, 0, &e, err)))
     return st;
   s->encoding = (wv_encoding)e;
+  json_t *g;
+  if (psf && (st = wv_json_object(o, "response", "gap_glow", K_GLOW, 0, &g, err))) return st;
+  if (psf && g &&
+      ((st = wv_json_number(g, "response.gap_glow", "radiance", WV_JSON_FINITE, WV_JSON_REQUIRED, &s->glow_radiance,
+                            err)) ||
+       (st = wv_json_number(g, "response.gap_glow", "sigma_px", WV_JSON_FINITE, WV_JSON_REQUIRED, &s->glow_sigma,
+                            err))))
+    return st;
   if ((st = wv_json_object(root, NULL, "falloff", K_FALLOFF, 0, &o, err))) return st;
   if (o && (st = wv_json_enum_of(o, "falloff", "type", type, WV_JSON_REQUIRED, &s->falloff, err))) return st;
   if (s->falloff &&
@@ -171,6 +195,12 @@ wv_status wv_scene_check_response(const wv_scene *s, wv_error *err) {
   if (!(s->psf_sigma >= 0 && s->psf_sigma <= WV_PSF_MAX_SIGMA))
     return wv_fail(err, WV_ERR_INVALID, "'response.psf_sigma_px' = %s is outside 0..%g", wv_num_str(s->psf_sigma, a),
                    WV_PSF_MAX_SIGMA);
+  if (!(s->glow_radiance >= 0 && s->glow_radiance <= WV_SCENE_MAX_GLOW))
+    return wv_fail(err, WV_ERR_INVALID, "'response.gap_glow.radiance' = %s is outside 0..%g",
+                   wv_num_str(s->glow_radiance, a), WV_SCENE_MAX_GLOW);
+  if (s->glow_radiance > 0 && !(s->glow_sigma > 0 && s->glow_sigma <= 1e9))
+    return wv_fail(err, WV_ERR_INVALID, "'response.gap_glow.sigma_px' = %s must be in (0, 1e+09]",
+                   wv_num_str(s->glow_sigma, a));
   if (s->falloff && !(s->falloff_sigma > 0 && s->falloff_sigma <= 1e9))
     return wv_fail(err, WV_ERR_INVALID, "'falloff.sigma_px' = %s must be in (0, 1e+09]",
                    wv_num_str(s->falloff_sigma, a));
@@ -230,6 +260,8 @@ wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
   return wv_scene_check_response(s, err);
 }
 
+int wv_scene_transmits(const wv_scene *s) { return s->shape == WV_SHAPE_PLANE && s->light_pos[2] < 0; }
+
 int wv_scene_distorted(const wv_scene *s) {
   for (int k = 0; k < 2; k++)
     for (int t = 0; t < WV_DISTORT_TERMS; t++)
@@ -268,11 +300,12 @@ wv_status wv_scene_read(const char *path, wv_scene *s, wv_error *err) {
 wv_status wv_scene_preset(const char *name, wv_scene *s, wv_error *err) {
   if (!strcmp(name, "cylinder")) return wv_scene_parse(PRESET_CYLINDER, "preset cylinder", s, err);
   if (!strcmp(name, "flat45")) return wv_scene_parse(PRESET_FLAT45, "preset flat45", s, err);
-  return wv_fail(err, WV_ERR_INVALID, "unknown scene preset '%s' (expected cylinder or flat45)", name);
+  if (!strcmp(name, "flat45-back")) return wv_scene_parse(PRESET_FLAT45_BACK, "preset flat45-back", s, err);
+  return wv_fail(err, WV_ERR_INVALID, "unknown scene preset '%s' (expected cylinder, flat45 or flat45-back)", name);
 }
 
 wv_status wv_scene_load(const char *name_or_path, wv_scene *s, wv_error *err) {
-  if (!strcmp(name_or_path, "cylinder") || !strcmp(name_or_path, "flat45"))
+  if (!strcmp(name_or_path, "cylinder") || !strcmp(name_or_path, "flat45") || !strcmp(name_or_path, "flat45-back"))
     return wv_scene_preset(name_or_path, s, err);
   return wv_scene_read(name_or_path, s, err);
 }
@@ -313,6 +346,9 @@ char *wv_scene_to_json(const wv_scene *s) {
                                                "encoding", enc[s->encoding], "gamma", s->gamma));
   if (s->psf_sigma > 0) /* written only when set: scenes without a blur keep their text */
     json_object_set_new(json_object_get(o, "response"), "psf_sigma_px", json_real(s->psf_sigma));
+  if (s->glow_radiance > 0) /* likewise */
+    json_object_set_new(json_object_get(o, "response"), "gap_glow",
+                        json_pack("{s:f,s:f}", "radiance", s->glow_radiance, "sigma_px", s->glow_sigma));
   if (s->falloff)
     json_object_set_new(o, "falloff", json_pack("{s:s,s:f}", "type", "gaussian", "sigma_px", s->falloff_sigma));
   else

@@ -34,6 +34,13 @@ void wv_rig_prepare(const wv_scene *s, wv_camera_rig *r) {
   r->aspect = (float)s->width / (float)s->height;
   wv_shape_prepare(s, &r->shape);
   r->lint = (float)s->light_intensity;
+  r->transmit = wv_scene_transmits(s);
+  if (r->transmit && s->glow_radiance > 0) r->glow = (float)s->glow_radiance, r->glow_sigma = (float)s->glow_sigma;
+}
+
+float wv_gap_glow(const wv_camera_rig *rig, int x, int y) {
+  if (!(rig->glow > 0)) return 0.0f;
+  return (float)(rig->glow * wv_pixel_gaussian(rig->width, rig->height, x, y, rig->glow_sigma));
 }
 
 WV_SIMD_CLONES

@@ -31,10 +31,14 @@ double wv_encode_slope(const wv_scene *s, double x) {
   }
 }
 
+double wv_pixel_gaussian(int w, int h, int x, int y, double sigma) {
+  double dx = x + 0.5 - 0.5 * w, dy = y + 0.5 - 0.5 * h;
+  return exp(-(dx * dx + dy * dy) / (sigma * sigma));
+}
+
 double wv_response_mask(const wv_scene *s, int x, int y) {
   if (!s->falloff) return 1.0;
-  double dx = x + 0.5 - 0.5 * s->width, dy = y + 0.5 - 0.5 * s->height;
-  return exp(-(dx * dx + dy * dy) / (s->falloff_sigma * s->falloff_sigma));
+  return wv_pixel_gaussian(s->width, s->height, x, y, s->falloff_sigma);
 }
 
 void wv_scene_response(const wv_scene *s, const wv_image *rad, wv_image *cap) {

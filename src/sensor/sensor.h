@@ -20,6 +20,8 @@ typedef struct {
   float tan_half, aspect;
   wv_shape shape;
   float lpos[3], lint;
+  int transmit;       /* the light is behind the sample (wv_scene_transmits): light through the cloth */
+  float glow, glow_sigma; /* the gap glow (wv_scene.glow_radiance, glow_sigma; 0: none) */
   const struct wv_footprint_s *cache; /* per-pixel footprints made once (wv_footprints) or NULL */
 } wv_camera_rig;
 
@@ -52,8 +54,15 @@ void wv_footprint_prepare(const wv_camera_rig *rig, int px, int py, wv_footprint
 #define wv_pow(x, y) _Generic((x), float: powf, double: pow)(x, y)
 /* d encode / d linear in double (0 for linear <= 0, where encode is clamped to 0). */
 double wv_encode_slope(const wv_scene *s, double linear);
+/* exp(-d^2 / sigma^2), d the distance in pixels of pixel (x, y)'s centre from the centre
+ * of a w x h image: the form of the falloff mask and of the gap glow. */
+double wv_pixel_gaussian(int w, int h, int x, int y, double sigma);
 /* The falloff mask at pixel (x, y) of the scene's full image (1 without falloff). */
 double wv_response_mask(const wv_scene *s, int x, int y);
+/* The gap glow's radiance at pixel (x, y) of the rig's full image per unit of open area
+ * (the fraction of the pixel's samples whose line of sight crosses an open gap); 0
+ * without a glow or with the light in front. */
+float wv_gap_glow(const wv_camera_rig *rig, int x, int y);
 
 #define WV_LANE WV_LANE_F
 #include "kernel/lane_begin.h"

@@ -2,7 +2,8 @@
  * view directions there in the fabric's tangent frame (a lane template, see
  * kernel/lanes.h; instantiated by sensor/sensor.h). */
 typedef struct {
-  WV_M hit;                /* the ray meets the sample, and light and camera are above its surface */
+  WV_M hit;                /* the ray meets the sample, the camera is above its surface and the light above
+                            * it (below it when the rig transmits) */
   WV_P fx, fy;             /* fabric coordinates, mm */
   WV_P wi[3], wo[3];       /* to the light, to the camera: fabric tangent frame (z = macro normal) */
   WV_P light;              /* I / r^2 */
@@ -33,8 +34,10 @@ WV_INLINE void WV_FN(wv_trace)(const wv_camera_rig *r, WV_P x, WV_P y, WV_FN(wv_
   hit->wo[2] = -(d[0] * s.n[0] + d[1] * s.n[1] + d[2] * s.n[2]);
   /* A ray grazing the plane meets it absurdly far away: beyond 1000 km of fabric a
    * float cannot place a yarn, and the yarn index would overflow an integer. */
-  hit->hit = s.hit & (hit->wi[2] > 0.0f) & (hit->wo[2] > 0.0f) & (s.fx < 1e9f) & (s.fx > -1e9f) &
-             (s.fy < 1e9f) & (s.fy > -1e9f);
+  /* The light on the sample's side: in front, or behind it when the rig transmits. */
+  WV_M lit_side = r->transmit ? (hit->wi[2] < 0.0f) : (hit->wi[2] > 0.0f);
+  hit->hit = s.hit & lit_side & (hit->wo[2] > 0.0f) & (s.fx < 1e9f) & (s.fx > -1e9f) & (s.fy < 1e9f) &
+             (s.fy > -1e9f);
   hit->light = r->lint / r2;
   hit->fx = s.fx, hit->fy = s.fy;
 }
