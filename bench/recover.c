@@ -247,12 +247,11 @@ static int real(const study *st, const char *dir) {
       named[k] = names[i][k], named[k + 1] = 0;
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, names[i]);
-    wv_image photo, blurred;
+    wv_image photo;
     wv_error err = {0};
     if (wv_photo_load(path, st->s, NULL, &photo, NULL, &err)) die(&err);
-    double base;
-    if (wv_image_blur(&photo, 4.0, &blurred, &err) || wv_ssim(&photo, &blurred, WV_SSIM_RGB, &base, &err)) die(&err);
-    wv_image_free(&blurred);
+    double base; /* the baseline woven capture reports as ssim_rgb_blurred_photo */
+    if (wv_blurred_copy_ssim(&photo, WV_BLURRED_COPY_SIGMA, &base, &err)) die(&err);
     capture c;
     run_capture(st, &photo, NULL, &c);
     double s0, s1, l0, l1, w0[2], w1[2], bl[2], quads = wsc_quadrants(&photo, 0), quadsw = wsc_quadrants(&photo, 1);
