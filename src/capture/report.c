@@ -269,11 +269,12 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
   }
   if (r->weave && r->weave->below_blurred_copy)
     sb_printf(&b, "<p class=\"unsure\" style=\"background:#fde8e8;border:2px solid #c00;padding:0.6em\"><b>Warning: "
-                  "an unsure capture.</b> The fit's render scores a lower SSIM against the photo (per RGB channel, "
+                  "an unsure %s.</b> The fit's render scores a lower SSIM against the photo (per RGB channel, "
                   "%.4f) than the photo's own copy blurred by a Gaussian of sigma %.0f px (%.4f), a copy that keeps "
                   "no weave at all: the fit reproduces the photo less well than a blur does. Check the weave "
-                  "close up and the families' scores below before using these parameters.</p>\n",
-              r->weave->ssim_rgb[1], WV_BLURRED_COPY_SIGMA, r->weave->ssim_rgb_blurred);
+                  "close up%s before using these parameters.</p>\n",
+              r->pattern_choice ? "capture" : "fit", r->weave->ssim_rgb[1], WV_BLURRED_COPY_SIGMA,
+              r->weave->ssim_rgb_blurred, r->pattern_choice ? " and the families' scores below" : "");
   if (r->weave && r->weave->zoom_png[0] && !st) {
     sb_printf(&b, "<h2>The weave, close up</h2>\n<figure><img alt=\"zoom\" src=\"data:image/png;base64,");
     sb_base64_file(&b, r->weave->zoom_png, &st, err);
