@@ -68,7 +68,7 @@ typedef struct {
 
 /* One target's draw and what its capture gave; written whole through a pipe by a job. */
 typedef struct {
-  int index, fam, draw, two_colour, noise_level, family_right, below_blurred_copy;
+  int index, fam, draw, two_colour, noise_level, fit_noise_level, family_right, below_blurred_copy;
   char pattern[16], chosen[16], family_kind[20];
   int fam_pattern[NFAM], fam_order[NFAM];
   double fam_score[NFAM];
@@ -233,7 +233,7 @@ static void run_target(const study *st, const plan *pl, int index, int fam, int 
   snprintf(r->family_kind, sizeof r->family_kind, "%s", c.families.kind);
   for (int f = 0; f < NFAM; f++)
     r->fam_pattern[f] = c.families.pattern[f], r->fam_score[f] = c.families.score[f], r->fam_order[f] = c.families.order[f];
-  r->fit_density[0] = c.fit.density[0], r->fit_density[1] = c.fit.density[1];
+  r->fit_density[0] = c.fit.density[0], r->fit_density[1] = c.fit.density[1], r->fit_noise_level = c.fit.noise_level;
   double wsc[2];
   measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &r->ssim_fit, NULL, wsc, 0, NULL);
   r->wsc_fit = wsc[0];
@@ -252,10 +252,11 @@ static void run_target(const study *st, const plan *pl, int index, int fam, int 
 
 static void print_line(const plan *pl, const result *r) {
   printf("%-7s %d %-12s%s -> %-12s %-5s SSIM fit %.4f ceiling %.4f (%.3f)  blurred copy %.4f%s  "
-         "spacing %.2f/%.2f px Q %d",
+         "spacing %.2f/%.2f px Q %d -> %d",
          FAMILIES[r->fam], r->draw, r->pattern, r->two_colour ? " two-colour" : "", r->chosen,
          r->family_right ? "ok" : "WRONG", r->ssim_fit, r->ssim_ceiling, r->ratio, r->ssim_blurred_copy,
-         r->below_blurred_copy ? " (fit below)" : "", r->spacing_px[0], r->spacing_px[1], r->noise_level);
+         r->below_blurred_copy ? " (fit below)" : "", r->spacing_px[0], r->spacing_px[1], r->noise_level,
+         r->fit_noise_level);
   if (pl->degrade)
     printf("  rot %+.2f lens %+.3f blur %.2f noise %.1e/%.1e jpeg %d", r->deg.rotation_deg, r->deg.lens_k,
            r->deg.blur_px, r->deg.noise_a, r->deg.noise_b, r->deg.jpeg_quality);
@@ -282,6 +283,7 @@ static json_t *target_json(const plan *pl, const result *r) {
                                             "spacing_px", r->spacing_px[0], r->spacing_px[1], "noise_level",
                                             r->noise_level));
   json_object_set_new(o, "fit_density", json_pack("[f,f]", r->fit_density[0], r->fit_density[1]));
+  json_object_set_new(o, "fit_noise_level", json_integer(r->fit_noise_level));
   json_object_set_new(o, "degradation",
                       pl->degrade ? json_pack("{s:f,s:f,s:f,s:f,s:f,s:i}", "rotation_deg", r->deg.rotation_deg,
                                               "lens_k", r->deg.lens_k, "blur_px", r->deg.blur_px, "noise_a",
