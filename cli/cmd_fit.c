@@ -222,6 +222,21 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
                                     cli_real(st->dist_ssim_after, 4)));
       json_object_set_new(o_json, "ssim_rgb_start", cli_real(wv->ssim_rgb[0], 6));
       json_object_set_new(o_json, "ssim_rgb_fit", cli_real(wv->ssim_rgb[1], 6));
+      json_object_set_new(o_json, "ssim_rgb_blurred_photo",
+                          wv->ssim_rgb_blurred > -2 ? cli_real(wv->ssim_rgb_blurred, 6) : json_null());
+      json_object_set_new(o_json, "below_blurred_copy", json_boolean(wv->below_blurred_copy));
+      json_t *fam = NULL;
+      wv_pattern_families fs;
+      if (pc) wv_pattern_family_scores(pc, &fs);
+      if (pc && strcmp(fs.kind, "none") && (fam = json_object()))
+        for (int k = 0; k < WV_PATTERN_FAMILIES; k++) { /* best first */
+          int f = fs.order[k];
+          if (fs.pattern[f] >= 0)
+            json_object_set_new(fam, fs.family[f], json_pack("{s:s,s:o}", "pattern", wv_weave_builtin_name(fs.pattern[f]),
+                                                             "score", cli_real(fs.score[f], 6)));
+        }
+      json_object_set_new(o_json, "family_scores", fam ? fam : json_null());
+      json_object_set_new(o_json, "family_score_kind", fam ? json_string(fs.kind) : json_null());
       json_object_set_new(o_json, "wsc_start", wv->wsc[0] > -2 ? cli_real(wv->wsc[0], 6) : json_null());
       json_object_set_new(o_json, "wsc_fit", wv->wsc[1] > -2 ? cli_real(wv->wsc[1], 6) : json_null());
       json_object_set_new(o_json, "wsc_whitened_start",

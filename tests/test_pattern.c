@@ -177,12 +177,76 @@ static void test_family_hears_network(void **state) {
   }
 }
 
+/* The families' standing, runner-ups included: with a lattice each family's score is step
+ * 2's (the best mean of lattice score and ranking score over its built-ins) and its candidate
+ * its best-ranked built-in; without one, the network's probability or the loss criterion. */
+static void test_family_scores(void **state) {
+  (void)state;
+  int nb = wv_weave_builtin_count();
+  static wv_pattern_choice c;
+  memset(&c, 0, sizeof c);
+  c.lattice.found = 1;
+  for (int i = 0; i < nb; i++) c.lattice.fit[i].score = 0.1, c.ranking.score[i] = 0.1, c.ranking.order[i] = i;
+  int twill31s = -1, twill22z = -1, satin8 = -1, plain = 0;
+  for (int i = 0; i < nb; i++) {
+    const char *n = wv_weave_builtin_name(i);
+    if (!strcmp(n, "twill31s")) twill31s = i;
+    if (!strcmp(n, "twill22z")) twill22z = i;
+    if (!strcmp(n, "satin8")) satin8 = i;
+  }
+  /* twill31s is ranked first in its family (the pattern the choice takes), twill22z has the
+   * better mean of lattice and ranking score: the family's best candidate and score */
+  c.lattice.fit[twill31s].score = 0.5, c.ranking.score[twill31s] = 0.7;  /* mean 0.60 */
+  c.lattice.fit[twill22z].score = 0.9, c.ranking.score[twill22z] = 0.5;  /* mean 0.70 */
+  c.lattice.fit[satin8].score = 0.6, c.ranking.score[satin8] = 0.6;      /* mean 0.60 */
+  c.lattice.fit[plain].score = 0.2, c.ranking.score[plain] = 0.3;        /* mean 0.25 */
+  c.ranking.order[0] = twill31s, c.ranking.order[twill31s] = 0;         /* twill31s ranked first */
+  c.best = twill31s;
+  wv_pattern_families fs;
+  wv_pattern_family_scores(&c, &fs);
+  assert_string_equal(fs.kind, "lattice+ranking");
+  assert_true(fs.higher_is_better);
+  int tw = fs.order[0], sa = fs.order[1];
+  assert_string_equal(fs.family[tw], "twill");
+  assert_int_equal(fs.pattern[tw], twill22z);
+  assert_true(fabs(fs.score[tw] - 0.70) < 1e-12);
+  assert_string_equal(fs.family[sa], "satin");
+  assert_int_equal(fs.pattern[sa], satin8);
+  assert_true(fabs(fs.score[sa] - 0.60) < 1e-12);
+  assert_string_equal(fs.family[fs.order[2]], "plain");
+  assert_true(fabs(fs.score[fs.order[2]] - 0.25) < 1e-12);
+  assert_string_equal(fs.family[fs.order[3]], "basket");
+  /* the decision takes the same family, and in it the best-ranked pattern */
+  assert_int_equal(wv_pattern_decide(&c, 0, 0, NULL), twill31s);
+  /* no lattice, the network decided: each family's most probable built-in */
+  memset(&c, 0, sizeof c);
+  c.method = "network", c.has_prob = 1;
+  for (int i = 0; i < nb; i++) c.prob[i] = 0.01;
+  c.prob[satin8] = 0.55, c.prob[twill22z] = 0.3, c.prob[plain] = 0.02;
+  wv_pattern_family_scores(&c, &fs);
+  assert_string_equal(fs.kind, "probability");
+  assert_int_equal(fs.pattern[fs.order[0]], satin8);
+  assert_int_equal(fs.pattern[fs.order[1]], twill22z);
+  assert_true(fabs(fs.score[fs.order[1]] - 0.3) < 1e-12);
+  /* no lattice, the loss criterion: the smallest loss, lower is better */
+  memset(&c, 0, sizeof c);
+  c.method = "loss";
+  for (int i = 0; i < nb; i++) c.evaluated[i] = 1, c.loss[i] = 1.0 + i;
+  wv_pattern_family_scores(&c, &fs);
+  assert_string_equal(fs.kind, "loss");
+  assert_false(fs.higher_is_better);
+  assert_string_equal(fs.family[fs.order[0]], "plain");
+  assert_true(fabs(fs.score[fs.order[0]] - 1.0) < 1e-12);
+  assert_string_equal(fs.family[fs.order[3]], "satin");
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_picks_true_family, setup, teardown),
       cmocka_unit_test_setup_teardown(test_no_lattice_falls_back, setup, teardown),
       cmocka_unit_test_setup_teardown(test_photo_size, setup, teardown),
       cmocka_unit_test(test_family_hears_network),
+      cmocka_unit_test(test_family_scores),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

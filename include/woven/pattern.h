@@ -92,6 +92,25 @@ wv_status wv_pattern_loss(struct wv_descriptor *d, const wv_scene *s, const wv_i
  * pattern, or -1 - i when it needs the loss criterion of candidate i, not yet evaluated.
  * contenders (may be NULL): how many families were within family_tie. */
 int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie, int *contenders);
+/* How each family (plain, basket, twill, satin: wv_weave_family's names, in that order) stood
+ * in the choice c, runner-ups included: its best candidate and that candidate's score. With
+ * a lattice, step 2's family score: the best mean of lattice score and ranking score over
+ * the family's built-ins, and the built-in that has it (kind "lattice+ranking", higher is
+ * better; within the chosen family the pattern itself goes by the ranking score alone, so
+ * it may be another). Without a lattice, by the choice's method: "network" each family's
+ * most probable built-in and its probability (kind "probability", higher is better); "loss"
+ * the built-in with the smallest loss criterion and that loss (kind "loss", lower is
+ * better). pattern[f] -1: the family had no scored candidate (then score is 0). */
+#define WV_PATTERN_FAMILIES 4
+typedef struct {
+  const char *kind;                   /* "lattice+ranking", "probability", "loss" or "none" */
+  int higher_is_better;
+  const char *family[WV_PATTERN_FAMILIES];
+  int pattern[WV_PATTERN_FAMILIES];   /* an index for wv_weave_builtin_name, or -1 */
+  double score[WV_PATTERN_FAMILIES];
+  int order[WV_PATTERN_FAMILIES];     /* the families, best first (unscored ones last) */
+} wv_pattern_families;
+void wv_pattern_family_scores(const wv_pattern_choice *c, wv_pattern_families *out);
 /* y: the network's normalised outputs; photo: the scene's capture image; gram_photo: its raw
  * descriptor features (before preprocessing). o may be NULL (defaults). */
 wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, struct wv_descriptor *d, const wv_scene *s,

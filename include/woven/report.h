@@ -24,13 +24,23 @@ wv_status wv_image_centre_zoom(const wv_image *img, int side, int factor, wv_ima
  * of text such as "inclination_deg = 70 (upper bound)" into lines (each 96 chars). */
 int wv_params_at_bounds(const wv_params *p, char (*lines)[96], int cap);
 
+/* The baseline a render must beat: SSIM per RGB channel of the photo against its own copy
+ * blurred by a Gaussian of sigma pixels (WV_BLURRED_COPY_SIGMA). Such a copy keeps the
+ * photo's colours and shading and none of its weave; a re-render scoring lower reproduces
+ * the photo less well than a blur does. */
+#define WV_BLURRED_COPY_SIGMA 4.0
+wv_status wv_blurred_copy_ssim(const wv_image *photo, double sigma, double *ssim, wv_error *err);
+
 /* What shows the weave to a person, next to SSIM: SSIM per RGB channel and WSC of start
- * and fit against the photo, the weave spectra of photo, start and fit (spectra.png) and
- * the same centre crop of the three, enlarged (zoom.png). Empty paths: not made (the
- * image is too small); wsc -2: not measured. */
+ * and fit against the photo, the photo's blurred-copy SSIM (wv_blurred_copy_ssim) and
+ * whether the fit scores below it, the weave spectra of photo, start and fit (spectra.png)
+ * and the same centre crop of the three, enlarged (zoom.png). Empty paths: not made (the
+ * image is too small); wsc and ssim_rgb_blurred -2: not measured. */
 #define WV_WEAVE_ZOOM 4
 typedef struct {
   double ssim_rgb[2], wsc[2], wsc_whitened[2]; /* [0] start, [1] fit */
+  double ssim_rgb_blurred;                     /* the photo's copy blurred by WV_BLURRED_COPY_SIGMA px */
+  int below_blurred_copy;                      /* ssim_rgb[1] < ssim_rgb_blurred: the fit is unsure */
   char zoom_png[4096], spectra_png[4096];
   int zoom_side, zoom_factor;
 } wv_weave_views;

@@ -48,14 +48,25 @@ wv_status wv_image_centre_zoom(const wv_image *img, int side, int factor, wv_ima
   return WV_OK;
 }
 
+wv_status wv_blurred_copy_ssim(const wv_image *photo, double sigma, double *ssim, wv_error *err) {
+  wv_image blurred = {0};
+  wv_status st = wv_image_blur(photo, sigma, &blurred, err);
+  if (!st) st = wv_ssim(photo, &blurred, WV_SSIM_RGB, ssim, err);
+  wv_image_free(&blurred);
+  return st;
+}
+
 wv_status wv_weave_views_write(const char *dir, const wv_image *photo, const wv_image *start, const wv_image *fit,
                                wv_weave_views *v, wv_error *err) {
   const wv_image *img[3] = {photo, start, fit};
-  v->wsc[0] = v->wsc[1] = v->wsc_whitened[0] = v->wsc_whitened[1] = -2;
+  v->wsc[0] = v->wsc[1] = v->wsc_whitened[0] = v->wsc_whitened[1] = v->ssim_rgb_blurred = -2;
+  v->below_blurred_copy = 0;
   v->zoom_png[0] = v->spectra_png[0] = 0;
   v->zoom_factor = WV_WEAVE_ZOOM;
   wv_status st = WV_OK;
   for (int i = 0; i < 2 && !st; i++) st = wv_ssim(photo, img[i + 1], WV_SSIM_RGB, &v->ssim_rgb[i], err);
+  if (!st) st = wv_blurred_copy_ssim(photo, WV_BLURRED_COPY_SIGMA, &v->ssim_rgb_blurred, err);
+  if (!st) v->below_blurred_copy = v->ssim_rgb[1] < v->ssim_rgb_blurred;
   int n = photo->w < photo->h ? photo->w : photo->h;
   n = n > WV_WSC_SIZE ? WV_WSC_SIZE : n - n % 2;
   if (!st && n >= 32) {
@@ -210,6 +221,32 @@ static void sb_base64_file(sbuf *b, const char *path, wv_status *st, wv_error *e
   free(text);
 }
 
+/* How sure the pattern choice was: each family's candidate and score, the best first, and
+ * how far each runner-up is behind the first. */
+static void family_table(sbuf *b, const wv_pattern_choice *pc) {
+  wv_pattern_families fs;
+  wv_pattern_family_scores(pc, &fs);
+  if (!strcmp(fs.kind, "none")) return;
+  const char *what = !strcmp(fs.kind, "lattice+ranking") ? "the family's score, the best mean of lattice score and "
+                                                           "ranking score of its built-ins"
+                     : !strcmp(fs.kind, "probability") ? "the network's probability of the family's most probable "
+                                                         "built-in"
+                                                       : "the smallest fit loss of the family's built-ins";
+  sb_printf(b, "<p>How the families stood (%s; %s is better), the runner-ups with how far they are behind:</p>\n"
+               "<table class=\"families\"><tr><th>family</th><th>candidate</th><th>score</th><th>behind</th></tr>\n",
+            what, fs.higher_is_better ? "higher" : "lower");
+  int top = fs.order[0];
+  const char *chosen = wv_weave_family(wv_weave_builtin_name(pc->best));
+  for (int k = 0; k < WV_PATTERN_FAMILIES; k++) {
+    int f = fs.order[k];
+    if (fs.pattern[f] < 0) continue;
+    sb_printf(b, strcmp(fs.family[f], chosen) ? "<tr><td>%s</td><td>%s</td><td>%.4f</td><td>%.4f</td></tr>\n"
+                   : "<tr><td><b>%s</b></td><td><b>%s</b></td><td>%.4f</td><td>%.4f</td></tr>\n",
+              fs.family[f], wv_weave_builtin_name(fs.pattern[f]), fs.score[f], fabs(fs.score[top] - fs.score[f]));
+  }
+  sb_printf(b, "</table>\n");
+}
+
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err) {
   sbuf b = {0};
   wv_status st = WV_OK;
@@ -230,6 +267,14 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
       sb_printf(&b, "\"><figcaption>%s: SSIM %.4f</figcaption></figure>\n", labels[i],
                 i == 1 ? r->ssim_start : r->ssim_fit);
   }
+  if (r->weave && r->weave->below_blurred_copy)
+    sb_printf(&b, "<p class=\"unsure\" style=\"background:#fde8e8;border:2px solid #c00;padding:0.6em\"><b>Warning: "
+                  "an unsure %s.</b> The fit's render scores a lower SSIM against the photo (per RGB channel, "
+                  "%.4f) than the photo's own copy blurred by a Gaussian of sigma %.0f px (%.4f), a copy that keeps "
+                  "no weave at all: the fit reproduces the photo less well than a blur does. Check the weave "
+                  "close up%s before using these parameters.</p>\n",
+              r->pattern_choice ? "capture" : "fit", r->weave->ssim_rgb[1], WV_BLURRED_COPY_SIGMA,
+              r->weave->ssim_rgb_blurred, r->pattern_choice ? " and the families' scores below" : "");
   if (r->weave && r->weave->zoom_png[0] && !st) {
     sb_printf(&b, "<h2>The weave, close up</h2>\n<figure><img alt=\"zoom\" src=\"data:image/png;base64,");
     sb_base64_file(&b, r->weave->zoom_png, &st, err);
@@ -250,6 +295,11 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
   if (r->weave)
     sb_printf(&b, "<tr><td>SSIM (per RGB channel)</td><td>%.4f</td><td>%.4f</td></tr>\n", r->weave->ssim_rgb[0],
               r->weave->ssim_rgb[1]);
+  if (r->weave && r->weave->ssim_rgb_blurred > -2)
+    sb_printf(&b, "<tr><td>SSIM (per RGB channel) of the photo's copy blurred by %.0f px, the baseline</td>"
+                  "<td colspan=\"2\">%.4f%s</td></tr>\n",
+              WV_BLURRED_COPY_SIGMA, r->weave->ssim_rgb_blurred,
+              r->weave->below_blurred_copy ? " <b style=\"color:#c00\">(the fit scores below it)</b>" : "");
   if (r->weave && r->weave->wsc[0] > -2)
     sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td><td>%.4f</td></tr>\n",
               r->weave->wsc[0], r->weave->wsc[1]);
@@ -316,6 +366,7 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                 !strcmp(pc->method, "network") ? "its most probable class"
                                                : "the smallest fit loss of its estimate rendered with each built-in");
     }
+    family_table(&b, pc);
   }
   if (r->drape_png || r->drape_note) {
     sb_printf(&b, "<h2>On a draped cloth</h2>\n");

@@ -75,9 +75,68 @@ void wv_pattern_choice_scene(const wv_pattern_choice *c, const wv_scene *s, int 
   if (c->orient && c->lattice.found) wv_lattice_candidate(&c->lattice, i, &c->params[i], &in, 1, &unused, out);
 }
 
-int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie, int *contenders) {
-  static const char *FAM[4] = {"plain", "basket", "twill", "satin"};
+static const char *const FAMILY[WV_PATTERN_FAMILIES] = {"plain", "basket", "twill", "satin"};
+
+static int family_index(int i) {
+  int f = 0;
+  while (f < WV_PATTERN_FAMILIES - 1 && strcmp(wv_weave_family(wv_weave_builtin_name(i)), FAMILY[f])) f++;
+  return f;
+}
+
+/* Step 2's family score: the best mean of lattice score and ranking score over the family's
+ * built-ins (ff) and the built-in that has it (arg, may be NULL), and the family's
+ * best-ranked built-in (rep); -1 for a family without any. */
+static void lattice_families(const wv_pattern_choice *c, double *ff, int *rep, int *arg) {
   const wv_lattice *l = &c->lattice;
+  const wv_lattice_ranking *r = &c->ranking;
+  for (int f = 0; f < WV_PATTERN_FAMILIES; f++) ff[f] = -1, rep[f] = -1;
+  for (int k = 0; k < wv_weave_builtin_count(); k++) {
+    int i = r->order[k], f = family_index(i);
+    double v = 0.5 * (l->fit[i].score + r->score[i]);
+    if (v > ff[f]) {
+      ff[f] = v;
+      if (arg) arg[f] = i;
+    }
+    if (rep[f] < 0) rep[f] = i;
+  }
+}
+
+void wv_pattern_family_scores(const wv_pattern_choice *c, wv_pattern_families *out) {
+  int prob = !c->lattice.found && c->method && !strcmp(c->method, "network");
+  int loss = !c->lattice.found && c->method && !strcmp(c->method, "loss");
+  out->kind = c->lattice.found ? "lattice+ranking" : prob ? "probability" : loss ? "loss" : "none";
+  out->higher_is_better = !loss;
+  for (int f = 0; f < WV_PATTERN_FAMILIES; f++) out->family[f] = FAMILY[f], out->pattern[f] = -1, out->score[f] = 0;
+  if (c->lattice.found) {
+    int rep[WV_PATTERN_FAMILIES];
+    lattice_families(c, out->score, rep, out->pattern);
+  } else if (prob || loss) {
+    /* each family's most probable built-in, or the one with the smallest loss criterion */
+    for (int i = 0; i < wv_weave_builtin_count(); i++) {
+      int f = family_index(i);
+      if (loss && !c->evaluated[i]) continue;
+      double v = prob ? c->prob[i] : c->loss[i];
+      if (out->pattern[f] < 0 || (prob ? v > out->score[f] : v < out->score[f])) out->pattern[f] = i, out->score[f] = v;
+    }
+  }
+  for (int f = 0; f < WV_PATTERN_FAMILIES; f++) {
+    if (out->pattern[f] < 0) out->score[f] = 0;
+    out->order[f] = f;
+  }
+  /* best first, families without a candidate last (an insertion sort of four) */
+  for (int a = 1; a < WV_PATTERN_FAMILIES; a++)
+    for (int b = a; b > 0; b--) {
+      int fa = out->order[b - 1], fb = out->order[b];
+      int swap = out->pattern[fa] < 0   ? out->pattern[fb] >= 0
+                 : out->pattern[fb] < 0 ? 0
+                 : out->higher_is_better ? out->score[fb] > out->score[fa]
+                                         : out->score[fb] < out->score[fa];
+      if (!swap) break;
+      out->order[b - 1] = fb, out->order[b] = fa;
+    }
+}
+
+int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie, int *contenders) {
   const wv_lattice_ranking *r = &c->ranking;
   int nb = wv_weave_builtin_count();
   /* 1. The family: the best by the mean of lattice score and ranking score (the lattice
@@ -86,15 +145,9 @@ int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie,
    * which the ranking score holds: on a two-colour plain weave the render match alone
    * prefers the basket, whose colour checks look the same), or the loss criterion among
    * the contenders, each represented by its best-ranked pattern. */
-  double ff[4] = {-1, -1, -1, -1};
-  int rep[4] = {-1, -1, -1, -1}, fam = 0, n = 0;
-  for (int k = 0; k < nb; k++) {
-    int i = r->order[k], f = 0;
-    while (f < 3 && strcmp(wv_weave_family(wv_weave_builtin_name(i)), FAM[f])) f++;
-    double v = 0.5 * (l->fit[i].score + r->score[i]);
-    if (v > ff[f]) ff[f] = v;
-    if (rep[f] < 0) rep[f] = i;
-  }
+  double ff[WV_PATTERN_FAMILIES];
+  int rep[WV_PATTERN_FAMILIES], fam = 0, n = 0;
+  lattice_families(c, ff, rep, NULL);
   for (int f = 1; f < 4; f++)
     if (ff[f] > ff[fam]) fam = f;
   int best_f = -1;
@@ -111,9 +164,7 @@ int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie,
   int best = rep[fam];
   for (int k = 0; k < nb; k++) {
     int i = r->order[k];
-    if (i == rep[fam] || strcmp(wv_weave_family(wv_weave_builtin_name(i)), FAM[fam]) ||
-        r->score[i] < r->score[rep[fam]] - tie)
-      continue;
+    if (i == rep[fam] || family_index(i) != fam || r->score[i] < r->score[rep[fam]] - tie) continue;
     if (!c->evaluated[i] || !c->evaluated[best]) return -1 - (c->evaluated[i] ? best : i);
     if (c->loss[i] < c->loss[best]) best = i;
   }
