@@ -418,7 +418,8 @@ wv_status wv_pair_scene(const char *scene, const wv_scene *s, const char *scene_
 static wv_status load_photo_t(const char *path, const wv_scene *s_t, const wv_crop *crop, const char *photo,
                               const wv_photo_info *ri, wv_image *out, wv_error *err) {
   wv_photo_info ti;
-  wv_status rc = wv_photo_load(path, s_t, crop, out, &ti, err);
+  /* read whole first (its own centre crop), so that a photo of another size is named as such */
+  wv_status rc = wv_photo_load(path, s_t, &(wv_crop){0, 0, 0, 0}, out, &ti, err);
   if (rc) {
     if (!strstr(err->msg, path)) wv_error_prefix(err, "%s", path);
     return rc;
@@ -429,7 +430,9 @@ static wv_status load_photo_t(const char *path, const wv_scene *s_t, const wv_cr
                    "%s is %d x %d but the reflection photo %s is %d x %d: a photo pair is taken by one camera", path,
                    ti.width, ti.height, photo, ri->width, ri->height);
   }
-  return WV_OK;
+  if (!memcmp(ti.crop, (int[4]){crop->x, crop->y, crop->w, crop->h}, sizeof ti.crop)) return WV_OK;
+  wv_image_free(out); /* the reflection photo's crop differs from the centre one: read it with that crop */
+  return wv_photo_load(path, s_t, crop, out, &ti, err);
 }
 
 wv_status wv_fit_dir_run(const wv_fit_dir_opts *o, wv_fit_outcome *out, wv_error *err) {
