@@ -132,6 +132,7 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
  * below (each command takes the tables that apply to it). */
 typedef struct {
   const char *photo, *scene, *pattern, *model, *descriptor, *weights, *out, *init, *resume, *drape;
+  const char *transmission, *transmission_scene; /* a photo pair (woven fit, woven capture) */
   wv_crop crop;
   int force, iters_given, align_given;
   wv_fit_opts fit;
@@ -141,6 +142,8 @@ void cli_capture_args_init(capture_args *a);
 extern const cli_opt CLI_PHOTO_OPTS[];
 /* --model */
 extern const cli_opt CLI_MODEL_OPTS[];
+/* --transmission, --transmission-scene (woven fit, woven capture) */
+extern const cli_opt CLI_PAIR_OPTS[];
 /* The fit's tuning: --iters, --iter-spp, --iter-scale, --seed, --align-radius,
  * --register-radius, --distort-degree, --w-struct, --w-colour, --camera-blur, --colour-split, --no-colour-split, --threads, --drape. */
 extern const cli_opt CLI_FIT_OPTS[];

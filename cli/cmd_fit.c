@@ -85,6 +85,14 @@ const cli_opt CLI_PHOTO_OPTS[] = {
     CLI_O_FLAG("--force", capture_args, force, "replace an earlier output (a model for another scene: use it)"),
     CLI_O_END};
 
+const cli_opt CLI_PAIR_OPTS[] = {
+    CLI_O_STR("--transmission", NULL, capture_args, transmission, "T.png",
+              "a back-lit photo of the same cloth by the same camera: one set of\nparameters is fitted to both "
+              "photos, the transmission colours\nincluded (docs/fit.md, \"Photo pairs\")"),
+    CLI_O_STR("--transmission-scene", NULL, capture_args, transmission_scene, "S",
+              "the back-lit scene of --transmission (default: flat45-back for\nflat45; other scenes need it)"),
+    CLI_O_END};
+
 const cli_opt CLI_MODEL_OPTS[] = {
     CLI_O_STR("--model", NULL, capture_args, model, "M",
               "a model from 'woven train' (default: models/fabricnet-<scene\nname>.bin; the directory can be "
@@ -149,7 +157,7 @@ static const cli_cmd CMD = {
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--[no-]schedule]\n"
     "                 [--patience N] [--no-noise-sweep] [--align-radius N]\n"
     "                 [--register-radius N] [--distort-degree N] [--w-struct X] [--w-colour X] [--colour-split]\n"
-    "                 [--camera-blur auto|measured|S]\n"
+    "                 [--camera-blur auto|measured|S] [--transmission T.png [--transmission-scene S]]\n"
     "                 [--seed N] [--threads N] [--drape S.json|none]\n"
     "                 [--force] [--quiet] [--json]\n"
     "       woven fit --resume DIR [--iters N] [--quiet] [--json]\n"
@@ -161,11 +169,12 @@ static const cli_cmd CMD = {
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), zoom.png (their\n"
     "centre crop enlarged 4x), spectra.png (their weave spectra), loss.svg, report.html (with\n"
     "SSIM and WSC, the weave-spectrum correlation, of start and fit), viewer.html (woven view),\n"
-    "drape.png (the fit on a draped cloth), maps/, and fit.json +\n"
+    "drape.png (the fit on a draped cloth), maps/, with --transmission photo_t.png and render_t.png\n"
+    "(the back-lit photo and the fit in the back-lit scene), and fit.json +\n"
     "checkpoint.json (for --resume). DIR is replaced whole at the end; it may not hold other\n"
     "files, nor any input; --force replaces an earlier fit in DIR (it stays whole until the new\n"
     "one is done).\n",
-    {{FIT_ONLY_OPTS, 0}, {CLI_PHOTO_OPTS, 0}, {CLI_FIT_OPTS, 0}}, 1, {offsetof(capture_args, photo)}};
+    {{FIT_ONLY_OPTS, 0}, {CLI_PHOTO_OPTS, 0}, {CLI_PAIR_OPTS, 0}, {CLI_FIT_OPTS, 0}}, 1, {offsetof(capture_args, photo)}};
 
 /* The fit's progress line on a terminal, and the job's messages. */
 static void on_iter(void *user, const wv_fit_state *st, const wv_fit_opts *o) {
@@ -249,6 +258,16 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
       for (int i = 0; i < nb && ab; i++) json_array_append_new(ab, cli_str(bounds[i]));
       json_object_set_new(o_json, "at_bounds", ab ? ab : json_null());
       json_object_set_new(o_json, "params", cli_json_text(wv_params_to_json(&st->params)));
+      if (r->pair) { /* the transmission photo against the fit's back-lit render */
+        json_object_set_new(o_json, "ssim_rgb_fit_t", cli_real(r->ssim_rgb_t, 6));
+        json_object_set_new(o_json, "ssim_rgb_blurred_photo_t",
+                            r->ssim_rgb_blurred_t > -2 ? cli_real(r->ssim_rgb_blurred_t, 6) : json_null());
+        json_object_set_new(o_json, "wsc_fit_t", r->wsc_t > -2 ? cli_real(r->wsc_t, 6) : json_null());
+        json_object_set_new(o_json, "mean_t",
+                            json_pack("{s:{s:o,s:o},s:{s:o,s:o}}", "photo", "centre", cli_real(r->mean_t[0][0], 6),
+                                      "whole", cli_real(r->mean_t[0][1], 6), "render", "centre",
+                                      cli_real(r->mean_t[1][0], 6), "whole", cli_real(r->mean_t[1][1], 6)));
+      }
     }
     cli_print_json(o_json);
   }
@@ -264,8 +283,8 @@ int cmd_fit(int argc, char **argv) {
   wv_error err = {0};
   wv_fit_record_job rec;
   if (ca.resume) {
-    if (ca.init || ca.pattern || ca.scene || ca.out)
-      return cli_usage_error(c.cmd, "--resume DIR takes its photo, scene, start and output from DIR");
+    if (ca.init || ca.pattern || ca.scene || ca.out || ca.transmission || ca.transmission_scene)
+      return cli_usage_error(c.cmd, "--resume DIR takes its photos, scenes, start and output from DIR");
     if (wv_fit_job_read(ca.resume, &rec, &err)) return cli_fail(&c, &err);
     if (ca.photo && !wv_same_file(ca.photo, rec.photo))
       return cli_usage_error(c.cmd, "%s was fitted to %s, not %s", ca.resume, rec.photo, ca.photo);
@@ -274,11 +293,14 @@ int cmd_fit(int argc, char **argv) {
     if (!ca.scene) return cli_usage_error(c.cmd, "--scene is required");
     if (!ca.out) return cli_usage_error(c.cmd, "-o DIR is required");
     if (!ca.init && !ca.pattern) return cli_usage_error(c.cmd, "give --init P.json or --pattern NAME");
+    if (ca.transmission_scene && !ca.transmission)
+      return cli_usage_error(c.cmd, "--transmission-scene needs --transmission T.png");
   }
   wv_fit_dir_opts o = {.photo = ca.photo, .scene = ca.scene, .init = ca.init, .pattern = ca.pattern,
                        .dir = ca.resume ? ca.resume : ca.out, .descriptor = ca.descriptor, .weights = ca.weights,
                        .drape = ca.drape, .crop = ca.crop, .resume = ca.resume ? &rec : NULL, .fit = ca.fit,
-                       .iters_given = ca.iters_given, .force = ca.force};
+                       .iters_given = ca.iters_given, .force = ca.force, .photo_t = ca.transmission,
+                       .scene_t = ca.transmission_scene};
   cli_fit_ui ui;
   o.progress = cli_fit_progress(&ui, &c);
   wv_fit_outcome out;

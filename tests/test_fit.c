@@ -535,6 +535,53 @@ static void test_noise_sweep(void **state) {
   wv_image_free(&photo);
 }
 
+
+/* A photo pair: the target rendered in flat45 and flat45-back. Fitted to both, the transmission
+ * colours move from the start (the prior, half of k_d) toward the target's; fitted to the
+ * front-lit photo alone they stay exactly at the start. */
+static void test_fit_pair(void **state) {
+  (void)state;
+  wv_scene s, sb;
+  wv_params tp, start;
+  wv_image photo, photo_t;
+  wv_descriptor *d;
+  tu_centre_window(&s, "flat45", 64, 64, 4);
+  tu_centre_window(&sb, "flat45-back", 64, 64, 4);
+  target(&tp);
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) tp.transmission[y][c] = 0.15 * tp.diffuse[y][c];
+  start = tp;
+  wv_params_transmission_default(&start); /* the prior's k_t, the only difference */
+  wv_render_opts ro = {0};
+  assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
+  assert_int_equal(wv_render(&sb, &tp, &ro, &photo_t, NULL, NULL), WV_OK);
+  assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
+  wv_fit_opts o;
+  opts(&o, 12);
+  o.discrete_every = 0, o.colour_split = 0, o.noise_sweep = 0, o.patience = 0;
+  o.align_radius = 0, o.register_radius = 0, o.distort_degree = 0, o.psf_sigma = 0;
+  wv_error err = {0};
+  double e[3] = {0, 0, 0}; /* k_t error: start, pair fit, reflection-only fit */
+  for (int run = 0; run < 2; run++) {
+    wv_fit_state st;
+    assert_int_equal(wv_fit_state_init(&st, &start, &o, &err), WV_OK);
+    if (wv_fit_run_pair(&st, &s, &photo, run == 0 ? &sb : NULL, run == 0 ? &photo_t : NULL, d, &o, NULL, NULL, &err))
+      fail_msg("%s", err.msg);
+    for (int y = 0; y < 2; y++)
+      for (int c = 0; c < 3; c++) {
+        if (run == 0) e[0] += fabs(start.transmission[y][c] - tp.transmission[y][c]);
+        e[1 + run] += fabs(st.params.transmission[y][c] - tp.transmission[y][c]);
+        if (run == 1) assert_true(st.params.transmission[y][c] == start.transmission[y][c]);
+      }
+    wv_fit_state_free(&st);
+  }
+  print_message("k_t error: start %.4f, pair %.4f, reflection only %.4f\n", e[0], e[1], e[2]);
+  assert_true(e[1] < 0.8 * e[0]);
+  assert_true(e[2] == e[0]);
+  wv_image_free(&photo), wv_image_free(&photo_t);
+  wv_descriptor_free(d);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fit_improves), cmocka_unit_test(test_resume_equals_straight),
                                      cmocka_unit_test(test_stopping_rule), cmocka_unit_test(test_fit_stops),
@@ -542,6 +589,7 @@ int main(void) {
                                      cmocka_unit_test(test_psf_fitted), cmocka_unit_test(test_colour_split),
                                      cmocka_unit_test(test_colour_split_sees_shading),
                                      cmocka_unit_test(test_colour_split_matches_hues),
-                                     cmocka_unit_test(test_limits), cmocka_unit_test(test_noise_sweep)};
+                                     cmocka_unit_test(test_limits), cmocka_unit_test(test_noise_sweep),
+                                     cmocka_unit_test(test_fit_pair)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

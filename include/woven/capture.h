@@ -48,6 +48,11 @@ typedef struct {
   /* The mesh scene the report shows the fit on (NULL: the bundled draped cloth; "none": no drape). */
   const char *drape;
   wv_capture_progress progress;
+  /* A photo pair (docs/fit.md, "Photo pairs"): the transmission photo, its back-lit scene and
+   * its path; all NULL: the photo alone. */
+  const wv_scene *scene_t;
+  const wv_image *photo_t;
+  const char *photo_t_path;
 } wv_fit_job;
 
 /* What a finished fit wrote, for the caller's summary. */
@@ -57,6 +62,11 @@ typedef struct {
   double ssim_start, ssim_fit;
   wv_weave_views views; /* SSIM per channel and WSC of start and fit (wsc -2: not measured) */
   char start_label[32]; /* what the start was: prior, start (a parameter file), network */
+  /* A photo pair's transmission photo against its re-render (pair 0: none): SSIM per RGB
+   * channel, WSC (-2: not measured), the photo's blurred-copy SSIM, and the mean brightness
+   * of photo [0] and re-render [1] over the centre (half of each side) [0] and the whole frame [1]. */
+  int pair;
+  double ssim_rgb_t, wsc_t, ssim_rgb_blurred_t, mean_t[2][2];
 } wv_fit_outcome;
 
 /* The output directory check, before any slow step: refuses a file, a directory holding
@@ -75,6 +85,8 @@ typedef struct {
   char photo[4096], descriptor[64], weights[4096], start_label[32]; /* weights "": none */
   wv_crop crop;
   wv_scene scene;
+  char photo_t[4096]; /* a photo pair's transmission photo ("": none) and its scene */
+  wv_scene scene_t;
 } wv_fit_record_job;
 wv_status wv_fit_job_read(const char *dir, wv_fit_record_job *rec, wv_error *err);
 
@@ -83,6 +95,7 @@ wv_status wv_fit_job_read(const char *dir, wv_fit_record_job *rec, wv_error *err
 typedef struct {
   const char *photo, *scene, *init, *pattern, *dir; /* with resume: only photo, NULL or the recorded one */
   const char *descriptor, *weights, *drape;         /* NULL descriptor: "default" */
+  const char *photo_t, *scene_t; /* a transmission photo and its scene (wv_pair_scene); NULL: none */
   wv_crop crop;
   const wv_fit_record_job *resume; /* from wv_fit_job_read of dir, or NULL */
   wv_fit_opts fit;
@@ -90,6 +103,12 @@ typedef struct {
   wv_capture_progress progress;
 } wv_fit_dir_opts;
 wv_status wv_fit_dir_run(const wv_fit_dir_opts *o, wv_fit_outcome *out, wv_error *err);
+
+/* The back-lit counterpart of a reflection scene for a photo pair: scene_t when given (a
+ * preset name or a file; it must be back-lit, wv_scene_transmits), else flat45-back for
+ * flat45; any other scene has none and is refused with a message naming it. The
+ * counterpart must render the reflection scene's image size. */
+wv_status wv_pair_scene(const char *scene, const wv_scene *s, const char *scene_t, wv_scene *out, wv_error *err);
 
 /* The whole capture (woven capture): the estimate, then the fit from it with every output
  * in dir (fit.json, network.json, ...). on_estimate (optional) is called between them. */
@@ -100,6 +119,7 @@ typedef struct {
   int align_given; /* 0: fit.align_radius becomes WV_CAPTURE_ALIGN_RADIUS when the weave
                     * analysis found the photo's lattice (wv_capture_fit_opts) */
   const char *dir, *drape;
+  const char *photo_t, *scene_t; /* a transmission photo and its scene (wv_pair_scene); NULL: none */
   int force;
   void (*on_estimate)(void *user, const wv_estimate *e);
   wv_capture_progress progress; /* its user is on_estimate's too */

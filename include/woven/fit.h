@@ -159,6 +159,15 @@ typedef int (*wv_fit_callback)(void *user, const wv_fit_state *st, const wv_fit_
  * centre window (a criterion that does see yarn positions). */
 wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
                      const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err);
+/* wv_fit_run on a photo pair (docs/fit.md, "Photo pairs"): the reflection photo in s and the
+ * transmission photo photo_t in s_t, its back-lit counterpart (same camera, same cloth). Each
+ * iteration's loss is the sum of the two photos' image losses (the prior counted once) and
+ * the Adam step takes the summed gradient over all WV_P_COUNT parameters; the discrete steps
+ * are judged on the sum too. The colour split, noise sweep, alignment, registration and
+ * distortion read the reflection photo alone. s_t or photo_t NULL: wv_fit_run. */
+wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_scene *s_t,
+                          const wv_image *photo_t, wv_descriptor *d, const wv_fit_opts *o, wv_fit_callback cb,
+                          void *user, wv_error *err);
 
 /* Registration (after the alignment, flat and cylinder scenes alike): a real photo's
  * weave has a phase (where the yarns start) and a density known only to a few

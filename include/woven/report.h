@@ -66,6 +66,12 @@ typedef struct {
   const char *viewer_html;                     /* the interactive viewer beside the report (NULL: none) */
   const char *drape_png;                       /* the fit on the draped cloth under new light (NULL: none) */
   const char *drape_note;                      /* what the drape shows, or why it is missing */
+  /* A photo pair: the transmission photo and the fit's re-render in the back-lit scene, SSIM per
+   * RGB channel and WSC between them (-2: not measured) and the photo's blurred-copy SSIM
+   * (NULL photo_t_png: one photo; the report says the transmission parameters were not fitted). */
+  const char *photo_t_png, *fit_t_png;
+  double ssim_rgb_t, wsc_t, ssim_rgb_blurred_t;
+  int kt_fitted; /* the one photo is back-lit: the fit moved k_t */
 } wv_report;
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err);

@@ -25,7 +25,7 @@
 static const char *const FIT_FILES[] = {
     "fit.json",    "checkpoint.json", "params.json", "render.png",  "start.png", "photo.png",
     "compare.png", "loss.svg",        "report.html", "viewer.html", "drape.png", "maps",
-    "scene.json",  "network.json",    "zoom.png",    "spectra.png", NULL};
+    "scene.json",  "network.json",    "zoom.png",    "spectra.png", "photo_t.png", "render_t.png", NULL};
 
 typedef enum { FIT_DIR_NONE, FIT_DIR_UNFINISHED, FIT_DIR_FINISHED } fit_dir_state;
 
@@ -91,6 +91,13 @@ static char *job_json(const wv_fit_job *job) {
                         wv_descriptor_name(job->desc), "start_label", job->start_label);
   if (o && job->weights) json_object_set_new(o, "vgg19_weights", wv_json_str_lossy(weights ? weights : job->weights));
   free(photo), free(weights);
+  if (o && job->photo_t_path) { /* a photo pair: the transmission photo and its scene */
+    char *pt = realpath(job->photo_t_path, NULL), *stj = wv_scene_to_json(job->scene_t);
+    json_t *sc = stj ? json_loads(stj, 0, NULL) : NULL;
+    json_object_set_new(o, "transmission", json_pack("{s:o,s:o}", "photo", wv_json_str_lossy(pt ? pt : job->photo_t_path),
+                                                     "scene", sc ? sc : json_null()));
+    free(pt), free(stj);
+  }
   if (o && job->pattern_choice) /* informative: a resume does not need it */
     json_object_set_new(o, "pattern_choice", wv_json_from_text(wv_pattern_choice_to_json(job->pattern_choice)));
   char *text = o ? json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17)) : NULL;
@@ -136,9 +143,43 @@ static int render_drape(const wv_fit_job *job, const char *dir, const wv_params 
   return 1;
 }
 
+/* The mean brightness of im over its centre (half of each side) [0] and the whole frame [1]. */
+static wv_status centre_whole_mean(const wv_image *im, double m[2], wv_error *err) {
+  wv_image c = {0};
+  wv_status rc = wv_image_centre_crop(im, im->w / 2, im->h / 2, &c, err);
+  if (!rc) m[0] = wv_image_mean(&c), m[1] = wv_image_mean(im);
+  wv_image_free(&c);
+  return rc;
+}
+
+/* A photo pair's transmission side: the fit re-rendered in the back-lit scene with the fit's
+ * offset, distortion and blur (same camera, same cloth), photo_t.png and render_t.png, and
+ * the figures against the transmission photo. */
+static wv_status write_transmission(const wv_fit_job *job, const char *dir, const wv_fit_state *st, int threads,
+                                    wv_fit_outcome *out, char *pphoto, char *pfit, size_t cap, wv_error *err) {
+  wv_scene fs;
+  wv_fit_scene(st, job->scene_t, &fs);
+  wv_render_opts ro = {.threads = threads};
+  wv_image r = {0};
+  wv_status rc = wv_render(&fs, &st->params, &ro, &r, NULL, err);
+  out->pair = 1, out->wsc_t = -2, out->ssim_rgb_blurred_t = -2;
+  if (!rc) rc = wv_ssim(job->photo_t, &r, WV_SSIM_RGB, &out->ssim_rgb_t, err);
+  if (!rc && wv_wsc(job->photo_t, &r, &out->wsc_t, NULL)) out->wsc_t = -2; /* too small an image: not measured */
+  if (!rc && wv_blurred_copy_ssim(job->photo_t, WV_BLURRED_COPY_SIGMA, &out->ssim_rgb_blurred_t, NULL))
+    out->ssim_rgb_blurred_t = -2;
+  if (!rc) rc = centre_whole_mean(job->photo_t, out->mean_t[0], err);
+  if (!rc) rc = centre_whole_mean(&r, out->mean_t[1], err);
+  snprintf(pphoto, cap, "%s/photo_t.png", dir);
+  snprintf(pfit, cap, "%s/render_t.png", dir);
+  if (!rc) rc = wv_image_write_png(pphoto, job->photo_t, 8, err);
+  if (!rc) rc = wv_image_write_png(pfit, &r, 8, err);
+  wv_image_free(&r);
+  return rc;
+}
+
 static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_fit_state *st, const wv_fit_opts *o,
                                const wv_scene *fit_scene, double *ssim_start, double *ssim_fit, wv_weave_views *wv,
-                               wv_error *err) {
+                               wv_fit_outcome *out, wv_error *err) {
   wv_render_opts ro = {.threads = o->threads};
   wv_image r_start = {0}, r_fit = {0}, cmp = {0};
   char path[4096], pphoto[4096], pstart[4096], pfit[4096];
@@ -160,6 +201,9 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
   snprintf(path, sizeof path, "%s/compare.png", dir);
   if (!rc) rc = wv_image_write_png(path, &cmp, 8, err);
   wv_image_free(&r_start), wv_image_free(&r_fit), wv_image_free(&cmp);
+  char pphoto_t[4096], pfit_t[4096];
+  if (!rc && job->photo_t)
+    rc = write_transmission(job, dir, st, o->threads, out, pphoto_t, pfit_t, sizeof pphoto_t, err);
   char pdrape[4096], note[1024] = "";
   int drape = 0;
   if (!rc) drape = render_drape(job, dir, &st->params, o->threads, pdrape, sizeof pdrape, note, sizeof note, err, &rc);
@@ -184,7 +228,13 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
                    .camera_blur_measured = st->psf_fit ? st->psf_start : -1,
                    .viewer_html = "viewer.html",
                    .drape_png = drape ? pdrape : NULL,
-                   .drape_note = note[0] ? note : NULL};
+                   .drape_note = note[0] ? note : NULL,
+                   .photo_t_png = out->pair ? pphoto_t : NULL,
+                   .fit_t_png = out->pair ? pfit_t : NULL,
+                   .ssim_rgb_t = out->ssim_rgb_t,
+                   .wsc_t = out->wsc_t,
+                   .ssim_rgb_blurred_t = out->ssim_rgb_blurred_t,
+                   .kt_fitted = wv_scene_transmits(job->scene)};
   /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
   wv_view_opts vo = {.params = &st->params, .scene = fit_scene, .photo = pphoto, .title = job->title};
   snprintf(path, sizeof path, "%s/viewer.html", dir);
@@ -311,7 +361,8 @@ wv_status wv_fit_job_run(const wv_fit_job *job, wv_fit_outcome *out, wv_error *e
     wv_note(job->progress.on_note, job->progress.user,
             "fitting %s: %d iterations from %d (%s start, iterating at 1/%d scale, %d spp)", job->photo_path, o.iters,
             st.iter, job->start_label, o.iter_scale, o.iter_spp);
-  rc = wv_fit_run(&st, job->scene, job->photo, job->desc, &o, on_iter, &u, err);
+  rc = wv_fit_run_pair(&st, job->scene, job->photo, job->photo_t ? job->scene_t : NULL, job->photo_t, job->desc, &o,
+                       on_iter, &u, err);
   if (!rc && !u.ckpt_failed) rc = wv_fit_checkpoint_write(ckpt, &st, &o, u.descriptor, err); /* with the alignment */
   if (u.ckpt_failed && !rc) rc = err->code;
   /* The results go into a temporary directory that then replaces the fit directory. */
@@ -326,7 +377,7 @@ wv_status wv_fit_job_run(const wv_fit_job *job, wv_fit_outcome *out, wv_error *e
     wv_note(job->progress.on_note, job->progress.user, "rendering start and fit at %d x %d, %d spp", job->scene->width,
             job->scene->height, job->scene->spp);
   if (!rc)
-    rc = write_results(job, od.tmp, &st, &o, &out->fit_scene, &out->ssim_start, &out->ssim_fit, &out->views, err);
+    rc = write_results(job, od.tmp, &st, &o, &out->fit_scene, &out->ssim_start, &out->ssim_fit, &out->views, out, err);
   if (!rc) rc = wv_outdir_commit(&od, err);
   if (rc) {
     wv_outdir_abort(&od, err);
@@ -336,6 +387,52 @@ wv_status wv_fit_job_run(const wv_fit_job *job, wv_fit_outcome *out, wv_error *e
   out->state = st;
   snprintf(out->start_label, sizeof out->start_label, "%s", job->start_label);
   return WV_OK;
+}
+
+wv_status wv_pair_scene(const char *scene, const wv_scene *s, const char *scene_t, wv_scene *out, wv_error *err) {
+  wv_status rc;
+  if (scene_t) {
+    if ((rc = wv_scene_load(scene_t, out, err))) return rc;
+    if (!wv_scene_transmits(out))
+      return wv_fail(err, WV_ERR_INVALID,
+                     "%s is not a back-lit scene (a plane with its light below the cloth): it cannot render the "
+                     "transmission photo",
+                     scene_t);
+  } else if (scene && !strcmp(scene, "flat45")) {
+    if ((rc = wv_scene_load("flat45-back", out, err))) return rc;
+  } else {
+    return wv_fail(err, WV_ERR_INVALID,
+                   "the scene %s has no built-in back-lit counterpart for --transmission: name one with "
+                   "--transmission-scene S.json",
+                   scene ? scene : "given");
+  }
+  if (out->width != s->width || out->height != s->height)
+    return wv_fail(err, WV_ERR_INVALID, "the back-lit scene %s renders %d x %d, not the %d x %d of %s",
+                   scene_t ? scene_t : "flat45-back", out->width, out->height, s->width, s->height,
+                   scene ? scene : "the scene");
+  return WV_OK;
+}
+
+/* The transmission photo of a pair, brought to its scene with the reflection photo's crop;
+ * taken by the same camera, its file must have the reflection photo's size. */
+static wv_status load_photo_t(const char *path, const wv_scene *s_t, const wv_crop *crop, const char *photo,
+                              const wv_photo_info *ri, wv_image *out, wv_error *err) {
+  wv_photo_info ti;
+  /* read whole first (its own centre crop), so that a photo of another size is named as such */
+  wv_status rc = wv_photo_load(path, s_t, &(wv_crop){0, 0, 0, 0}, out, &ti, err);
+  if (rc) {
+    if (!strstr(err->msg, path)) wv_error_prefix(err, "%s", path);
+    return rc;
+  }
+  if (ti.width != ri->width || ti.height != ri->height) {
+    wv_image_free(out);
+    return wv_fail(err, WV_ERR_INVALID,
+                   "%s is %d x %d but the reflection photo %s is %d x %d: a photo pair is taken by one camera", path,
+                   ti.width, ti.height, photo, ri->width, ri->height);
+  }
+  if (!memcmp(ti.crop, (int[4]){crop->x, crop->y, crop->w, crop->h}, sizeof ti.crop)) return WV_OK;
+  wv_image_free(out); /* the reflection photo's crop differs from the centre one: read it with that crop */
+  return wv_photo_load(path, s_t, crop, out, &ti, err);
 }
 
 wv_status wv_fit_dir_run(const wv_fit_dir_opts *o, wv_fit_outcome *out, wv_error *err) {
@@ -354,7 +451,8 @@ wv_status wv_fit_dir_run(const wv_fit_dir_opts *o, wv_fit_outcome *out, wv_error
     return rc;
   /* Everything is checked before anything is written; the directory first (cheap). */
   job.dir = o->dir, job.resume = rec != NULL, job.force = o->force;
-  const char *inputs[] = {photo, rec ? NULL : o->scene, o->init, weights};
+  const char *inputs[] = {photo, rec ? NULL : o->scene, o->init, weights, rec ? NULL : o->photo_t,
+                          rec ? NULL : o->scene_t};
   memcpy(job.inputs, inputs, sizeof inputs);
   if ((rc = wv_fit_job_check_dir(&job, err))) return rc;
   wv_params start;
@@ -368,10 +466,22 @@ wv_status wv_fit_dir_run(const wv_fit_dir_opts *o, wv_fit_outcome *out, wv_error
   }
   wv_descriptor *desc;
   if ((rc = wv_descriptor_create(desc_name ? desc_name : "default", weights, &desc, err))) return rc;
-  wv_image ph = {0};
+  wv_image ph = {0}, ph_t = {0};
   wv_photo_info info;
+  const char *photo_t = rec ? (rec->photo_t[0] ? rec->photo_t : NULL) : o->photo_t;
+  wv_scene scene_t;
+  memset(&scene_t, 0, sizeof scene_t);
+  if (rec && photo_t)
+    scene_t = rec->scene_t;
+  else if (photo_t && (rc = wv_pair_scene(o->scene, &scene, o->scene_t, &scene_t, err))) {
+    wv_descriptor_free(desc);
+    return rc;
+  }
   if ((rec || !(rc = wv_fit_check_sizes(&scene, desc, &job.opts, err))) &&
-      !(rc = wv_photo_load(photo, &scene, &crop, &ph, &info, err))) {
+      !(rc = wv_photo_load(photo, &scene, &crop, &ph, &info, err)) &&
+      !(photo_t && (rc = load_photo_t(photo_t, &scene_t, &(wv_crop){info.crop[0], info.crop[1], info.crop[2], info.crop[3]},
+                                      photo, &info, &ph_t, err)))) {
+    if (photo_t) job.scene_t = &scene_t, job.photo_t = &ph_t, job.photo_t_path = photo_t;
     job.crop = (wv_crop){info.crop[0], info.crop[1], info.crop[2], info.crop[3]};
     job.weights = weights;
     job.scene = &scene, job.photo = &ph, job.desc = desc, job.start = rec ? NULL : &start;
@@ -381,7 +491,7 @@ wv_status wv_fit_dir_run(const wv_fit_dir_opts *o, wv_fit_outcome *out, wv_error
     rc = wv_fit_job_run(&job, out, err);
   }
   wv_descriptor_free(desc);
-  wv_image_free(&ph);
+  wv_image_free(&ph), wv_image_free(&ph_t);
   return rc;
 }
 
@@ -436,6 +546,20 @@ wv_status wv_fit_job_read(const char *dir, wv_fit_record_job *rec, wv_error *err
     st = sj ? wv_scene_parse(sj, path, s, err) : wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
     free(sj);
   }
+  rec->photo_t[0] = '\0';
+  json_t *tr = json_object_get(o, "transmission");
+  if (!st && tr) { /* a photo pair */
+    const char *pt = NULL;
+    json_t *ts = NULL;
+    if (json_unpack(tr, "{s:s,s:o}", "photo", &pt, "scene", &ts)) {
+      st = wv_fail(err, WV_ERR_FORMAT, "%s: \"transmission\" needs a photo and a scene", path);
+    } else {
+      resolve_recorded(dir, pt, rec->photo_t, sizeof rec->photo_t);
+      char *sj = json_dumps(ts, JSON_REAL_PRECISION(17));
+      st = sj ? wv_scene_parse(sj, path, &rec->scene_t, err) : wv_fail(err, WV_ERR_NOMEM, "%s: out of memory", path);
+      free(sj);
+    }
+  }
   json_decref(o);
   return st;
 }
@@ -452,14 +576,30 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
   wv_fit_job job;
   memset(&job, 0, sizeof job);
   job.opts = o->fit, job.drape = o->drape, job.dir = o->dir, job.force = o->force;
-  const char *inputs[] = {o->estimate.photo, o->estimate.scene, o->estimate.model, o->estimate.weights};
+  const char *inputs[] = {o->estimate.photo, o->estimate.scene, o->estimate.model, o->estimate.weights,
+                          o->photo_t, o->scene_t};
   memcpy(job.inputs, inputs, sizeof inputs);
   wv_status rc = wv_fit_job_check_dir(&job, err);
   if (rc) return rc;
-  wv_scene scene; /* loaded once: the fit's size limits are checked before the network runs */
+  wv_scene scene, scene_t; /* loaded once: the fit's size limits are checked before the network runs */
   if ((rc = wv_scene_load(o->estimate.scene, &scene, err)) || (rc = wv_fit_check_sizes(&scene, NULL, &o->fit, err)))
     return rc;
-  if ((rc = wv_estimate_run_scene(&o->estimate, &scene, est, err))) return rc;
+  wv_image ph_t = {0};
+  if (o->photo_t) { /* the pair's photo read before the network runs (the crop: the photo's, as the estimate takes it) */
+    wv_image ph = {0};
+    wv_photo_info info;
+    if ((rc = wv_pair_scene(o->estimate.scene, &scene, o->scene_t, &scene_t, err)) ||
+        (rc = wv_photo_load(o->estimate.photo, &scene, &o->estimate.crop, &ph, &info, err)))
+      return rc;
+    wv_image_free(&ph);
+    if ((rc = load_photo_t(o->photo_t, &scene_t, &(wv_crop){info.crop[0], info.crop[1], info.crop[2], info.crop[3]},
+                           o->estimate.photo, &info, &ph_t, err)))
+      return rc;
+  }
+  if ((rc = wv_estimate_run_scene(&o->estimate, &scene, est, err))) {
+    wv_image_free(&ph_t);
+    return rc;
+  }
   if (o->on_estimate) o->on_estimate(o->progress.user, est);
   char *network = wv_params_to_json(&est->params), *nl = network ? realloc(network, strlen(network) + 2) : NULL;
   if (nl) strcat(nl, "\n"), network = nl; /* as wv_params_write writes it */
@@ -476,8 +616,10 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
     job.start_label = "network";
     job.title = "woven capture";
     job.progress = o->progress;
+    if (o->photo_t) job.scene_t = &scene_t, job.photo_t = &ph_t, job.photo_t_path = o->photo_t;
     rc = wv_fit_job_run(&job, out, err);
   }
+  wv_image_free(&ph_t);
   free(network);
   if (rc) wv_estimate_free(est);
   return rc;

@@ -306,6 +306,24 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
   if (r->weave && r->weave->wsc_whitened[0] > -2)
     sb_printf(&b, "<tr><td>whitened WSC (the weave's peaks alone)</td><td>%.4f</td><td>%.4f</td></tr>\n",
               r->weave->wsc_whitened[0], r->weave->wsc_whitened[1]);
+  if (r->photo_t_png && !st) {
+    sb_printf(&b, "</table>\n<h2>Transmission</h2>\n");
+    const char *tf[2] = {r->photo_t_png, r->fit_t_png}, *tl[2] = {"transmission photo", "fit, back-lit"};
+    for (int i = 0; i < 2 && !st; i++) {
+      sb_printf(&b, "<figure><img alt=\"%s\" src=\"data:image/png;base64,", tl[i]);
+      sb_base64_file(&b, tf[i], &st, err);
+      sb_printf(&b, "\"><figcaption>%s</figcaption></figure>\n", tl[i]);
+    }
+    sb_printf(&b, "<table><tr><th>against the transmission photo</th><th>fit</th></tr>\n");
+    sb_printf(&b, "<tr><td>SSIM (per RGB channel)</td><td>%.4f</td></tr>\n", r->ssim_rgb_t);
+    if (r->ssim_rgb_blurred_t > -2)
+      sb_printf(&b, "<tr><td>SSIM (per RGB channel) of the photo's copy blurred by %.0f px, the baseline</td>"
+                    "<td>%.4f</td></tr>\n",
+                WV_BLURRED_COPY_SIGMA, r->ssim_rgb_blurred_t);
+    if (r->wsc_t > -2) sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td></tr>\n", r->wsc_t);
+    sb_printf(&b, "<tr><td colspan=\"2\">The fit was fitted to both photos at once (docs/fit.md, \"Photo "
+                  "pairs\"); the back-lit render uses the reflection photo's registration.</td></tr>\n");
+  }
   char how[96] = "measured from the photo's spectrum unless given";
   if (r->camera_blur_measured >= 0)
     snprintf(how, sizeof how, "measured from the photo's spectrum at %.2f px, then fitted with the parameters",
@@ -313,6 +331,10 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
   sb_printf(&b, "</table>\n<p>Both renders pass through the camera blur: a Gaussian of sigma %.2f px on the "
                 "radiance (%s; docs/fit.md).</p>\n",
             r->camera_blur, how);
+  if (!r->photo_t_png && !r->kt_fitted)
+    sb_printf(&b, "<p>One photo, front-lit: the transmission colours (k_t) were not fitted; they are the start's, "
+                  "from the prior (half the start's diffuse colour). <code>--transmission T.png</code> fits them to a "
+                  "back-lit photo.</p>\n");
   sb_printf(&b, "<p>SSIM: Wang et al. 2004, 11x11 Gaussian window. WSC: Pearson correlation of the log "
                 "power spectra of the luminance detail of the centre 256 x 256 pixels, DC left out; 1 for the same "
                 "periodic structure, about 0 for none in common. Whitened WSC: the same after each ring of the spectrum is "

@@ -96,6 +96,7 @@ typedef struct {
   wv_fit_timing *timing;
   wv_footprints *fp; /* the iteration scene's camera geometry, made once */
   wv_fit_opts wopts; /* a window's options (o points here) */
+  int no_prior;      /* the pattern prior is left out (the second photo of a pair: counted once) */
 } fit_ctx;
 
 static void ctx_free(fit_ctx *c) {
@@ -162,7 +163,8 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   double lp = 0;
   for (int y = 0; y < 2; y++) lp += (p->heightfield[y] - mu) * (p->heightfield[y] - mu) / (2 * sg * sg);
   rec->gram = lt.gram, rec->pixel = lt.pixel, rec->prior = lp, rec->structure = lt.structure, rec->colour = lt.colour;
-  rec->loss = lt.total + o->w_prior * lp;
+  double wp = c->no_prior ? 0.0 : o->w_prior;
+  rec->loss = lt.total + wp * lp;
   double t3 = omp_get_wtime();
   c->timing->descriptor += t3 - t1;
   if (!grad) return WV_OK;
@@ -171,8 +173,8 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   wv_record_free(record);
   if (st) return st;
   c->timing->gradient += omp_get_wtime() - t3;
-  grad[WV_P_BETA_WARP] += o->w_prior * (p->heightfield[WV_WARP] - mu) / (sg * sg);
-  grad[WV_P_BETA_WEFT] += o->w_prior * (p->heightfield[WV_WEFT] - mu) / (sg * sg);
+  grad[WV_P_BETA_WARP] += wp * (p->heightfield[WV_WARP] - mu) / (sg * sg);
+  grad[WV_P_BETA_WEFT] += wp * (p->heightfield[WV_WEFT] - mu) / (sg * sg);
   return WV_OK;
 fail:
   wv_record_free(record);
@@ -187,6 +189,23 @@ wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d
   if (!st) st = evaluate(&c, p, out, NULL, NULL, err);
   ctx_free(&c);
   return st;
+}
+
+/* The loss of a photo pair: the reflection photo's (c) plus, when ct is not NULL, the
+ * transmission photo's (its prior left out), their gradients summed; rec's terms are the sums. */
+static wv_status evaluate_pair(fit_ctx *c, fit_ctx *ct, const wv_params *p, wv_fit_record *rec, double grad[WV_P_COUNT],
+                               double *dpsf, wv_error *err) {
+  wv_status rc = evaluate(c, p, rec, grad, dpsf, err);
+  if (rc || !ct) return rc;
+  wv_fit_record rt = {0};
+  double gt[WV_P_COUNT] = {0}, dt = 0;
+  if ((rc = evaluate(ct, p, &rt, grad ? gt : NULL, dpsf ? &dt : NULL, err))) return rc;
+  rec->loss += rt.loss, rec->gram += rt.gram, rec->pixel += rt.pixel, rec->structure += rt.structure;
+  rec->colour += rt.colour;
+  if (grad)
+    for (int i = 0; i < WV_P_COUNT; i++) grad[i] += gt[i];
+  if (dpsf) *dpsf += dt;
+  return WV_OK;
 }
 
 static uint64_t next_rand(uint64_t *state) {
@@ -468,6 +487,13 @@ static wv_status stage_ctx(fit_ctx *c, int stage, const wv_scene *s, const wv_im
 
 wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
                      const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err) {
+  return wv_fit_run_pair(st, s, photo, NULL, NULL, d, o, cb, user, err);
+}
+
+wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_scene *s_t,
+                          const wv_image *photo_t, wv_descriptor *d, const wv_fit_opts *o, wv_fit_callback cb,
+                          void *user, wv_error *err) {
+  int pair = s_t && photo_t;
   wv_status vs = wv_fit_opts_validate(o, err);
   if (vs) return vs;
   if (o->iters > st->log_cap) {
@@ -479,15 +505,20 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
   if (stage < 2) st->aligned = st->registered = st->distorted = 0; /* more iterations: align again after them */
   /* One context per stage (the coarse one and the full one), each made once: the photo's
    * side of the loss and the camera geometry do not change between iterations. */
-  fit_ctx cx[2];
-  int made[2] = {0, 0};
+  fit_ctx cx[2], ct[2]; /* ct: the transmission photo's, for a pair */
+  int made[2] = {0, 0}, made_t[2] = {0, 0};
   double scale = o->iter_scale;
   memset(cx, 0, sizeof cx);
+  memset(ct, 0, sizeof ct);
   double t_start = omp_get_wtime();
   wv_status rc = wv_fit_check_sizes(s, d, o, err);
   if (!rc && (photo->w != s->width || photo->h != s->height))
     rc = wv_fail(err, WV_ERR_INVALID, "the photo is %d x %d but the scene renders %d x %d", photo->w, photo->h,
                  s->width, s->height);
+  if (!rc && pair) rc = wv_fit_check_sizes(s_t, d, o, err);
+  if (!rc && pair && (photo_t->w != s_t->width || photo_t->h != s_t->height))
+    rc = wv_fail(err, WV_ERR_INVALID, "the transmission photo is %d x %d but its scene renders %d x %d", photo_t->w,
+                 photo_t->h, s_t->width, s_t->height);
   if (!rc && !st->psf_done) {
     /* the camera blur: given by the options or the scene, else measured on the start */
     double tp = omp_get_wtime();
@@ -525,11 +556,20 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
       made[k] = 1;
     }
     c->scene.psf_sigma = (st->psf_done ? st->psf_sigma : s->psf_sigma) / scale;
+    fit_ctx *tc = NULL;
+    if (pair) { /* the same camera: the same blur */
+      tc = &ct[k];
+      if (!made_t[k]) {
+        if ((rc = stage_ctx(tc, k, s_t, photo_t, d, o, &st->timing, err))) break;
+        made_t[k] = 1, tc->no_prior = 1;
+      }
+      tc->scene.psf_sigma = c->scene.psf_sigma;
+    }
     wv_fit_record rec = {0};
     rec.iter = st->iter;
     double g[WV_P_COUNT] = {0};
     double dpsf = 0;
-    if ((rc = evaluate(c, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, err))) break;
+    if ((rc = evaluate_pair(c, tc, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, err))) break;
     int t = st->iter + 1;
     /* Discrete search: a random step is kept only if it lowers the loss. It is compared with
      * this iteration's render (the parameters the gradient was taken at), so it costs one
@@ -541,7 +581,7 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
       wv_params trial = st->params;
       if (discrete_step(&trial, &st->rng, st->iter, o->iters, o->density_steps)) {
         wv_fit_record alt = {0};
-        if ((rc = evaluate(c, &trial, &alt, NULL, NULL, err))) break;
+        if ((rc = evaluate_pair(c, tc, &trial, &alt, NULL, NULL, err))) break;
         rec.discrete_tried = 1;
         if (alt.loss < rec.loss) {
           st->params = trial;
@@ -566,8 +606,9 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     wv_nn_adam adam = {.n = WV_P_COUNT, .lr = (float)o->lr, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f,
                        .weight_decay = 0.0f, .t = st->iter, .m = st->adam_m, .v = st->adam_v};
     wv_nn_adam_step_box(&adam, z, gz, 0.0f, 1.0f);
-    /* a front-lit scene shows nothing of the transmission colours: they keep their values exactly */
-    int np = wv_scene_transmits(s) ? WV_P_COUNT : WV_P_REFLECT_COUNT;
+    /* a front-lit scene shows nothing of the transmission colours: they keep their values exactly
+     * (a pair's transmission photo shows them) */
+    int np = wv_scene_transmits(s) || pair ? WV_P_COUNT : WV_P_REFLECT_COUNT;
     for (int i = 0; i < np; i++) {
       double lo, hi;
       wv_param_range(i, &lo, &hi);
@@ -598,8 +639,10 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
     t_start = omp_get_wtime();
     if (cb && cb(user, st, o)) break;
   }
-  for (int k = 0; k < 2; k++)
+  for (int k = 0; k < 2; k++) {
     if (made[k]) ctx_free(&cx[k]);
+    if (made_t[k]) ctx_free(&ct[k]);
+  }
   wv_fit_scene(st, s, &sb); /* the blur as fitted; the offset as given (the alignment comes before the registration) */
   sb.fabric_offset[0] = s->fabric_offset[0], sb.fabric_offset[1] = s->fabric_offset[1];
   int over = !rc && stage == 2;
