@@ -16,19 +16,23 @@
 #define PI_F 3.14159265358979f
 #define CMJ_DEPTHS 2 /* path vertices whose light and bounce samples are stratified */
 
-/* Samples 0 .. n-1 of a pixel's sequence of n (the capture renderer's sampler,
- * sampler/sampler.h), eight at a time: the numbers wv_sample_at_f gives one by one. */
-WV_SIMD_CLONES static void draw_sequence(int px, int py, int n, int width, uint64_t seed, float (*out)[2]) {
+/* Samples idx[0 .. m-1] (all of 0 .. n-1 when idx is NULL) of a pixel's sequence
+ * of n (the capture renderer's sampler, sampler/sampler.h), eight at a time: the
+ * numbers wv_sample_at_f gives one by one, each into out[its index]. */
+WV_SIMD_CLONES static void draw_sequence(int px, int py, int n, int width, uint64_t seed, const int *idx, int m,
+                                         float (*out)[2]) {
   int nx, ny;
   wv_pixel_grid(n, &nx, &ny);
   wv_pixel_sampler_f p = wv_pixel_sampler_make(px, py, width, seed);
   wv_pixel_sampler_8 p8 = {(wv_q8){0} + p.hash, (wv_w8){0} + p.keyx, (wv_w8){0} + p.keyy};
-  for (int s0 = 0; s0 < n; s0 += 8) {
-    wv_i8 s = s0 + WV_IOTA8;
-    s = wv_seli(s < n, s, wv_splati8(0)); /* lanes past the end: a valid index, result dropped */
+  if (!idx) m = n;
+  for (int s0 = 0; s0 < m; s0 += 8) {
+    wv_i8 s;
+    for (int k = 0; k < 8; k++) /* lanes past the end: a valid index, result dropped */
+      s[k] = s0 + k < m ? (idx ? idx[s0 + k] : s0 + k) : (idx ? idx[s0] : s0);
     wv_f8 sx, sy;
     wv_sample_at_8(&p8, nx, ny, s, &sx, &sy);
-    for (int k = 0; k < 8 && s0 + k < n; k++) out[s0 + k][0] = sx[k], out[s0 + k][1] = sy[k];
+    for (int k = 0; k < 8 && s0 + k < m; k++) out[s[k]][0] = sx[k], out[s[k]][1] = sy[k];
   }
 }
 
@@ -38,18 +42,44 @@ typedef struct {
   float kd[2][3], beta[2], alpha[2];
 } fabric_edit;
 
-/* THE adapter between the mesh renderer and the fabric shading model: the
- * average of (f_s + f_d) mu_i over n fabric positions (mm), for directions wi
- * (to the light) and wo (to the viewer) in the fabric's local frame (x weft, y
- * warp, z macro normal), with the edits applied. Everything the mesh renderer
- * knows about the fabric model is here: it runs the shading kernel's scalar
- * flavour (wv_shade_f, kernel/kernel.h) with unit light, with the parameters of a
- * per-thread copy of the prepared fabric when edits change k_d, beta or alpha at
- * this point. */
-static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric_edit *e, const float wi[3],
-                         const float wo[3], const float (*pos)[2], int n, float out[3]) {
-  out[0] = out[1] = out[2] = 0.0f;
-  if (wi[2] <= 0.0f || wo[2] <= 0.0f) return; /* SPEC section 4: zero below either horizon */
+/* Fabric points shaded eight at a time by the kernel's 8-lane flavour, which
+ * gives each lane the scalar flavour's result bit for bit: lane i at position
+ * pos[i] (mm), light from wi[i], view wo, unit light; m <= 8 lanes. */
+WV_SIMD_CLONES static void shade_lanes(const wv_fabric *f, int m, const float (*pos)[2], const float (*wi)[3],
+                                       const float wo[3], float (*r)[3]) {
+  wv_f8 x, y, vi[3], vo[3], rad[3];
+  for (int i = 0; i < 8; i++) {
+    int l = i < m ? i : 0; /* lanes past the end: a copy of lane 0, result dropped */
+    x[i] = pos[l][0], y[i] = pos[l][1];
+    for (int k = 0; k < 3; k++) vi[k][i] = wi[l][k], vo[k][i] = wo[k];
+  }
+  wv_dirs_8 d;
+  wv_dirs_make_8(vi, vo, wv_splat8(1.0f), &d);
+  wv_shade_8(f, &f->P, &d, x, y, rad, NULL);
+  for (int i = 0; i < m; i++) r[i][0] = rad[0][i], r[i][1] = rad[1][i], r[i][2] = rad[2][i];
+}
+
+/* Below this many points a call shades them one by one (the 8-lane call's cost). */
+#define SHADE_LANES_MIN 3
+
+/* THE adapter between the mesh renderer and the fabric shading model: for each
+ * of nd light directions wi[j] (NULL: not wanted), the average of (f_s + f_d)
+ * mu_i over n fabric positions (mm) into out[j], with the view wo, both in the
+ * fabric's local frame (x weft, y warp, z macro normal), with the edits applied.
+ * Everything the mesh renderer knows about the fabric model is here: it runs the
+ * shading kernel (kernel/kernel.h; all the points of all directions in 8-lane
+ * calls, or the scalar flavour wv_shade_f for one or two) with unit light, with
+ * the parameters of a per-thread copy of the prepared fabric when edits change
+ * k_d, beta or alpha at this point. */
+static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric_edit *e, int nd,
+                         const float *const *wi, const float wo[3], const float (*pos)[2], int n, float (*out)[3]) {
+  int lanes = 0, on[2];
+  for (int j = 0; j < nd; j++) {
+    out[j][0] = out[j][1] = out[j][2] = 0.0f;
+    on[j] = wi[j] && wi[j][2] > 0.0f && wo[2] > 0.0f; /* SPEC section 4: zero below either horizon */
+    lanes += on[j] * n;
+  }
+  if (!lanes) return;
   const wv_fabric *f = base;
   if (e->active && scratch) {
     for (int y = 0; y < 2; y++) {
@@ -59,15 +89,34 @@ static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric
     }
     f = scratch;
   }
-  wv_dirs_f d;
-  wv_dirs_make_f(wi, wo, 1.0f, &d);
-  for (int k = 0; k < n; k++) {
-    float r[3];
-    wv_shade_f(f, &f->P, &d, pos[k][0], pos[k][1], r, NULL);
-    out[0] += r[0], out[1] += r[1], out[2] += r[2];
+  if (lanes < SHADE_LANES_MIN) {
+    for (int j = 0; j < nd; j++) {
+      if (!on[j]) continue;
+      wv_dirs_f d;
+      wv_dirs_make_f(wi[j], wo, 1.0f, &d);
+      for (int k = 0; k < n; k++) {
+        float r[3];
+        wv_shade_f(f, &f->P, &d, pos[k][0], pos[k][1], r, NULL);
+        out[j][0] += r[0], out[j][1] += r[1], out[j][2] += r[2];
+      }
+    }
+  } else { /* lanes in the order (direction, position): each sum in the scalar order */
+    float lp[8][2], lw[8][3], r[8][3];
+    int owner[8], m = 0;
+    for (int l = 0; l < lanes; l += m) {
+      m = 0;
+      for (; m < 8 && l + m < lanes; m++) {
+        int q = l + m, j = on[0] ? q / n : 1, k = q % n;
+        lp[m][0] = pos[k][0], lp[m][1] = pos[k][1], memcpy(lw[m], wi[j], sizeof lw[m]), owner[m] = j;
+      }
+      shade_lanes(f, m, (const float(*)[2])lp, (const float(*)[3])lw, wo, r);
+      for (int i = 0; i < m; i++)
+        out[owner[i]][0] += r[i][0], out[owner[i]][1] += r[i][1], out[owner[i]][2] += r[i][2];
+    }
   }
   float inv = 1.0f / (float)n;
-  out[0] *= inv, out[1] *= inv, out[2] *= inv;
+  for (int j = 0; j < nd; j++)
+    if (on[j]) out[j][0] *= inv, out[j][1] *= inv, out[j][2] *= inv;
 }
 
 static float dot(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -132,11 +181,23 @@ typedef struct {
   const wv_world *w;
   wv_camera_rig cam;
   int spp, K;
-  float eps; /* ray offset */
+  float eps;                    /* ray offset */
+  int need[1 + 3 * CMJ_DEPTHS]; /* the stratified dimensions paths use (see rand2) */
 } render_ctx;
 
-/* Per thread: scratch, counters, and the current pixel's stratified numbers,
- * drawn for all its samples before its first path. */
+/* One camera path of a pixel between two vertices: the ray to follow and what
+ * the path has gathered. */
+typedef struct {
+  float o[3], d[3], thr[3], L[3];
+  float prev_pdf;   /* bounce pdf of the ray (o, d); 0 for the camera ray (no MIS) */
+  int depth;        /* the path vertex the ray leads to */
+  int got, alive;   /* the ray meets the scene (at hit); the path goes on */
+  wv_trace_hit hit;
+  wv_env_at at;     /* the environment's texel along a bounce ray */
+} path;
+
+/* Per thread: scratch, counters, the current pixel's paths and their stratified
+ * numbers, drawn for the paths that need them (render_pixel). */
 typedef struct {
   wv_fabric **scratch; /* per material, NULL without edits */
   double rays, shades;
@@ -147,6 +208,11 @@ typedef struct {
   float (*dir)[3];     /* spp camera rays */
   wv_trace_hit *hit;   /* spp: where they meet the scene */
   int *got;            /* spp: whether they do */
+  path *paths;         /* spp */
+  int *idx;            /* spp: the paths that reach a surface at a vertex */
+  int *yidx;           /* spp x K: the yarn positions wanted */
+  float (*ug)[2];      /* spp: the numbers of the environment samples wanted */
+  wv_env_sample *eg;   /* spp: their samples */
   uint64_t pixel;
   int sample;
 } thread_state;
@@ -263,19 +329,31 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   sf->nfpos = c->K;
 }
 
-/* BSDF x cosine for light arriving from wi (world), seen from wo. */
-static void eval_bsdf(const surface *sf, thread_state *ts, const float wi[3], const float wo[3], float f[3]) {
-  f[0] = f[1] = f[2] = 0;
-  if (dot(wi, sf->ng) <= 0.0f) return; /* reflection only: the cloth is opaque */
-  if (sf->mat->kind == WV_MAT_LAMBERT) {
-    float cs = dot(wi, sf->ns);
-    if (cs <= 0) return;
-    for (int c = 0; c < 3; c++) f[c] = sf->mat->albedo[c] * cs / PI_F;
-    return;
+/* BSDF x cosine for light arriving from each of nd <= 2 directions wi[j] (world;
+ * NULL: not wanted, f[j] = 0), seen from wo: a fabric is shaded for all of them
+ * in one call. */
+static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *const *wi, const float wo[3],
+                      float (*f)[3]) {
+  float li[2][3];
+  const float *want[2] = {NULL, NULL};
+  int any = 0;
+  for (int j = 0; j < nd; j++) {
+    f[j][0] = f[j][1] = f[j][2] = 0;
+    if (!wi[j] || dot(wi[j], sf->ng) <= 0.0f) continue; /* reflection only: the cloth is opaque */
+    if (sf->mat->kind == WV_MAT_LAMBERT) {
+      float cs = dot(wi[j], sf->ns);
+      if (cs <= 0) continue;
+      for (int c = 0; c < 3; c++) f[j][c] = sf->mat->albedo[c] * cs / PI_F;
+      continue;
+    }
+    li[j][0] = dot(wi[j], sf->t), li[j][1] = dot(wi[j], sf->b), li[j][2] = dot(wi[j], sf->ns);
+    want[j] = li[j], any = 1;
+    ts->shades += sf->nfpos;
   }
-  float li[3] = {dot(wi, sf->t), dot(wi, sf->b), dot(wi, sf->ns)}, lo[3] = {dot(wo, sf->t), dot(wo, sf->b), dot(wo, sf->ns)};
-  shade_fabric(sf->mat->fab, ts->scratch[sf->mat_index], &sf->edit, li, lo, (const float(*)[2])sf->fpos, sf->nfpos, f);
-  ts->shades += sf->nfpos;
+  if (!any) return;
+  float lo[3] = {dot(wo, sf->t), dot(wo, sf->b), dot(wo, sf->ns)};
+  shade_fabric(sf->mat->fab, ts->scratch[sf->mat_index], &sf->edit, nd, want, lo, (const float(*)[2])sf->fpos,
+               sf->nfpos, f);
 }
 
 static float power_heuristic(float a, float b) { return a * a / (a * a + b * b); }
@@ -301,135 +379,210 @@ static int hit_area(const wv_light3d *l, const float o[3], const float d[3], flo
   return 1;
 }
 
-/* Radiance along one camera ray (o0, d0), which meets the scene at hit0 when got0. */
-static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3], const float d0[3],
-                       const wv_trace_hit *hit0, int got0, float L[3]) {
+/* What the path's ray (o, d) meets at vertex p->depth (p->got, p->hit): the light
+ * it sees there and, when the path goes on, the next ray in (o, d). Returns 0
+ * when the path ends. ts->sample is the path's sample. */
+static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
   const wv_scene3d *s = c->s;
   const wv_world *w = c->w;
-  float o[3] = {o0[0], o0[1], o0[2]}, d[3] = {d0[0], d0[1], d0[2]}, thr[3] = {1, 1, 1};
-  float prev_pdf = 0; /* bounce pdf of the ray being traced; 0 for the camera ray (no MIS) */
-  L[0] = L[1] = L[2] = 0;
-  for (int depth = 0;; depth++) {
-    wv_trace_hit hit;
-    wv_env_at at = {0, 0};
-    if (w->has_env && prev_pdf > 0) at = wv_envmap_at(&w->env, d); /* its texel arrives while the ray is traced */
-    ts->rays++;
-    int got = depth ? wv_tracer_intersect(w->tracer, o, d, 0.0f, INFINITY, &hit) : got0;
-    if (!depth && got) hit = *hit0;
-    float tmax = got ? hit.t : INFINITY;
-    for (int i = 0; i < s->nlights; i++) { /* area lights the ray sees before the surface */
-      const wv_light3d *l = &s->lights[i];
-      float t, cosl;
-      if (l->type != WV_LIGHT_AREA || !hit_area(l, o, d, tmax, &t, &cosl)) continue;
-      float pl = t * t / ((float)(l->size[0] * l->size[1]) * cosl), wgt = prev_pdf > 0 ? power_heuristic(prev_pdf, pl) : 1;
-      for (int k = 0; k < 3; k++) L[k] += thr[k] * (float)l->color[k] * wgt;
+  const int depth = p->depth;
+  float *o = p->o, *d = p->d, *thr = p->thr, *L = p->L;
+  float tmax = p->got ? p->hit.t : INFINITY;
+  for (int i = 0; i < s->nlights; i++) { /* area lights the ray sees before the surface */
+    const wv_light3d *l = &s->lights[i];
+    float t, cosl;
+    if (l->type != WV_LIGHT_AREA || !hit_area(l, o, d, tmax, &t, &cosl)) continue;
+    float pl = t * t / ((float)(l->size[0] * l->size[1]) * cosl),
+          wgt = p->prev_pdf > 0 ? power_heuristic(p->prev_pdf, pl) : 1;
+    for (int k = 0; k < 3; k++) L[k] += thr[k] * (float)l->color[k] * wgt;
+  }
+  if (!p->got) {
+    if (w->has_env && (depth > 0 || s->env_visible)) {
+      float le[3], wgt = 1;
+      if (p->prev_pdf > 0) wgt = power_heuristic(p->prev_pdf, wv_envmap_read(&w->env, p->at, le));
+      else wv_envmap_eval(&w->env, d, le);
+      for (int k = 0; k < 3; k++) L[k] += thr[k] * le[k] * wgt;
     }
-    if (!got) {
-      if (w->has_env && (depth > 0 || s->env_visible)) {
-        float le[3], wgt = 1;
-        if (prev_pdf > 0) wgt = power_heuristic(prev_pdf, wv_envmap_read(&w->env, at, le));
-        else wv_envmap_eval(&w->env, d, le);
-        for (int k = 0; k < 3; k++) L[k] += thr[k] * le[k] * wgt;
-      }
-      return;
+    return 0;
+  }
+  surface sf;
+  make_surface(c, ts, &p->hit, o, d, depth == 0, &sf);
+  float wo[3] = {-d[0], -d[1], -d[2]}, org[3];
+  int last = depth >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
+  for (int i = 0; i < 3; i++) org[i] = sf.p[i] + c->eps * sf.ng[i];
+  /* the environment's sample and the bounce direction first: the surface is
+   * evaluated for both in one call */
+  float ewi[3] = {0, 0, 0}, ele[3] = {0, 0, 0}, epl = 0, bwi[3] = {0, 0, 0}, bpdf = 0, fb[2][3];
+  int env_on = 0;
+  if (w->has_env) {
+    if (depth < CMJ_DEPTHS) {
+      const wv_env_sample *es = &ts->env[depth * c->spp + ts->sample];
+      memcpy(ewi, es->d, sizeof ewi), memcpy(ele, es->rgb, sizeof ele), epl = es->pdf;
+    } else {
+      float u1, u2;
+      rand2(c, ts, depth, 0, &u1, &u2);
+      epl = wv_envmap_sample(&w->env, u1, u2, ewi, ele);
     }
-    surface sf;
-    make_surface(c, ts, &hit, o, d, depth == 0, &sf);
-    float wo[3] = {-d[0], -d[1], -d[2]}, org[3];
-    int last = depth >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
-    for (int i = 0; i < 3; i++) org[i] = sf.p[i] + c->eps * sf.ng[i];
-    /* next-event estimation */
-    for (int i = 0; i < s->nlights; i++) {
-      const wv_light3d *l = &s->lights[i];
-      float wi[3], li[3], dist = INFINITY, wgt = 1;
-      if (l->type == WV_LIGHT_DIRECTIONAL) {
-        for (int k = 0; k < 3; k++) wi[k] = (float)l->dir[k], li[k] = (float)l->color[k];
-      } else {
-        float lp[3], g = 1;
-        for (int k = 0; k < 3; k++) lp[k] = (float)l->pos[k];
-        if (l->type == WV_LIGHT_AREA) {
-          float u1, u2, n[3] = {(float)l->dir[0], (float)l->dir[1], (float)l->dir[2]}, ex[3], ey[3];
-          float a[3] = {fabsf(n[1]) > 0.99f ? 1.0f : 0.0f, fabsf(n[1]) > 0.99f ? 0.0f : 1.0f, 0};
-          cross(a, n, ex), normalize(ex), cross(n, ex, ey);
-          rand2(c, ts, depth, 1, &u1, &u2);
-          for (int k = 0; k < 3; k++)
-            lp[k] += (u1 - 0.5f) * (float)l->size[0] * ex[k] + (u2 - 0.5f) * (float)l->size[1] * ey[k];
-          for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
-          dist = normalize(wi);
-          float cosl = -dot(wi, n);
-          if (cosl <= 0) continue;
-          float pl = dist * dist / ((float)(l->size[0] * l->size[1]) * cosl);
-          wgt = last ? 1.0f : power_heuristic(pl, cos_pdf(&sf, wi));
-          g = 1.0f / pl;
-        } else {
-          for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
-          dist = normalize(wi);
-          g = 1.0f / (dist * dist);
-          if (l->type == WV_LIGHT_SPOT) {
-            float ca = -(wi[0] * (float)l->dir[0] + wi[1] * (float)l->dir[1] + wi[2] * (float)l->dir[2]);
-            float c0 = cosf((float)(l->cone_deg * 3.14159265358979 / 180)),
-                  c1 = cosf((float)((l->cone_deg - l->blend_deg) * 3.14159265358979 / 180));
-            float x = c1 > c0 ? (ca - c0) / (c1 - c0) : (ca >= c0 ? 1.0f : 0.0f);
-            x = fminf(fmaxf(x, 0.0f), 1.0f);
-            g *= x * x * (3 - 2 * x);
-          }
-        }
-        for (int k = 0; k < 3; k++) li[k] = (float)l->color[k] * g;
-        dist *= 0.9999f;
-      }
-      if (maxc(li) <= 0) continue;
-      float f[3];
-      eval_bsdf(&sf, ts, wi, wo, f);
-      if (maxc(f) <= 0) continue;
-      ts->rays++;
-      if (wv_tracer_occluded(w->tracer, org, wi, 0.0f, dist)) continue;
-      for (int k = 0; k < 3; k++) L[k] += thr[k] * f[k] * li[k] * wgt;
-    }
-    if (w->has_env) {
-      float u1, u2, wi[3], le[3], pl;
-      if (depth < CMJ_DEPTHS) {
-        const wv_env_sample *es = &ts->env[depth * c->spp + ts->sample];
-        memcpy(wi, es->d, sizeof wi), memcpy(le, es->rgb, sizeof le), pl = es->pdf;
-      } else {
-        rand2(c, ts, depth, 0, &u1, &u2);
-        pl = wv_envmap_sample(&w->env, u1, u2, wi, le);
-      }
-      if (pl > 0 && maxc(le) > 0) {
-        float f[3];
-        eval_bsdf(&sf, ts, wi, wo, f);
-        if (maxc(f) > 0) {
-          ts->rays++;
-          if (!wv_tracer_occluded(w->tracer, org, wi, 0.0f, INFINITY)) {
-            float wgt = last ? 1.0f : power_heuristic(pl, cos_pdf(&sf, wi));
-            for (int k = 0; k < 3; k++) L[k] += thr[k] * f[k] * le[k] * wgt / pl;
-          }
-        }
-      }
-    }
-    if (last) return;
-    /* bounce: cosine-weighted about the shading normal */
+    env_on = epl > 0 && maxc(ele) > 0;
+  }
+  if (!last) { /* bounce: cosine-weighted about the shading normal */
     float u1, u2;
     rand2(c, ts, depth, 2, &u1, &u2);
     float r = sqrtf(u1), phi = 2 * PI_F * u2, lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(fmaxf(0.0f, 1 - u1));
-    float a[3], bx[3], by[3], wi[3];
+    float a[3], bx[3], by[3];
     a[0] = fabsf(sf.ns[0]) > 0.9f ? 0.0f : 1.0f, a[1] = fabsf(sf.ns[0]) > 0.9f ? 1.0f : 0.0f, a[2] = 0;
     cross(sf.ns, a, bx), normalize(bx), cross(sf.ns, bx, by);
-    for (int k = 0; k < 3; k++) wi[k] = lx * bx[k] + ly * by[k] + lz * sf.ns[k];
-    float pdf = cos_pdf(&sf, wi), f[3];
-    if (pdf <= 0) return;
-    eval_bsdf(&sf, ts, wi, wo, f);
-    for (int k = 0; k < 3; k++) thr[k] *= f[k] / pdf;
-    float q = fminf(0.95f, maxc(thr));
-    if (q <= 0) return;
-    if (depth >= 1) { /* Russian roulette from the third path vertex on */
-      uint64_t h = wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 9), s->seed);
-      if (wv_u01(h) >= q) return;
-      for (int k = 0; k < 3; k++) thr[k] /= q;
-    }
-    memcpy(o, org, sizeof o);
-    memcpy(d, wi, sizeof d);
-    prev_pdf = pdf;
+    for (int k = 0; k < 3; k++) bwi[k] = lx * bx[k] + ly * by[k] + lz * sf.ns[k];
+    bpdf = cos_pdf(&sf, bwi);
   }
+  const float *want[2] = {env_on ? ewi : NULL, bpdf > 0 ? bwi : NULL};
+  eval_bsdf(&sf, ts, 2, want, wo, fb);
+  /* next-event estimation */
+  for (int i = 0; i < s->nlights; i++) {
+    const wv_light3d *l = &s->lights[i];
+    float wi[3], li[3], dist = INFINITY, wgt = 1;
+    if (l->type == WV_LIGHT_DIRECTIONAL) {
+      for (int k = 0; k < 3; k++) wi[k] = (float)l->dir[k], li[k] = (float)l->color[k];
+    } else {
+      float lp[3], g = 1;
+      for (int k = 0; k < 3; k++) lp[k] = (float)l->pos[k];
+      if (l->type == WV_LIGHT_AREA) {
+        float u1, u2, n[3] = {(float)l->dir[0], (float)l->dir[1], (float)l->dir[2]}, ex[3], ey[3];
+        float a[3] = {fabsf(n[1]) > 0.99f ? 1.0f : 0.0f, fabsf(n[1]) > 0.99f ? 0.0f : 1.0f, 0};
+        cross(a, n, ex), normalize(ex), cross(n, ex, ey);
+        rand2(c, ts, depth, 1, &u1, &u2);
+        for (int k = 0; k < 3; k++)
+          lp[k] += (u1 - 0.5f) * (float)l->size[0] * ex[k] + (u2 - 0.5f) * (float)l->size[1] * ey[k];
+        for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
+        dist = normalize(wi);
+        float cosl = -dot(wi, n);
+        if (cosl <= 0) continue;
+        float pl = dist * dist / ((float)(l->size[0] * l->size[1]) * cosl);
+        wgt = last ? 1.0f : power_heuristic(pl, cos_pdf(&sf, wi));
+        g = 1.0f / pl;
+      } else {
+        for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
+        dist = normalize(wi);
+        g = 1.0f / (dist * dist);
+        if (l->type == WV_LIGHT_SPOT) {
+          float ca = -(wi[0] * (float)l->dir[0] + wi[1] * (float)l->dir[1] + wi[2] * (float)l->dir[2]);
+          float c0 = cosf((float)(l->cone_deg * 3.14159265358979 / 180)),
+                c1 = cosf((float)((l->cone_deg - l->blend_deg) * 3.14159265358979 / 180));
+          float x = c1 > c0 ? (ca - c0) / (c1 - c0) : (ca >= c0 ? 1.0f : 0.0f);
+          x = fminf(fmaxf(x, 0.0f), 1.0f);
+          g *= x * x * (3 - 2 * x);
+        }
+      }
+      for (int k = 0; k < 3; k++) li[k] = (float)l->color[k] * g;
+      dist *= 0.9999f;
+    }
+    if (maxc(li) <= 0) continue;
+    float f[1][3];
+    const float *lw[1] = {wi};
+    eval_bsdf(&sf, ts, 1, lw, wo, f);
+    if (maxc(f[0]) <= 0) continue;
+    ts->rays++;
+    if (wv_tracer_occluded(w->tracer, org, wi, 0.0f, dist)) continue;
+    for (int k = 0; k < 3; k++) L[k] += thr[k] * f[0][k] * li[k] * wgt;
+  }
+  if (env_on && maxc(fb[0]) > 0) {
+    ts->rays++;
+    if (!wv_tracer_occluded(w->tracer, org, ewi, 0.0f, INFINITY)) {
+      float wgt = last ? 1.0f : power_heuristic(epl, cos_pdf(&sf, ewi));
+      for (int k = 0; k < 3; k++) L[k] += thr[k] * fb[0][k] * ele[k] * wgt / epl;
+    }
+  }
+  if (last || bpdf <= 0) return 0;
+  for (int k = 0; k < 3; k++) thr[k] *= fb[1][k] / bpdf;
+  float q = fminf(0.95f, maxc(thr));
+  if (q <= 0) return 0;
+  if (depth >= 1) { /* Russian roulette from the third path vertex on */
+    uint64_t h = wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 9), s->seed);
+    if (wv_u01(h) >= q) return 0;
+    for (int k = 0; k < 3; k++) thr[k] /= q;
+  }
+  memcpy(o, org, sizeof org);
+  memcpy(d, bwi, sizeof bwi);
+  p->prev_pdf = bpdf;
+  p->depth++;
+  return 1;
+}
+
+/* Traces the path's bounce ray (o, d), fetching its environment texel meanwhile. */
+static void path_trace(const render_ctx *c, thread_state *ts, path *p) {
+  const wv_world *w = c->w;
+  p->at = (wv_env_at){0, 0};
+  if (w->has_env && p->prev_pdf > 0) p->at = wv_envmap_at(&w->env, p->d); /* its texel arrives while the ray is traced */
+  ts->rays++;
+  p->got = wv_tracer_intersect(w->tracer, p->o, p->d, 0.0f, INFINITY, &p->hit);
+}
+
+/* The stratified numbers of path vertex depth (environment, area light, bounce)
+ * for the samples idx[0 .. m-1], the paths that reach a surface there, and their
+ * environment samples. */
+static void draw_depth(const render_ctx *c, thread_state *ts, int px, int py, int depth, const int *idx, int m) {
+  if (!m || depth >= CMJ_DEPTHS) return;
+  const int spp = c->spp;
+  for (int which = 0; which < 3; which++) {
+    int k = 1 + 3 * depth + which;
+    if (c->need[k])
+      draw_sequence(px, py, spp, c->s->width, wv_mix64(c->s->seed + 0x51ed27ULL * (uint64_t)k), idx, m,
+                    ts->u + (size_t)k * spp);
+  }
+  if (!c->need[1 + 3 * depth]) return;
+  const float(*u)[2] = (const float(*)[2])ts->u + (size_t)(1 + 3 * depth) * spp;
+  for (int i = 0; i < m; i++) ts->ug[i][0] = u[idx[i]][0], ts->ug[i][1] = u[idx[i]][1];
+  wv_envmap_sample_n(&c->w->env, m, (const float(*)[2])ts->ug, ts->eg);
+  for (int i = 0; i < m; i++) ts->env[(size_t)depth * spp + idx[i]] = ts->eg[i];
+}
+
+/* The pixel's spp paths, taken together from vertex to vertex so that each
+ * vertex's stratified numbers and environment samples are drawn, in batches,
+ * only for the paths that reach a surface there; each path is the same as
+ * traced alone, and the mean is summed in sample order. */
+static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, float out[3]) {
+  const wv_scene3d *s = c->s;
+  const wv_world *w = c->w;
+  const int spp = c->spp, K = c->K;
+  path *P = ts->paths;
+  ts->pixel = (uint64_t)py * (uint64_t)s->width + (uint64_t)px;
+  draw_sequence(px, py, spp, s->width, s->seed, NULL, spp, ts->u);
+  for (int j = 0; j < spp; j++) camera_dir(&c->cam, (float)px + ts->u[j][0], (float)py + ts->u[j][1], ts->dir[j]);
+  wv_tracer_intersect_from(w->tracer, c->cam.cpos, (const float(*)[3])ts->dir, spp, ts->hit, ts->got);
+  int m = 0, nyarn = 0;
+  for (int j = 0; j < spp; j++) {
+    path *p = &P[j];
+    memcpy(p->o, c->cam.cpos, sizeof p->o), memcpy(p->d, ts->dir[j], sizeof p->d);
+    p->thr[0] = p->thr[1] = p->thr[2] = 1, p->L[0] = p->L[1] = p->L[2] = 0;
+    p->prev_pdf = 0, p->depth = 0, p->got = ts->got[j], p->at = (wv_env_at){0, 0};
+    ts->rays++;
+    if (!p->got) continue;
+    p->hit = ts->hit[j];
+    ts->idx[m++] = j;
+    if (w->mats[w->material[p->hit.geom]].kind == WV_MAT_FABRIC)
+      for (int k = 0; k < K; k++) ts->yidx[nyarn++] = j * K + k;
+  }
+  draw_depth(c, ts, px, py, 0, ts->idx, m);
+  if (nyarn) draw_sequence(px, py, spp * K, s->width, wv_mix64(s->seed ^ 0x7961726eULL), ts->yidx, nyarn, ts->yarn);
+  /* every path up to what its first bounce ray meets */
+  m = 0;
+  for (int j = 0; j < spp; j++) {
+    ts->sample = j;
+    P[j].alive = path_vertex(c, ts, &P[j]);
+    if (!P[j].alive) continue;
+    path_trace(c, ts, &P[j]);
+    if (P[j].got) ts->idx[m++] = j;
+  }
+  draw_depth(c, ts, px, py, 1, ts->idx, m);
+  /* the rest of each path */
+  double acc[3] = {0, 0, 0};
+  for (int j = 0; j < spp; j++) {
+    ts->sample = j;
+    if (P[j].alive)
+      while (path_vertex(c, ts, &P[j])) path_trace(c, ts, &P[j]);
+    for (int k = 0; k < 3; k++) acc[k] += isfinite(P[j].L[k]) ? P[j].L[k] : 0.0f;
+  }
+  for (int k = 0; k < 3; k++) out[k] = (float)(acc[k] / spp);
 }
 
 wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_scene3d_opts *opt, wv_image *capture,
@@ -451,6 +604,13 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
   float extent = w->scene_radius;
   for (int i = 0; i < 3; i++) extent = fmaxf(extent, fabsf(c.cam.cpos[i]));
   c.eps = 2e-5f * extent;
+  /* the stratified dimensions a path can use: camera; per depth environment, area light, bounce */
+  int area = 0;
+  for (int i = 0; i < s->nlights; i++) area |= s->lights[i].type == WV_LIGHT_AREA;
+  c.need[0] = 1;
+  for (int d = 0; d < CMJ_DEPTHS; d++)
+    c.need[1 + 3 * d] = w->has_env && d <= s->max_bounces, c.need[2 + 3 * d] = area && d <= s->max_bounces,
+                 c.need[3 + 3 * d] = d < s->max_bounces;
   int threads = opt && opt->threads > 0 ? opt->threads : omp_get_max_threads();
   wv_image rad;
   wv_status st = wv_image_alloc(&rad, s->width, s->height, 3, err);
@@ -459,31 +619,32 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     wv_image_free(&rad);
     return st;
   }
+  const size_t spp = (size_t)c.spp, K = (size_t)c.K;
   thread_state *ts = calloc((size_t)threads, sizeof *ts);
   int fail = !ts;
   for (int t = 0; t < threads && !fail; t++) {
-    ts[t].scratch = calloc((size_t)w->nmats, sizeof *ts[t].scratch);
-    ts[t].fpos = malloc(sizeof *ts[t].fpos * (size_t)c.K);
-    ts[t].u = malloc(sizeof *ts[t].u * (size_t)(1 + 3 * CMJ_DEPTHS) * (size_t)c.spp);
-    ts[t].yarn = malloc(sizeof *ts[t].yarn * (size_t)c.spp * (size_t)c.K);
-    ts[t].env = malloc(sizeof *ts[t].env * (size_t)CMJ_DEPTHS * (size_t)c.spp);
-    ts[t].dir = malloc(sizeof *ts[t].dir * (size_t)c.spp);
-    ts[t].hit = malloc(sizeof *ts[t].hit * (size_t)c.spp);
-    ts[t].got = malloc(sizeof *ts[t].got * (size_t)c.spp);
-    fail |= !ts[t].scratch || !ts[t].fpos || !ts[t].u || !ts[t].yarn || !ts[t].env || !ts[t].dir || !ts[t].hit ||
-            !ts[t].got;
+    thread_state *me = &ts[t];
+    me->scratch = calloc((size_t)w->nmats, sizeof *me->scratch);
+    me->fpos = malloc(sizeof *me->fpos * K);
+    me->u = malloc(sizeof *me->u * (1 + 3 * CMJ_DEPTHS) * spp);
+    me->yarn = malloc(sizeof *me->yarn * spp * K);
+    me->env = malloc(sizeof *me->env * CMJ_DEPTHS * spp);
+    me->dir = malloc(sizeof *me->dir * spp);
+    me->hit = malloc(sizeof *me->hit * spp);
+    me->got = malloc(sizeof *me->got * spp);
+    me->paths = malloc(sizeof *me->paths * spp);
+    me->idx = malloc(sizeof *me->idx * spp);
+    me->yidx = malloc(sizeof *me->yidx * spp * K);
+    me->ug = malloc(sizeof *me->ug * spp);
+    me->eg = malloc(sizeof *me->eg * spp);
+    fail |= !me->scratch || !me->fpos || !me->u || !me->yarn || !me->env || !me->dir || !me->hit || !me->got ||
+            !me->paths || !me->idx || !me->yidx || !me->ug || !me->eg;
     for (int m = 0; m < w->nmats && !fail; m++)
       if (w->mats[m].nedits) {
-        fail |= !(ts[t].scratch[m] = malloc(sizeof(wv_fabric)));
-        if (!fail) *ts[t].scratch[m] = *w->mats[m].fab;
+        fail |= !(me->scratch[m] = malloc(sizeof(wv_fabric)));
+        if (!fail) *me->scratch[m] = *w->mats[m].fab;
       }
   }
-  /* the stratified dimensions a path can use: camera; per depth environment, area light, bounce */
-  int need[1 + 3 * CMJ_DEPTHS] = {1}, area = 0;
-  for (int i = 0; i < s->nlights; i++) area |= s->lights[i].type == WV_LIGHT_AREA;
-  for (int d = 0; d < CMJ_DEPTHS; d++)
-    need[1 + 3 * d] = w->has_env && d <= s->max_bounces, need[2 + 3 * d] = area && d <= s->max_bounces,
-                 need[3 + 3 * d] = d < s->max_bounces;
   int rows_done = 0;
   if (!fail) {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
@@ -495,39 +656,19 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
         done = rows_done;
         opt->progress(opt->progress_user, (double)done / s->height);
       }
-      for (int px = 0; px < s->width; px++) {
-        me->pixel = (uint64_t)py * (uint64_t)s->width + (uint64_t)px;
-        for (int k = 0; k < 1 + 3 * CMJ_DEPTHS; k++)
-          if (need[k])
-            draw_sequence(px, py, c.spp, s->width, k ? wv_mix64(s->seed + 0x51ed27ULL * (uint64_t)k) : s->seed,
-                          me->u + (size_t)k * c.spp);
-        draw_sequence(px, py, c.spp * c.K, s->width, wv_mix64(s->seed ^ 0x7961726eULL), me->yarn);
-        for (int d = 0; d < CMJ_DEPTHS; d++)
-          if (need[1 + 3 * d])
-            wv_envmap_sample_n(&w->env, c.spp, (const float(*)[2])me->u + (size_t)(1 + 3 * d) * c.spp,
-                               me->env + (size_t)d * c.spp);
-        for (int j = 0; j < c.spp; j++) camera_dir(&c.cam, (float)px + me->u[j][0], (float)py + me->u[j][1], me->dir[j]);
-        wv_tracer_intersect_from(w->tracer, c.cam.cpos, (const float(*)[3])me->dir, c.spp, me->hit, me->got);
-        double acc[3] = {0, 0, 0};
-        for (int j = 0; j < c.spp; j++) {
-          me->sample = j;
-          float L[3];
-          trace_path(&c, me, c.cam.cpos, me->dir[j], &me->hit[j], me->got[j], L);
-          for (int k = 0; k < 3; k++) acc[k] += isfinite(L[k]) ? L[k] : 0.0f;
-        }
-        float *out = wv_image_px(&rad, px, py);
-        for (int k = 0; k < 3; k++) out[k] = (float)(acc[k] / c.spp);
-      }
+      for (int px = 0; px < s->width; px++) render_pixel(&c, me, px, py, wv_image_px(&rad, px, py));
 #pragma omp atomic update
       rows_done++;
     }
   }
   double rays = 0, shades = 0;
   for (int t = 0; t < threads && ts; t++) {
-    rays += ts[t].rays, shades += ts[t].shades;
-    for (int m = 0; m < w->nmats && ts[t].scratch; m++) free(ts[t].scratch[m]);
-    free(ts[t].scratch), free(ts[t].fpos), free(ts[t].u), free(ts[t].yarn), free(ts[t].env);
-    free(ts[t].dir), free(ts[t].hit), free(ts[t].got);
+    thread_state *me = &ts[t];
+    rays += me->rays, shades += me->shades;
+    for (int m = 0; m < w->nmats && me->scratch; m++) free(me->scratch[m]);
+    free(me->scratch), free(me->fpos), free(me->u), free(me->yarn), free(me->env);
+    free(me->dir), free(me->hit), free(me->got), free(me->paths), free(me->idx), free(me->yidx), free(me->ug);
+    free(me->eg);
   }
   free(ts);
   if (fail) {
