@@ -128,7 +128,11 @@ static float normalize(float v[3]) {
   if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
   return l;
 }
-static float maxc(const float c[3]) { return fmaxf(c[0], fmaxf(c[1], c[2])); }
+/* fmaxf and fminf as the comparisons they are (a NaN loses to a number), inline:
+ * the baseline build calls libm for them. */
+static float max2(float a, float b) { return a >= b || b != b ? a : b; }
+static float min2(float a, float b) { return a <= b || b != b ? a : b; }
+static float maxc(const float c[3]) { return max2(c[0], max2(c[1], c[2])); }
 
 /* Edit values at UV (u, v) of a fabric material. */
 static void eval_edits(const wv_world_material *m, float u, float v, fabric_edit *e) {
@@ -206,6 +210,7 @@ typedef struct {
   float (*yarn)[2];    /* spp x K: the yarn positions */
   wv_env_sample *env;  /* CMJ_DEPTHS x spp: the environment's samples of the numbers in u */
   float (*dir)[3];     /* spp camera rays */
+  float (*ydir)[3];    /* K: the rays through a camera ray's yarn positions */
   wv_trace_hit *hit;   /* spp: where they meet the scene */
   int *got;            /* spp: whether they do */
   path *paths;         /* spp */
@@ -228,11 +233,24 @@ static void rand2(const render_ctx *c, thread_state *ts, int depth, int which, f
   *u1 = wv_u01(h), *u2 = (float)((h >> 16) & 0xffffff) * (1.0f / 16777216.0f);
 }
 
-static void camera_dir(const wv_camera_rig *r, float x, float y, float d[3]) {
-  float ndx = (2.0f * x / (float)r->width - 1.0f) * r->tan_half * r->aspect;
-  float ndy = (1.0f - 2.0f * y / (float)r->height) * r->tan_half;
-  for (int i = 0; i < 3; i++) d[i] = r->fwd[i] + ndx * r->right[i] + ndy * r->up[i];
-  normalize(d);
+/* Unit directions of the camera rays through the points s[0 .. n-1] (offsets in
+ * [0, 1)^2) of pixel (px, py), eight at a time. */
+WV_SIMD_CLONES static void camera_dirs(const wv_camera_rig *r, int px, int py, int n, const float (*s)[2],
+                                       float (*d)[3]) {
+  for (int j0 = 0; j0 < n; j0 += 8) {
+    wv_f8 x, y, v[3];
+    for (int k = 0; k < 8; k++) {
+      int j = j0 + k < n ? j0 + k : j0; /* lanes past the end: a copy, result dropped */
+      x[k] = (float)px + s[j][0], y[k] = (float)py + s[j][1];
+    }
+    wv_f8 ndx = (2.0f * x / (float)r->width - 1.0f) * r->tan_half * r->aspect;
+    wv_f8 ndy = (1.0f - 2.0f * y / (float)r->height) * r->tan_half;
+    for (int i = 0; i < 3; i++) v[i] = r->fwd[i] + ndx * r->right[i] + ndy * r->up[i];
+    wv_f8 l = wv_sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    l = wv_sel(l > 0.0f, l, wv_splat8(1.0f)); /* normalize()'s operations */
+    for (int i = 0; i < 3; i++) v[i] = v[i] / l;
+    for (int k = 0; k < 8 && j0 + k < n; k++) d[j0 + k][0] = v[0][k], d[j0 + k][1] = v[1][k], d[j0 + k][2] = v[2][k];
+  }
 }
 
 /* UV change per unit move within the plane of triangle ix: rows du/dP and dv/dP
@@ -263,17 +281,12 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   for (int i = 0; i < 3; i++) {
     sf->p[i] = o[i] + hit->t * d[i];
     e1[i] = p1[i] - p0[i], e2[i] = p2[i] - p0[i];
-    sf->ns[i] = 0, sf->t[i] = 0;
+    sf->ns[i] = 0;
   }
   cross(e1, e2, sf->ng);
   normalize(sf->ng);
-  float w_sign = 1;
   for (int k = 0; k < 3; k++)
-    for (int i = 0; i < 3; i++) {
-      sf->ns[i] += bw[k] * m->nrm[3 * ix[k] + i];
-      if (m->tan) sf->t[i] += bw[k] * m->tan[4 * ix[k] + i];
-    }
-  if (m->tan) w_sign = m->tan[4 * ix[0] + 3];
+    for (int i = 0; i < 3; i++) sf->ns[i] += bw[k] * m->nrm[3 * ix[k] + i];
   if (normalize(sf->ns) == 0.0f) memcpy(sf->ns, sf->ng, sizeof sf->ns);
   if (dot(sf->ns, sf->ng) < 0) /* normals wound against the triangle: trust the normals' side */
     for (int i = 0; i < 3; i++) sf->ng[i] = -sf->ng[i];
@@ -286,6 +299,13 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   sf->nfpos = 0;
   if (sf->mat->kind != WV_MAT_FABRIC) return;
   /* fabric frame: x along the interpolated u tangent, made orthogonal to ns; y = +-(ns x t) toward +v */
+  float w_sign = 1;
+  for (int i = 0; i < 3; i++) sf->t[i] = 0;
+  if (m->tan) {
+    for (int k = 0; k < 3; k++)
+      for (int i = 0; i < 3; i++) sf->t[i] += bw[k] * m->tan[4 * ix[k] + i];
+    w_sign = m->tan[4 * ix[0] + 3];
+  }
   float tn = dot(sf->t, sf->ns);
   for (int i = 0; i < 3; i++) sf->t[i] -= tn * sf->ns[i];
   if (normalize(sf->t) == 0.0f) {
@@ -314,10 +334,10 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   for (int i = 0; i < 3; i++) rel[i] = sf->p[i] - r->cpos[i];
   float pn = dot(rel, sf->ng); /* camera to the plane, along its normal */
   int px = (int)(ts->pixel % (uint64_t)r->width), py = (int)(ts->pixel / (uint64_t)r->width);
+  float(*ydir)[3] = ts->ydir;
+  camera_dirs(r, px, py, c->K, (const float(*)[2])ts->yarn + (size_t)ts->sample * c->K, ydir);
   for (int k = 0; k < c->K; k++) {
-    float sx = ts->yarn[ts->sample * c->K + k][0], sy = ts->yarn[ts->sample * c->K + k][1], dd[3], u = sf->u,
-          v = sf->v;
-    camera_dir(r, (float)px + sx, (float)py + sy, dd);
+    float *dd = ydir[k], u = sf->u, v = sf->v;
     float den = dot(dd, sf->ng);
     if (fabsf(den) > 1e-6f && pn / den > 0) {
       float q[3]; /* from the hit to where this sample's ray meets the plane */
@@ -428,7 +448,7 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
   if (!last) { /* bounce: cosine-weighted about the shading normal */
     float u1, u2;
     rand2(c, ts, depth, 2, &u1, &u2);
-    float r = sqrtf(u1), phi = 2 * PI_F * u2, lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(fmaxf(0.0f, 1 - u1));
+    float r = sqrtf(u1), phi = 2 * PI_F * u2, lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(max2(0.0f, 1 - u1));
     float a[3], bx[3], by[3];
     a[0] = fabsf(sf.ns[0]) > 0.9f ? 0.0f : 1.0f, a[1] = fabsf(sf.ns[0]) > 0.9f ? 1.0f : 0.0f, a[2] = 0;
     cross(sf.ns, a, bx), normalize(bx), cross(sf.ns, bx, by);
@@ -494,7 +514,7 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
   }
   if (last || bpdf <= 0) return 0;
   for (int k = 0; k < 3; k++) thr[k] *= fb[1][k] / bpdf;
-  float q = fminf(0.95f, maxc(thr));
+  float q = min2(0.95f, maxc(thr));
   if (q <= 0) return 0;
   if (depth >= 1) { /* Russian roulette from the third path vertex on */
     uint64_t h = wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 9), s->seed);
@@ -547,7 +567,7 @@ static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, 
   path *P = ts->paths;
   ts->pixel = (uint64_t)py * (uint64_t)s->width + (uint64_t)px;
   draw_sequence(px, py, spp, s->width, s->seed, NULL, spp, ts->u);
-  for (int j = 0; j < spp; j++) camera_dir(&c->cam, (float)px + ts->u[j][0], (float)py + ts->u[j][1], ts->dir[j]);
+  camera_dirs(&c->cam, px, py, spp, (const float(*)[2])ts->u, ts->dir);
   wv_tracer_intersect_from(w->tracer, c->cam.cpos, (const float(*)[3])ts->dir, spp, ts->hit, ts->got);
   int m = 0, nyarn = 0;
   for (int j = 0; j < spp; j++) {
@@ -630,6 +650,7 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     me->yarn = malloc(sizeof *me->yarn * spp * K);
     me->env = malloc(sizeof *me->env * CMJ_DEPTHS * spp);
     me->dir = malloc(sizeof *me->dir * spp);
+    me->ydir = malloc(sizeof *me->ydir * K);
     me->hit = malloc(sizeof *me->hit * spp);
     me->got = malloc(sizeof *me->got * spp);
     me->paths = malloc(sizeof *me->paths * spp);
@@ -637,7 +658,7 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     me->yidx = malloc(sizeof *me->yidx * spp * K);
     me->ug = malloc(sizeof *me->ug * spp);
     me->eg = malloc(sizeof *me->eg * spp);
-    fail |= !me->scratch || !me->fpos || !me->u || !me->yarn || !me->env || !me->dir || !me->hit || !me->got ||
+    fail |= !me->scratch || !me->fpos || !me->u || !me->yarn || !me->env || !me->dir || !me->ydir || !me->hit || !me->got ||
             !me->paths || !me->idx || !me->yidx || !me->ug || !me->eg;
     for (int m = 0; m < w->nmats && !fail; m++)
       if (w->mats[m].nedits) {
@@ -667,7 +688,7 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     rays += me->rays, shades += me->shades;
     for (int m = 0; m < w->nmats && me->scratch; m++) free(me->scratch[m]);
     free(me->scratch), free(me->fpos), free(me->u), free(me->yarn), free(me->env);
-    free(me->dir), free(me->hit), free(me->got), free(me->paths), free(me->idx), free(me->yidx), free(me->ug);
+    free(me->dir), free(me->ydir), free(me->hit), free(me->got), free(me->paths), free(me->idx), free(me->yidx), free(me->ug);
     free(me->eg);
   }
   free(ts);
