@@ -198,6 +198,8 @@ typedef struct {
   int got, alive;   /* the ray meets the scene (at hit); the path goes on */
   wv_trace_hit hit;
   wv_env_at at;     /* the environment's texel along a bounce ray */
+  int shadow;       /* a shadow ray toward the environment's sample waits (path_vertex's defer) */
+  float sh_o[3], sh_d[3], sh_add[3]; /* it, and what it adds to L when nothing blocks it */
 } path;
 
 /* Per thread: scratch, counters, the current pixel's paths and their stratified
@@ -209,7 +211,10 @@ typedef struct {
   float (*u)[2];       /* (1 + 3 CMJ_DEPTHS) x spp: camera; per depth: environment, area light, bounce */
   float (*yarn)[2];    /* spp x K: the yarn positions */
   wv_env_sample *env;  /* CMJ_DEPTHS x spp: the environment's samples of the numbers in u */
-  float (*dir)[3];     /* spp camera rays */
+  float (*dir)[3];     /* spp: camera rays, then the bounce rays traced together */
+  float (*org)[3];     /* spp: the bounce rays' origins */
+  float (*sh_o)[3], (*sh_d)[3], *sh_t; /* spp: the shadow rays traced together */
+  int *sh_idx, *sh_occ;                /* spp: their paths, and whether they are blocked */
   float (*ydir)[3];    /* K: the rays through a camera ray's yarn positions */
   wv_trace_hit *hit;   /* spp: where they meet the scene */
   int *got;            /* spp: whether they do */
@@ -270,23 +275,30 @@ static void uv_gradient(const wv_mesh *m, const uint32_t *ix, float gu[3], float
   }
 }
 
+void wv_faces_make(const wv_mesh *m, wv_face *out) {
+  for (int t = 0; t < m->nt; t++) {
+    const uint32_t *ix = m->idx + 3 * (size_t)t;
+    const float *p0 = m->pos + 3 * ix[0], *p1 = m->pos + 3 * ix[1], *p2 = m->pos + 3 * ix[2];
+    float e1[3], e2[3];
+    for (int i = 0; i < 3; i++) e1[i] = p1[i] - p0[i], e2[i] = p2[i] - p0[i];
+    wv_face *f = &out[t];
+    memset(f, 0, sizeof *f);
+    cross(e1, e2, f->ng);
+    normalize(f->ng);
+    for (int k = 0; k < 3; k++) memcpy(f->nrm[k], m->nrm + 3 * ix[k], sizeof f->nrm[k]);
+  }
+}
+
 /* Fills the surface at a hit; wo points back along the ray. */
 static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_hit *hit, const float o[3],
                          const float d[3], int camera, surface *sf) {
   const wv_mesh *m = &c->w->meshes[hit->geom];
   const uint32_t *ix = m->idx + 3 * (size_t)hit->prim;
   float b0 = 1 - hit->b1 - hit->b2, bw[3] = {b0, hit->b1, hit->b2};
-  const float *p0 = m->pos + 3 * ix[0], *p1 = m->pos + 3 * ix[1], *p2 = m->pos + 3 * ix[2];
-  float e1[3], e2[3];
-  for (int i = 0; i < 3; i++) {
-    sf->p[i] = o[i] + hit->t * d[i];
-    e1[i] = p1[i] - p0[i], e2[i] = p2[i] - p0[i];
-    sf->ns[i] = 0;
-  }
-  cross(e1, e2, sf->ng);
-  normalize(sf->ng);
+  const wv_face *fc = &c->w->faces[hit->geom][hit->prim];
+  for (int i = 0; i < 3; i++) sf->p[i] = o[i] + hit->t * d[i], sf->ng[i] = fc->ng[i], sf->ns[i] = 0;
   for (int k = 0; k < 3; k++)
-    for (int i = 0; i < 3; i++) sf->ns[i] += bw[k] * m->nrm[3 * ix[k] + i];
+    for (int i = 0; i < 3; i++) sf->ns[i] += bw[k] * fc->nrm[k][i];
   if (normalize(sf->ns) == 0.0f) memcpy(sf->ns, sf->ng, sizeof sf->ns);
   if (dot(sf->ns, sf->ng) < 0) /* normals wound against the triangle: trust the normals' side */
     for (int i = 0; i < 3; i++) sf->ng[i] = -sf->ng[i];
@@ -402,7 +414,7 @@ static int hit_area(const wv_light3d *l, const float o[3], const float d[3], flo
 /* What the path's ray (o, d) meets at vertex p->depth (p->got, p->hit): the light
  * it sees there and, when the path goes on, the next ray in (o, d). Returns 0
  * when the path ends. ts->sample is the path's sample. */
-static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
+static int path_vertex(const render_ctx *c, thread_state *ts, path *p, int defer) {
   const wv_scene3d *s = c->s;
   const wv_world *w = c->w;
   const int depth = p->depth;
@@ -507,8 +519,12 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
   }
   if (env_on && maxc(fb[0]) > 0) {
     ts->rays++;
-    if (!wv_tracer_occluded(w->tracer, org, ewi, 0.0f, INFINITY)) {
-      float wgt = last ? 1.0f : power_heuristic(epl, cos_pdf(&sf, ewi));
+    float wgt = last ? 1.0f : power_heuristic(epl, cos_pdf(&sf, ewi));
+    if (defer) {
+      p->shadow = 1;
+      memcpy(p->sh_o, org, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
+      for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * wgt / epl;
+    } else if (!wv_tracer_occluded(w->tracer, org, ewi, 0.0f, INFINITY)) {
       for (int k = 0; k < 3; k++) L[k] += thr[k] * fb[0][k] * ele[k] * wgt / epl;
     }
   }
@@ -586,20 +602,40 @@ static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, 
   if (nyarn) draw_sequence(px, py, spp * K, s->width, wv_mix64(s->seed ^ 0x7961726eULL), ts->yidx, nyarn, ts->yarn);
   /* every path up to what its first bounce ray meets */
   m = 0;
+  int nsh = 0;
   for (int j = 0; j < spp; j++) {
     ts->sample = j;
-    P[j].alive = path_vertex(c, ts, &P[j]);
+    P[j].shadow = 0;
+    P[j].alive = path_vertex(c, ts, &P[j], 1);
+    if (P[j].shadow) {
+      memcpy(ts->sh_o[nsh], P[j].sh_o, sizeof P[j].sh_o), memcpy(ts->sh_d[nsh], P[j].sh_d, sizeof P[j].sh_d);
+      ts->sh_t[nsh] = INFINITY, ts->sh_idx[nsh++] = j;
+    }
     if (!P[j].alive) continue;
-    path_trace(c, ts, &P[j]);
-    if (P[j].got) ts->idx[m++] = j;
+    memcpy(ts->dir[m], P[j].d, sizeof P[j].d), memcpy(ts->org[m], P[j].o, sizeof P[j].o);
+    ts->idx[m++] = j;
   }
+  wv_tracer_occluded_n(w->tracer, (const float(*)[3])ts->sh_o, (const float(*)[3])ts->sh_d, ts->sh_t, nsh, ts->sh_occ);
+  for (int i = 0; i < nsh; i++)
+    if (!ts->sh_occ[i])
+      for (int k = 0; k < 3; k++) P[ts->sh_idx[i]].L[k] += P[ts->sh_idx[i]].sh_add[k];
+  ts->rays += m;
+  wv_tracer_intersect_n(w->tracer, (const float(*)[3])ts->org, (const float(*)[3])ts->dir, m, ts->hit, ts->got);
+  int m1 = 0;
+  for (int i = 0; i < m; i++) { /* the environment's texel of a bounce ray that escapes, read later */
+    path *p = &P[ts->idx[i]];
+    p->got = ts->got[i], p->at = (wv_env_at){0, 0};
+    if (p->got) p->hit = ts->hit[i], ts->idx[m1++] = ts->idx[i];
+    else if (w->has_env && p->prev_pdf > 0) p->at = wv_envmap_at(&w->env, p->d);
+  }
+  m = m1;
   draw_depth(c, ts, px, py, 1, ts->idx, m);
   /* the rest of each path */
   double acc[3] = {0, 0, 0};
   for (int j = 0; j < spp; j++) {
     ts->sample = j;
     if (P[j].alive)
-      while (path_vertex(c, ts, &P[j])) path_trace(c, ts, &P[j]);
+      while (path_vertex(c, ts, &P[j], 0)) path_trace(c, ts, &P[j]);
     for (int k = 0; k < 3; k++) acc[k] += isfinite(P[j].L[k]) ? P[j].L[k] : 0.0f;
   }
   for (int k = 0; k < 3; k++) out[k] = (float)(acc[k] / spp);
@@ -650,6 +686,10 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     me->yarn = malloc(sizeof *me->yarn * spp * K);
     me->env = malloc(sizeof *me->env * CMJ_DEPTHS * spp);
     me->dir = malloc(sizeof *me->dir * spp);
+    me->org = malloc(sizeof *me->org * spp);
+    me->sh_o = malloc(sizeof *me->sh_o * spp), me->sh_d = malloc(sizeof *me->sh_d * spp);
+    me->sh_t = malloc(sizeof *me->sh_t * spp), me->sh_idx = malloc(sizeof *me->sh_idx * spp);
+    me->sh_occ = malloc(sizeof *me->sh_occ * spp);
     me->ydir = malloc(sizeof *me->ydir * K);
     me->hit = malloc(sizeof *me->hit * spp);
     me->got = malloc(sizeof *me->got * spp);
@@ -658,8 +698,9 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     me->yidx = malloc(sizeof *me->yidx * spp * K);
     me->ug = malloc(sizeof *me->ug * spp);
     me->eg = malloc(sizeof *me->eg * spp);
-    fail |= !me->scratch || !me->fpos || !me->u || !me->yarn || !me->env || !me->dir || !me->ydir || !me->hit || !me->got ||
-            !me->paths || !me->idx || !me->yidx || !me->ug || !me->eg;
+    fail |= !me->scratch || !me->fpos || !me->u || !me->yarn || !me->env || !me->dir || !me->org || !me->sh_o ||
+            !me->sh_d || !me->sh_t || !me->sh_idx || !me->sh_occ || !me->ydir || !me->hit || !me->got || !me->paths ||
+            !me->idx || !me->yidx || !me->ug || !me->eg;
     for (int m = 0; m < w->nmats && !fail; m++)
       if (w->mats[m].nedits) {
         fail |= !(me->scratch[m] = malloc(sizeof(wv_fabric)));
@@ -688,7 +729,7 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     rays += me->rays, shades += me->shades;
     for (int m = 0; m < w->nmats && me->scratch; m++) free(me->scratch[m]);
     free(me->scratch), free(me->fpos), free(me->u), free(me->yarn), free(me->env);
-    free(me->dir), free(me->ydir), free(me->hit), free(me->got), free(me->paths), free(me->idx), free(me->yidx), free(me->ug);
+    free(me->dir), free(me->org), free(me->sh_o), free(me->sh_d), free(me->sh_t), free(me->sh_idx), free(me->sh_occ), free(me->ydir), free(me->hit), free(me->got), free(me->paths), free(me->idx), free(me->yidx), free(me->ug);
     free(me->eg);
   }
   free(ts);

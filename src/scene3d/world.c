@@ -16,6 +16,7 @@
 void wv_world_free(wv_world *w) {
   if (!w) return;
   for (int i = 0; i < w->nobjects; i++) wv_mesh_free(&w->meshes[i]);
+  for (int i = 0; i < w->nobjects && w->faces; i++) free(w->faces[i]);
   for (int i = 0; i < w->nmats; i++) {
     free(w->mats[i].fab);
     free(w->mats[i].edits);
@@ -24,7 +25,7 @@ void wv_world_free(wv_world *w) {
   free(w->images);
   wv_tracer_free(w->tracer);
   wv_envmap_free(&w->env);
-  free(w->meshes), free(w->material), free(w->mats);
+  free(w->meshes), free(w->faces), free(w->material), free(w->mats);
   free(w);
 }
 
@@ -189,10 +190,11 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
   wv_status st = WV_OK;
   if (!w) return wv_fail(err, WV_ERR_NOMEM, "out of memory");
   w->meshes = calloc((size_t)s->nobjects, sizeof *w->meshes);
+  w->faces = calloc((size_t)s->nobjects, sizeof *w->faces);
   w->material = calloc((size_t)s->nobjects, sizeof *w->material);
   w->mats = calloc((size_t)s->nmaterials, sizeof *w->mats);
   w->images = s->nedits ? calloc(2 * (size_t)s->nedits, sizeof *w->images) : NULL;
-  if (!w->meshes || !w->material || !w->mats || (s->nedits && !w->images)) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  if (!w->meshes || !w->faces || !w->material || !w->mats || (s->nedits && !w->images)) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
   /* one budget for everything the job holds: maps, meshes, the tracer, the environment */
   budget b = {0, s->mesh_limit_bytes ? s->mesh_limit_bytes : (size_t)WV_MESH_DEFAULT_LIMIT_MB << 20};
   for (int i = 0; i < s->nmaterials && !st; i++, w->nmats++)
@@ -207,8 +209,12 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
   for (int i = 0; i < s->nobjects && !st; i++, w->nobjects++) {
     w->material[i] = s->objects[i].material;
     st = make_mesh(s, &s->objects[i], b.limit - b.used, &w->meshes[i], err);
-    if (!st) st = spend(&b, wv_mesh_bytes(w->meshes[i].nv, w->meshes[i].nt),
-                        s->objects[i].path ? s->objects[i].path : "a built-in shape", err);
+    const char *what = s->objects[i].path ? s->objects[i].path : "a built-in shape";
+    if (!st) st = spend(&b, wv_mesh_bytes(w->meshes[i].nv, w->meshes[i].nt), what, err);
+    if (!st) st = spend(&b, sizeof(wv_face) * (size_t)w->meshes[i].nt, what, err);
+    if (!st && !(w->faces[i] = malloc(sizeof(wv_face) * (size_t)w->meshes[i].nt)))
+      st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+    if (!st) wv_faces_make(&w->meshes[i], w->faces[i]);
   }
   if (!st) {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};

@@ -34,8 +34,20 @@ typedef struct {
   int grey, colour;
 } wv_world_image;
 
+/* What a hit on a triangle reads first, in one cache line: its unit geometric
+ * normal (the edges' cross product, normalised) and its corners' normals. */
+typedef struct {
+  float ng[3];
+  float nrm[3][3];
+  float pad[4];
+} wv_face;
+
+/* The faces of mesh m (nt of them) into out. */
+void wv_faces_make(const wv_mesh *m, wv_face *out);
+
 struct wv_world {
   wv_mesh *meshes; /* one per object */
+  wv_face **faces; /* per object, per triangle */
   int *material;   /* per object */
   int nobjects;
   wv_world_material *mats;

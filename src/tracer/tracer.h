@@ -34,6 +34,15 @@ int wv_tracer_intersect(const wv_tracer *t, const float o[3], const float d[3], 
  * Returns the number of hits. Thread-safe. */
 int wv_tracer_intersect_from(const wv_tracer *t, const float o[3], const float (*d)[3], int n, wv_trace_hit *hit,
                              int *got);
+/* Closest hits of n rays from o[j] along d[j] (0 < t), traced together (one
+ * Embree stream): got[j] and hit[j] as wv_tracer_intersect_from gives them.
+ * Returns the number of hits. Thread-safe. */
+int wv_tracer_intersect_n(const wv_tracer *t, const float (*o)[3], const float (*d)[3], int n, wv_trace_hit *hit,
+                          int *got);
+/* occ[j] = wv_tracer_occluded(t, o[j], d[j], 0, tmax[j]) for n rays traced
+ * together (one Embree stream). Thread-safe. */
+void wv_tracer_occluded_n(const wv_tracer *t, const float (*o)[3], const float (*d)[3], const float *tmax, int n,
+                          int *occ);
 /* 1 when anything lies between tmin and tmax. Thread-safe. */
 int wv_tracer_occluded(const wv_tracer *t, const float o[3], const float d[3], float tmin, float tmax);
 
