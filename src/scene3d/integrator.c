@@ -275,7 +275,7 @@ static void uv_gradient(const wv_mesh *m, const uint32_t *ix, float gu[3], float
   }
 }
 
-void wv_faces_make(const wv_mesh *m, wv_face *out) {
+void wv_faces_make(const wv_mesh *m, wv_face *out, wv_uv_grad *grad) {
   for (int t = 0; t < m->nt; t++) {
     const uint32_t *ix = m->idx + 3 * (size_t)t;
     const float *p0 = m->pos + 3 * ix[0], *p1 = m->pos + 3 * ix[1], *p2 = m->pos + 3 * ix[2];
@@ -286,6 +286,7 @@ void wv_faces_make(const wv_mesh *m, wv_face *out) {
     cross(e1, e2, f->ng);
     normalize(f->ng);
     for (int k = 0; k < 3; k++) memcpy(f->nrm[k], m->nrm + 3 * ix[k], sizeof f->nrm[k]);
+    if (grad) uv_gradient(m, ix, grad[t].gu, grad[t].gv);
   }
 }
 
@@ -341,8 +342,8 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   /* Sub-pixel yarns: K positions spread over the pixel (a stratified set of spp x K
    * per pixel, K of them for this ray), where their camera rays meet this triangle's plane. */
   const wv_camera_rig *r = &c->cam;
-  float gu[3], gv[3], rel[3];
-  uv_gradient(m, ix, gu, gv);
+  const float *gu = c->w->uv_grad[hit->geom][hit->prim].gu, *gv = c->w->uv_grad[hit->geom][hit->prim].gv;
+  float rel[3];
   for (int i = 0; i < 3; i++) rel[i] = sf->p[i] - r->cpos[i];
   float pn = dot(rel, sf->ng); /* camera to the plane, along its normal */
   int px = (int)(ts->pixel % (uint64_t)r->width), py = (int)(ts->pixel / (uint64_t)r->width);
