@@ -201,10 +201,10 @@ typedef struct {
   float o[3], d[3], thr[3], L[3];
   float prev_pdf;   /* bounce pdf of the ray (o, d); 0 for the camera ray (no MIS) */
   int depth;        /* the path vertex the ray leads to */
-  int got, alive;   /* the ray meets the scene (at hit); the path goes on */
+  int got;          /* the ray meets the scene, at hit */
   wv_trace_hit hit;
   wv_env_at at;     /* the environment's texel along a bounce ray */
-  int shadow;       /* a shadow ray toward the environment's sample waits (path_vertex's defer) */
+  int shadow;       /* a shadow ray toward the environment's sample waits (render_pixel traces it) */
   float sh_o[3], sh_d[3], sh_add[3]; /* it, and what it adds to L when nothing blocks it */
 } path;
 
@@ -225,7 +225,8 @@ typedef struct {
   wv_trace_hit *hit;   /* spp: where they meet the scene */
   int *got;            /* spp: whether they do */
   path *paths;         /* spp */
-  int *idx;            /* spp: the paths that reach a surface at a vertex */
+  int *act;            /* spp: the paths that reach a vertex */
+  int *idx;            /* spp: of them, those that reach a surface there */
   int *yidx;           /* spp x K: the yarn positions wanted */
   float (*ug)[2];      /* spp: the numbers of the environment samples wanted */
   wv_env_sample *eg;   /* spp: their samples */
@@ -418,10 +419,12 @@ static int hit_area(const wv_light3d *l, const float o[3], const float d[3], flo
   return 1;
 }
 
-/* What the path's ray (o, d) meets at vertex p->depth (p->got, p->hit): the light
- * it sees there and, when the path goes on, the next ray in (o, d). Returns 0
- * when the path ends. ts->sample is the path's sample. */
-static int path_vertex(const render_ctx *c, thread_state *ts, path *p, int defer) {
+/* What the path's ray (o, d) meets at vertex p->depth (p->got, p->hit, p->at):
+ * the light it sees there, its shadow ray toward the environment's sample (left
+ * in p for the caller to trace, with what it adds when unblocked) and, when the
+ * path goes on, the next ray in (o, d). Returns 0 when the path ends.
+ * ts->sample is the path's sample. */
+static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
   const wv_scene3d *s = c->s;
   const wv_world *w = c->w;
   const int depth = p->depth;
@@ -527,13 +530,9 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p, int defer
   if (env_on && maxc(fb[0]) > 0) {
     ts->rays++;
     float wgt = last ? 1.0f : power_heuristic(epl, cos_pdf(&sf, ewi));
-    if (defer) {
-      p->shadow = 1;
-      memcpy(p->sh_o, org, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
-      for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * wgt / epl;
-    } else if (!wv_tracer_occluded(w->tracer, org, ewi, 0.0f, INFINITY)) {
-      for (int k = 0; k < 3; k++) L[k] += thr[k] * fb[0][k] * ele[k] * wgt / epl;
-    }
+    p->shadow = 1;
+    memcpy(p->sh_o, org, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
+    for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * wgt / epl;
   }
   if (last || bpdf <= 0) return 0;
   for (int k = 0; k < 3; k++) thr[k] *= fb[1][k] / bpdf;
@@ -549,15 +548,6 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p, int defer
   p->prev_pdf = bpdf;
   p->depth++;
   return 1;
-}
-
-/* Traces the path's bounce ray (o, d), fetching its environment texel meanwhile. */
-static void path_trace(const render_ctx *c, thread_state *ts, path *p) {
-  const wv_world *w = c->w;
-  p->at = (wv_env_at){0, 0};
-  if (w->has_env && p->prev_pdf > 0) p->at = wv_envmap_at(&w->env, p->d); /* its texel arrives while the ray is traced */
-  ts->rays++;
-  p->got = wv_tracer_intersect(w->tracer, p->o, p->d, 0.0f, INFINITY, &p->hit);
 }
 
 /* The stratified numbers of path vertex depth (environment, area light, bounce)
@@ -579,10 +569,11 @@ static void draw_depth(const render_ctx *c, thread_state *ts, int px, int py, in
   for (int i = 0; i < m; i++) ts->env[(size_t)depth * spp + idx[i]] = ts->eg[i];
 }
 
-/* The pixel's spp paths, taken together from vertex to vertex so that each
- * vertex's stratified numbers and environment samples are drawn, in batches,
- * only for the paths that reach a surface there; each path is the same as
- * traced alone, and the mean is summed in sample order. */
+/* The pixel's spp paths, taken together from vertex to vertex: each vertex's
+ * stratified numbers and environment samples are drawn, in batches, only for the
+ * paths that reach a surface there, and the paths' shadow rays toward the
+ * environment and their bounce rays are traced as streams. Each path is the same
+ * as traced alone, and the mean is summed in sample order. */
 static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, float out[3]) {
   const wv_scene3d *s = c->s;
   const wv_world *w = c->w;
@@ -592,59 +583,56 @@ static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, 
   draw_sequence(px, py, spp, s->width, s->seed, NULL, spp, ts->u);
   camera_dirs(&c->cam, px, py, spp, (const float(*)[2])ts->u, ts->dir);
   wv_tracer_intersect_from(w->tracer, c->cam.cpos, (const float(*)[3])ts->dir, spp, ts->hit, ts->got);
-  int m = 0, nyarn = 0;
+  int nyarn = 0;
   for (int j = 0; j < spp; j++) {
     path *p = &P[j];
     memcpy(p->o, c->cam.cpos, sizeof p->o), memcpy(p->d, ts->dir[j], sizeof p->d);
     p->thr[0] = p->thr[1] = p->thr[2] = 1, p->L[0] = p->L[1] = p->L[2] = 0;
     p->prev_pdf = 0, p->depth = 0, p->got = ts->got[j], p->at = (wv_env_at){0, 0};
-    ts->rays++;
+    ts->act[j] = j;
     if (!p->got) continue;
     p->hit = ts->hit[j];
-    ts->idx[m++] = j;
     if (w->mats[w->material[p->hit.geom]].kind == WV_MAT_FABRIC)
       for (int k = 0; k < K; k++) ts->yidx[nyarn++] = j * K + k;
   }
-  draw_depth(c, ts, px, py, 0, ts->idx, m);
+  ts->rays += spp;
   if (nyarn) draw_sequence(px, py, spp * K, s->width, wv_mix64(s->seed ^ 0x7961726eULL), ts->yidx, nyarn, ts->yarn);
-  /* every path up to what its first bounce ray meets */
-  m = 0;
-  int nsh = 0;
-  for (int j = 0; j < spp; j++) {
-    ts->sample = j;
-    P[j].shadow = 0;
-    P[j].alive = path_vertex(c, ts, &P[j], 1);
-    if (P[j].shadow) {
-      memcpy(ts->sh_o[nsh], P[j].sh_o, sizeof P[j].sh_o), memcpy(ts->sh_d[nsh], P[j].sh_d, sizeof P[j].sh_d);
-      ts->sh_t[nsh] = INFINITY, ts->sh_idx[nsh++] = j;
+  for (int depth = 0, n = spp; n > 0; depth++) { /* the n paths in act reach vertex depth */
+    int m = 0, nsh = 0, nb = 0;
+    for (int i = 0; i < n; i++)
+      if (P[ts->act[i]].got) ts->idx[m++] = ts->act[i];
+    draw_depth(c, ts, px, py, depth, ts->idx, m);
+    for (int i = 0; i < n; i++) {
+      int j = ts->act[i];
+      path *p = &P[j];
+      ts->sample = j, p->shadow = 0;
+      int on = path_vertex(c, ts, p);
+      if (p->shadow) {
+        memcpy(ts->sh_o[nsh], p->sh_o, sizeof p->sh_o), memcpy(ts->sh_d[nsh], p->sh_d, sizeof p->sh_d);
+        ts->sh_t[nsh] = INFINITY, ts->sh_idx[nsh++] = j;
+      }
+      if (!on) continue;
+      memcpy(ts->dir[nb], p->d, sizeof p->d), memcpy(ts->org[nb], p->o, sizeof p->o);
+      ts->act[nb++] = j;
     }
-    if (!P[j].alive) continue;
-    memcpy(ts->dir[m], P[j].d, sizeof P[j].d), memcpy(ts->org[m], P[j].o, sizeof P[j].o);
-    ts->idx[m++] = j;
+    wv_tracer_occluded_n(w->tracer, (const float(*)[3])ts->sh_o, (const float(*)[3])ts->sh_d, ts->sh_t, nsh,
+                         ts->sh_occ);
+    for (int i = 0; i < nsh; i++)
+      if (!ts->sh_occ[i])
+        for (int k = 0; k < 3; k++) P[ts->sh_idx[i]].L[k] += P[ts->sh_idx[i]].sh_add[k];
+    ts->rays += nb;
+    wv_tracer_intersect_n(w->tracer, (const float(*)[3])ts->org, (const float(*)[3])ts->dir, nb, ts->hit, ts->got);
+    for (int i = 0; i < nb; i++) { /* the environment's texel of a bounce ray that escapes, read at the next vertex */
+      path *p = &P[ts->act[i]];
+      p->got = ts->got[i], p->at = (wv_env_at){0, 0};
+      if (p->got) p->hit = ts->hit[i];
+      else if (w->has_env && p->prev_pdf > 0) p->at = wv_envmap_at(&w->env, p->d);
+    }
+    n = nb;
   }
-  wv_tracer_occluded_n(w->tracer, (const float(*)[3])ts->sh_o, (const float(*)[3])ts->sh_d, ts->sh_t, nsh, ts->sh_occ);
-  for (int i = 0; i < nsh; i++)
-    if (!ts->sh_occ[i])
-      for (int k = 0; k < 3; k++) P[ts->sh_idx[i]].L[k] += P[ts->sh_idx[i]].sh_add[k];
-  ts->rays += m;
-  wv_tracer_intersect_n(w->tracer, (const float(*)[3])ts->org, (const float(*)[3])ts->dir, m, ts->hit, ts->got);
-  int m1 = 0;
-  for (int i = 0; i < m; i++) { /* the environment's texel of a bounce ray that escapes, read later */
-    path *p = &P[ts->idx[i]];
-    p->got = ts->got[i], p->at = (wv_env_at){0, 0};
-    if (p->got) p->hit = ts->hit[i], ts->idx[m1++] = ts->idx[i];
-    else if (w->has_env && p->prev_pdf > 0) p->at = wv_envmap_at(&w->env, p->d);
-  }
-  m = m1;
-  draw_depth(c, ts, px, py, 1, ts->idx, m);
-  /* the rest of each path */
   double acc[3] = {0, 0, 0};
-  for (int j = 0; j < spp; j++) {
-    ts->sample = j;
-    if (P[j].alive)
-      while (path_vertex(c, ts, &P[j], 0)) path_trace(c, ts, &P[j]);
+  for (int j = 0; j < spp; j++)
     for (int k = 0; k < 3; k++) acc[k] += isfinite(P[j].L[k]) ? P[j].L[k] : 0.0f;
-  }
   for (int k = 0; k < 3; k++) out[k] = (float)(acc[k] / spp);
 }
 
@@ -702,12 +690,13 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     me->got = malloc(sizeof *me->got * spp);
     me->paths = malloc(sizeof *me->paths * spp);
     me->idx = malloc(sizeof *me->idx * spp);
+    me->act = malloc(sizeof *me->act * spp);
     me->yidx = malloc(sizeof *me->yidx * spp * K);
     me->ug = malloc(sizeof *me->ug * spp);
     me->eg = malloc(sizeof *me->eg * spp);
     fail |= !me->scratch || !me->fpos || !me->u || !me->yarn || !me->env || !me->dir || !me->org || !me->sh_o ||
             !me->sh_d || !me->sh_t || !me->sh_idx || !me->sh_occ || !me->ydir || !me->hit || !me->got || !me->paths ||
-            !me->idx || !me->yidx || !me->ug || !me->eg;
+            !me->idx || !me->act || !me->yidx || !me->ug || !me->eg;
     for (int m = 0; m < w->nmats && !fail; m++)
       if (w->mats[m].nedits) {
         fail |= !(me->scratch[m] = malloc(sizeof(wv_fabric)));
@@ -736,7 +725,7 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     rays += me->rays, shades += me->shades;
     for (int m = 0; m < w->nmats && me->scratch; m++) free(me->scratch[m]);
     free(me->scratch), free(me->fpos), free(me->u), free(me->yarn), free(me->env);
-    free(me->dir), free(me->org), free(me->sh_o), free(me->sh_d), free(me->sh_t), free(me->sh_idx), free(me->sh_occ), free(me->ydir), free(me->hit), free(me->got), free(me->paths), free(me->idx), free(me->yidx), free(me->ug);
+    free(me->dir), free(me->org), free(me->sh_o), free(me->sh_d), free(me->sh_t), free(me->sh_idx), free(me->sh_occ), free(me->ydir), free(me->hit), free(me->got), free(me->paths), free(me->idx), free(me->act), free(me->yidx), free(me->ug);
     free(me->eg);
   }
   free(ts);

@@ -100,7 +100,6 @@ static void to_hit(const struct RTCRayHit *rh, wv_trace_hit *hit) {
   hit->t = rh->ray.tfar;
   hit->b1 = rh->hit.u, hit->b2 = rh->hit.v;
   hit->geom = (int)rh->hit.geomID, hit->prim = (int)rh->hit.primID;
-  hit->ng[0] = rh->hit.Ng_x, hit->ng[1] = rh->hit.Ng_y, hit->ng[2] = rh->hit.Ng_z;
 }
 
 int wv_tracer_intersect(const wv_tracer *t, const float o[3], const float d[3], float tmin, float tmax,

@@ -15,7 +15,6 @@ typedef struct {
   float b1, b2;  /* barycentrics of vertices 1 and 2 of the triangle */
   int geom;      /* index of the mesh in the list given to wv_tracer_create */
   int prim;      /* triangle index in that mesh */
-  float ng[3];   /* geometric normal (unnormalised, winding order) */
 } wv_trace_hit;
 
 /* Builds the acceleration structure over n meshes (borrowed only during the call).
