@@ -10,6 +10,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Below this many rays a stream is traced ray by ray (a stream's own cost). */
+#define WV_STREAM_MIN 8
+
 struct wv_tracer {
   RTCDevice dev;
   RTCScene scene;
@@ -133,7 +136,10 @@ static int intersect_stream(const wv_tracer *t, const float *o, size_t ostride, 
       rh[j].hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh[j].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     }
-    rtcIntersect1M(t->scene, &ctx, rh, (unsigned)m, sizeof *rh);
+    if (m < WV_STREAM_MIN)
+      for (int j = 0; j < m; j++) rtcIntersect1(t->scene, &ctx, &rh[j]);
+    else
+      rtcIntersect1M(t->scene, &ctx, rh, (unsigned)m, sizeof *rh);
     for (int j = 0; j < m; j++) {
       got[j0 + j] = rh[j].hit.geomID != RTC_INVALID_GEOMETRY_ID;
       hits += got[j0 + j];
@@ -162,7 +168,10 @@ void wv_tracer_occluded_n(const wv_tracer *t, const float (*o)[3], const float (
   for (int j0 = 0; j0 < n; j0 += B) {
     int m = n - j0 < B ? n - j0 : B;
     for (int j = 0; j < m; j++) set_ray(&r[j], o[j0 + j], d[j0 + j], 0.0f, tmax[j0 + j]);
-    rtcOccluded1M(t->scene, &ctx, r, (unsigned)m, sizeof *r);
+    if (m < WV_STREAM_MIN)
+      for (int j = 0; j < m; j++) rtcOccluded1(t->scene, &ctx, &r[j]);
+    else
+      rtcOccluded1M(t->scene, &ctx, r, (unsigned)m, sizeof *r);
     for (int j = 0; j < m; j++) occ[j0 + j] = r[j].tfar < 0.0f;
   }
 }
