@@ -108,12 +108,12 @@ static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric
     }
   } else { /* lanes in the order (direction, position): each sum in the scalar order */
     float lp[8][2], lw[8][3], r[8][3];
-    int owner[8], m = 0;
-    for (int l = 0; l < lanes; l += m) {
-      m = 0;
-      for (; m < 8 && l + m < lanes; m++) {
-        int q = l + m, j = on[0] ? q / n : 1, k = q % n;
+    int owner[8], j = on[0] ? 0 : 1, k = 0;
+    for (int l = 0; l < lanes;) {
+      int m = 0;
+      for (; m < 8 && l < lanes; m++, l++) {
         lp[m][0] = pos[k][0], lp[m][1] = pos[k][1], memcpy(lw[m], wi[j], sizeof lw[m]), owner[m] = j;
+        if (++k == n) k = 0, j++;
       }
       shade_lanes(f, m, (const float(*)[2])lp, (const float(*)[3])lw, wo, r);
       for (int i = 0; i < m; i++)
@@ -211,7 +211,7 @@ typedef struct {
 /* Per thread: scratch, counters, the current pixel's paths and their stratified
  * numbers, drawn for the paths that need them (render_pixel). */
 typedef struct {
-  wv_fabric **scratch; /* per material, NULL without edits */
+  _Alignas(64) wv_fabric **scratch; /* per material, NULL without edits; the state on cache lines of its own */
   double rays, shades;
   float (*fpos)[2];    /* K positions */
   float (*u)[2];       /* (1 + 3 CMJ_DEPTHS) x spp: camera; per depth: environment, area light, bounce */
@@ -671,7 +671,8 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     return st;
   }
   const size_t spp = (size_t)c.spp, K = (size_t)c.K;
-  thread_state *ts = calloc((size_t)threads, sizeof *ts);
+  thread_state *ts = aligned_alloc(_Alignof(thread_state), (size_t)threads * sizeof *ts); /* no line shared by two threads */
+  if (ts) memset(ts, 0, (size_t)threads * sizeof *ts);
   int fail = !ts;
   for (int t = 0; t < threads && !fail; t++) {
     thread_state *me = &ts[t];
