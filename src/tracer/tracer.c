@@ -105,20 +105,6 @@ static void to_hit(const struct RTCRayHit *rh, wv_trace_hit *hit) {
   hit->geom = (int)rh->hit.geomID, hit->prim = (int)rh->hit.primID;
 }
 
-int wv_tracer_intersect(const wv_tracer *t, const float o[3], const float d[3], float tmin, float tmax,
-                        wv_trace_hit *hit) {
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  struct RTCRayHit rh;
-  set_ray(&rh.ray, o, d, tmin, tmax);
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(t->scene, &ctx, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
-  to_hit(&rh, hit);
-  return 1;
-}
-
 /* Closest hits of n rays from o + j ostride (ostride 0: one origin for all)
  * along d[j], in streams of up to 64 rays. */
 static int intersect_stream(const wv_tracer *t, const float *o, size_t ostride, const float (*d)[3], int n,

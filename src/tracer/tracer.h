@@ -24,13 +24,10 @@ wv_status wv_tracer_create(const wv_mesh *const *meshes, int n, int threads, siz
                            wv_error *err);
 void wv_tracer_free(wv_tracer *t);
 
-/* Closest hit with tmin < t < tmax; returns 0 on a miss. Thread-safe. */
-int wv_tracer_intersect(const wv_tracer *t, const float o[3], const float d[3], float tmin, float tmax,
-                        wv_trace_hit *hit);
 /* Closest hits of n rays from o along d[j] (0 < t): got[j] = 0 on a miss, else
- * hit[j] as wv_tracer_intersect gives it. Traced together (Embree's coherent
- * streams): for rays that start together and diverge little, camera rays.
- * Returns the number of hits. Thread-safe. */
+ * 1 and hit[j]. Traced together (Embree's coherent streams): for rays that start
+ * together and diverge little, camera rays. Returns the number of hits.
+ * Thread-safe. */
 int wv_tracer_intersect_from(const wv_tracer *t, const float o[3], const float (*d)[3], int n, wv_trace_hit *hit,
                              int *got);
 /* Closest hits of n rays from o[j] along d[j] (0 < t), traced together (one
