@@ -1,7 +1,8 @@
 /* The mesh renderer: mesh loading (OBJ, PLY, glTF) and its errors, tangent
  * frames, environment sampling (single and batched), the white furnace, the flat quad against the
- * capture renderer, edits, the cloth simulation, scene parsing errors and
- * determinism across thread counts. Small images and few samples. */
+ * capture renderer, edits, the cloth simulation, scene parsing errors,
+ * determinism across thread counts, and the ray tracer's streams against its
+ * single rays. Small images and few samples. */
 #include <math.h>
 
 #define M_PI 3.14159265358979323846
@@ -12,6 +13,7 @@
 #include <unistd.h>
 
 #include "testutil.h"
+#include "tracer/tracer.h"
 #include "util/hash.h"
 #include "woven/cloth.h"
 #include "woven/emitters.h"
@@ -564,6 +566,65 @@ static void test_deterministic(void **state) {
   wv_image_free(&a), wv_image_free(&ra);
 }
 
+/* Rays traced together (streams of any length, over the 64-ray batches and under
+ * the length at which a stream is traced ray by ray) find what each ray alone finds. */
+static void test_tracer_streams(void **state) {
+  (void)state;
+  wv_error err = {0};
+  wv_mesh mesh[2];
+  const double c[3] = {0, 1, 0}, o[3] = {0, 0, 0}, eu[3] = {1, 0, 0}, ev[3] = {0, 0, -1};
+  assert_int_equal(wv_mesh_sphere(c, 1.0, 12, 24, &mesh[0], &err), WV_OK);
+  assert_int_equal(wv_mesh_quad(o, eu, ev, 8, 8, 1, &mesh[1], &err), WV_OK);
+  const wv_mesh *list[2] = {&mesh[0], &mesh[1]};
+  wv_tracer *t;
+  assert_int_equal(wv_tracer_create(list, 2, 1, 0, &t, &err), WV_OK);
+  enum { N = 150 };
+  float org[N][3], dir[N][3], tmax[N];
+  for (int j = 0; j < N; j++) { /* from around the sphere, most toward it */
+    uint64_t h = wv_hash4(7, (uint64_t)j, 0, 1);
+    float len = 0;
+    for (int i = 0; i < 3; i++) {
+      org[j][i] = 3.0f * (wv_u01(wv_hash4(7, (uint64_t)j, 1 + (uint64_t)i, 1)) - 0.5f) + (i == 1 ? 2.0f : 0.0f);
+      dir[j][i] = (float)c[i] - org[j][i] + 1.5f * (wv_u01(h >> (8 * i)) - 0.5f);
+      len += dir[j][i] * dir[j][i];
+    }
+    for (int i = 0; i < 3; i++) dir[j][i] /= (j % 4 ? 1.0f : -1.0f) * sqrtf(len); /* a quarter away from it */
+    tmax[j] = j % 3 ? INFINITY : 1.5f;
+  }
+  wv_trace_hit all[N], one;
+  int got_all[N], got_one, occ[N], hits = 0, blocked = 0;
+  wv_tracer_intersect_n(t, (const float(*)[3])org, (const float(*)[3])dir, N, all, got_all);
+  wv_tracer_occluded_n(t, (const float(*)[3])org, (const float(*)[3])dir, tmax, N, occ);
+  for (int j = 0; j < N; j++) {
+    wv_tracer_intersect_n(t, (const float(*)[3])&org[j], (const float(*)[3])&dir[j], 1, &one, &got_one);
+    assert_int_equal(got_all[j], got_one);
+    if (got_one) {
+      assert_true(all[j].t == one.t && all[j].b1 == one.b1 && all[j].b2 == one.b2);
+      assert_int_equal(all[j].geom, one.geom);
+      assert_int_equal(all[j].prim, one.prim);
+      hits++;
+    }
+    assert_int_equal(occ[j], wv_tracer_occluded(t, org[j], dir[j], 0.0f, tmax[j]));
+    blocked += occ[j];
+  }
+  fprintf(stderr, "%d of %d rays hit, %d blocked\n", hits, N, blocked);
+  assert_true(hits > N / 4 && hits < N); /* both hits and misses */
+  assert_true(blocked > 0 && blocked < hits);
+  /* rays from one point: the coherent stream agrees */
+  wv_trace_hit from[N];
+  int got_from[N];
+  float same[N][3];
+  for (int j = 0; j < N; j++) memcpy(same[j], org[0], sizeof same[j]);
+  wv_tracer_intersect_from(t, org[0], (const float(*)[3])dir, N, from, got_from);
+  wv_tracer_intersect_n(t, (const float(*)[3])same, (const float(*)[3])dir, N, all, got_all);
+  for (int j = 0; j < N; j++) {
+    assert_int_equal(got_from[j], got_all[j]);
+    if (got_from[j]) assert_true(from[j].t == all[j].t && from[j].prim == all[j].prim && from[j].geom == all[j].geom);
+  }
+  wv_tracer_free(t);
+  wv_mesh_free(&mesh[0]), wv_mesh_free(&mesh[1]);
+}
+
 int main(void) {
   const char *d = tu_tmpdir("scene3d");
   if (!d) return 1;
@@ -575,7 +636,7 @@ int main(void) {
       cmocka_unit_test(test_white_furnace),
       cmocka_unit_test(test_quad_matches_flat45), cmocka_unit_test(test_edits),
       cmocka_unit_test(test_cloth),         cmocka_unit_test(test_parse_errors),
-      cmocka_unit_test(test_deterministic),
+      cmocka_unit_test(test_deterministic), cmocka_unit_test(test_tracer_streams),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

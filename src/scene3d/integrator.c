@@ -13,22 +13,32 @@
 #include "sensor/sensor.h"
 #include "util/hash.h"
 
+/* -O3 for this file (its small fixed-size loops unrolled, unswitched and
+ * vectorised; about 6% of a render): no reassociation, so results stay the same. */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("O3")
+#endif
+
 #define PI_F 3.14159265358979f
 #define CMJ_DEPTHS 2 /* path vertices whose light and bounce samples are stratified */
 
-/* Samples 0 .. n-1 of a pixel's sequence of n (the capture renderer's sampler,
- * sampler/sampler.h), eight at a time: the numbers wv_sample_at_f gives one by one. */
-WV_SIMD_CLONES static void draw_sequence(int px, int py, int n, int width, uint64_t seed, float (*out)[2]) {
+/* Samples idx[0 .. m-1] (all of 0 .. n-1 when idx is NULL) of a pixel's sequence
+ * of n (the capture renderer's sampler, sampler/sampler.h), eight at a time: the
+ * numbers wv_sample_at_f gives one by one, each into out[its index]. */
+WV_SIMD_CLONES static void draw_sequence(int px, int py, int n, int width, uint64_t seed, const int *idx, int m,
+                                         float (*out)[2]) {
   int nx, ny;
   wv_pixel_grid(n, &nx, &ny);
   wv_pixel_sampler_f p = wv_pixel_sampler_make(px, py, width, seed);
   wv_pixel_sampler_8 p8 = {(wv_q8){0} + p.hash, (wv_w8){0} + p.keyx, (wv_w8){0} + p.keyy};
-  for (int s0 = 0; s0 < n; s0 += 8) {
-    wv_i8 s = s0 + WV_IOTA8;
-    s = wv_seli(s < n, s, wv_splati8(0)); /* lanes past the end: a valid index, result dropped */
+  if (!idx) m = n;
+  for (int s0 = 0; s0 < m; s0 += 8) {
+    wv_i8 s;
+    for (int k = 0; k < 8; k++) /* lanes past the end: a valid index, result dropped */
+      s[k] = s0 + k < m ? (idx ? idx[s0 + k] : s0 + k) : (idx ? idx[s0] : s0);
     wv_f8 sx, sy;
     wv_sample_at_8(&p8, nx, ny, s, &sx, &sy);
-    for (int k = 0; k < 8 && s0 + k < n; k++) out[s0 + k][0] = sx[k], out[s0 + k][1] = sy[k];
+    for (int k = 0; k < 8 && s0 + k < m; k++) out[s[k]][0] = sx[k], out[s[k]][1] = sy[k];
   }
 }
 
@@ -38,18 +48,44 @@ typedef struct {
   float kd[2][3], beta[2], alpha[2];
 } fabric_edit;
 
-/* THE adapter between the mesh renderer and the fabric shading model: the
- * average of (f_s + f_d) mu_i over n fabric positions (mm), for directions wi
- * (to the light) and wo (to the viewer) in the fabric's local frame (x weft, y
- * warp, z macro normal), with the edits applied. Everything the mesh renderer
- * knows about the fabric model is here: it runs the shading kernel's scalar
- * flavour (wv_shade_f, kernel/kernel.h) with unit light, with the parameters of a
- * per-thread copy of the prepared fabric when edits change k_d, beta or alpha at
- * this point. */
-static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric_edit *e, const float wi[3],
-                         const float wo[3], const float (*pos)[2], int n, float out[3]) {
-  out[0] = out[1] = out[2] = 0.0f;
-  if (wi[2] <= 0.0f || wo[2] <= 0.0f) return; /* SPEC section 4: zero below either horizon */
+/* Fabric points shaded eight at a time by the kernel's 8-lane flavour, which
+ * gives each lane the scalar flavour's result bit for bit: lane i at position
+ * pos[i] (mm), light from wi[i], view wo, unit light; m <= 8 lanes. */
+WV_SIMD_CLONES static void shade_lanes(const wv_fabric *f, int m, const float (*pos)[2], const float (*wi)[3],
+                                       const float wo[3], float (*r)[3]) {
+  wv_f8 x, y, vi[3], vo[3], rad[3];
+  for (int i = 0; i < 8; i++) {
+    int l = i < m ? i : 0; /* lanes past the end: a copy of lane 0, result dropped */
+    x[i] = pos[l][0], y[i] = pos[l][1];
+    for (int k = 0; k < 3; k++) vi[k][i] = wi[l][k], vo[k][i] = wo[k];
+  }
+  wv_dirs_8 d;
+  wv_dirs_make_8(vi, vo, wv_splat8(1.0f), &d);
+  wv_shade_8(f, &f->P, &d, x, y, rad, NULL);
+  for (int i = 0; i < m; i++) r[i][0] = rad[0][i], r[i][1] = rad[1][i], r[i][2] = rad[2][i];
+}
+
+/* Below this many points a call shades them one by one (the 8-lane call's cost). */
+#define SHADE_LANES_MIN 3
+
+/* THE adapter between the mesh renderer and the fabric shading model: for each
+ * of nd light directions wi[j] (NULL: not wanted), the average of (f_s + f_d)
+ * mu_i over n fabric positions (mm) into out[j], with the view wo, both in the
+ * fabric's local frame (x weft, y warp, z macro normal), with the edits applied.
+ * Everything the mesh renderer knows about the fabric model is here: it runs the
+ * shading kernel (kernel/kernel.h; all the points of all directions in 8-lane
+ * calls, or the scalar flavour wv_shade_f for one or two) with unit light, with
+ * the parameters of a per-thread copy of the prepared fabric when edits change
+ * k_d, beta or alpha at this point. */
+static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric_edit *e, int nd,
+                         const float *const *wi, const float wo[3], const float (*pos)[2], int n, float (*out)[3]) {
+  int lanes = 0, on[2];
+  for (int j = 0; j < nd; j++) {
+    out[j][0] = out[j][1] = out[j][2] = 0.0f;
+    on[j] = wi[j] && wi[j][2] > 0.0f && wo[2] > 0.0f; /* SPEC section 4: zero below either horizon */
+    lanes += on[j] * n;
+  }
+  if (!lanes) return;
   const wv_fabric *f = base;
   if (e->active && scratch) {
     for (int y = 0; y < 2; y++) {
@@ -59,15 +95,34 @@ static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric
     }
     f = scratch;
   }
-  wv_dirs_f d;
-  wv_dirs_make_f(wi, wo, 1.0f, &d);
-  for (int k = 0; k < n; k++) {
-    float r[3];
-    wv_shade_f(f, &f->P, &d, pos[k][0], pos[k][1], r, NULL);
-    out[0] += r[0], out[1] += r[1], out[2] += r[2];
+  if (lanes < SHADE_LANES_MIN) {
+    for (int j = 0; j < nd; j++) {
+      if (!on[j]) continue;
+      wv_dirs_f d;
+      wv_dirs_make_f(wi[j], wo, 1.0f, &d);
+      for (int k = 0; k < n; k++) {
+        float r[3];
+        wv_shade_f(f, &f->P, &d, pos[k][0], pos[k][1], r, NULL);
+        out[j][0] += r[0], out[j][1] += r[1], out[j][2] += r[2];
+      }
+    }
+  } else { /* lanes in the order (direction, position): each sum in the scalar order */
+    float lp[8][2], lw[8][3], r[8][3];
+    int owner[8], j = on[0] ? 0 : 1, k = 0;
+    for (int l = 0; l < lanes;) {
+      int m = 0;
+      for (; m < 8 && l < lanes; m++, l++) {
+        lp[m][0] = pos[k][0], lp[m][1] = pos[k][1], memcpy(lw[m], wi[j], sizeof lw[m]), owner[m] = j;
+        if (++k == n) k = 0, j++;
+      }
+      shade_lanes(f, m, (const float(*)[2])lp, (const float(*)[3])lw, wo, r);
+      for (int i = 0; i < m; i++)
+        out[owner[i]][0] += r[i][0], out[owner[i]][1] += r[i][1], out[owner[i]][2] += r[i][2];
+    }
   }
   float inv = 1.0f / (float)n;
-  out[0] *= inv, out[1] *= inv, out[2] *= inv;
+  for (int j = 0; j < nd; j++)
+    if (on[j]) out[j][0] *= inv, out[j][1] *= inv, out[j][2] *= inv;
 }
 
 static float dot(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -79,7 +134,11 @@ static float normalize(float v[3]) {
   if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
   return l;
 }
-static float maxc(const float c[3]) { return fmaxf(c[0], fmaxf(c[1], c[2])); }
+/* fmaxf and fminf as the comparisons they are (a NaN loses to a number), inline:
+ * the baseline build calls libm for them. */
+static float max2(float a, float b) { return a >= b || b != b ? a : b; }
+static float min2(float a, float b) { return a <= b || b != b ? a : b; }
+static float maxc(const float c[3]) { return max2(c[0], max2(c[1], c[2])); }
 
 /* Edit values at UV (u, v) of a fabric material. */
 static void eval_edits(const wv_world_material *m, float u, float v, fabric_edit *e) {
@@ -132,21 +191,45 @@ typedef struct {
   const wv_world *w;
   wv_camera_rig cam;
   int spp, K;
-  float eps; /* ray offset */
+  float eps;                    /* ray offset */
+  int need[1 + 3 * CMJ_DEPTHS]; /* the stratified dimensions paths use (see rand2) */
 } render_ctx;
 
-/* Per thread: scratch, counters, and the current pixel's stratified numbers,
- * drawn for all its samples before its first path. */
+/* One camera path of a pixel between two vertices: the ray to follow and what
+ * the path has gathered. */
 typedef struct {
-  wv_fabric **scratch; /* per material, NULL without edits */
+  float o[3], d[3], thr[3], L[3];
+  float prev_pdf;   /* bounce pdf of the ray (o, d); 0 for the camera ray (no MIS) */
+  int depth;        /* the path vertex the ray leads to */
+  int got;          /* the ray meets the scene, at hit */
+  wv_trace_hit hit;
+  wv_env_at at;     /* the environment's texel along a bounce ray */
+  int shadow;       /* a shadow ray toward the environment's sample waits (render_pixel traces it) */
+  float sh_o[3], sh_d[3], sh_add[3]; /* it, and what it adds to L when nothing blocks it */
+} path;
+
+/* Per thread: scratch, counters, the current pixel's paths and their stratified
+ * numbers, drawn for the paths that need them (render_pixel). */
+typedef struct {
+  _Alignas(64) wv_fabric **scratch; /* per material, NULL without edits; the state on cache lines of its own */
   double rays, shades;
   float (*fpos)[2];    /* K positions */
   float (*u)[2];       /* (1 + 3 CMJ_DEPTHS) x spp: camera; per depth: environment, area light, bounce */
   float (*yarn)[2];    /* spp x K: the yarn positions */
   wv_env_sample *env;  /* CMJ_DEPTHS x spp: the environment's samples of the numbers in u */
-  float (*dir)[3];     /* spp camera rays */
+  float (*dir)[3];     /* spp: camera rays, then the bounce rays traced together */
+  float (*org)[3];     /* spp: the bounce rays' origins */
+  float (*sh_o)[3], (*sh_d)[3], *sh_t; /* spp: the shadow rays traced together */
+  int *sh_idx, *sh_occ;                /* spp: their paths, and whether they are blocked */
+  float (*ydir)[3];    /* K: the rays through a camera ray's yarn positions */
   wv_trace_hit *hit;   /* spp: where they meet the scene */
   int *got;            /* spp: whether they do */
+  path *paths;         /* spp */
+  int *act;            /* spp: the paths that reach a vertex */
+  int *idx;            /* spp: of them, those that reach a surface there */
+  int *yidx;           /* spp x K: the yarn positions wanted */
+  float (*ug)[2];      /* spp: the numbers of the environment samples wanted */
+  wv_env_sample *eg;   /* spp: their samples */
   uint64_t pixel;
   int sample;
 } thread_state;
@@ -162,11 +245,24 @@ static void rand2(const render_ctx *c, thread_state *ts, int depth, int which, f
   *u1 = wv_u01(h), *u2 = (float)((h >> 16) & 0xffffff) * (1.0f / 16777216.0f);
 }
 
-static void camera_dir(const wv_camera_rig *r, float x, float y, float d[3]) {
-  float ndx = (2.0f * x / (float)r->width - 1.0f) * r->tan_half * r->aspect;
-  float ndy = (1.0f - 2.0f * y / (float)r->height) * r->tan_half;
-  for (int i = 0; i < 3; i++) d[i] = r->fwd[i] + ndx * r->right[i] + ndy * r->up[i];
-  normalize(d);
+/* Unit directions of the camera rays through the points s[0 .. n-1] (offsets in
+ * [0, 1)^2) of pixel (px, py), eight at a time. */
+WV_SIMD_CLONES static void camera_dirs(const wv_camera_rig *r, int px, int py, int n, const float (*s)[2],
+                                       float (*d)[3]) {
+  for (int j0 = 0; j0 < n; j0 += 8) {
+    wv_f8 x, y, v[3];
+    for (int k = 0; k < 8; k++) {
+      int j = j0 + k < n ? j0 + k : j0; /* lanes past the end: a copy, result dropped */
+      x[k] = (float)px + s[j][0], y[k] = (float)py + s[j][1];
+    }
+    wv_f8 ndx = (2.0f * x / (float)r->width - 1.0f) * r->tan_half * r->aspect;
+    wv_f8 ndy = (1.0f - 2.0f * y / (float)r->height) * r->tan_half;
+    for (int i = 0; i < 3; i++) v[i] = r->fwd[i] + ndx * r->right[i] + ndy * r->up[i];
+    wv_f8 l = wv_sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    l = wv_sel(l > 0.0f, l, wv_splat8(1.0f)); /* normalize()'s operations */
+    for (int i = 0; i < 3; i++) v[i] = v[i] / l;
+    for (int k = 0; k < 8 && j0 + k < n; k++) d[j0 + k][0] = v[0][k], d[j0 + k][1] = v[1][k], d[j0 + k][2] = v[2][k];
+  }
 }
 
 /* UV change per unit move within the plane of triangle ix: rows du/dP and dv/dP
@@ -186,28 +282,31 @@ static void uv_gradient(const wv_mesh *m, const uint32_t *ix, float gu[3], float
   }
 }
 
+void wv_faces_make(const wv_mesh *m, wv_face *out, wv_uv_grad *grad) {
+  for (int t = 0; t < m->nt; t++) {
+    const uint32_t *ix = m->idx + 3 * (size_t)t;
+    const float *p0 = m->pos + 3 * ix[0], *p1 = m->pos + 3 * ix[1], *p2 = m->pos + 3 * ix[2];
+    float e1[3], e2[3];
+    for (int i = 0; i < 3; i++) e1[i] = p1[i] - p0[i], e2[i] = p2[i] - p0[i];
+    wv_face *f = &out[t];
+    memset(f, 0, sizeof *f);
+    cross(e1, e2, f->ng);
+    normalize(f->ng);
+    for (int k = 0; k < 3; k++) memcpy(f->nrm[k], m->nrm + 3 * ix[k], sizeof f->nrm[k]);
+    if (grad) uv_gradient(m, ix, grad[t].gu, grad[t].gv);
+  }
+}
+
 /* Fills the surface at a hit; wo points back along the ray. */
 static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_hit *hit, const float o[3],
                          const float d[3], int camera, surface *sf) {
   const wv_mesh *m = &c->w->meshes[hit->geom];
   const uint32_t *ix = m->idx + 3 * (size_t)hit->prim;
   float b0 = 1 - hit->b1 - hit->b2, bw[3] = {b0, hit->b1, hit->b2};
-  const float *p0 = m->pos + 3 * ix[0], *p1 = m->pos + 3 * ix[1], *p2 = m->pos + 3 * ix[2];
-  float e1[3], e2[3];
-  for (int i = 0; i < 3; i++) {
-    sf->p[i] = o[i] + hit->t * d[i];
-    e1[i] = p1[i] - p0[i], e2[i] = p2[i] - p0[i];
-    sf->ns[i] = 0, sf->t[i] = 0;
-  }
-  cross(e1, e2, sf->ng);
-  normalize(sf->ng);
-  float w_sign = 1;
+  const wv_face *fc = &c->w->faces[hit->geom][hit->prim];
+  for (int i = 0; i < 3; i++) sf->p[i] = o[i] + hit->t * d[i], sf->ng[i] = fc->ng[i], sf->ns[i] = 0;
   for (int k = 0; k < 3; k++)
-    for (int i = 0; i < 3; i++) {
-      sf->ns[i] += bw[k] * m->nrm[3 * ix[k] + i];
-      if (m->tan) sf->t[i] += bw[k] * m->tan[4 * ix[k] + i];
-    }
-  if (m->tan) w_sign = m->tan[4 * ix[0] + 3];
+    for (int i = 0; i < 3; i++) sf->ns[i] += bw[k] * fc->nrm[k][i];
   if (normalize(sf->ns) == 0.0f) memcpy(sf->ns, sf->ng, sizeof sf->ns);
   if (dot(sf->ns, sf->ng) < 0) /* normals wound against the triangle: trust the normals' side */
     for (int i = 0; i < 3; i++) sf->ng[i] = -sf->ng[i];
@@ -220,6 +319,13 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   sf->nfpos = 0;
   if (sf->mat->kind != WV_MAT_FABRIC) return;
   /* fabric frame: x along the interpolated u tangent, made orthogonal to ns; y = +-(ns x t) toward +v */
+  float w_sign = 1;
+  for (int i = 0; i < 3; i++) sf->t[i] = 0;
+  if (m->tan) {
+    for (int k = 0; k < 3; k++)
+      for (int i = 0; i < 3; i++) sf->t[i] += bw[k] * m->tan[4 * ix[k] + i];
+    w_sign = m->tan[4 * ix[0] + 3];
+  }
   float tn = dot(sf->t, sf->ns);
   for (int i = 0; i < 3; i++) sf->t[i] -= tn * sf->ns[i];
   if (normalize(sf->t) == 0.0f) {
@@ -243,15 +349,15 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   /* Sub-pixel yarns: K positions spread over the pixel (a stratified set of spp x K
    * per pixel, K of them for this ray), where their camera rays meet this triangle's plane. */
   const wv_camera_rig *r = &c->cam;
-  float gu[3], gv[3], rel[3];
-  uv_gradient(m, ix, gu, gv);
+  const float *gu = c->w->uv_grad[hit->geom][hit->prim].gu, *gv = c->w->uv_grad[hit->geom][hit->prim].gv;
+  float rel[3];
   for (int i = 0; i < 3; i++) rel[i] = sf->p[i] - r->cpos[i];
   float pn = dot(rel, sf->ng); /* camera to the plane, along its normal */
   int px = (int)(ts->pixel % (uint64_t)r->width), py = (int)(ts->pixel / (uint64_t)r->width);
+  float(*ydir)[3] = ts->ydir;
+  camera_dirs(r, px, py, c->K, (const float(*)[2])ts->yarn + (size_t)ts->sample * c->K, ydir);
   for (int k = 0; k < c->K; k++) {
-    float sx = ts->yarn[ts->sample * c->K + k][0], sy = ts->yarn[ts->sample * c->K + k][1], dd[3], u = sf->u,
-          v = sf->v;
-    camera_dir(r, (float)px + sx, (float)py + sy, dd);
+    float *dd = ydir[k], u = sf->u, v = sf->v;
     float den = dot(dd, sf->ng);
     if (fabsf(den) > 1e-6f && pn / den > 0) {
       float q[3]; /* from the hit to where this sample's ray meets the plane */
@@ -263,19 +369,31 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   sf->nfpos = c->K;
 }
 
-/* BSDF x cosine for light arriving from wi (world), seen from wo. */
-static void eval_bsdf(const surface *sf, thread_state *ts, const float wi[3], const float wo[3], float f[3]) {
-  f[0] = f[1] = f[2] = 0;
-  if (dot(wi, sf->ng) <= 0.0f) return; /* reflection only: the cloth is opaque */
-  if (sf->mat->kind == WV_MAT_LAMBERT) {
-    float cs = dot(wi, sf->ns);
-    if (cs <= 0) return;
-    for (int c = 0; c < 3; c++) f[c] = sf->mat->albedo[c] * cs / PI_F;
-    return;
+/* BSDF x cosine for light arriving from each of nd <= 2 directions wi[j] (world;
+ * NULL: not wanted, f[j] = 0), seen from wo: a fabric is shaded for all of them
+ * in one call. */
+static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *const *wi, const float wo[3],
+                      float (*f)[3]) {
+  float li[2][3];
+  const float *want[2] = {NULL, NULL};
+  int any = 0;
+  for (int j = 0; j < nd; j++) {
+    f[j][0] = f[j][1] = f[j][2] = 0;
+    if (!wi[j] || dot(wi[j], sf->ng) <= 0.0f) continue; /* reflection only: the cloth is opaque */
+    if (sf->mat->kind == WV_MAT_LAMBERT) {
+      float cs = dot(wi[j], sf->ns);
+      if (cs <= 0) continue;
+      for (int c = 0; c < 3; c++) f[j][c] = sf->mat->albedo[c] * cs / PI_F;
+      continue;
+    }
+    li[j][0] = dot(wi[j], sf->t), li[j][1] = dot(wi[j], sf->b), li[j][2] = dot(wi[j], sf->ns);
+    want[j] = li[j], any = 1;
+    ts->shades += sf->nfpos;
   }
-  float li[3] = {dot(wi, sf->t), dot(wi, sf->b), dot(wi, sf->ns)}, lo[3] = {dot(wo, sf->t), dot(wo, sf->b), dot(wo, sf->ns)};
-  shade_fabric(sf->mat->fab, ts->scratch[sf->mat_index], &sf->edit, li, lo, (const float(*)[2])sf->fpos, sf->nfpos, f);
-  ts->shades += sf->nfpos;
+  if (!any) return;
+  float lo[3] = {dot(wo, sf->t), dot(wo, sf->b), dot(wo, sf->ns)};
+  shade_fabric(sf->mat->fab, ts->scratch[sf->mat_index], &sf->edit, nd, want, lo, (const float(*)[2])sf->fpos,
+               sf->nfpos, f);
 }
 
 static float power_heuristic(float a, float b) { return a * a / (a * a + b * b); }
@@ -301,135 +419,221 @@ static int hit_area(const wv_light3d *l, const float o[3], const float d[3], flo
   return 1;
 }
 
-/* Radiance along one camera ray (o0, d0), which meets the scene at hit0 when got0. */
-static void trace_path(const render_ctx *c, thread_state *ts, const float o0[3], const float d0[3],
-                       const wv_trace_hit *hit0, int got0, float L[3]) {
+/* What the path's ray (o, d) meets at vertex p->depth (p->got, p->hit, p->at):
+ * the light it sees there, its shadow ray toward the environment's sample (left
+ * in p for the caller to trace, with what it adds when unblocked) and, when the
+ * path goes on, the next ray in (o, d). Returns 0 when the path ends.
+ * ts->sample is the path's sample. */
+static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
   const wv_scene3d *s = c->s;
   const wv_world *w = c->w;
-  float o[3] = {o0[0], o0[1], o0[2]}, d[3] = {d0[0], d0[1], d0[2]}, thr[3] = {1, 1, 1};
-  float prev_pdf = 0; /* bounce pdf of the ray being traced; 0 for the camera ray (no MIS) */
-  L[0] = L[1] = L[2] = 0;
-  for (int depth = 0;; depth++) {
-    wv_trace_hit hit;
-    wv_env_at at = {0, 0};
-    if (w->has_env && prev_pdf > 0) at = wv_envmap_at(&w->env, d); /* its texel arrives while the ray is traced */
-    ts->rays++;
-    int got = depth ? wv_tracer_intersect(w->tracer, o, d, 0.0f, INFINITY, &hit) : got0;
-    if (!depth && got) hit = *hit0;
-    float tmax = got ? hit.t : INFINITY;
-    for (int i = 0; i < s->nlights; i++) { /* area lights the ray sees before the surface */
-      const wv_light3d *l = &s->lights[i];
-      float t, cosl;
-      if (l->type != WV_LIGHT_AREA || !hit_area(l, o, d, tmax, &t, &cosl)) continue;
-      float pl = t * t / ((float)(l->size[0] * l->size[1]) * cosl), wgt = prev_pdf > 0 ? power_heuristic(prev_pdf, pl) : 1;
-      for (int k = 0; k < 3; k++) L[k] += thr[k] * (float)l->color[k] * wgt;
+  const int depth = p->depth;
+  float *o = p->o, *d = p->d, *thr = p->thr, *L = p->L;
+  float tmax = p->got ? p->hit.t : INFINITY;
+  for (int i = 0; i < s->nlights; i++) { /* area lights the ray sees before the surface */
+    const wv_light3d *l = &s->lights[i];
+    float t, cosl;
+    if (l->type != WV_LIGHT_AREA || !hit_area(l, o, d, tmax, &t, &cosl)) continue;
+    float pl = t * t / ((float)(l->size[0] * l->size[1]) * cosl),
+          wgt = p->prev_pdf > 0 ? power_heuristic(p->prev_pdf, pl) : 1;
+    for (int k = 0; k < 3; k++) L[k] += thr[k] * (float)l->color[k] * wgt;
+  }
+  if (!p->got) {
+    if (w->has_env && (depth > 0 || s->env_visible)) {
+      float le[3], wgt = 1;
+      if (p->prev_pdf > 0) wgt = power_heuristic(p->prev_pdf, wv_envmap_read(&w->env, p->at, le));
+      else wv_envmap_eval(&w->env, d, le);
+      for (int k = 0; k < 3; k++) L[k] += thr[k] * le[k] * wgt;
     }
-    if (!got) {
-      if (w->has_env && (depth > 0 || s->env_visible)) {
-        float le[3], wgt = 1;
-        if (prev_pdf > 0) wgt = power_heuristic(prev_pdf, wv_envmap_read(&w->env, at, le));
-        else wv_envmap_eval(&w->env, d, le);
-        for (int k = 0; k < 3; k++) L[k] += thr[k] * le[k] * wgt;
-      }
-      return;
+    return 0;
+  }
+  surface sf;
+  make_surface(c, ts, &p->hit, o, d, depth == 0, &sf);
+  float wo[3] = {-d[0], -d[1], -d[2]}, org[3];
+  int last = depth >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
+  for (int i = 0; i < 3; i++) org[i] = sf.p[i] + c->eps * sf.ng[i];
+  /* the environment's sample and the bounce direction first: the surface is
+   * evaluated for both in one call */
+  float ewi[3] = {0, 0, 0}, ele[3] = {0, 0, 0}, epl = 0, bwi[3] = {0, 0, 0}, bpdf = 0, fb[2][3];
+  int env_on = 0;
+  if (w->has_env) {
+    if (depth < CMJ_DEPTHS) {
+      const wv_env_sample *es = &ts->env[depth * c->spp + ts->sample];
+      memcpy(ewi, es->d, sizeof ewi), memcpy(ele, es->rgb, sizeof ele), epl = es->pdf;
+    } else {
+      float u1, u2;
+      rand2(c, ts, depth, 0, &u1, &u2);
+      epl = wv_envmap_sample(&w->env, u1, u2, ewi, ele);
     }
-    surface sf;
-    make_surface(c, ts, &hit, o, d, depth == 0, &sf);
-    float wo[3] = {-d[0], -d[1], -d[2]}, org[3];
-    int last = depth >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
-    for (int i = 0; i < 3; i++) org[i] = sf.p[i] + c->eps * sf.ng[i];
-    /* next-event estimation */
-    for (int i = 0; i < s->nlights; i++) {
-      const wv_light3d *l = &s->lights[i];
-      float wi[3], li[3], dist = INFINITY, wgt = 1;
-      if (l->type == WV_LIGHT_DIRECTIONAL) {
-        for (int k = 0; k < 3; k++) wi[k] = (float)l->dir[k], li[k] = (float)l->color[k];
-      } else {
-        float lp[3], g = 1;
-        for (int k = 0; k < 3; k++) lp[k] = (float)l->pos[k];
-        if (l->type == WV_LIGHT_AREA) {
-          float u1, u2, n[3] = {(float)l->dir[0], (float)l->dir[1], (float)l->dir[2]}, ex[3], ey[3];
-          float a[3] = {fabsf(n[1]) > 0.99f ? 1.0f : 0.0f, fabsf(n[1]) > 0.99f ? 0.0f : 1.0f, 0};
-          cross(a, n, ex), normalize(ex), cross(n, ex, ey);
-          rand2(c, ts, depth, 1, &u1, &u2);
-          for (int k = 0; k < 3; k++)
-            lp[k] += (u1 - 0.5f) * (float)l->size[0] * ex[k] + (u2 - 0.5f) * (float)l->size[1] * ey[k];
-          for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
-          dist = normalize(wi);
-          float cosl = -dot(wi, n);
-          if (cosl <= 0) continue;
-          float pl = dist * dist / ((float)(l->size[0] * l->size[1]) * cosl);
-          wgt = last ? 1.0f : power_heuristic(pl, cos_pdf(&sf, wi));
-          g = 1.0f / pl;
-        } else {
-          for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
-          dist = normalize(wi);
-          g = 1.0f / (dist * dist);
-          if (l->type == WV_LIGHT_SPOT) {
-            float ca = -(wi[0] * (float)l->dir[0] + wi[1] * (float)l->dir[1] + wi[2] * (float)l->dir[2]);
-            float c0 = cosf((float)(l->cone_deg * 3.14159265358979 / 180)),
-                  c1 = cosf((float)((l->cone_deg - l->blend_deg) * 3.14159265358979 / 180));
-            float x = c1 > c0 ? (ca - c0) / (c1 - c0) : (ca >= c0 ? 1.0f : 0.0f);
-            x = fminf(fmaxf(x, 0.0f), 1.0f);
-            g *= x * x * (3 - 2 * x);
-          }
-        }
-        for (int k = 0; k < 3; k++) li[k] = (float)l->color[k] * g;
-        dist *= 0.9999f;
-      }
-      if (maxc(li) <= 0) continue;
-      float f[3];
-      eval_bsdf(&sf, ts, wi, wo, f);
-      if (maxc(f) <= 0) continue;
-      ts->rays++;
-      if (wv_tracer_occluded(w->tracer, org, wi, 0.0f, dist)) continue;
-      for (int k = 0; k < 3; k++) L[k] += thr[k] * f[k] * li[k] * wgt;
-    }
-    if (w->has_env) {
-      float u1, u2, wi[3], le[3], pl;
-      if (depth < CMJ_DEPTHS) {
-        const wv_env_sample *es = &ts->env[depth * c->spp + ts->sample];
-        memcpy(wi, es->d, sizeof wi), memcpy(le, es->rgb, sizeof le), pl = es->pdf;
-      } else {
-        rand2(c, ts, depth, 0, &u1, &u2);
-        pl = wv_envmap_sample(&w->env, u1, u2, wi, le);
-      }
-      if (pl > 0 && maxc(le) > 0) {
-        float f[3];
-        eval_bsdf(&sf, ts, wi, wo, f);
-        if (maxc(f) > 0) {
-          ts->rays++;
-          if (!wv_tracer_occluded(w->tracer, org, wi, 0.0f, INFINITY)) {
-            float wgt = last ? 1.0f : power_heuristic(pl, cos_pdf(&sf, wi));
-            for (int k = 0; k < 3; k++) L[k] += thr[k] * f[k] * le[k] * wgt / pl;
-          }
-        }
-      }
-    }
-    if (last) return;
-    /* bounce: cosine-weighted about the shading normal */
+    env_on = epl > 0 && maxc(ele) > 0;
+  }
+  if (!last) { /* bounce: cosine-weighted about the shading normal */
     float u1, u2;
     rand2(c, ts, depth, 2, &u1, &u2);
-    float r = sqrtf(u1), phi = 2 * PI_F * u2, lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(fmaxf(0.0f, 1 - u1));
-    float a[3], bx[3], by[3], wi[3];
+    float r = sqrtf(u1), phi = 2 * PI_F * u2, lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(max2(0.0f, 1 - u1));
+    float a[3], bx[3], by[3];
     a[0] = fabsf(sf.ns[0]) > 0.9f ? 0.0f : 1.0f, a[1] = fabsf(sf.ns[0]) > 0.9f ? 1.0f : 0.0f, a[2] = 0;
     cross(sf.ns, a, bx), normalize(bx), cross(sf.ns, bx, by);
-    for (int k = 0; k < 3; k++) wi[k] = lx * bx[k] + ly * by[k] + lz * sf.ns[k];
-    float pdf = cos_pdf(&sf, wi), f[3];
-    if (pdf <= 0) return;
-    eval_bsdf(&sf, ts, wi, wo, f);
-    for (int k = 0; k < 3; k++) thr[k] *= f[k] / pdf;
-    float q = fminf(0.95f, maxc(thr));
-    if (q <= 0) return;
-    if (depth >= 1) { /* Russian roulette from the third path vertex on */
-      uint64_t h = wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 9), s->seed);
-      if (wv_u01(h) >= q) return;
-      for (int k = 0; k < 3; k++) thr[k] /= q;
-    }
-    memcpy(o, org, sizeof o);
-    memcpy(d, wi, sizeof d);
-    prev_pdf = pdf;
+    for (int k = 0; k < 3; k++) bwi[k] = lx * bx[k] + ly * by[k] + lz * sf.ns[k];
+    bpdf = cos_pdf(&sf, bwi);
   }
+  const float *want[2] = {env_on ? ewi : NULL, bpdf > 0 ? bwi : NULL};
+  eval_bsdf(&sf, ts, 2, want, wo, fb);
+  /* next-event estimation */
+  for (int i = 0; i < s->nlights; i++) {
+    const wv_light3d *l = &s->lights[i];
+    float wi[3], li[3], dist = INFINITY, wgt = 1;
+    if (l->type == WV_LIGHT_DIRECTIONAL) {
+      for (int k = 0; k < 3; k++) wi[k] = (float)l->dir[k], li[k] = (float)l->color[k];
+    } else {
+      float lp[3], g = 1;
+      for (int k = 0; k < 3; k++) lp[k] = (float)l->pos[k];
+      if (l->type == WV_LIGHT_AREA) {
+        float u1, u2, n[3] = {(float)l->dir[0], (float)l->dir[1], (float)l->dir[2]}, ex[3], ey[3];
+        float a[3] = {fabsf(n[1]) > 0.99f ? 1.0f : 0.0f, fabsf(n[1]) > 0.99f ? 0.0f : 1.0f, 0};
+        cross(a, n, ex), normalize(ex), cross(n, ex, ey);
+        rand2(c, ts, depth, 1, &u1, &u2);
+        for (int k = 0; k < 3; k++)
+          lp[k] += (u1 - 0.5f) * (float)l->size[0] * ex[k] + (u2 - 0.5f) * (float)l->size[1] * ey[k];
+        for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
+        dist = normalize(wi);
+        float cosl = -dot(wi, n);
+        if (cosl <= 0) continue;
+        float pl = dist * dist / ((float)(l->size[0] * l->size[1]) * cosl);
+        wgt = last ? 1.0f : power_heuristic(pl, cos_pdf(&sf, wi));
+        g = 1.0f / pl;
+      } else {
+        for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
+        dist = normalize(wi);
+        g = 1.0f / (dist * dist);
+        if (l->type == WV_LIGHT_SPOT) {
+          float ca = -(wi[0] * (float)l->dir[0] + wi[1] * (float)l->dir[1] + wi[2] * (float)l->dir[2]);
+          float c0 = cosf((float)(l->cone_deg * 3.14159265358979 / 180)),
+                c1 = cosf((float)((l->cone_deg - l->blend_deg) * 3.14159265358979 / 180));
+          float x = c1 > c0 ? (ca - c0) / (c1 - c0) : (ca >= c0 ? 1.0f : 0.0f);
+          x = fminf(fmaxf(x, 0.0f), 1.0f);
+          g *= x * x * (3 - 2 * x);
+        }
+      }
+      for (int k = 0; k < 3; k++) li[k] = (float)l->color[k] * g;
+      dist *= 0.9999f;
+    }
+    if (maxc(li) <= 0) continue;
+    float f[1][3];
+    const float *lw[1] = {wi};
+    eval_bsdf(&sf, ts, 1, lw, wo, f);
+    if (maxc(f[0]) <= 0) continue;
+    ts->rays++;
+    if (wv_tracer_occluded(w->tracer, org, wi, 0.0f, dist)) continue;
+    for (int k = 0; k < 3; k++) L[k] += thr[k] * f[0][k] * li[k] * wgt;
+  }
+  if (env_on && maxc(fb[0]) > 0) {
+    ts->rays++;
+    float wgt = last ? 1.0f : power_heuristic(epl, cos_pdf(&sf, ewi));
+    p->shadow = 1;
+    memcpy(p->sh_o, org, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
+    for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * wgt / epl;
+  }
+  if (last || bpdf <= 0) return 0;
+  for (int k = 0; k < 3; k++) thr[k] *= fb[1][k] / bpdf;
+  float q = min2(0.95f, maxc(thr));
+  if (q <= 0) return 0;
+  if (depth >= 1) { /* Russian roulette from the third path vertex on */
+    uint64_t h = wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 9), s->seed);
+    if (wv_u01(h) >= q) return 0;
+    for (int k = 0; k < 3; k++) thr[k] /= q;
+  }
+  memcpy(o, org, sizeof org);
+  memcpy(d, bwi, sizeof bwi);
+  p->prev_pdf = bpdf;
+  p->depth++;
+  return 1;
+}
+
+/* The stratified numbers of path vertex depth (environment, area light, bounce)
+ * for the samples idx[0 .. m-1], the paths that reach a surface there, and their
+ * environment samples. */
+static void draw_depth(const render_ctx *c, thread_state *ts, int px, int py, int depth, const int *idx, int m) {
+  if (!m || depth >= CMJ_DEPTHS) return;
+  const int spp = c->spp;
+  for (int which = 0; which < 3; which++) {
+    int k = 1 + 3 * depth + which;
+    if (c->need[k])
+      draw_sequence(px, py, spp, c->s->width, wv_mix64(c->s->seed + 0x51ed27ULL * (uint64_t)k), idx, m,
+                    ts->u + (size_t)k * spp);
+  }
+  if (!c->need[1 + 3 * depth]) return;
+  const float(*u)[2] = (const float(*)[2])ts->u + (size_t)(1 + 3 * depth) * spp;
+  for (int i = 0; i < m; i++) ts->ug[i][0] = u[idx[i]][0], ts->ug[i][1] = u[idx[i]][1];
+  wv_envmap_sample_n(&c->w->env, m, (const float(*)[2])ts->ug, ts->eg);
+  for (int i = 0; i < m; i++) ts->env[(size_t)depth * spp + idx[i]] = ts->eg[i];
+}
+
+/* The pixel's spp paths, taken together from vertex to vertex: each vertex's
+ * stratified numbers and environment samples are drawn, in batches, only for the
+ * paths that reach a surface there, and the paths' shadow rays toward the
+ * environment and their bounce rays are traced as streams. Each path is the same
+ * as traced alone, and the mean is summed in sample order. */
+static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, float out[3]) {
+  const wv_scene3d *s = c->s;
+  const wv_world *w = c->w;
+  const int spp = c->spp, K = c->K;
+  path *P = ts->paths;
+  ts->pixel = (uint64_t)py * (uint64_t)s->width + (uint64_t)px;
+  draw_sequence(px, py, spp, s->width, s->seed, NULL, spp, ts->u);
+  camera_dirs(&c->cam, px, py, spp, (const float(*)[2])ts->u, ts->dir);
+  wv_tracer_intersect_from(w->tracer, c->cam.cpos, (const float(*)[3])ts->dir, spp, ts->hit, ts->got);
+  int nyarn = 0;
+  for (int j = 0; j < spp; j++) {
+    path *p = &P[j];
+    memcpy(p->o, c->cam.cpos, sizeof p->o), memcpy(p->d, ts->dir[j], sizeof p->d);
+    p->thr[0] = p->thr[1] = p->thr[2] = 1, p->L[0] = p->L[1] = p->L[2] = 0;
+    p->prev_pdf = 0, p->depth = 0, p->got = ts->got[j], p->at = (wv_env_at){0, 0};
+    ts->act[j] = j;
+    if (!p->got) continue;
+    p->hit = ts->hit[j];
+    if (w->mats[w->material[p->hit.geom]].kind == WV_MAT_FABRIC)
+      for (int k = 0; k < K; k++) ts->yidx[nyarn++] = j * K + k;
+  }
+  ts->rays += spp;
+  if (nyarn) draw_sequence(px, py, spp * K, s->width, wv_mix64(s->seed ^ 0x7961726eULL), ts->yidx, nyarn, ts->yarn);
+  for (int depth = 0, n = spp; n > 0; depth++) { /* the n paths in act reach vertex depth */
+    int m = 0, nsh = 0, nb = 0;
+    for (int i = 0; i < n; i++)
+      if (P[ts->act[i]].got) ts->idx[m++] = ts->act[i];
+    draw_depth(c, ts, px, py, depth, ts->idx, m);
+    for (int i = 0; i < n; i++) {
+      int j = ts->act[i];
+      path *p = &P[j];
+      ts->sample = j, p->shadow = 0;
+      int on = path_vertex(c, ts, p);
+      if (p->shadow) {
+        memcpy(ts->sh_o[nsh], p->sh_o, sizeof p->sh_o), memcpy(ts->sh_d[nsh], p->sh_d, sizeof p->sh_d);
+        ts->sh_t[nsh] = INFINITY, ts->sh_idx[nsh++] = j;
+      }
+      if (!on) continue;
+      memcpy(ts->dir[nb], p->d, sizeof p->d), memcpy(ts->org[nb], p->o, sizeof p->o);
+      ts->act[nb++] = j;
+    }
+    wv_tracer_occluded_n(w->tracer, (const float(*)[3])ts->sh_o, (const float(*)[3])ts->sh_d, ts->sh_t, nsh,
+                         ts->sh_occ);
+    for (int i = 0; i < nsh; i++)
+      if (!ts->sh_occ[i])
+        for (int k = 0; k < 3; k++) P[ts->sh_idx[i]].L[k] += P[ts->sh_idx[i]].sh_add[k];
+    ts->rays += nb;
+    wv_tracer_intersect_n(w->tracer, (const float(*)[3])ts->org, (const float(*)[3])ts->dir, nb, ts->hit, ts->got);
+    for (int i = 0; i < nb; i++) { /* the environment's texel of a bounce ray that escapes, read at the next vertex */
+      path *p = &P[ts->act[i]];
+      p->got = ts->got[i], p->at = (wv_env_at){0, 0};
+      if (p->got) p->hit = ts->hit[i];
+      else if (w->has_env && p->prev_pdf > 0) p->at = wv_envmap_at(&w->env, p->d);
+    }
+    n = nb;
+  }
+  double acc[3] = {0, 0, 0};
+  for (int j = 0; j < spp; j++)
+    for (int k = 0; k < 3; k++) acc[k] += isfinite(P[j].L[k]) ? P[j].L[k] : 0.0f;
+  for (int k = 0; k < 3; k++) out[k] = (float)(acc[k] / spp);
 }
 
 wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_scene3d_opts *opt, wv_image *capture,
@@ -451,6 +655,13 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
   float extent = w->scene_radius;
   for (int i = 0; i < 3; i++) extent = fmaxf(extent, fabsf(c.cam.cpos[i]));
   c.eps = 2e-5f * extent;
+  /* the stratified dimensions a path can use: camera; per depth environment, area light, bounce */
+  int area = 0;
+  for (int i = 0; i < s->nlights; i++) area |= s->lights[i].type == WV_LIGHT_AREA;
+  c.need[0] = 1;
+  for (int d = 0; d < CMJ_DEPTHS; d++)
+    c.need[1 + 3 * d] = w->has_env && d <= s->max_bounces, c.need[2 + 3 * d] = area && d <= s->max_bounces,
+                 c.need[3 + 3 * d] = d < s->max_bounces;
   int threads = opt && opt->threads > 0 ? opt->threads : omp_get_max_threads();
   wv_image rad;
   wv_status st = wv_image_alloc(&rad, s->width, s->height, 3, err);
@@ -459,31 +670,40 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     wv_image_free(&rad);
     return st;
   }
-  thread_state *ts = calloc((size_t)threads, sizeof *ts);
+  const size_t spp = (size_t)c.spp, K = (size_t)c.K;
+  thread_state *ts = aligned_alloc(_Alignof(thread_state), (size_t)threads * sizeof *ts); /* no line shared by two threads */
+  if (ts) memset(ts, 0, (size_t)threads * sizeof *ts);
   int fail = !ts;
   for (int t = 0; t < threads && !fail; t++) {
-    ts[t].scratch = calloc((size_t)w->nmats, sizeof *ts[t].scratch);
-    ts[t].fpos = malloc(sizeof *ts[t].fpos * (size_t)c.K);
-    ts[t].u = malloc(sizeof *ts[t].u * (size_t)(1 + 3 * CMJ_DEPTHS) * (size_t)c.spp);
-    ts[t].yarn = malloc(sizeof *ts[t].yarn * (size_t)c.spp * (size_t)c.K);
-    ts[t].env = malloc(sizeof *ts[t].env * (size_t)CMJ_DEPTHS * (size_t)c.spp);
-    ts[t].dir = malloc(sizeof *ts[t].dir * (size_t)c.spp);
-    ts[t].hit = malloc(sizeof *ts[t].hit * (size_t)c.spp);
-    ts[t].got = malloc(sizeof *ts[t].got * (size_t)c.spp);
-    fail |= !ts[t].scratch || !ts[t].fpos || !ts[t].u || !ts[t].yarn || !ts[t].env || !ts[t].dir || !ts[t].hit ||
-            !ts[t].got;
+    thread_state *me = &ts[t];
+    me->scratch = calloc((size_t)w->nmats, sizeof *me->scratch);
+    me->fpos = malloc(sizeof *me->fpos * K);
+    me->u = malloc(sizeof *me->u * (1 + 3 * CMJ_DEPTHS) * spp);
+    me->yarn = malloc(sizeof *me->yarn * spp * K);
+    me->env = malloc(sizeof *me->env * CMJ_DEPTHS * spp);
+    me->dir = malloc(sizeof *me->dir * spp);
+    me->org = malloc(sizeof *me->org * spp);
+    me->sh_o = malloc(sizeof *me->sh_o * spp), me->sh_d = malloc(sizeof *me->sh_d * spp);
+    me->sh_t = malloc(sizeof *me->sh_t * spp), me->sh_idx = malloc(sizeof *me->sh_idx * spp);
+    me->sh_occ = malloc(sizeof *me->sh_occ * spp);
+    me->ydir = malloc(sizeof *me->ydir * K);
+    me->hit = malloc(sizeof *me->hit * spp);
+    me->got = malloc(sizeof *me->got * spp);
+    me->paths = malloc(sizeof *me->paths * spp);
+    me->idx = malloc(sizeof *me->idx * spp);
+    me->act = malloc(sizeof *me->act * spp);
+    me->yidx = malloc(sizeof *me->yidx * spp * K);
+    me->ug = malloc(sizeof *me->ug * spp);
+    me->eg = malloc(sizeof *me->eg * spp);
+    fail |= !me->scratch || !me->fpos || !me->u || !me->yarn || !me->env || !me->dir || !me->org || !me->sh_o ||
+            !me->sh_d || !me->sh_t || !me->sh_idx || !me->sh_occ || !me->ydir || !me->hit || !me->got || !me->paths ||
+            !me->idx || !me->act || !me->yidx || !me->ug || !me->eg;
     for (int m = 0; m < w->nmats && !fail; m++)
       if (w->mats[m].nedits) {
-        fail |= !(ts[t].scratch[m] = malloc(sizeof(wv_fabric)));
-        if (!fail) *ts[t].scratch[m] = *w->mats[m].fab;
+        fail |= !(me->scratch[m] = malloc(sizeof(wv_fabric)));
+        if (!fail) *me->scratch[m] = *w->mats[m].fab;
       }
   }
-  /* the stratified dimensions a path can use: camera; per depth environment, area light, bounce */
-  int need[1 + 3 * CMJ_DEPTHS] = {1}, area = 0;
-  for (int i = 0; i < s->nlights; i++) area |= s->lights[i].type == WV_LIGHT_AREA;
-  for (int d = 0; d < CMJ_DEPTHS; d++)
-    need[1 + 3 * d] = w->has_env && d <= s->max_bounces, need[2 + 3 * d] = area && d <= s->max_bounces,
-                 need[3 + 3 * d] = d < s->max_bounces;
   int rows_done = 0;
   if (!fail) {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
@@ -495,39 +715,19 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
         done = rows_done;
         opt->progress(opt->progress_user, (double)done / s->height);
       }
-      for (int px = 0; px < s->width; px++) {
-        me->pixel = (uint64_t)py * (uint64_t)s->width + (uint64_t)px;
-        for (int k = 0; k < 1 + 3 * CMJ_DEPTHS; k++)
-          if (need[k])
-            draw_sequence(px, py, c.spp, s->width, k ? wv_mix64(s->seed + 0x51ed27ULL * (uint64_t)k) : s->seed,
-                          me->u + (size_t)k * c.spp);
-        draw_sequence(px, py, c.spp * c.K, s->width, wv_mix64(s->seed ^ 0x7961726eULL), me->yarn);
-        for (int d = 0; d < CMJ_DEPTHS; d++)
-          if (need[1 + 3 * d])
-            wv_envmap_sample_n(&w->env, c.spp, (const float(*)[2])me->u + (size_t)(1 + 3 * d) * c.spp,
-                               me->env + (size_t)d * c.spp);
-        for (int j = 0; j < c.spp; j++) camera_dir(&c.cam, (float)px + me->u[j][0], (float)py + me->u[j][1], me->dir[j]);
-        wv_tracer_intersect_from(w->tracer, c.cam.cpos, (const float(*)[3])me->dir, c.spp, me->hit, me->got);
-        double acc[3] = {0, 0, 0};
-        for (int j = 0; j < c.spp; j++) {
-          me->sample = j;
-          float L[3];
-          trace_path(&c, me, c.cam.cpos, me->dir[j], &me->hit[j], me->got[j], L);
-          for (int k = 0; k < 3; k++) acc[k] += isfinite(L[k]) ? L[k] : 0.0f;
-        }
-        float *out = wv_image_px(&rad, px, py);
-        for (int k = 0; k < 3; k++) out[k] = (float)(acc[k] / c.spp);
-      }
+      for (int px = 0; px < s->width; px++) render_pixel(&c, me, px, py, wv_image_px(&rad, px, py));
 #pragma omp atomic update
       rows_done++;
     }
   }
   double rays = 0, shades = 0;
   for (int t = 0; t < threads && ts; t++) {
-    rays += ts[t].rays, shades += ts[t].shades;
-    for (int m = 0; m < w->nmats && ts[t].scratch; m++) free(ts[t].scratch[m]);
-    free(ts[t].scratch), free(ts[t].fpos), free(ts[t].u), free(ts[t].yarn), free(ts[t].env);
-    free(ts[t].dir), free(ts[t].hit), free(ts[t].got);
+    thread_state *me = &ts[t];
+    rays += me->rays, shades += me->shades;
+    for (int m = 0; m < w->nmats && me->scratch; m++) free(me->scratch[m]);
+    free(me->scratch), free(me->fpos), free(me->u), free(me->yarn), free(me->env);
+    free(me->dir), free(me->org), free(me->sh_o), free(me->sh_d), free(me->sh_t), free(me->sh_idx), free(me->sh_occ), free(me->ydir), free(me->hit), free(me->got), free(me->paths), free(me->idx), free(me->act), free(me->yidx), free(me->ug);
+    free(me->eg);
   }
   free(ts);
   if (fail) {

@@ -34,8 +34,28 @@ typedef struct {
   int grey, colour;
 } wv_world_image;
 
+/* What a hit on a triangle reads first, in one cache line: its unit geometric
+ * normal (the edges' cross product, normalised) and its corners' normals. */
+typedef struct {
+  float ng[3];
+  float nrm[3][3];
+  float pad[4];
+} wv_face;
+
+/* Per triangle of a mesh with a fabric on it: the UV change per unit move in its
+ * plane (rows du/dP and dv/dP). */
+typedef struct {
+  float gu[3], gv[3];
+} wv_uv_grad;
+
+/* The faces of mesh m (nt of them) into out, and into grad (unless NULL) their
+ * UV gradients. */
+void wv_faces_make(const wv_mesh *m, wv_face *out, wv_uv_grad *grad);
+
 struct wv_world {
   wv_mesh *meshes; /* one per object */
+  wv_face **faces; /* per object, per triangle */
+  wv_uv_grad **uv_grad; /* per object, per triangle; NULL for a mesh without a fabric */
   int *material;   /* per object */
   int nobjects;
   wv_world_material *mats;

@@ -1,6 +1,6 @@
 /* Embree 3 scene of triangle meshes: building it under a memory limit, and the
- * queries the integrator needs (closest hit, for one ray or for many from one
- * point; occlusion). */
+ * queries the integrator needs (closest hit and occlusion, for one ray or for
+ * many together). */
 #include "tracer/tracer.h"
 
 #include <embree3/rtcore.h>
@@ -9,6 +9,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Below this many rays a stream is traced ray by ray (a stream's own cost). */
+#define WV_STREAM_MIN 8
 
 struct wv_tracer {
   RTCDevice dev;
@@ -100,39 +103,29 @@ static void to_hit(const struct RTCRayHit *rh, wv_trace_hit *hit) {
   hit->t = rh->ray.tfar;
   hit->b1 = rh->hit.u, hit->b2 = rh->hit.v;
   hit->geom = (int)rh->hit.geomID, hit->prim = (int)rh->hit.primID;
-  hit->ng[0] = rh->hit.Ng_x, hit->ng[1] = rh->hit.Ng_y, hit->ng[2] = rh->hit.Ng_z;
 }
 
-int wv_tracer_intersect(const wv_tracer *t, const float o[3], const float d[3], float tmin, float tmax,
-                        wv_trace_hit *hit) {
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  struct RTCRayHit rh;
-  set_ray(&rh.ray, o, d, tmin, tmax);
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(t->scene, &ctx, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
-  to_hit(&rh, hit);
-  return 1;
-}
-
-int wv_tracer_intersect_from(const wv_tracer *t, const float o[3], const float (*d)[3], int n, wv_trace_hit *hit,
-                             int *got) {
+/* Closest hits of n rays from o + j ostride (ostride 0: one origin for all)
+ * along d[j], in streams of up to 64 rays. */
+static int intersect_stream(const wv_tracer *t, const float *o, size_t ostride, const float (*d)[3], int n,
+                            enum RTCIntersectContextFlags flags, wv_trace_hit *hit, int *got) {
   enum { B = 64 };
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
-  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  ctx.flags = flags;
   struct RTCRayHit rh[B];
   int hits = 0;
   for (int j0 = 0; j0 < n; j0 += B) {
     int m = n - j0 < B ? n - j0 : B;
     for (int j = 0; j < m; j++) {
-      set_ray(&rh[j].ray, o, d[j0 + j], 0.0f, INFINITY);
+      set_ray(&rh[j].ray, o + (size_t)(j0 + j) * ostride, d[j0 + j], 0.0f, INFINITY);
       rh[j].hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh[j].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     }
-    rtcIntersect1M(t->scene, &ctx, rh, (unsigned)m, sizeof *rh);
+    if (m < WV_STREAM_MIN)
+      for (int j = 0; j < m; j++) rtcIntersect1(t->scene, &ctx, &rh[j]);
+    else
+      rtcIntersect1M(t->scene, &ctx, rh, (unsigned)m, sizeof *rh);
     for (int j = 0; j < m; j++) {
       got[j0 + j] = rh[j].hit.geomID != RTC_INVALID_GEOMETRY_ID;
       hits += got[j0 + j];
@@ -140,6 +133,33 @@ int wv_tracer_intersect_from(const wv_tracer *t, const float o[3], const float (
     }
   }
   return hits;
+}
+
+int wv_tracer_intersect_from(const wv_tracer *t, const float o[3], const float (*d)[3], int n, wv_trace_hit *hit,
+                             int *got) {
+  return intersect_stream(t, o, 0, d, n, RTC_INTERSECT_CONTEXT_FLAG_COHERENT, hit, got);
+}
+
+int wv_tracer_intersect_n(const wv_tracer *t, const float (*o)[3], const float (*d)[3], int n, wv_trace_hit *hit,
+                          int *got) {
+  return intersect_stream(t, o[0], 3, d, n, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT, hit, got);
+}
+
+void wv_tracer_occluded_n(const wv_tracer *t, const float (*o)[3], const float (*d)[3], const float *tmax, int n,
+                          int *occ) {
+  enum { B = 64 };
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  struct RTCRay r[B];
+  for (int j0 = 0; j0 < n; j0 += B) {
+    int m = n - j0 < B ? n - j0 : B;
+    for (int j = 0; j < m; j++) set_ray(&r[j], o[j0 + j], d[j0 + j], 0.0f, tmax[j0 + j]);
+    if (m < WV_STREAM_MIN)
+      for (int j = 0; j < m; j++) rtcOccluded1(t->scene, &ctx, &r[j]);
+    else
+      rtcOccluded1M(t->scene, &ctx, r, (unsigned)m, sizeof *r);
+    for (int j = 0; j < m; j++) occ[j0 + j] = r[j].tfar < 0.0f;
+  }
 }
 
 int wv_tracer_occluded(const wv_tracer *t, const float o[3], const float d[3], float tmin, float tmax) {
