@@ -5,13 +5,11 @@
 # Usage: cli_nolattice.sh WOVEN SOURCE_DIR
 source "$(dirname "$0")/cli_lib.bash"
 fail() { echo "FAIL $*"; fails=$((fails + 1)); }
-python3 - "$T" <<'PY' || fail "could not write the test photos"
-import random, struct, sys, zlib
-def png(path, w, h, px):
-    raw = b''.join(b'\x00' + bytes(px[y * w * 3:(y + 1) * w * 3]) for y in range(h))
-    def chunk(t, d): return struct.pack('>I', len(d)) + t + d + struct.pack('>I', zlib.crc32(t + d) & 0xffffffff)
-    open(path, 'wb').write(b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', w, h, 8, 2, 0, 0, 0)) +
-                           chunk(b'IDAT', zlib.compress(raw)) + chunk(b'IEND', b''))
+python3 - "$T" "$(dirname "$0")" <<'PY' || fail "could not write the test photos"
+import random, sys
+sys.dont_write_bytecode = True  # nothing written into the source tree
+sys.path.insert(0, sys.argv[2])
+from png_write import png
 png(sys.argv[1] + '/grey.png', 512, 512, [128] * (512 * 512 * 3))
 r = random.Random(5)  # seeded: the same sand every run
 png(sys.argv[1] + '/sand.png', 512, 512, [min(255, max(0, int(r.gauss(140, 30)))) for _ in range(512 * 512 * 3)])

@@ -6,13 +6,11 @@
 # Usage: cli_pair.sh WOVEN SOURCE_DIR
 source "$(dirname "$0")/cli_lib.bash"
 fail() { echo "FAIL $*"; fails=$((fails + 1)); }
-python3 - "$T" <<'PY' || fail "could not write the test photos"
-import random, struct, sys, zlib
-def png(path, w, h, px):
-    raw = b''.join(b'\x00' + bytes(px[y * w * 3:(y + 1) * w * 3]) for y in range(h))
-    def chunk(t, d): return struct.pack('>I', len(d)) + t + d + struct.pack('>I', zlib.crc32(t + d) & 0xffffffff)
-    open(path, 'wb').write(b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', w, h, 8, 2, 0, 0, 0)) +
-                           chunk(b'IDAT', zlib.compress(raw)) + chunk(b'IEND', b''))
+python3 - "$T" "$(dirname "$0")" <<'PY' || fail "could not write the test photos"
+import random, sys
+sys.dont_write_bytecode = True  # nothing written into the source tree
+sys.path.insert(0, sys.argv[2])
+from png_write import png
 r = random.Random(7)  # seeded: the same photos every run
 png(sys.argv[1] + '/r.png', 512, 512, [min(255, max(0, int(r.gauss(140, 30)))) for _ in range(512 * 512 * 3)])
 png(sys.argv[1] + '/t.png', 512, 512, [min(255, max(0, int(r.gauss(60, 20)))) for _ in range(512 * 512 * 3)])
