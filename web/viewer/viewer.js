@@ -603,7 +603,8 @@ function buildLightControls() {
 $('title').textContent = DATA.title || 'woven';
 $('subtitle').textContent = `${params.pattern} — scene ${SC.name}${DATA.photo ? ', with the photo' : ''}`;
 $('about').textContent = `The true woven model in WebGL (three.js r${THREE.REVISION}): yarn geometry, ` +
-  'SGGX/SpongeCake specular, blended diffuse and glints computed per sample, as woven renders them.';
+  'SGGX/SpongeCake specular, blended diffuse and glints computed per sample, as woven renders them; ' +
+  'with the back light, the light through the cloth (specular and diffuse transmission, open gaps).';
 const pat = $('pattern');
 for (const name of Object.keys(DATA.weaves)) pat.add(new Option(name, name));
 pat.value = params.pattern;
