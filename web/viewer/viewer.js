@@ -277,6 +277,7 @@ function setMode(mode) {
   state.mode = mode;
   $('mode').value = mode;
   if (state.controls) { state.controls.dispose(); state.controls = null; }
+  applyBackDefines();
   const u = fabricUniforms;
   if (mode === 'rig') {
     fabricMesh.geometry = rigGeometry(SC);
@@ -395,11 +396,15 @@ function rigLights(cyl) {
 // The light through the cloth on or off: the fabric shader with or without
 // WV_TRANSMIT (off, it is the reflection model alone, at its cost).
 function setBackLight(on) {
-  on = !!on && !(state.mode === 'rig' && SC.sample.shape === 'cylinder'); // woven transmits through a plane only
-  state.back = on;
-  fabricMaterial.defines = on ? { WV_TRANSMIT: '' } : {};
-  fabricMaterial.needsUpdate = true;
+  state.back = !!on;
   setMode(state.mode);
+}
+function applyBackDefines() {
+  if (state.back && state.mode === 'rig' && SC.sample.shape === 'cylinder') state.back = false; // woven transmits through a plane only
+  const on = 'WV_TRANSMIT' in fabricMaterial.defines;
+  if (on === state.back) return;
+  fabricMaterial.defines = state.back ? { WV_TRANSMIT: '' } : {};
+  fabricMaterial.needsUpdate = true;
 }
 
 function applyLight() {
@@ -542,6 +547,10 @@ function buildFabricControls() {
   colour(box, 'diffuse weft', 'diffuse.weft');
   colour(box, 'specular warp', 'specular.warp');
   colour(box, 'specular weft', 'specular.weft');
+  if (params.transmission) { // k_t: seen with the back light
+    colour(box, 'transmission warp', 'transmission.warp');
+    colour(box, 'transmission weft', 'transmission.weft');
+  }
   num('twist_deg', 'twist (deg)', 1);
   num('inclination_deg', 'inclination (deg)', 0.5);
   num('diffuse_blend', 'diffuse blend', 0.01);
