@@ -6,7 +6,9 @@
 // `seconds` each, and frames per CPU second of all of Chromium's processes
 // (steadier than the wall clock on a shared machine). Prints a table, then one
 // JSON line.
-// Usage: node bench/viewer_fps.mjs WOVEN SOURCE_DIR [--runs 3] [--seconds 3] [--spp 1,4]
+// With --back, each view also with its back light on (the light through the
+// cloth: `?back=1`, the rig's flat45-back view), rows "rig+back" and so on.
+// Usage: node bench/viewer_fps.mjs WOVEN SOURCE_DIR [--runs 3] [--seconds 3] [--spp 1,4] [--back]
 import { execFileSync } from 'node:child_process';
 import { createRequire } from 'node:module';
 import { mkdtempSync, readdirSync, readFileSync, rmSync } from 'node:fs';
@@ -48,7 +50,9 @@ function cpuSeconds() {
 }
 const results = [];
 let renderer = '';
-for (const [mode, query] of [['rig', 'mode=rig'], ['swatch', 'mode=swatch&w=1024&h=768'], ['drape', 'mode=drape&w=1024&h=768']]) {
+const views = [['rig', 'mode=rig'], ['swatch', 'mode=swatch&w=1024&h=768'], ['drape', 'mode=drape&w=1024&h=768']];
+if (args.includes('--back')) for (const [m, q] of views.slice()) views.push([`${m}+back`, `${q}&back=1`]);
+for (const [mode, query] of views) {
   const page = await context.newPage();
   await page.goto(`file://${html}?${query}&frames=1`);
   await page.waitForFunction(() => window.woven !== undefined, null, { timeout: 120000 });
@@ -72,7 +76,7 @@ for (const [mode, query] of [['rig', 'mode=rig'], ['swatch', 'mode=swatch&w=1024
 await context.close();
 rmSync(work, { recursive: true, force: true });
 for (const r of results)
-  console.log(`${r.mode.padEnd(7)} ${r.size.join(' x ').padEnd(11)} ${String(r.spp).padStart(3)} spp  ` +
+  console.log(`${r.mode.padEnd(11)} ${r.size.join(' x ').padEnd(11)} ${String(r.spp).padStart(3)} spp  ` +
               `${r.fps.toFixed(2)} frames/s  ${r.frames_per_cpu_second.toFixed(2)} frames per CPU second`);
 const load = readFileSync('/proc/loadavg', 'utf8').split(' ').slice(0, 3).join(' ');
 console.log(JSON.stringify({ renderer, runs, seconds, load_average: load, results }));

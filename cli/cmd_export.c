@@ -33,7 +33,9 @@ static const cli_cmd CMD = {
     "weave tile (base colour, normal, metallic-roughness, KHR_materials_anisotropy,\n"
     "KHR_materials_sheen), tiled by KHR_texture_transform at the tile's physical size. Each\n"
     "texel is a least-squares fit of that material to the woven BRDF over light/view direction\n"
-    "pairs; the residual is printed and stored in the material's extras (docs/export.md).\n"
+    "pairs; the residual is printed and stored in the material's extras (docs/export.md). The\n"
+    "light through the cloth: KHR_materials_diffuse_transmission (woven's diffuse transmission\n"
+    "per texel) and, where yarns leave open gaps, KHR_materials_transmission (their area).\n"
     "  DIR            a finished fit's directory (its params.json), or P.json a parameter file\n",
     NULL, {{OPTS, 0}}, 1, {offsetof(export_args, in)}};
 

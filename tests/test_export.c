@@ -12,6 +12,7 @@
 
 #include "export/std_model.h"
 #include "woven/export.h"
+#include "woven/maps.h"
 #include "woven/io.h"
 #include "woven/view.h"
 
@@ -38,7 +39,7 @@ static void test_std_lut(void **state) {
  * the anisotropic lobe with strength 0 equals it in any direction. */
 static void test_std_closed_forms(void **state) {
   (void)state;
-  wv_std_material m = {{0.5f, 0.5f, 0.5f}, 0.0f, 0.5f, 0.0f, {1, 0}, {0, 0, 0}, 0.5f, {0, 0, 1}};
+  wv_std_material m = {{0.5f, 0.5f, 0.5f}, 0.0f, 0.5f, 0.0f, {1, 0}, {0, 0, 0}, 0.5f, {0, 0, 1}, 0.0f};
   float z[3] = {0, 0, 1};
   wv_std_terms t;
   wv_std_spec_terms(&m, lut(), z, z, &t);
@@ -76,7 +77,7 @@ static void test_std_closed_forms(void **state) {
  * hemisphere of light directions) stays below 1 for white colours. */
 static void test_std_energy(void **state) {
   (void)state;
-  wv_std_material m = {{1, 1, 1}, 0.0f, 0.6f, 0.5f, {1, 0}, {0.5f, 0.5f, 0.5f}, 0.5f, {0, 0, 1}};
+  wv_std_material m = {{1, 1, 1}, 0.0f, 0.6f, 0.5f, {1, 0}, {0.5f, 0.5f, 0.5f}, 0.5f, {0, 0, 1}, 0.0f};
   float v[3] = {0.5f, 0.0f, 0.8660254f};
   double sum = 0;
   const int n = 128;
@@ -232,6 +233,69 @@ static void test_glb_structure(void **state) {
   wv_tri_mesh_free(&m);
 }
 
+/* The light through the cloth: the bake's diffuse transmission (factor x colour) has
+ * the mean of woven's transmission map, its open-area texture the open area (1 - w)^2;
+ * the glTF carries KHR_materials_diffuse_transmission, and KHR_materials_transmission
+ * only where the cloth has open gaps. */
+static void test_bake_transmission(void **state) {
+  (void)state;
+  for (int gaps = 0; gaps < 2; gaps++) {
+    wv_params p;
+    params_of("twill", &p);
+    p.yarn_width = gaps ? 0.75 : 1.0;
+    for (int y = 0; y < 2; y++) p.transmission[y][0] = 0.4, p.transmission[y][1] = 0.2, p.transmission[y][2] = 0.1;
+    wv_bake_opts o;
+    wv_bake_opts_default(&o);
+    o.texture_size = 16, o.samples = 2, o.directions = 16;
+    wv_bake b;
+    wv_error err = {0};
+    assert_int_equal(wv_bake_fabric(&p, &o, &b, &err), WV_OK);
+    assert_int_equal(b.has_open, gaps);
+    wv_maps mp;
+    assert_int_equal(wv_maps_generate(&p, 64, &mp, &err), WV_OK);
+    double want[3] = {0}, got[3] = {0}, open = 0;
+    for (int i = 0; i < 64 * 64; i++)
+      for (int c = 0; c < 3; c++) want[c] += mp.transmission.data[3 * i + c] / (64.0 * 64.0);
+    wv_scene srgb;
+    memset(&srgb, 0, sizeof srgb);
+    srgb.encoding = WV_ENC_SRGB;
+    for (int i = 0; i < 16 * 16; i++) {
+      const float *dt = b.diffuse_transmission.data + 4 * i, *op = b.open.data + 3 * i;
+      for (int c = 0; c < 3; c++) got[c] += dt[3] * wv_decode(&srgb, dt[c]) / 256.0;
+      open += op[0] / 256.0;
+      if (op[0] == 1.0f) assert_true(dt[3] == 0.0f); /* nothing diffuse where no yarn is */
+    }
+    for (int c = 0; c < 3; c++) assert_float_equal(got[c], want[c], 0.04 * want[c] + 2e-3);
+    assert_float_equal(open, gaps ? 0.25 * 0.25 : 0.0, 0.01);
+    wv_maps_free(&mp);
+    wv_tri_mesh m;
+    assert_int_equal(wv_tri_mesh_quad(20.0, &m, &err), WV_OK);
+    char path[512];
+    snprintf(path, sizeof path, "%s/t%d.glb", tu_tmpdir("export_trans"), gaps);
+    assert_int_equal(wv_gltf_write(path, &m, &b, &p, &err), WV_OK);
+    char *data;
+    size_t len;
+    assert_int_equal(wv_read_file(path, &data, &len, &err), WV_OK);
+    json_error_t je;
+    json_t *root = json_loadb(data + 20, le32((const unsigned char *)data + 12), 0, &je);
+    assert_non_null(root);
+    json_t *ext = json_object_get(json_array_get(json_object_get(root, "materials"), 0), "extensions");
+    json_t *dtx = json_object_get(ext, "KHR_materials_diffuse_transmission");
+    assert_non_null(dtx);
+    assert_int_equal(json_integer_value(json_object_get(json_object_get(dtx, "diffuseTransmissionTexture"), "index")), 5);
+    assert_int_equal(json_integer_value(json_object_get(json_object_get(dtx, "diffuseTransmissionColorTexture"), "index")), 5);
+    json_t *tx = json_object_get(ext, "KHR_materials_transmission");
+    assert_true((tx != NULL) == gaps);
+    if (tx) assert_int_equal(json_integer_value(json_object_get(json_object_get(tx, "transmissionTexture"), "index")), 6);
+    assert_int_equal(json_array_size(json_object_get(root, "images")), gaps ? 7 : 6);
+    assert_int_equal(json_array_size(json_object_get(root, "extensionsUsed")), gaps ? 5 : 4);
+    json_decref(root);
+    free(data);
+    wv_tri_mesh_free(&m);
+    wv_bake_free(&b);
+  }
+}
+
 /* Meshes: unit normals, tangents orthogonal with a sign, and the drape's cap
  * keeps arc length along the radii; tangents from UVs match the quad's. */
 static void test_meshes(void **state) {
@@ -383,6 +447,7 @@ int main(void) {
       cmocka_unit_test(test_bake_residual),  cmocka_unit_test(test_glb_structure),
       cmocka_unit_test(test_meshes),         cmocka_unit_test(test_bad_input),
       cmocka_unit_test(test_view_page),
+      cmocka_unit_test(test_bake_transmission),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -82,6 +82,13 @@ typedef struct {
   wv_image metal_rough; /* glTF layout: R 1, G roughness, B metallic */
   wv_image anisotropy;  /* glTF layout: RG 0.5 d + 0.5 (d the axis in the tangent plane), B strength */
   wv_image sheen;       /* RGB sheen colour, sRGB-encoded; A sheen roughness */
+  /* The light through the cloth (docs/export.md): KHR_materials_diffuse_transmission's
+   * colour (RGB, sRGB-encoded) and factor (A), whose product is the texel's mean of woven's
+   * diffuse transmission at normal incidence (wv_maps_transmission_at); and the texel's
+   * open area (grey, linear), KHR_materials_transmission's factor. */
+  wv_image diffuse_transmission;
+  wv_image open;
+  int has_open;         /* some texel has open area (else no KHR_materials_transmission) */
   double tile_mm[2];    /* physical size of the tile */
   /* The fit's residual, over all texels, direction pairs and channels, of the
    * model with the stored (8-bit) textures against the woven BRDF x cosine. */

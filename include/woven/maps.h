@@ -9,6 +9,7 @@
 #include "woven/error.h"
 #include "woven/image.h"
 #include "woven/params.h"
+#include "woven/yarn.h"
 
 typedef struct {
   wv_image normal;    /* unit normal, xyz in [-1,1] */
@@ -24,6 +25,11 @@ typedef struct {
   double tile_mm[2];  /* physical width and height of one tile, mm */
   double height_max;  /* largest height value, mm */
 } wv_maps;
+
+/* The transmission map's value at a point (woven's diffuse transmission at normal
+ * incidence): k_t of the yarn the light passes times the cloth's diffuse
+ * transmittance there, linear RGB; 0 in an open gap. */
+void wv_maps_transmission_at(const wv_params *p, const wv_yarn_point *yp, float out[3]);
 
 /* size x size pixels per tile (1..8192), one sample at each pixel centre. */
 wv_status wv_maps_generate(const wv_params *p, int size, wv_maps *m, wv_error *err);

@@ -11,6 +11,7 @@
 #include "io/io_internal.h"
 #include "util/colour.h"
 #include "woven/export.h"
+#include "woven/maps.h"
 
 #define MAX_DIRS 256
 #define PI_D 3.14159265358979323846
@@ -23,7 +24,8 @@ void wv_bake_opts_default(wv_bake_opts *o) {
 }
 
 void wv_bake_free(wv_bake *b) {
-  wv_image *all[] = {&b->base_color, &b->normal, &b->metal_rough, &b->anisotropy, &b->sheen};
+  wv_image *all[] = {&b->base_color, &b->normal, &b->metal_rough, &b->anisotropy, &b->sheen, &b->diffuse_transmission,
+                     &b->open};
   for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) wv_image_free(all[i]);
 }
 
@@ -232,8 +234,10 @@ wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, 
   if (st) return st;
   const wv_yarn_model *ym = wv_export_fabric_yarns(fab);
   int S = o->texture_size, n = o->samples, M = o->directions;
-  wv_image *all[] = {&b->base_color, &b->normal, &b->metal_rough, &b->anisotropy, &b->sheen};
-  for (size_t i = 0; i < sizeof all / sizeof all[0] && !st; i++) st = wv_image_alloc(all[i], S, S, i == 4 ? 4 : 3, err);
+  wv_image *all[] = {&b->base_color, &b->normal, &b->metal_rough, &b->anisotropy, &b->sheen, &b->diffuse_transmission,
+                     &b->open};
+  for (size_t i = 0; i < sizeof all / sizeof all[0] && !st; i++)
+    st = wv_image_alloc(all[i], S, S, i == 4 || i == 5 ? 4 : 3, err);
   wv_std_lut *lut = st ? NULL : malloc(sizeof *lut);
   if (!st && !lut) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for the bake");
   if (st) {
@@ -248,8 +252,9 @@ wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, 
   b->tile_mm[0] = tw, b->tile_mm[1] = th;
   b->directions = M;
   double sq_res = 0, sq_tgt = 0;
+  int any_open = 0;
   int threads = o->threads > 0 ? o->threads : omp_get_max_threads();
-#pragma omp parallel num_threads(threads) reduction(+ : sq_res, sq_tgt)
+#pragma omp parallel num_threads(threads) reduction(+ : sq_res, sq_tgt) reduction(| : any_open)
   {
     texel_fit *t = malloc(sizeof *t);
 #pragma omp for schedule(dynamic, 1)
@@ -260,12 +265,16 @@ wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, 
         /* The texel's woven reflectance, averaged over n x n positions, and its
          * mean normal and fibre direction (fibres have no sign: the doubled
          * angle is averaged). */
-        double nsum[3] = {0}, c2 = 0, s2 = 0;
+        double nsum[3] = {0}, c2 = 0, s2 = 0, kt[3] = {0}, open = 0;
         for (int j = 0; j < n; j++)
           for (int i = 0; i < n; i++) {
             float fx = (float)((tx + (i + 0.5) / n) / S * tw), fy = (float)(-(ty + (j + 0.5) / n) / S * th);
             wv_yarn_point yp;
             wv_yarn_eval(ym, fx, fy, &yp);
+            float ktp[3];
+            wv_maps_transmission_at(p, &yp, ktp);
+            for (int c = 0; c < 3; c++) kt[c] += ktp[c] / (n * n);
+            open += (double)yp.open / (n * n);
             if (yp.type >= 0) {
               for (int c = 0; c < 3; c++) nsum[c] += yp.n[c];
               c2 += (double)yp.t[0] * yp.t[0] - (double)yp.t[1] * yp.t[1], s2 += 2.0 * yp.t[0] * yp.t[1];
@@ -284,6 +293,18 @@ wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, 
         t->along[0] = (float)cos(fib), t->along[1] = (float)sin(fib);
         t->across[0] = -t->along[1], t->across[1] = t->along[0];
         for (int c = 0; c < 3; c++) t->yarn_n[c] = nrm[c];
+        /* The open area is transmission in glTF, which keeps only (1 - t) of the
+         * diffuse reflection: the fit knows it (the stored, 8-bit t). */
+        float *dt = wv_image_px(&b->diffuse_transmission, tx, ty), *op = wv_image_px(&b->open, tx, ty);
+        for (int c = 0; c < 3; c++) op[c] = q8((float)open);
+        any_open |= op[0] > 0;
+        t->mat.transmission = op[0];
+        /* The diffuse transmission as factor x colour, the factor as small as the colour
+         * (at most 1) allows: the factor takes its share of the diffuse reflection in
+         * an engine that honours it. */
+        double f = fmax(kt[0], fmax(kt[1], kt[2]));
+        dt[3] = q8((float)f);
+        for (int c = 0; c < 3; c++) dt[c] = q8(wv_srgb_encode_f(dt[3] > 0 ? (float)fmin(1.0, kt[c] / dt[3]) : 1.0f));
         fit_state s;
         fit_texel(t, &s);
         for (int c = 0; c < 3; c++) nrm[c] = t->mat.n[c];
@@ -312,6 +333,7 @@ wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, 
           q.n[c] = ql > 0 ? qn[c] / ql : (c == 2);
         }
         q.metallic = mr[2], q.roughness = mr[1], q.aniso = an[2], q.sheen_roughness = sh[3];
+        q.transmission = op[0];
         q.aniso_dir[0] = qdl > 0 ? qd[0] / qdl : 1.0f, q.aniso_dir[1] = qdl > 0 ? qd[1] / qdl : 0.0f;
         for (int k = 0; k < M; k++) {
           float y[3];
@@ -332,6 +354,7 @@ wv_status wv_bake_fabric(const wv_params *p, const wv_bake_opts *o, wv_bake *b, 
     wv_bake_free(b);
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for the bake");
   }
+  b->has_open = any_open;
   double cnt = (double)S * S * M * 3;
   b->rms = sqrt(sq_res / cnt), b->target_rms = sqrt(sq_tgt / cnt);
   b->relative = b->target_rms > 0 ? b->rms / b->target_rms : 0.0;

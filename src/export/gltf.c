@@ -84,10 +84,12 @@ wv_status wv_gltf_write(const char *path, const wv_tri_mesh *mesh, const wv_bake
                            add_view(views, &bin, m.indices, sizeof(uint32_t) * m.index_count, GL_ELEMENT_ARRAY_BUFFER),
                            GL_UNSIGNED_INT, m.index_count, "SCALAR");
   /* Textures: one PNG each, in the order the material refers to them. */
-  const wv_image *imgs[5] = {&b->base_color, &b->normal, &b->metal_rough, &b->anisotropy, &b->sheen};
-  static const char *names[5] = {"base colour", "normal", "metallic-roughness", "anisotropy", "sheen"};
+  const wv_image *imgs[7] = {&b->base_color, &b->normal,  &b->metal_rough, &b->anisotropy,
+                             &b->sheen,      &b->diffuse_transmission, &b->open};
+  static const char *names[7] = {"base colour", "normal", "metallic-roughness", "anisotropy", "sheen",
+                                 "diffuse transmission", "open area"};
   json_t *images = json_array(), *textures = json_array();
-  for (int i = 0; i < 5 && !st; i++) {
+  for (int i = 0; i < (b->has_open ? 7 : 6) && !st; i++) {
     unsigned char *png;
     size_t len;
     if ((st = wv_image_encode_png(imgs[i], &png, &len, err))) break;
@@ -106,6 +108,17 @@ wv_status wv_gltf_write(const char *path, const wv_tri_mesh *mesh, const wv_bake
       "KHR_materials_anisotropy", "anisotropyStrength", 1.0, "anisotropyRotation", 0.0, "anisotropyTexture",
       tex_info(3, sx, sy), "KHR_materials_sheen", "sheenColorFactor", 1.0, 1.0, 1.0, "sheenColorTexture",
       tex_info(4, sx, sy), "sheenRoughnessFactor", 1.0, "sheenRoughnessTexture", tex_info(4, sx, sy));
+  /* The light through the cloth: diffuse transmission (factor in A, colour in RGB of one
+   * texture) and, where the cloth has open gaps, their area as transmission (thin-walled:
+   * no KHR_materials_volume). */
+  json_t *mext = json_object_get(material, "extensions");
+  json_object_set_new(mext, "KHR_materials_diffuse_transmission",
+                      json_pack("{s:f,s:o,s:[f,f,f],s:o}", "diffuseTransmissionFactor", 1.0,
+                                "diffuseTransmissionTexture", tex_info(5, sx, sy), "diffuseTransmissionColorFactor",
+                                1.0, 1.0, 1.0, "diffuseTransmissionColorTexture", tex_info(5, sx, sy)));
+  if (b->has_open)
+    json_object_set_new(mext, "KHR_materials_transmission",
+                        json_pack("{s:f,s:o}", "transmissionFactor", 1.0, "transmissionTexture", tex_info(6, sx, sy)));
   json_object_set_new(material, "doubleSided", json_true()); /* cloth is seen from both sides */
   char *pj = wv_params_to_json(p);
   json_t *params = pj ? json_loads(pj, 0, NULL) : NULL;
@@ -116,8 +129,10 @@ wv_status wv_gltf_write(const char *path, const wv_tri_mesh *mesh, const wv_bake
                 "uv_mm", m.uv_mm, "texture_size", b->base_color.w, "fit", "rms", b->rms, "target_rms", b->target_rms,
                 "relative", b->relative, "direction_pairs", b->directions, "params", params));
   json_object_set_new(root, "asset", json_pack("{s:s,s:s}", "version", "2.0", "generator", "woven export"));
-  json_object_set_new(root, "extensionsUsed",
-                      json_pack("[s,s,s]", "KHR_materials_anisotropy", "KHR_materials_sheen", "KHR_texture_transform"));
+  json_t *used = json_pack("[s,s,s,s]", "KHR_materials_anisotropy", "KHR_materials_sheen", "KHR_texture_transform",
+                           "KHR_materials_diffuse_transmission");
+  if (b->has_open) json_array_append_new(used, json_string("KHR_materials_transmission"));
+  json_object_set_new(root, "extensionsUsed", used);
   json_object_set_new(root, "scene", json_integer(0));
   json_object_set_new(root, "scenes", json_pack("[{s:[i]}]", "nodes", 0));
   json_object_set_new(root, "nodes", json_pack("[{s:s,s:i}]", "name", "woven fabric", "mesh", 0));

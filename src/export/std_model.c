@@ -82,7 +82,7 @@ void wv_std_spec_terms(const wv_std_material *m, const wv_std_lut *lut, const fl
   float nl = sat(dot3(n, l)), nv = sat(dot3(n, v)), nh = sat(dot3(n, h)), vh = sat(dot3(v, h));
   t->nl = nl;
   t->w = exp2f((-5.55473f * vh - 6.98316f) * vh);
-  t->lambert = (1.0f - (0.04f * (1.0f - t->w) + t->w)) / PI_F;
+  t->lambert = (1.0f - m->transmission) * (1.0f - (0.04f * (1.0f - t->w) + t->w)) / PI_F;
   float r = clamp_roughness(m->roughness), alpha = r * r;
   /* Anisotropy axis T and its partner B in the geometric tangent plane. */
   float a = sat(m->aniso), dx = m->aniso_dir[0], dy = m->aniso_dir[1];

@@ -5,7 +5,7 @@
  * baker fits it and the tests check it. The formulas, with n the normal-mapped
  * normal, l and v the unit light and view directions, h = normalize(l + v):
  *
- *   out_c = (n.l) [ comp (b_c (1 - m) (1 - F(0.04)) / pi + F(f0_c) V D ms_c) + s_c D_s V_s ]
+ *   out_c = (n.l) [ comp (b_c (1 - m) (1 - t) (1 - F(0.04)) / pi + F(f0_c) V D ms_c) + s_c D_s V_s ]
  *   F(f0) = f0 (1 - w) + w,  w = 2^((-5.55473 (v.h) - 6.98316) (v.h))   (three's Schlick)
  *   f0_c  = 0.04 (1 - m) + m b_c,   ms_c = 1 + f0_c (1/E_ss - 1)        (multiple scattering)
  *   V D   = anisotropic GGX, height-correlated Smith, alpha = r^2 across the anisotropy
@@ -14,7 +14,8 @@
  *   D_s V_s = Charlie sheen (Estevez & Kulla 2017) with Neubelt's visibility
  *   comp  = 1 - max(s) max(E_s(n.v), E_s(n.l))                          (sheen energy)
  *
- * b base colour, m metallic, r roughness, a anisotropy strength, s sheen colour,
+ * b base colour, m metallic, t transmission (the light it lets through, from behind, is
+ * not part of this reflection model), r roughness, a anisotropy strength, s sheen colour,
  * E_ss the GGX single-scattering albedo (three's DFG table; here computed by
  * importance sampling), E_s three's analytic sheen albedo. Not modelled: three's
  * "geometry roughness" (it adds the screen-space change of the normal to r; 0 on
@@ -32,6 +33,7 @@ typedef struct {
   float sheen[3];        /* sheen colour, linear RGB */
   float sheen_roughness; /* 0..1 */
   float n[3];            /* unit shading normal (the normal map's value) */
+  float transmission;    /* KHR_materials_transmission's factor t: three keeps (1 - t) of the diffuse */
 } wv_std_material;
 
 /* GGX single-scattering albedo E_ss(r, n.v) (F = 1) on a grid, read bilinearly. */
@@ -46,7 +48,7 @@ float wv_std_lut_ess(const wv_std_lut *lut, float roughness, float nv);
 typedef struct {
   float nl;        /* saturate(n.l) */
   float w;         /* Schlick weight of v.h */
-  float lambert;   /* (1 - F(0.04)) / pi */
+  float lambert;   /* (1 - t) (1 - F(0.04)) / pi */
   float vd;        /* V D of the anisotropic GGX lobe */
   float ms_k;      /* 1/E_ss - 1 */
   float sheen;     /* D_s V_s */

@@ -20,6 +20,11 @@ void wv_maps_free(wv_maps *m) {
   for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) wv_image_free(all[i]);
 }
 
+void wv_maps_transmission_at(const wv_params *p, const wv_yarn_point *yp, float out[3]) {
+  float tr = WV_CLOTH_TRANSMITTANCE((float)p->thickness * yp->thickness);
+  for (int c = 0; c < 3; c++) out[c] = yp->through < 0 ? 0.0f : (float)p->transmission[yp->through][c] * tr;
+}
+
 wv_status wv_maps_generate(const wv_params *p, int size, wv_maps *m, wv_error *err) {
   memset(m, 0, sizeof *m);
   if (size < 1 || size > 8192) return wv_fail(err, WV_ERR_INVALID, "map size %d is outside 1..8192", size);
@@ -51,16 +56,15 @@ wv_status wv_maps_generate(const wv_params *p, int size, wv_maps *m, wv_error *e
       float *kd = wv_image_px(&m->diffuse, px, py), *ks = wv_image_px(&m->specular, px, py);
       float *a = wv_image_px(&m->roughness, px, py);
       float *kt = wv_image_px(&m->transmission, px, py), *op = wv_image_px(&m->open, px, py);
-      float tr = WV_CLOTH_TRANSMITTANCE((float)p->thickness * yp.thickness);
       for (int c = 0; c < 3; c++) n[c] = yp.n[c], t[c] = yp.t[c], h[c] = yp.height;
       if (yp.height > hmax) hmax = yp.height;
+      wv_maps_transmission_at(p, &yp, kt);
       int ty = yp.type;
       id[0] = ty == WV_WARP, id[1] = ty == WV_WEFT, id[2] = ty < 0 ? 0.0f : wv_u01(yp.segment);
       for (int c = 0; c < 3; c++) {
         kd[c] = ty < 0 ? 0.0f : (float)p->diffuse[ty][c];
         ks[c] = ty < 0 ? 0.0f : (float)p->specular[ty][c];
         a[c] = ty < 0 ? 1.0f : (float)p->roughness[ty];
-        kt[c] = yp.through < 0 ? 0.0f : (float)p->transmission[yp.through][c] * tr;
         op[c] = (float)yp.open;
       }
     }

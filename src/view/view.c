@@ -79,6 +79,14 @@ static wv_status build_data(const wv_view_opts *o, char **out, wv_error *err) {
   json_object_set_new(root, "params", pj ? json_loads(pj, 0, NULL) : json_null());
   json_object_set_new(root, "scene", sj ? json_loads(sj, 0, NULL) : json_null());
   free(pj), free(sj);
+  { /* the back light's placement and gap glow in the rig (viewer.js rigLights) */
+    wv_scene back;
+    char *bj = NULL;
+    if (!(st = wv_scene_preset("flat45-back", &back, err)) && !(bj = wv_scene_to_json(&back)))
+      st = wv_fail(err, WV_ERR_NOMEM, "out of memory for the viewer's data");
+    json_object_set_new(root, "back_scene", bj ? json_loads(bj, 0, NULL) : json_null());
+    free(bj);
+  }
   uint64_t seed = (uint64_t)p->seed; /* exact, beyond JavaScript's 2^53 */
   json_object_set_new(root, "seed_words", json_pack("[I,I]", (json_int_t)(seed >> 32), (json_int_t)(seed & 0xffffffffu)));
   json_object_set_new(root, "ranges", ranges_json());

@@ -14,6 +14,18 @@
 //      of the same mesh in three.js, same view, is reported against it; and
 //      spp frames of one sample give the picture of one frame of spp samples
 //      (the progressive accumulation);
+//   4. the viewer's back-lit rig view (`?back=1`: the light behind the cloth,
+//      flat45-back; 16 frames of spp samples) against `woven render --scene
+//      flat45-back`: SSIM of 4-px blurs >= 0.999 and their MAE <= 0.002, on
+//      each pattern and on twill with open gaps (yarn width 0.75), where the
+//      centre's mean (the gap glow, clipped) must also be within 5 % of woven's; woven's renders without the diffuse
+//      transmission, without the specular transmission and without the gap glow
+//      must each miss those bounds (so a viewer without them would fail); the
+//      glTF export carries KHR_materials_diffuse_transmission (and, with open
+//      gaps, KHR_materials_transmission), validates, and three.js's render of it
+//      in flat45-back (the light seen through the gaps as a lamp behind the
+//      cloth) is brighter at the centre than the same file without
+//      KHR_materials_transmission (its SSIM against woven's render is reported);
 // and the viewer refuses out-of-range parameters visibly. Nothing is fetched:
 // the viewer is a file, the glTF page is served from web/ by request
 // interception, and any other request fails the test.
@@ -149,6 +161,91 @@ async function skewedRig(pat, params, square) {
   if (!(turned > st + 0.05)) fail(`${pat}: the viewer does not bend the cloth as woven render does`);
 }
 
+// Mean luma (0..1) of the centre 48 x 48 pixels of a PNG, decoded in the glTF page.
+const centreMean = (file) => gpage.evaluate(async (url) => {
+  const img = new Image();
+  img.src = url;
+  await img.decode();
+  const cv = document.createElement('canvas');
+  cv.width = img.width, cv.height = img.height;
+  const g = cv.getContext('2d');
+  g.drawImage(img, 0, 0);
+  const d = g.getImageData(img.width / 2 - 24, img.height / 2 - 24, 48, 48).data;
+  let s = 0;
+  for (let i = 0; i < d.length; i += 4) s += 0.2126 * d[i] + 0.7152 * d[i + 1] + 0.0722 * d[i + 2];
+  return s / (255 * d.length / 4);
+}, `data:image/png;base64,${readFileSync(file).toString('base64')}`);
+
+// The back-lit rig (flat45-back) of one parameter file: the viewer with its back light on
+// against woven render, and woven's renders with a part of the transmission taken away.
+const BACK_SSIM = 0.999, BACK_MAE = 0.002, GLOW_REL = 0.05, BACK_FRAMES = 16;
+async function backLit(name, paramsFile) {
+  const base = join(work, `${name}_back`), c = `${base}_c.png`, v = `${base}_viewer.png`, html = `${base}.html`;
+  woven('render', '--params', paramsFile, '--scene', 'flat45-back', '-o', c, '-q');
+  woven('view', paramsFile, '-o', html, '-q'); // the flat45 page: its back light makes flat45-back
+  const page = await browser.newPage();
+  page.on('pageerror', (e) => fail(`${name} back-lit viewer: ${e.message}`));
+  await page.goto(`file://${html}?frames=1&spp=${spp}&back=1`);
+  await page.waitForFunction(() => window.woven !== undefined, null, { timeout: 60000 });
+  const t1 = Date.now();
+  await page.evaluate(([n, s]) => window.woven.render({ frames: n, spp: s }), [BACK_FRAMES, spp]);
+  const ms = Date.now() - t1;
+  png(await page.evaluate(() => window.woven.snapshot()), v);
+  const view = await page.evaluate(() => window.woven.view());
+  await page.close();
+  const back = JSON.parse(readFileSync(join(SRC, 'scenes/flat45-back.json'), 'utf8'));
+  if (!view.back || view.light.intensity !== back.light.intensity ||
+      view.light.position.some((x, i) => Math.abs(x - back.light.position_mm[i]) > 1e-9))
+    fail(`${name}: the viewer's back light is not flat45-back's (${JSON.stringify(view.light)})`);
+  const params = JSON.parse(readFileSync(paramsFile, 'utf8'));
+  const open = (params.yarn_width ?? 1) < 1;
+  const pass = (r) => r.ssim >= BACK_SSIM && r.mae <= BACK_MAE;
+  const sv = compare(c, v), raw = compare(c, v, 0);
+  const cc = await centreMean(c), cvm = await centreMean(v);
+  const glowOk = (m) => Math.abs(m - cc) <= GLOW_REL * cc;
+  if (!pass(sv)) fail(`${name} back-lit: viewer vs woven render SSIM ${sv.ssim.toFixed(4)} (>= ${BACK_SSIM}), MAE ${sv.mae.toFixed(4)} (<= ${BACK_MAE})`);
+  if (open && !glowOk(cvm)) fail(`${name} back-lit: the centre's mean ${cvm.toFixed(4)} is not within ${GLOW_REL} of woven's ${cc.toFixed(4)}`);
+  // woven's render without each part: the bounds must reject it
+  const parts = { diffuse_transmission: { transmission: { warp: [0, 0, 0], weft: [0, 0, 0] } },
+                  specular_transmission: { specular: { warp: [0, 0, 0], weft: [0, 0, 0] } } };
+  const without = {};
+  for (const [part, edit] of Object.entries(parts)) {
+    const pf = `${base}_no_${part}.json`, pc = `${base}_no_${part}.png`;
+    writeFileSync(pf, JSON.stringify({ ...params, ...edit }));
+    woven('render', '--params', pf, '--scene', 'flat45-back', '-o', pc, '-q');
+    const r = compare(c, pc);
+    without[part] = { ssim_blur4: r.ssim, mae_blur4: r.mae };
+    if (pass(r)) fail(`${name} back-lit: the bounds accept woven's render without the ${part.replace('_', ' ')}`);
+  }
+  if (open) {
+    const sf = `${base}_no_glow_scene.json`, pc = `${base}_no_gap_glow.png`;
+    writeFileSync(sf, JSON.stringify({ ...back, response: { ...back.response, gap_glow: { ...back.response.gap_glow, radiance: 0 } } }));
+    woven('render', '--params', paramsFile, '--scene', sf, '-o', pc, '-q');
+    const m = await centreMean(pc);
+    without.gap_glow = { centre_mean: m };
+    if (glowOk(m)) fail(`${name} back-lit: the centre's bound accepts woven's render without the gap glow`);
+  }
+  // the glTF: its transmission extensions, and three.js's back-lit render of it
+  const glb = `${base}.glb`;
+  woven('export', paramsFile, '--gltf', glb, '--texture', '32', '-q');
+  const report = await validateBytes(new Uint8Array(readFileSync(glb)), { uri: glb });
+  if (report.issues.numErrors) fail(`${name}: the glTF validator reports ${report.issues.numErrors} errors`);
+  const used = report.info?.extensionsUsed || [];
+  if (!used.includes('KHR_materials_diffuse_transmission')) fail(`${name}: the glTF has no KHR_materials_diffuse_transmission`);
+  if (used.includes('KHR_materials_transmission') !== open) fail(`${name}: KHR_materials_transmission ${open ? 'missing' : 'without open gaps'}`);
+  let gltf = null;
+  if (open) {
+    const u = `http://woven.test/work/${name}_back.glb`, t = `${base}_gltf.png`, ts = `${base}_gltf_stripped.png`;
+    png(await gpage.evaluate(([x, sc]) => window.renderGltf(x, sc), [u, back]), t);
+    png(await gpage.evaluate(([x, sc]) => window.renderGltf(x, sc, { strip: 'KHR_materials_transmission' }), [u, back]), ts);
+    const mt = await centreMean(t), ms0 = await centreMean(ts), st = compare(c, t);
+    gltf = { centre: mt, centre_stripped: ms0, ssim_blur4: st.ssim, mae_blur4: st.mae };
+    if (!(mt > ms0 + 0.05)) fail(`${name}: three.js shows no light through the glTF's gaps (centre ${mt.toFixed(4)} vs ${ms0.toFixed(4)} without KHR_materials_transmission)`);
+  }
+  return { name, ssim_blur4: sv.ssim, mae_blur4: sv.mae, ssim: raw.ssim, centre_viewer: cvm, centre_woven: cc,
+           viewer_ms: ms, without, gltf, gltf_validator: { errors: report.issues.numErrors, warnings: report.issues.numWarnings } };
+}
+
 // One studio view (swatch or drape) of one pattern, key light alone: the viewer,
 // woven scene of the same view, and the glTF of the same mesh in three.js.
 async function studioCompare(pat, params, html, mode) {
@@ -192,7 +289,7 @@ async function studioCompare(pat, params, html, mode) {
            vertices: pos.length / 3 };
 }
 
-const rows = [], studio = [];
+const rows = [], studio = [], backRows = [];
 const flat45 = JSON.parse(readFileSync(join(SRC, 'scenes/flat45.json'), 'utf8'));
 const gpage = await browser.newPage();
 gpage.on('pageerror', (e) => fail(`glTF page: ${e.message}`));
@@ -241,6 +338,12 @@ for (const pat of patterns) {
   if (!(sv.ssim >= 0.9)) fail(`${pat}: viewer vs woven render SSIM ${sv.ssim.toFixed(4)} < 0.9`);
   for (const mode of ['swatch', 'drape']) studio.push(await studioCompare(pat, params, html, mode));
   if (pat === (patterns.includes('twill') ? 'twill' : patterns[0])) await skewedRig(pat, params, c);
+  backRows.push(await backLit(pat, params));
+  if (pat === (patterns.includes('twill') ? 'twill' : patterns[0])) { // open gaps: the light seen through them
+    const pf = join(work, `${pat}_open.json`);
+    writeFileSync(pf, JSON.stringify({ ...JSON.parse(readFileSync(params, 'utf8')), yarn_width: 0.75 }));
+    backRows.push(await backLit(`${pat}_open`, pf));
+  }
 }
 
 await browser.close();
@@ -259,6 +362,18 @@ console.log('pattern   view     viewer: SSIM    MAE   SSIM raw  MAE raw | glTF: 
 for (const r of studio)
   console.log(`${r.pattern.padEnd(9)} ${r.mode.padEnd(7)} ${f(r.viewer_ssim_blur4)} ${f(r.viewer_mae_blur4)} ${f(r.viewer_ssim)} ${f(r.viewer_mae)}   ` +
               `${f(r.gltf_ssim_blur4)} ${f(r.gltf_mae_blur4)} ${f(r.gltf_ssim)} ${f(r.gltf_mae)}   ${String(r.viewer_ms).padStart(8)}   ${String(r.scene_ms).padStart(7)}`);
-console.log(JSON.stringify({ renderer: rendererName, spp, seconds: (Date.now() - t0) / 1000, scene_spp: cspp, results: rows, studio }));
+console.log('flat45-back (viewer ?back=1) against woven render: SSIM and MAE of 4-px blurs, SSIM unblurred, centre 48 px mean');
+console.log('params        SSIM     MAE  SSIM raw | centre viewer  woven | without k_t: SSIM   MAE | without k_s: SSIM   MAE');
+for (const r of backRows) {
+  const d = r.without.diffuse_transmission, sp = r.without.specular_transmission;
+  console.log(`${r.name.padEnd(11)} ${f(r.ssim_blur4)} ${f(r.mae_blur4)} ${f(r.ssim)}   ${f(r.centre_viewer)} ${f(r.centre_woven)}   ` +
+              `${f(d.ssim_blur4)} ${f(d.mae_blur4)}   ${f(sp.ssim_blur4)} ${f(sp.mae_blur4)}` +
+              (r.without.gap_glow ? `   (without the glow: centre ${r.without.gap_glow.centre_mean.toFixed(4)})` : ''));
+  if (r.gltf)
+    console.log(`  ${r.name} glTF in three.js, flat45-back: centre ${r.gltf.centre.toFixed(4)} (without KHR_materials_transmission ` +
+                `${r.gltf.centre_stripped.toFixed(4)}), vs woven render SSIM ${r.gltf.ssim_blur4.toFixed(4)} MAE ${r.gltf.mae_blur4.toFixed(4)} (4-px blurs)`);
+}
+console.log(JSON.stringify({ renderer: rendererName, spp, seconds: (Date.now() - t0) / 1000, scene_spp: cspp, results: rows, studio,
+                             back_lit: backRows }));
 console.log(failures ? `${failures} failed` : 'all passed');
 process.exit(failures ? 1 : 0);

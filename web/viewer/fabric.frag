@@ -5,8 +5,12 @@
 //   yarnEval      src/yarn/yarn_eval.h  wv_yarn_eval_inline, wv_yarn_frame_inline, wv_yarn_scale_inline
 //   glint         src/render/render_internal.h  wv_glint (U_s from the hashed 1/8-spacing grid)
 //   shadeLight    src/render/render_internal.h  wv_shade (SGGX/SpongeCake specular, blended Lambert)
+//   clothAt, shadeTrans  src/kernel/kernel_impl.h  wv_yarn_locate's crossing yarn, wv_cloth_chords,
+//                 wv_shade_trans (light from behind: specular and diffuse transmission, open gaps)
 //   hash2, mix64  src/util/hash.h (64-bit integers emulated as uvec2(high, low))
 //   sinHp, cosHp, expWv  src/util/fastmath.h
+// The light through the cloth is compiled only with WV_TRANSMIT defined (the
+// back light on): without it the shader is the reflection model alone.
 // A change to the model in C must be repeated here; the browser test
 // (web/test/browser.test.mjs) compares this shader with `woven render`.
 precision highp float;
@@ -60,6 +64,12 @@ uniform sampler2D uShadowMap;   // distance from the light / far
 uniform mat4 uShadowMatrix;
 uniform float uShadowInvFar, uShadowBias;
 uniform float uShadowTexel;     // a texel's width per unit distance from the light
+
+#ifdef WV_TRANSMIT
+uniform vec3 uKt[2];            // transmission colours k_t
+uniform vec3 uBackPos;          // studio: a point light behind the cloth (uBackI 0: none)
+uniform float uBackI;
+#endif
 
 uniform int uSpp;               // samples this frame
 uniform int uFrame;             // frame index of the progressive accumulation
@@ -216,6 +226,61 @@ vec3 shadeLight(int ty, vec3 n, vec3 t, float us, vec3 wi, vec3 wo, float light)
   return light * (uKs[ty] * spec + uKd[ty] * diff);
 }
 
+#ifdef WV_TRANSMIT
+// phi(y) = (1 - e^-y) / y, its Taylor series below 0.5 (wv_phi).
+float phiWv(float y) {
+  if (y < 0.5)
+    return 1.0 - y * (1.0 / 2.0 - y * (1.0 / 6.0 - y * (1.0 / 24.0 - y * (1.0 / 120.0 - y * (1.0 / 720.0 -
+           y * (1.0 / 5040.0 - y * (1.0 / 40320.0 - y * (1.0 / 362880.0 - y * (1.0 / 3628800.0)))))))));
+  return (1.0 - expWv(-y)) / y;
+}
+
+// The cloth at a fabric point for light from behind (wv_yarn_locate's crossing
+// yarn, wv_cloth_chords): the type of the yarn the light passes (the visible
+// one, or beside it the crossing one; -1 in an open gap, where no yarn is) and
+// the chords of the visible (lv) and the crossing (lh) yarn, in yarn diameters.
+int clothAt(float x, float y, out float lv, out float lh) {
+  float r = -y * uInvSpacing.y, c = x * uInvSpacing.x;
+  int I = int(floor(r)), J = int(floor(c));
+  float fr = r - floor(r), fc = c - floor(c);
+  int type = int(texelFetch(uWeave, ivec2(wrapI(J, uCols), wrapI(I, uRows)), 0).r & 0xffu);
+  float a = type == 0 ? (fc - 0.5) * uSpacing.x : (fr - 0.5) * uSpacing.y;
+  float ah = type == 0 ? (fr - 0.5) * uSpacing.y : (fc - 0.5) * uSpacing.x;
+  bool lit = !(abs(a) > 0.5 * (type == 0 ? uSpacing.x : uSpacing.y) * uYarnWidth);
+  bool cov = !(abs(ah) > 0.5 * (type == 0 ? uSpacing.y : uSpacing.x) * uYarnWidth);
+  float cv = cosHp(a * (type == 0 ? uVScale.x : uVScale.y)), ch = cosHp(ah * (type == 0 ? uVScale.y : uVScale.x));
+  lv = lit && cv > 0.0 ? cv : 0.0;
+  lh = cov && ch > 0.0 ? ch : 0.0;
+  if (lit) return type;
+  return cov ? 1 - type : -1;
+}
+
+// wv_shade_trans for one light behind the cloth (wi.z < 0): the visible yarn ty
+// (-1 beside it) with frame (n, t), the yarn tw the light passes, the chords.
+vec3 shadeTrans(int ty, int tw, vec3 n, vec3 t, float us, float lv, float lh, vec3 wi, vec3 wo, float light) {
+  if (wo.z <= 0.0) return vec3(0.0);
+  float ami = -wi.z, mo = wo.z;
+  float Ah = 1.0 / (1.0 + 0.5 * (uThickness * lh)), A = 1.0 / (1.0 + 0.5 * (uThickness * (lv + lh)));
+  vec3 spec = vec3(0.0);
+  float ni = ami; // beside the visible yarn: the macro normal
+  if (ty >= 0) {
+    vec3 h = normalize(wi + wo);
+    float a = uAlpha[ty], k = 1.0 - a * a;
+    float ti = dot(t, wi), to = dot(t, wo), th = dot(t, h);
+    float si = sqrt(max(1.0 - k * ti * ti, 0.0)), so = sqrt(max(1.0 - k * to * to, 0.0));
+    float pa = si / ami, pb = so / mo, tl = uThickness * lv;
+    float E = tl * expWv(-tl * min(pa, pb)) * phiWv(tl * abs(pa - pb));
+    float q = 1.0 + (1.0 / (a * a) - 1.0) * th * th;
+    float D = 1.0 / (PI_F * a * q * q);
+    spec = uKs[ty] * (us * Ah * D / (4.0 * mo) * E);
+    // the yarn's underside, where the light enters: the normal mirrored along the yarn and in z
+    ni = dot(wi, ty == 0 ? vec3(n.x, -n.y, -n.z) : vec3(-n.x, n.y, -n.z));
+  }
+  float diff = (uBlend * max(ni, 0.0) + (1.0 - uBlend) * ami) * (1.0 / PI_F) * A;
+  return light * (spec + uKt[tw] * diff);
+}
+#endif
+
 // 0 where the shadow map has a surface nearer the key light than P, else 1.
 // P moves off the surface along N by 1.5 texels: a texel is flat where the
 // surface slopes away from the light, and would shadow the surface itself.
@@ -279,7 +344,21 @@ void main() {
   vec3 V = normalize(uCamPos - P);
   vec3 wi = vec3(dot(l, T), dot(l, B), dot(l, N));
   vec3 wo = vec3(dot(V, T), dot(V, B), dot(V, N));
+#ifdef WV_TRANSMIT
+  float light = uLightI / r2 * keyVisible(P, wi.z < 0.0 ? -N : N); // lit from behind: tested on the far side
+  vec3 wib = vec3(0.0, 0.0, 1.0);
+  float lightb = 0.0;
+  if (uBackI > 0.0) {
+    vec3 Lb = uBackPos - P;
+    float rb2 = dot(Lb, Lb);
+    vec3 lb = Lb * (1.0 / sqrt(rb2));
+    wib = vec3(dot(lb, T), dot(lb, B), dot(lb, N));
+    lightb = uBackI / rb2;
+  }
+  float open = 0.0; // samples whose line of sight crosses an open gap
+#else
   float light = uLightI / r2 * keyVisible(P, N);
+#endif
 
   // Samples: the R2 low-discrepancy sequence (Roberts 2018) continued across
   // frames, rotated per pixel (Cranley-Patterson).
@@ -295,9 +374,22 @@ void main() {
     vec2 fs = f + fdx * (xi.x - 0.5) + fdy * (xi.y - 0.5);
     vec3 yn, yt;
     int ty = yarnEval(fs.x, fs.y, cache, yn, yt);
+#ifdef WV_TRANSMIT
+    float lv, lh;
+    int tw = clothAt(fs.x, fs.y, lv, lh);
+    if (tw < 0) { open += 1.0; continue; } // an open gap: what is behind shows (display.frag)
+    float us = ty >= 0 ? glint(fs.x, fs.y, gcache) : 1.0;
+    sum += wi.z < 0.0 ? shadeTrans(ty, tw, yn, yt, us, lv, lh, wi, wo, light)
+                      : (ty >= 0 ? shadeLight(ty, yn, yt, us, wi, wo, light) : vec3(0.0));
+    if (lightb > 0.0)
+      sum += wib.z < 0.0 ? shadeTrans(ty, tw, yn, yt, us, lv, lh, wib, wo, lightb)
+                         : (ty >= 0 ? shadeLight(ty, yn, yt, us, wib, wo, lightb) : vec3(0.0));
+#endif
     if (ty < 0) continue; // gap: nothing reflects
+#ifndef WV_TRANSMIT
     float us = glint(fs.x, fs.y, gcache);
     sum += shadeLight(ty, yn, yt, us, wi, wo, light);
+#endif
     for (int b = 0; b < uBoxes; b++) { // one point of each soft box per sample
       vec2 e = fract(rot.yx + g * vec2(0.5698402909980532, 0.7548776662466927) + 0.37 * float(b + 1)) * 2.0 - 1.0;
       vec3 q = uBoxC[b] + e.x * uBoxU[b] + e.y * uBoxV[b];
@@ -311,5 +403,9 @@ void main() {
     if (uAmbient > 0.0 && wo.z > 0.0) // uniform sky on the diffuse lobe: its exact cosine integral
       sum += uAmbient * uKd[ty] * (uBlend * 0.5 * (1.0 + yn.z) + (1.0 - uBlend));
   }
+#ifdef WV_TRANSMIT
+  outColor = vec4(sum / float(uSpp), 1.0 - open / float(uSpp)); // alpha: the cloth's cover
+#else
   outColor = vec4(sum / float(uSpp), 1.0);
+#endif
 }

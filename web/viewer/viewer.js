@@ -13,7 +13,8 @@
 //
 // A small API for tests and scripts: window.woven.render({frames, spp}) renders
 // and resolves when done; snapshot() returns the canvas as a PNG data URL;
-// fps(ms) measures frames per second; setParam(key, value) edits a parameter.
+// fps(ms) measures frames per second; setParam(key, value) edits a parameter;
+// setBackLight(on) switches the light through the cloth (also ?back=1).
 
 const $ = (id) => document.getElementById(id);
 const DATA = JSON.parse($('woven-data').textContent);
@@ -81,6 +82,8 @@ function prepareFabric(p, seedWords) {
     uYarnWidth: width, uSinPsi: f(Math.sin(psi)), uCosPsi: f(Math.cos(psi)), uNoise: p.noise_level,
     uSeed: seedWords, uKd: [new THREE.Vector3(...p.diffuse.warp), new THREE.Vector3(...p.diffuse.weft)],
     uKs: [new THREE.Vector3(...p.specular.warp), new THREE.Vector3(...p.specular.weft)],
+    // k_t (woven view writes it; a file without it has k_d / 2, as wv_params_transmission_default)
+    uKt: ['warp', 'weft'].map((y) => new THREE.Vector3(...(p.transmission ? p.transmission[y] : p.diffuse[y].map((x) => x / 2)))),
     uAlpha: [p.roughness.warp, p.roughness.weft], uBlend: p.diffuse_blend, uThickness: p.thickness,
     uGlints: p.specular_noise !== false, uInvGlintCell: sp.map((s) => f(1 / f(s / 8))),
   };
@@ -141,6 +144,7 @@ const fabricUniforms = {
   uBoxArea: { value: [0, 0, 0] }, uAmbient: { value: 0 }, uSpp: { value: 4 }, uFrame: { value: 0 },
   uShadows: { value: false }, uShadowMap: { value: null }, uShadowMatrix: { value: new THREE.Matrix4() },
   uShadowInvFar: { value: 1 }, uShadowBias: { value: 0 }, uShadowTexel: { value: 0 },
+  uBackPos: { value: new THREE.Vector3() }, uBackI: { value: 0 },
 };
 for (const [k, v] of Object.entries(prepareFabric(params, seedWords))) fabricUniforms[k] = { value: v };
 const fabricMaterial = new THREE.RawShaderMaterial({
@@ -224,6 +228,7 @@ const display = screenPass(shader('woven-display-frag'), {
   uAcc: { value: null }, uInvFrames: { value: 1 }, uRig: { value: true }, uExposure: { value: 1 }, uClip: { value: 1 },
   uGamma: { value: 2.2 }, uSigma: { value: 450 }, uEncoding: { value: 1 }, uFalloff: { value: false },
   uSize: { value: new THREE.Vector2(1, 1) }, uBackdrop: { value: true }, uPhoto: { value: photoTex }, uSplit: { value: 0 },
+  uGlow: { value: 0 }, uGlowSigma: { value: 1 },
 });
 const quadCamera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
 
@@ -251,7 +256,7 @@ const state = {
   mode: ['rig', 'swatch', 'drape'].includes(url.get('mode')) ? url.get('mode') : 'rig',
   spp: Math.max(1, Math.min(256, Number(url.get('spp')) || 4)),
   frames: Math.max(1, Math.min(4096, Number(url.get('frames')) || 64)),
-  frame: 0, split: 0, light: null, controls: null, size: [1, 1], valid: true,
+  frame: 0, split: 0, light: null, controls: null, size: [1, 1], valid: true, back: false,
 };
 const meshes = {};
 
@@ -272,6 +277,7 @@ function setMode(mode) {
   state.mode = mode;
   $('mode').value = mode;
   if (state.controls) { state.controls.dispose(); state.controls = null; }
+  applyBackDefines();
   const u = fabricUniforms;
   if (mode === 'rig') {
     fabricMesh.geometry = rigGeometry(SC);
@@ -300,7 +306,11 @@ function setMode(mode) {
     camera.lookAt(look);
     const dist = camera.position.distanceTo(look);
     camera.near = dist * 1e-3, camera.far = dist * 100;
-    state.light = lightFromPosition(look, new THREE.Vector3(...SC.light.position_mm), SC.light.intensity, true);
+    const rl = rigLights(cyl);
+    state.light = lightFromPosition(look, state.back ? rl.back : rl.front, SC.light.intensity, true);
+    display.uniforms.uGlow.value = state.back ? rl.glow : 0;
+    display.uniforms.uGlowSigma.value = rl.glowSigma;
+    u.uBackI.value = 0;
     renderer.setPixelRatio(1);
   } else {
     const m = meshes[mode] || (meshes[mode] = meshGeometry(DATA.meshes[mode]));
@@ -321,6 +331,8 @@ function setMode(mode) {
     // behind) and a dim uniform sky, all scaled to the object.
     const key = new THREE.Vector3(c.x - 1.2 * R, c.y + 2.2 * R, c.z + 1.6 * R);
     state.light = lightFromPosition(c, key, 12.0 * R * R, false);
+    u.uBackI.value = state.back ? state.light.intensity : 0; // placed behind the cloth each frame (renderFrame)
+    display.uniforms.uGlow.value = 0;
     const boxes = [
       { c: [c.x - 2.0 * R, c.y + 2.5 * R, c.z + 1.0 * R], u: [0.9 * R, 0, 0.5 * R], v: [0, 0.2 * R, -0.9 * R], L: 0.9 },
       { c: [c.x + 2.6 * R, c.y + 0.8 * R, c.z + 0.8 * R], u: [0, 0.8 * R, 0], v: [-0.3 * R, 0, 0.9 * R], L: 0.35 },
@@ -363,6 +375,38 @@ function setMode(mode) {
   applyLight();
 }
 
+// The rig's lights: the scene's, and with the back light on a light behind the
+// cloth on the camera's axis, as the flat45-back preset places it (its distance
+// behind the look-at point in camera distances, the same intensity, its gap
+// glow); a scene that transmits itself (light below the plane) keeps its light
+// and glow, and its front light is that light mirrored through the plane.
+function rigLights(cyl) {
+  const cam = new THREE.Vector3(...SC.camera.position_mm), look = new THREE.Vector3(...SC.camera.look_at_mm);
+  const lp = new THREE.Vector3(...SC.light.position_mm);
+  if (!cyl && lp.z < 0)
+    return { front: new THREE.Vector3(lp.x, lp.y, -lp.z), back: lp,
+             glow: SC.response.gap_glow ? SC.response.gap_glow.radiance : 0,
+             glowSigma: SC.response.gap_glow ? SC.response.gap_glow.sigma_px : 1 };
+  const B = DATA.back_scene, bc = new THREE.Vector3(...B.camera.position_mm), bl = new THREE.Vector3(...B.camera.look_at_mm);
+  const k = new THREE.Vector3(...B.light.position_mm).distanceTo(bl) / bc.distanceTo(bl);
+  const back = new THREE.Vector3().subVectors(look, cam).multiplyScalar(k).add(look);
+  return { front: lp, back, glow: B.response.gap_glow.radiance, glowSigma: B.response.gap_glow.sigma_px };
+}
+
+// The light through the cloth on or off: the fabric shader with or without
+// WV_TRANSMIT (off, it is the reflection model alone, at its cost).
+function setBackLight(on) {
+  state.back = !!on;
+  setMode(state.mode);
+}
+function applyBackDefines() {
+  if (state.back && state.mode === 'rig' && SC.sample.shape === 'cylinder') state.back = false; // woven transmits through a plane only
+  const on = 'WV_TRANSMIT' in fabricMaterial.defines;
+  if (on === state.back) return;
+  fabricMaterial.defines = state.back ? { WV_TRANSMIT: '' } : {};
+  fabricMaterial.needsUpdate = true;
+}
+
 function applyLight() {
   const L = state.light;
   fabricUniforms.uLightPos.value.copy(L.moved ? lightPosition(L, L.upZ) : L.pos);
@@ -377,6 +421,10 @@ function restart() { state.frame = 0; }
 function renderFrame() {
   if (shadowStale) renderShadows();
   fabricUniforms.uCamPos.value.copy(camera.position);
+  if (state.back && state.controls) { // studio: the back light on the camera's axis behind the orbit target
+    const t = state.controls.target;
+    fabricUniforms.uBackPos.value.subVectors(t, camera.position).multiplyScalar(1.2).add(t);
+  }
   fabricUniforms.uSpp.value = state.spp;
   fabricUniforms.uFrame.value = state.frame;
   let sum;
@@ -499,6 +547,10 @@ function buildFabricControls() {
   colour(box, 'diffuse weft', 'diffuse.weft');
   colour(box, 'specular warp', 'specular.warp');
   colour(box, 'specular weft', 'specular.weft');
+  if (params.transmission) { // k_t: seen with the back light
+    colour(box, 'transmission warp', 'transmission.warp');
+    colour(box, 'transmission weft', 'transmission.weft');
+  }
   num('twist_deg', 'twist (deg)', 1);
   num('inclination_deg', 'inclination (deg)', 0.5);
   num('diffuse_blend', 'diffuse blend', 0.01);
@@ -535,11 +587,21 @@ function buildLightControls() {
   const deg = 180 / Math.PI;
   const moved = (fn) => (v) => { fn(v); L.moved = true; applyLight(); };
   slider(box, 'azimuth (deg)', -180, 180, 1, () => Math.round(L.az * deg), moved((v) => { L.az = v / deg; }));
-  slider(box, 'elevation (deg)', 1, 90, 1, () => Math.round(L.el * deg), moved((v) => { L.el = v / deg; }));
+  const below = state.back && state.mode === 'rig'; // the rig's back light is the light, below the plane
+  slider(box, 'elevation (deg)', below ? -90 : 1, below ? -1 : 90, 1, () => Math.round(L.el * deg), moved((v) => { L.el = v / deg; }));
   slider(box, 'distance', +(0.2 * L.r).toPrecision(3), +(5 * L.r).toPrecision(3), +(L.r / 100).toPrecision(2),
          () => +L.r.toPrecision(4), moved((v) => { L.r = v; }));
   slider(box, 'intensity', +(L.intensity / 20).toPrecision(3), +(L.intensity * 20).toPrecision(3),
          +(L.intensity / 100).toPrecision(2), () => +L.intensity.toPrecision(4), (v) => { L.intensity = v; applyLight(); });
+  const row = document.createElement('div');
+  row.className = 'wide';
+  row.innerHTML = '<label title="light behind the cloth on the camera\'s axis: in the rig the flat45-back view, ' +
+    'in the studio a second light">back light</label><input type="checkbox" id="backLight">';
+  const cb = row.querySelector('input');
+  cb.checked = state.back;
+  cb.disabled = state.mode === 'rig' && SC.sample.shape === 'cylinder';
+  cb.addEventListener('change', () => setBackLight(cb.checked));
+  box.appendChild(row);
   const reset = document.createElement('button');
   reset.textContent = 'reset light';
   reset.addEventListener('click', () => { setMode(state.mode); });
@@ -550,7 +612,8 @@ function buildLightControls() {
 $('title').textContent = DATA.title || 'woven';
 $('subtitle').textContent = `${params.pattern} — scene ${SC.name}${DATA.photo ? ', with the photo' : ''}`;
 $('about').textContent = `The true woven model in WebGL (three.js r${THREE.REVISION}): yarn geometry, ` +
-  'SGGX/SpongeCake specular, blended diffuse and glints computed per sample, as woven renders them.';
+  'SGGX/SpongeCake specular, blended diffuse and glints computed per sample, as woven renders them; ' +
+  'with the back light, the light through the cloth (specular and diffuse transmission, open gaps).';
 const pat = $('pattern');
 for (const name of Object.keys(DATA.weaves)) pat.add(new Option(name, name));
 pat.value = params.pattern;
@@ -576,7 +639,7 @@ if (DATA.photo) {
 buildViewControls();
 buildFabricControls();
 applyParams();
-setMode(state.mode);
+setBackLight(url.get('back') === '1' || (SC.sample.shape !== 'cylinder' && SC.light.position_mm[2] < 0));
 window.addEventListener('resize', () => { if (state.mode !== 'rig' && !url.get('w')) setMode(state.mode); });
 
 window.woven = {
@@ -613,10 +676,11 @@ window.woven = {
               up: camera.up.toArray(), fov: camera.fov, aspect: camera.aspect },
     light: { position: fabricUniforms.uLightPos.value.toArray(), intensity: fabricUniforms.uLightI.value },
     exposure: display.uniforms.uExposure.value, size: state.size, mode: state.mode,
-    backdrop: display.uniforms.uBackdrop.value,
+    backdrop: display.uniforms.uBackdrop.value, back: state.back,
   }),
   setParam(key, value) { setP(params, key, value); applyParams(); return problems(params); },
   setMode,
+  setBackLight,
   problems: () => problems(params),
 };
 status('ready');
