@@ -23,6 +23,7 @@
 
 #define PI_F 3.14159265358979f
 #define CMJ_DEPTHS 2 /* path vertices whose light and bounce samples are stratified */
+#define ONE_BELOW 0x1.fffffep-1f /* the largest float below 1 */
 #define PASS_MAX 256 /* path vertices after which a path ends rather than pass through another gap */
 
 /* Samples idx[0 .. m-1] (all of 0 .. n-1 when idx is NULL) of a pixel's sequence
@@ -496,13 +497,20 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
   int last = p->bounces >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
   /* ray origins on the side the ray came from, and on the other (light through the sheet) */
   for (int i = 0; i < 3; i++) org[i] = sf.p[i] + c->eps * sf.ng[i], orgb[i] = sf.p[i] - c->eps * sf.ng[i];
-  /* straight through an open gap with the probability of the positions' open fraction
+  /* Straight through an open gap with the probability of the positions' open fraction
    * (the kernel shades those positions 0), else scatter: the light samples below are
-   * taken either way, the bounce only when scattering */
+   * taken either way, the bounce only when scattering. The bounce's numbers make the
+   * choice (u1 below the open fraction), so it is stratified as they are; u1 is then
+   * stretched back over 0..1 for the bounce. */
+  float u1 = 0, u2 = 0;
+  if (!last) rand2(c, ts, depth, 2, &u1, &u2);
+  else if (sf.nopen) u1 = wv_u01(wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 10), s->seed));
   int pass = 0;
-  if (sf.nopen)
-    pass = sf.nopen == sf.nfpos ||
-           wv_u01(wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 10), s->seed)) >= sf.pscatter;
+  if (sf.nopen) {
+    float po = 1.0f - sf.pscatter;
+    pass = sf.nopen == sf.nfpos || u1 < po;
+    if (!pass) u1 = min2((u1 - po) / sf.pscatter, ONE_BELOW);
+  }
   /* the environment's sample and the bounce direction first: the surface is
    * evaluated for both in one call */
   float ewi[3] = {0, 0, 0}, ele[3] = {0, 0, 0}, epl = 0, bwi[3] = {0, 0, 0}, bpdf = 0, fb[2][3];
@@ -529,11 +537,13 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
     }
   }
   if (!last && !pass) { /* bounce: cosine-weighted about the shading normal, or through a transmitting fabric */
-    float u1, u2;
-    rand2(c, ts, depth, 2, &u1, &u2);
+    int below = 0; /* through the sheet where u2 falls below pback, u2 then stretched back over 0..1 */
+    if (sf.trans) {
+      below = u2 < sf.pback;
+      u2 = below ? u2 / sf.pback : min2((u2 - sf.pback) / (1.0f - sf.pback), ONE_BELOW);
+    }
     float r = sqrtf(u1), phi = 2 * PI_F * u2, lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(max2(0.0f, 1 - u1));
-    if (sf.trans && wv_u01(wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 11), s->seed)) < sf.pback)
-      lz = -lz;
+    if (below) lz = -lz;
     float a[3], bx[3], by[3];
     a[0] = fabsf(sf.ns[0]) > 0.9f ? 0.0f : 1.0f, a[1] = fabsf(sf.ns[0]) > 0.9f ? 1.0f : 0.0f, a[2] = 0;
     cross(sf.ns, a, bx), normalize(bx), cross(sf.ns, bx, by);
