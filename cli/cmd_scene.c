@@ -12,7 +12,7 @@
 
 typedef struct {
   const char *scene, *out, *params;
-  int spp, threads, seed, limit_mb, size[2];
+  int spp, threads, seed, limit_mb, size[2], opaque;
 } scene_args;
 
 /* WIDTHxHEIGHT */
@@ -36,6 +36,8 @@ static const cli_opt OPTS[] = {
     CLI_O_CUSTOM("--size", scene_args, size, 0, 0, parse_size, "WxH",
                  "image size instead of the scene's (same camera and field of view:\na preview)"),
     CLI_O_INT("--seed", NULL, scene_args, seed, 0, INT_MAX, "N", "overrides the scene's render.seed"),
+    CLI_O_FLAG("--no-transmission", scene_args, opaque,
+               "the cloth reflects only (no light through it): as the scene's\nrender.transmission false"),
     CLI_O_INT("--mesh-limit-mb", NULL, scene_args, limit_mb, 1, 1 << 20, "N",
               "memory limit of the job: meshes, ray tracer, edit maps,\nenvironment (default 2048; the scene's limits.mesh_mb may\nlower it, never raise it)"),
     CLI_O_END};
@@ -43,7 +45,7 @@ static const cli_opt OPTS[] = {
 static const cli_cmd CMD = {
     "scene",
     "usage: woven scene SCENE.json -o OUT.png|OUT.exr [--params P.json] [--spp N] [--threads N]\n"
-    "                   [--size WxH] [--seed N] [--mesh-limit-mb N] [--quiet] [--json]\n"
+    "                   [--size WxH] [--seed N] [--no-transmission] [--mesh-limit-mb N] [--quiet] [--json]\n"
     "\n"
     "Renders a scene of meshes (the fabric on a draped cloth, under an environment and lights)\n"
     "with a path tracer; the scene format is in docs/scene.md.\n",
@@ -56,7 +58,7 @@ static int ends_with(const char *s, const char *ext) {
 
 int cmd_scene(int argc, char **argv) {
   cli_ctx c = {0, 0, "scene"};
-  scene_args sa = {NULL, NULL, NULL, 0, 0, -1, 0, {0, 0}};
+  scene_args sa = {NULL, NULL, NULL, 0, 0, -1, 0, {0, 0}, 0};
   CLI_PARSE(&CMD, argc, argv, &sa, &c);
   const char *scene_path = sa.scene, *out = sa.out, *params_path = sa.params;
   long spp = sa.spp, threads = sa.threads, seed = sa.seed, limit_mb = sa.limit_mb;
@@ -76,6 +78,7 @@ int cmd_scene(int argc, char **argv) {
   }
   if (wv_scene3d_read(scene_path, &sc, &err)) return cli_fail(&c, &err);
   if (seed >= 0) sc.seed = (uint64_t)seed;
+  if (sa.opaque) sc.opaque = 1;
   /* the scene's own limit may lower the command line's, never raise it */
   size_t limit_cap = (size_t)(limit_mb ? limit_mb : WV_MESH_DEFAULT_LIMIT_MB) << 20;
   if (!sc.mesh_limit_bytes || sc.mesh_limit_bytes > limit_cap) sc.mesh_limit_bytes = limit_cap;

@@ -26,6 +26,15 @@ check "scene exr" 0 "" -- "$WOVEN" scene "$T/ok.json" -o "$T/a.exr" -q --spp 1
 cmp -s "$T/a.png" "$T/b.png" || { echo "FAIL the thread count changed the image"; fails=$((fails + 1)); }
 "$WOVEN" scene "$T/ok.json" -o "$T/c.png" -q --params "$SRC/examples/satin.json"
 cmp -s "$T/a.png" "$T/c.png" && { echo "FAIL --params did not change the fabric"; fails=$((fails + 1)); }
+# the bundled curtain, tiny: lit through the cloth, and darker with --no-transmission
+check "curtain" 0 '"mean"' -- "$WOVEN" scene "$SRC/scenes/curtain-window.json" -o "$T/cw.png" --size 32x24 --spp 4 --json
+lit=$(sed -n 's/.*"mean": \([0-9.e-]*\).*/\1/p' "$T/out")
+check "curtain opaque" 0 '"mean"' -- "$WOVEN" scene "$SRC/scenes/curtain-window.json" -o "$T/cwo.png" --size 32x24 --spp 4 --json --no-transmission
+dark=$(sed -n 's/.*"mean": \([0-9.e-]*\).*/\1/p' "$T/out")
+python3 -c "import sys; sys.exit(0 if float('$lit') > 1.5 * float('$dark') else 1)" ||
+  { echo "FAIL --no-transmission: mean $dark, not well below the transmitting $lit"; fails=$((fails + 1)); }
+sed 's/"seed": 1, "transmission": true/"seed": 1, "transmission": 1/' "$SRC/scenes/curtain-window.json" >"$T/cwbad.json"
+check "transmission not a boolean" 2 "'render.transmission' must be true or false" -- "$WOVEN" scene "$T/cwbad.json" -o "$T/x.png"
 check "help" 0 "usage: woven scene" -- "$WOVEN" scene --help
 check "cloth help" 0 "usage: woven cloth" -- "$WOVEN" cloth --help
 

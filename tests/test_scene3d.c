@@ -1,6 +1,7 @@
 /* The mesh renderer: mesh loading (OBJ, PLY, glTF) and its errors, tangent
  * frames, environment sampling (single and batched), the white furnace, the flat quad against the
- * capture renderer, edits, the cloth simulation, scene parsing errors,
+ * capture renderer (lit from the front and from behind), light through the cloth (open gaps,
+ * the sheet in a white environment, transmission off), edits, the cloth simulation, scene parsing errors,
  * determinism across thread counts, and the ray tracer's streams against its
  * single rays. Small images and few samples. */
 #include <math.h>
@@ -355,19 +356,24 @@ static void test_white_furnace(void **state) {
   }
 }
 
-/* The flat quad through the mesh path matches the capture renderer's flat45 scene
- * (a 96 x 96 centre window) within sampling noise. */
-static void test_quad_matches_flat45(void **state) {
-  (void)state;
+/* The flat quad of scenes/quad-flat45.json (back: quad-flat45-back.json, the light
+ * behind the cloth as in the flat45-back preset) through the mesh path against the
+ * capture renderer's preset (a 96 x 96 centre window, the capture renderer at 256
+ * spp): SSIM and mean absolute difference of the captures; opaque: the mesh
+ * renderer's transmission off; keep (may be NULL): its capture. */
+static void quad_against_rig(int back, int opaque, double *ssim, double *mae, wv_image *keep) {
   char *text;
   wv_error err = {0};
-  assert_int_equal(wv_read_file(WOVEN_SOURCE_DIR "/scenes/quad-flat45.json", &text, NULL, &err), WV_OK);
+  assert_int_equal(wv_read_file(back ? WOVEN_SOURCE_DIR "/scenes/quad-flat45-back.json"
+                                     : WOVEN_SOURCE_DIR "/scenes/quad-flat45.json",
+                                &text, NULL, &err),
+                   WV_OK);
   wv_scene3d s;
   assert_int_equal(wv_scene3d_parse(text, "quad-flat45.json", WOVEN_SOURCE_DIR "/scenes", &s, &err), WV_OK);
   free(text);
   wv_scene ref;
-  tu_centre_window(&ref, "flat45", 96, 96, 64);
-  s.width = s.height = 96, s.vfov_deg = ref.vfov_deg;
+  tu_centre_window(&ref, back ? "flat45-back" : "flat45", 96, 96, 64);
+  s.width = s.height = 96, s.vfov_deg = ref.vfov_deg, s.opaque = opaque;
   s.response.width = s.response.height = 96, s.response.falloff = 0, ref.falloff = 0;
   wv_world *w;
   assert_int_equal(wv_world_load(&s, NULL, 2, &w, &err), WV_OK);
@@ -378,15 +384,140 @@ static void test_quad_matches_flat45(void **state) {
   assert_int_equal(wv_params_read(WOVEN_SOURCE_DIR "/examples/twill.json", &p, &err), WV_OK);
   wv_render_opts ro = {.spp = 256, .threads = 2};
   assert_int_equal(wv_render(&ref, &p, &ro, &b, NULL, &err), WV_OK);
+  assert_int_equal(wv_ssim(&a, &b, WV_SSIM_LUMA, ssim, &err), WV_OK);
+  assert_int_equal(wv_mae(&a, &b, mae, &err), WV_OK);
+  if (keep) *keep = a;
+  else wv_image_free(&a);
+  wv_image_free(&b);
+  wv_world_free(w);
+  wv_scene3d_free(&s);
+}
+
+/* The flat quad through the mesh path matches the capture renderer's flat45 scene
+ * (a 96 x 96 centre window) within sampling noise. */
+static void test_quad_matches_flat45(void **state) {
+  (void)state;
   double ssim, mae;
-  assert_int_equal(wv_ssim(&a, &b, WV_SSIM_LUMA, &ssim, &err), WV_OK);
-  assert_int_equal(wv_mae(&a, &b, &mae, &err), WV_OK);
+  quad_against_rig(0, 0, &ssim, &mae, NULL);
   print_message("quad vs flat45: SSIM %.4f, MAE %.4f\n", ssim, mae);
   assert_true(ssim > 0.98);
   assert_true(mae < 0.01);
-  wv_image_free(&a), wv_image_free(&b);
-  wv_world_free(w);
-  wv_scene3d_free(&s);
+}
+
+/* Light through the cloth: the quad lit from behind renders what the capture
+ * renderer's flat45-back preset renders (the kernel's specular and diffuse
+ * transmission, the shadow ray leaving the far side); with transmission off the
+ * cloth is opaque and the image black. */
+static void test_quad_matches_flat45_back(void **state) {
+  (void)state;
+  double ssim, mae;
+  wv_image a;
+  quad_against_rig(1, 0, &ssim, &mae, &a);
+  double mean = wv_image_mean(&a);
+  print_message("quad vs flat45-back: SSIM %.4f, MAE %.4f, mean %.4f\n", ssim, mae, mean);
+  assert_true(ssim > 0.98);
+  assert_true(mae < 0.01);
+  assert_true(mean > 0.1);
+  wv_image_free(&a);
+  quad_against_rig(1, 1, &ssim, &mae, &a);
+  assert_true(wv_image_mean(&a) == 0.0);
+  wv_image_free(&a);
+}
+
+/* Straight through the open gaps: a sheet of black yarns (nothing scattered or
+ * reflected) of yarn width 0.5 in front of a uniform white environment shows the
+ * environment on the open area (1 - 0.5)^2 = 0.25 of it; opaque, nothing. */
+static void test_gap_fraction(void **state) {
+  (void)state;
+  const char *params = file("black_gaps.json",
+      "{\"version\": 2, \"pattern\": \"plain\", \"density\": {\"warp\": 60, \"weft\": 60},"
+      " \"heightfield\": {\"warp\": 1, \"weft\": 1}, \"diffuse\": {\"warp\": [0, 0, 0], \"weft\": [0, 0, 0]},"
+      " \"specular\": {\"warp\": [0, 0, 0], \"weft\": [0, 0, 0]}, \"transmission\": {\"warp\": [0, 0, 0], \"weft\": [0, 0, 0]},"
+      " \"roughness\": {\"warp\": 0.3, \"weft\": 0.3}, \"twist_deg\": 0, \"inclination_deg\": 20,"
+      " \"diffuse_blend\": 0.4, \"noise_level\": 0, \"thickness\": 2, \"yarn_width\": 0.5, \"seed\": 1}");
+  char params_abs[2048], cwd[1024];
+  assert_non_null(getcwd(cwd, sizeof cwd));
+  snprintf(params_abs, sizeof params_abs, "%s%s%s", params[0] == '/' ? "" : cwd, params[0] == '/' ? "" : "/", params);
+  for (int opaque = 0; opaque < 2; opaque++) {
+    char json[4096];
+    snprintf(json, sizeof json,
+             "{\"image\": {\"width\": 48, \"height\": 48, \"spp\": 4},"
+             "\"camera\": {\"position_mm\": [0, 0, 30], \"look_at_mm\": [0, 0, 0], \"vfov_deg\": 20},"
+             "\"environment\": {\"uniform\": 1},"
+             "\"materials\": {\"f\": {\"fabric\": \"%s\", \"uv_mm\": [1, 1]}},"
+             "\"objects\": [{\"quad\": {\"centre_mm\": [0, 0, 0], \"u_axis\": [1, 0, 0], \"v_axis\": [0, 1, 0],"
+             " \"size_mm\": [40, 40]}, \"material\": \"f\"}],"
+             "\"render\": {\"max_bounces\": 2, \"transmission\": %s},"
+             " \"response\": {\"encoding\": \"linear\", \"clip\": 0}}",
+             params_abs, opaque ? "false" : "true");
+    wv_image cap, rad;
+    render_text(json, 2, &cap, &rad);
+    double mean = wv_image_mean(&rad);
+    print_message("black yarns, width 0.5, %s: mean radiance %.5f\n", opaque ? "opaque" : "transmitting", mean);
+    if (opaque) assert_true(mean == 0.0);
+    else assert_true(fabs(mean - 0.25) < 0.01);
+    wv_image_free(&cap), wv_image_free(&rad);
+  }
+}
+
+/* The sheet in a uniform white environment: the light through it (the image's
+ * mean transmitting minus opaque) is the same estimated by the environment's
+ * samples alone (direct light only: the samples behind the sheet shaded by the
+ * transmission) and with bounces (those samples weighed by MIS against bounces
+ * that may go through the sheet). */
+static void test_sheet_furnace(void **state) {
+  (void)state;
+  double mean[2][2];
+  for (int bounces = 0; bounces < 2; bounces++)
+    for (int opaque = 0; opaque < 2; opaque++) {
+      char json[1024];
+      snprintf(json, sizeof json,
+               "{\"image\": {\"width\": 32, \"height\": 32, \"spp\": 64},"
+               "\"camera\": {\"position_mm\": [0, 0, 30], \"look_at_mm\": [0, 0, 0], \"vfov_deg\": 20},"
+               "\"environment\": {\"uniform\": 1},"
+               "\"materials\": {\"f\": {\"fabric\": \"../examples/twill.json\", \"uv_mm\": [1, 1]}},"
+               "\"objects\": [{\"quad\": {\"centre_mm\": [0, 0, 0], \"u_axis\": [1, 0, 0], \"v_axis\": [0, 1, 0],"
+               " \"size_mm\": [40, 40]}, \"material\": \"f\"}],"
+               "\"render\": {\"max_bounces\": %d, \"transmission\": %s},"
+               " \"response\": {\"encoding\": \"linear\", \"clip\": 0}}",
+               bounces, opaque ? "false" : "true");
+      wv_image cap, rad;
+      render_text(json, 2, &cap, &rad);
+      mean[bounces][opaque] = wv_image_mean(&rad);
+      wv_image_free(&cap), wv_image_free(&rad);
+    }
+  double t0 = mean[0][0] - mean[0][1], t1 = mean[1][0] - mean[1][1];
+  print_message("light through the sheet: %.5f direct only, %.5f with bounces\n", t0, t1);
+  assert_true(t0 > 0.05);
+  assert_true(fabs(t1 - t0) < 0.02 * t0);
+}
+
+/* Transmission off reproduces the reflection-only renderer: the bundled scene
+ * (tiny, few samples) renders, with render.transmission false, the capture whose
+ * mean the renderer gave before the cloth transmitted (0.456964). */
+static void test_opaque_is_reflection_only(void **state) {
+  (void)state;
+  char *text;
+  wv_error err = {0};
+  assert_int_equal(wv_read_file(WOVEN_SOURCE_DIR "/scenes/drape-studio.json", &text, NULL, &err), WV_OK);
+  const char *full = "\"width\": 1024, \"height\": 768, \"spp\": 64";
+  char *at = strstr(text, full);
+  assert_non_null(at);
+  memcpy(at, "\"width\":   48, \"height\":  36, \"spp\":  2", strlen(full));
+  at = strstr(text, "\"render\": {");
+  assert_non_null(at);
+  char *off = malloc(strlen(text) + 32);
+  assert_non_null(off);
+  at += strlen("\"render\": {");
+  sprintf(off, "%.*s\"transmission\": false, %s", (int)(at - text), text, at);
+  wv_image a, b, ra, rb;
+  render_text(off, 2, &a, &ra);
+  render_text(text, 2, &b, &rb);
+  double ma = wv_image_mean(&a), mb = wv_image_mean(&b);
+  print_message("drape-studio 48 x 36, 2 spp: opaque %.6f, transmitting %.6f\n", ma, mb);
+  assert_true(fabs(ma - 0.456964) < 2e-6);
+  free(text), free(off);
+  wv_image_free(&a), wv_image_free(&b), wv_image_free(&ra), wv_image_free(&rb);
 }
 
 /* A diffuse edit with a mask: where the mask is 1 the fabric turns darker; edit
@@ -634,7 +765,10 @@ int main(void) {
       cmocka_unit_test(test_material_refused),
       cmocka_unit_test(test_env_sampling),  cmocka_unit_test(test_env_sample_batch),
       cmocka_unit_test(test_white_furnace),
-      cmocka_unit_test(test_quad_matches_flat45), cmocka_unit_test(test_edits),
+      cmocka_unit_test(test_quad_matches_flat45), cmocka_unit_test(test_quad_matches_flat45_back),
+      cmocka_unit_test(test_gap_fraction),  cmocka_unit_test(test_sheet_furnace),
+      cmocka_unit_test(test_opaque_is_reflection_only),
+      cmocka_unit_test(test_edits),
       cmocka_unit_test(test_cloth),         cmocka_unit_test(test_parse_errors),
       cmocka_unit_test(test_deterministic), cmocka_unit_test(test_tracer_streams),
   };

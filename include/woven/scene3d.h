@@ -96,6 +96,7 @@ typedef struct {
   /* integrator */
   int max_bounces;    /* path length after the camera hit (0: direct light only) */
   int yarn_samples;   /* fabric positions shaded per camera ray (sub-pixel yarns) */
+  int opaque;         /* fabrics reflect only (render.transmission false): no light through the cloth */
   uint64_t seed;
   /* camera response: exposure, clip, encoding, gamma, falloff (wv_scene_response) */
   wv_scene response;
@@ -151,7 +152,10 @@ typedef struct {
  * of the environment, both weighted against the bounce by multiple importance
  * sampling, power heuristic), then a bounce in a cosine-weighted direction about
  * the shading normal, up to max_bounces, with Russian roulette from the third
- * vertex on. Camera-ray positions in the pixel come from the capture renderer's
+ * vertex on. Fabrics transmit unless s->opaque: a light behind the sheet is
+ * sampled through it (the kernel's transmission, the shadow ray from the other
+ * side), the bounce may continue through it, and where a shaded position falls in
+ * an open gap between yarns the path goes straight on. Camera-ray positions in the pixel come from the capture renderer's
  * correlated multi-jittered sampler; a fabric hit seen by the camera is shaded
  * at yarn_samples positions spread over the pixel's footprint on the cloth
  * (sharing the ray's light samples), so yarns smaller than a pixel are averaged.

@@ -1,6 +1,6 @@
 /* The shading kernel's non-inline parts: preparing a fabric (parameters in
  * the kernel's float form, the glint table, the weave's packed cells), the
- * entry points wv_kernel_shade / wv_kernel_shade8 (kernel/kernel.h) and the
+ * entry points wv_kernel_shade / wv_kernel_shade8 / wv_kernel_open (kernel/kernel.h) and the
  * public per-point yarn evaluation (wv_yarn_eval, woven/yarn.h: the kernel's
  * geometry in scalar float, plus the height the maps need). */
 #include "kernel/kernel.h"
@@ -102,6 +102,12 @@ void wv_kernel_shade8(const wv_fabric *f, const float x[8], const float y[8], co
   }
 }
 
+int wv_kernel_open(const wv_fabric *f, float x, float y) {
+  wv_yarn_cell_f c;
+  wv_yarn_locate_f(&f->ym, x, y, &c);
+  return wv_cell_open_f(&c) != 0;
+}
+
 void wv_yarn_eval(const wv_yarn_model *m, float x, float y, wv_yarn_point *out) {
   wv_yarn_cell_f c;
   wv_yarn_locate_f(m, x, y, &c);
@@ -111,7 +117,7 @@ void wv_yarn_eval(const wv_yarn_model *m, float x, float y, wv_yarn_point *out) 
   float lv, lh;
   wv_cloth_chords_f(&P, &c, &lv, &lh);
   int vis = c.warp ? WV_WARP : WV_WEFT;
-  out->open = !c.lit && !c.cov;
+  out->open = wv_cell_open_f(&c) != 0;
   out->through = c.lit ? vis : c.cov ? 1 - vis : -1;
   out->thickness = lv + lh;
   if (!c.lit) { /* gap between yarns narrower than their spacing */

@@ -19,9 +19,18 @@
  * (specular k_s U_s f_s mu_i plus diffuse k_d f_d mu_i): multiply by the
  * light's irradiance I / r^2 for radiance. 0 where wi or wo is below the
  * surface or the point falls in a gap between yarns (these entry points
- * reflect only; the capture rig's renderer also transmits, docs/model.md). wv_kernel_shade8 shades
- * eight points at once (SIMD; out[c][i] is point i, bit-identical to
- * wv_kernel_shade on each). f comes from wv_fabric_prepare(params).
+ * reflect only). wv_kernel_shade8 shades eight points at once (SIMD; out[c][i]
+ * is point i, bit-identical to wv_kernel_shade on each). f comes from
+ * wv_fabric_prepare(params).
+ *
+ *   int wv_kernel_open(const wv_fabric *f, float x, float y);
+ *
+ * 1 where (x, y) falls in an open gap (no yarn of either type over it: light
+ * passes straight through the cloth), else 0.
+ *
+ * Light through the cloth: the generic forms below shade a light behind the
+ * cloth (wi.z < 0, wo.z > 0) with the kernel's transmission (wv_shade_trans,
+ * docs/model.md); the capture rig's renderer and the mesh renderer use them so.
  *
  * Inside the library the generic forms are called directly and inline:
  * wv_shade_f / wv_shade_8 / wv_shade_d (one float, eight floats, double) take
@@ -114,5 +123,6 @@ void wv_shade_params_double(const wv_params *p, wv_shade_params_d *P);
 void wv_kernel_shade(const wv_fabric *f, float x, float y, const float wi[3], const float wo[3], float out[3]);
 void wv_kernel_shade8(const wv_fabric *f, const float x[8], const float y[8], const float wi[3][8],
                       const float wo[3][8], float out[3][8]);
+int wv_kernel_open(const wv_fabric *f, float x, float y);
 
 #endif

@@ -69,6 +69,10 @@ WV_INLINE void WV_FN(wv_yarn_locate)(const wv_yarn_model *m, WV_P x, WV_P y, WV_
   c->cov = wv_not(wv_abs(c->a_h) > WV_FN(wv_pickp)(c->warp, 0.5f * dy * m->width, 0.5f * dx * m->width));
 }
 
+/* An open gap at the cell's points: neither the visible yarn nor the crossing one
+ * covers them (light passes straight through the cloth there). */
+WV_INLINE WV_M WV_FN(wv_cell_open)(const WV_FN(wv_yarn_cell) * c) { return wv_not(c->lit) & wv_not(c->cov); }
+
 /* v, or v mod period when the identities repeat (tiled maps). */
 WV_INLINE WV_I WV_FN(wv_wrap)(WV_I v, int period) { return period > 0 ? wv_modn(v, period) : v; }
 
@@ -451,7 +455,7 @@ WV_INLINE void WV_FN(wv_shade_trans)(const wv_fabric *fab, const K_PARAMS *P, co
   const wv_yarn_model *m = &fab->ym;
   const WV_M warp = c->warp, lit = c->lit;
   const WV_M tw = (lit & warp) | (wv_not(lit) & wv_not(warp)); /* the yarn the light passes is warp */
-  const WV_M opn = wv_not(lit) & wv_not(c->cov);
+  const WV_M opn = WV_FN(wv_cell_open)(c);
   if (open) *open = wv_sel(opn, WV_B(1), WV_B(0));
   if (G) {
     G->warp = tw;

@@ -1,8 +1,10 @@
 /* The mesh renderer's path tracer (wv_scene3d_render): camera rays through
  * Embree, next-event estimation with multiple importance sampling, cosine-
  * weighted bounces with Russian roulette, fabric shading through the capture
- * renderer's kernel (one adapter, shade_fabric), spatially varying edits, and
- * the capture renderer's pixel sampler for anti-aliasing. */
+ * renderer's kernel (one adapter, shade_fabric), light through the cloth (the
+ * kernel's transmission, bounces through the sheet, paths straight through its
+ * open gaps), spatially varying edits, and the capture renderer's pixel sampler
+ * for anti-aliasing. */
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
@@ -21,6 +23,8 @@
 
 #define PI_F 3.14159265358979f
 #define CMJ_DEPTHS 2 /* path vertices whose light and bounce samples are stratified */
+#define ONE_BELOW 0x1.fffffep-1f /* the largest float below 1 */
+#define PASS_MAX 256 /* path vertices after which a path ends rather than pass through another gap */
 
 /* Samples idx[0 .. m-1] (all of 0 .. n-1 when idx is NULL) of a pixel's sequence
  * of n (the capture renderer's sampler, sampler/sampler.h), eight at a time: the
@@ -71,7 +75,9 @@ WV_SIMD_CLONES static void shade_lanes(const wv_fabric *f, int m, const float (*
 /* THE adapter between the mesh renderer and the fabric shading model: for each
  * of nd light directions wi[j] (NULL: not wanted), the average of (f_s + f_d)
  * mu_i over n fabric positions (mm) into out[j], with the view wo, both in the
- * fabric's local frame (x weft, y warp, z macro normal), with the edits applied.
+ * fabric's local frame (x weft, y warp, z macro normal), with the edits applied:
+ * reflected for wi above the surface, transmitted (the kernel's wv_shade_trans:
+ * specular and diffuse transmission, 0 in an open gap) for wi below it.
  * Everything the mesh renderer knows about the fabric model is here: it runs the
  * shading kernel (kernel/kernel.h; all the points of all directions in 8-lane
  * calls, or the scalar flavour wv_shade_f for one or two) with unit light, with
@@ -82,7 +88,7 @@ static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric
   int lanes = 0, on[2];
   for (int j = 0; j < nd; j++) {
     out[j][0] = out[j][1] = out[j][2] = 0.0f;
-    on[j] = wi[j] && wi[j][2] > 0.0f && wo[2] > 0.0f; /* SPEC section 4: zero below either horizon */
+    on[j] = wi[j] && wi[j][2] != 0.0f && wo[2] > 0.0f; /* zero below the view's horizon (SPEC section 4) */
     lanes += on[j] * n;
   }
   if (!lanes) return;
@@ -184,6 +190,10 @@ typedef struct {
   fabric_edit edit;
   float (*fpos)[2]; /* fabric positions (mm) shaded at this point */
   int nfpos;
+  int trans;        /* a fabric that transmits: light from below the surface is shaded too */
+  int nopen;        /* of the positions, those in an open gap (the path may pass straight through) */
+  float pback;      /* probability that a bounce goes through the sheet */
+  float pscatter;   /* probability that the path scatters here (not straight through a gap) */
 } surface;
 
 typedef struct {
@@ -191,6 +201,7 @@ typedef struct {
   const wv_world *w;
   wv_camera_rig cam;
   int spp, K;
+  int gaps;                     /* a fabric transmits and has open gaps: paths may pass through */
   float eps;                    /* ray offset */
   int need[1 + 3 * CMJ_DEPTHS]; /* the stratified dimensions paths use (see rand2) */
 } render_ctx;
@@ -201,6 +212,7 @@ typedef struct {
   float o[3], d[3], thr[3], L[3];
   float prev_pdf;   /* bounce pdf of the ray (o, d); 0 for the camera ray (no MIS) */
   int depth;        /* the path vertex the ray leads to */
+  int bounces;      /* scattering vertices before it (passing through an open gap is none) */
   int got;          /* the ray meets the scene, at hit */
   wv_trace_hit hit;
   wv_env_at at;     /* the environment's texel along a bounce ray */
@@ -297,6 +309,26 @@ void wv_faces_make(const wv_mesh *m, wv_face *out, wv_uv_grad *grad) {
   }
 }
 
+/* Where a transmitting fabric has gaps: how many of the surface's positions are
+ * in an open gap (the kernel's wv_kernel_open; edits do not move the gaps), and
+ * so the probability that the path scatters there rather than going straight on. */
+static void count_open(const render_ctx *c, surface *sf) {
+  const wv_fabric *f = sf->mat->fab;
+  if (!sf->trans || !c->gaps || !(f->ym.width < 1.0f)) return;
+  for (int k = 0; k < sf->nfpos; k++) sf->nopen += wv_kernel_open(f, sf->fpos[k][0], sf->fpos[k][1]);
+  sf->pscatter = 1.0f - (float)sf->nopen / (float)sf->nfpos;
+}
+
+/* The probability that a fabric's bounce goes through the sheet (a choice of
+ * sampling, not of the result): its diffuse transmission at normal incidence
+ * (k_t t(T)) against its reflection's albedos (k_d + k_s), within 0.05..0.5. */
+static float back_prob(const wv_fabric *f) {
+  float r = 0, t = 0, tt = WV_CLOTH_TRANSMITTANCE(f->P.thickness);
+  for (int y = 0; y < 2; y++) r += maxc(f->P.kd[y]) + maxc(f->P.ks[y]), t += maxc(f->P.kt[y]) * tt;
+  float p = r + t > 0 ? t / (r + t) : 0.5f;
+  return min2(0.5f, max2(0.05f, p));
+}
+
 /* Fills the surface at a hit; wo points back along the ray. */
 static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_hit *hit, const float o[3],
                          const float d[3], int camera, surface *sf) {
@@ -316,8 +348,9 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   if (-dot(d, sf->ns) <= 1e-4f) memcpy(sf->ns, sf->ng, sizeof sf->ns); /* shading normal faces away from the viewer */
   sf->mat_index = c->w->material[hit->geom];
   sf->mat = &c->w->mats[sf->mat_index];
-  sf->nfpos = 0;
+  sf->nfpos = 0, sf->trans = 0, sf->nopen = 0, sf->pback = 0, sf->pscatter = 1;
   if (sf->mat->kind != WV_MAT_FABRIC) return;
+  if (!c->s->opaque) sf->trans = 1, sf->pback = back_prob(sf->mat->fab);
   /* fabric frame: x along the interpolated u tangent, made orthogonal to ns; y = +-(ns x t) toward +v */
   float w_sign = 1;
   for (int i = 0; i < 3; i++) sf->t[i] = 0;
@@ -344,6 +377,7 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   if (!camera) {
     sf->fpos[0][0] = sf->u * mt->uv_mm[0] + mt->uv_off[0], sf->fpos[0][1] = sf->v * mt->uv_mm[1] + mt->uv_off[1];
     sf->nfpos = 1;
+    count_open(c, sf);
     return;
   }
   /* Sub-pixel yarns: K positions spread over the pixel (a stratified set of spp x K
@@ -367,11 +401,13 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
     sf->fpos[k][0] = u * mt->uv_mm[0] + mt->uv_off[0], sf->fpos[k][1] = v * mt->uv_mm[1] + mt->uv_off[1];
   }
   sf->nfpos = c->K;
+  count_open(c, sf);
 }
 
 /* BSDF x cosine for light arriving from each of nd <= 2 directions wi[j] (world;
  * NULL: not wanted, f[j] = 0), seen from wo: a fabric is shaded for all of them
- * in one call. */
+ * in one call. Light from below the surface passes a transmitting fabric (the
+ * geometric and shading normals agreeing on the side), nothing else. */
 static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *const *wi, const float wo[3],
                       float (*f)[3]) {
   float li[2][3];
@@ -379,7 +415,9 @@ static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *
   int any = 0;
   for (int j = 0; j < nd; j++) {
     f[j][0] = f[j][1] = f[j][2] = 0;
-    if (!wi[j] || dot(wi[j], sf->ng) <= 0.0f) continue; /* reflection only: the cloth is opaque */
+    if (!wi[j]) continue;
+    float side = dot(wi[j], sf->ng);
+    if (side <= 0.0f && !(sf->trans && side < 0.0f)) continue; /* an opaque surface reflects only */
     if (sf->mat->kind == WV_MAT_LAMBERT) {
       float cs = dot(wi[j], sf->ns);
       if (cs <= 0) continue;
@@ -387,6 +425,7 @@ static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *
       continue;
     }
     li[j][0] = dot(wi[j], sf->t), li[j][1] = dot(wi[j], sf->b), li[j][2] = dot(wi[j], sf->ns);
+    if ((side > 0.0f) != (li[j][2] > 0.0f)) continue; /* the triangle and the shading normal disagree on the side */
     want[j] = li[j], any = 1;
     ts->shades += sf->nfpos;
   }
@@ -397,9 +436,14 @@ static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *
 }
 
 static float power_heuristic(float a, float b) { return a * a / (a * a + b * b); }
-static float cos_pdf(const surface *sf, const float wi[3]) {
+/* The bounce's pdf of direction wi: cosine-weighted about the shading normal
+ * (reflection only), or on a transmitting fabric, the side chosen with pback and
+ * cosine-weighted about the normal there, times the probability of scattering
+ * here at all (pscatter: not straight through an open gap). */
+static float bounce_pdf(const surface *sf, const float wi[3]) {
   float cs = dot(wi, sf->ns);
-  return cs > 0 ? cs / PI_F : 0.0f;
+  if (!sf->trans) return cs > 0 ? cs / PI_F : 0.0f;
+  return (cs > 0 ? 1.0f - sf->pback : sf->pback) * fabsf(cs) / PI_F * sf->pscatter;
 }
 
 /* Area light l hit by the ray (o, d) before tmax: distance and the light's cosine. */
@@ -439,7 +483,7 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
     for (int k = 0; k < 3; k++) L[k] += thr[k] * (float)l->color[k] * wgt;
   }
   if (!p->got) {
-    if (w->has_env && (depth > 0 || s->env_visible)) {
+    if (w->has_env && (p->bounces > 0 || s->env_visible)) {
       float le[3], wgt = 1;
       if (p->prev_pdf > 0) wgt = power_heuristic(p->prev_pdf, wv_envmap_read(&w->env, p->at, le));
       else wv_envmap_eval(&w->env, d, le);
@@ -449,9 +493,24 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
   }
   surface sf;
   make_surface(c, ts, &p->hit, o, d, depth == 0, &sf);
-  float wo[3] = {-d[0], -d[1], -d[2]}, org[3];
-  int last = depth >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
-  for (int i = 0; i < 3; i++) org[i] = sf.p[i] + c->eps * sf.ng[i];
+  float wo[3] = {-d[0], -d[1], -d[2]}, org[3], orgb[3];
+  int last = p->bounces >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
+  /* ray origins on the side the ray came from, and on the other (light through the sheet) */
+  for (int i = 0; i < 3; i++) org[i] = sf.p[i] + c->eps * sf.ng[i], orgb[i] = sf.p[i] - c->eps * sf.ng[i];
+  /* Straight through an open gap with the probability of the positions' open fraction
+   * (the kernel shades those positions 0), else scatter: the light samples below are
+   * taken either way, the bounce only when scattering. The bounce's numbers make the
+   * choice (u1 below the open fraction), so it is stratified as they are; u1 is then
+   * stretched back over 0..1 for the bounce. */
+  float u1 = 0, u2 = 0;
+  if (!last) rand2(c, ts, depth, 2, &u1, &u2);
+  else if (sf.nopen) u1 = wv_u01(wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 10), s->seed));
+  int pass = 0;
+  if (sf.nopen) {
+    float po = 1.0f - sf.pscatter;
+    pass = sf.nopen == sf.nfpos || u1 < po;
+    if (!pass) u1 = min2((u1 - po) / sf.pscatter, ONE_BELOW);
+  }
   /* the environment's sample and the bounce direction first: the surface is
    * evaluated for both in one call */
   float ewi[3] = {0, 0, 0}, ele[3] = {0, 0, 0}, epl = 0, bwi[3] = {0, 0, 0}, bpdf = 0, fb[2][3];
@@ -466,16 +525,30 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
       epl = wv_envmap_sample(&w->env, u1, u2, ewi, ele);
     }
     env_on = epl > 0 && maxc(ele) > 0;
+    /* through the sheet, the sample is taken with the probability min(1, 2 pback) (and
+     * weighed up by its inverse): behind cloth that transmits little it seldom adds
+     * much, and most of it would be shadow rays blocked under the cloth */
+    if (env_on && sf.trans && dot(ewi, sf.ng) < 0) {
+      float q = min2(1.0f, 2.0f * sf.pback);
+      if (q < 1.0f) {
+        env_on = wv_u01(wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 12), s->seed)) < q;
+        for (int k = 0; k < 3; k++) ele[k] /= q;
+      }
+    }
   }
-  if (!last) { /* bounce: cosine-weighted about the shading normal */
-    float u1, u2;
-    rand2(c, ts, depth, 2, &u1, &u2);
+  if (!last && !pass) { /* bounce: cosine-weighted about the shading normal, or through a transmitting fabric */
+    int below = 0; /* through the sheet where u2 falls below pback, u2 then stretched back over 0..1 */
+    if (sf.trans) {
+      below = u2 < sf.pback;
+      u2 = below ? u2 / sf.pback : min2((u2 - sf.pback) / (1.0f - sf.pback), ONE_BELOW);
+    }
     float r = sqrtf(u1), phi = 2 * PI_F * u2, lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(max2(0.0f, 1 - u1));
+    if (below) lz = -lz;
     float a[3], bx[3], by[3];
     a[0] = fabsf(sf.ns[0]) > 0.9f ? 0.0f : 1.0f, a[1] = fabsf(sf.ns[0]) > 0.9f ? 1.0f : 0.0f, a[2] = 0;
     cross(sf.ns, a, bx), normalize(bx), cross(sf.ns, bx, by);
     for (int k = 0; k < 3; k++) bwi[k] = lx * bx[k] + ly * by[k] + lz * sf.ns[k];
-    bpdf = cos_pdf(&sf, bwi);
+    bpdf = bounce_pdf(&sf, bwi);
   }
   const float *want[2] = {env_on ? ewi : NULL, bpdf > 0 ? bwi : NULL};
   eval_bsdf(&sf, ts, 2, want, wo, fb);
@@ -500,7 +573,7 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
         float cosl = -dot(wi, n);
         if (cosl <= 0) continue;
         float pl = dist * dist / ((float)(l->size[0] * l->size[1]) * cosl);
-        wgt = last ? 1.0f : power_heuristic(pl, cos_pdf(&sf, wi));
+        wgt = last ? 1.0f : power_heuristic(pl, bounce_pdf(&sf, wi));
         g = 1.0f / pl;
       } else {
         for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
@@ -524,29 +597,36 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
     eval_bsdf(&sf, ts, 1, lw, wo, f);
     if (maxc(f[0]) <= 0) continue;
     ts->rays++;
-    if (wv_tracer_occluded(w->tracer, org, wi, 0.0f, dist)) continue;
+    if (wv_tracer_occluded(w->tracer, dot(wi, sf.ng) > 0 ? org : orgb, wi, 0.0f, dist)) continue;
     for (int k = 0; k < 3; k++) L[k] += thr[k] * f[0][k] * li[k] * wgt;
   }
   if (env_on && maxc(fb[0]) > 0) {
     ts->rays++;
-    float wgt = last ? 1.0f : power_heuristic(epl, cos_pdf(&sf, ewi));
+    float wgt = last ? 1.0f : power_heuristic(epl, bounce_pdf(&sf, ewi));
     p->shadow = 1;
-    memcpy(p->sh_o, org, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
+    memcpy(p->sh_o, dot(ewi, sf.ng) > 0 ? org : orgb, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
     for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * wgt / epl;
+  }
+  if (pass) { /* straight on from the far side: the throughput stays (probability and weight both the open fraction) */
+    if (depth >= PASS_MAX) return 0;
+    memcpy(o, orgb, sizeof orgb);
+    p->prev_pdf = 0; /* no light sample sees through the gap: what the ray meets counts whole */
+    p->depth++;
+    return 1;
   }
   if (last || bpdf <= 0) return 0;
   for (int k = 0; k < 3; k++) thr[k] *= fb[1][k] / bpdf;
   float q = min2(0.95f, maxc(thr));
   if (q <= 0) return 0;
-  if (depth >= 1) { /* Russian roulette from the third path vertex on */
+  if (p->bounces >= 1) { /* Russian roulette from the third path vertex on */
     uint64_t h = wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 9), s->seed);
     if (wv_u01(h) >= q) return 0;
     for (int k = 0; k < 3; k++) thr[k] /= q;
   }
-  memcpy(o, org, sizeof org);
+  memcpy(o, dot(bwi, sf.ng) > 0 ? org : orgb, sizeof org);
   memcpy(d, bwi, sizeof bwi);
   p->prev_pdf = bpdf;
-  p->depth++;
+  p->depth++, p->bounces++;
   return 1;
 }
 
@@ -588,7 +668,7 @@ static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, 
     path *p = &P[j];
     memcpy(p->o, c->cam.cpos, sizeof p->o), memcpy(p->d, ts->dir[j], sizeof p->d);
     p->thr[0] = p->thr[1] = p->thr[2] = 1, p->L[0] = p->L[1] = p->L[2] = 0;
-    p->prev_pdf = 0, p->depth = 0, p->got = ts->got[j], p->at = (wv_env_at){0, 0};
+    p->prev_pdf = 0, p->depth = 0, p->bounces = 0, p->got = ts->got[j], p->at = (wv_env_at){0, 0};
     ts->act[j] = j;
     if (!p->got) continue;
     p->hit = ts->hit[j];
@@ -658,10 +738,14 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
   /* the stratified dimensions a path can use: camera; per depth environment, area light, bounce */
   int area = 0;
   for (int i = 0; i < s->nlights; i++) area |= s->lights[i].type == WV_LIGHT_AREA;
+  for (int m = 0; m < w->nmats; m++)
+    c.gaps |= !s->opaque && w->mats[m].kind == WV_MAT_FABRIC && w->mats[m].fab->ym.width < 1.0f;
+  /* (a path through a gap reaches vertex d after fewer than d bounces) */
   c.need[0] = 1;
   for (int d = 0; d < CMJ_DEPTHS; d++)
-    c.need[1 + 3 * d] = w->has_env && d <= s->max_bounces, c.need[2 + 3 * d] = area && d <= s->max_bounces,
-                 c.need[3 + 3 * d] = d < s->max_bounces;
+    c.need[1 + 3 * d] = w->has_env && (d <= s->max_bounces || c.gaps),
+                 c.need[2 + 3 * d] = area && (d <= s->max_bounces || c.gaps),
+                 c.need[3 + 3 * d] = d < s->max_bounces || (c.gaps && s->max_bounces > 0);
   int threads = opt && opt->threads > 0 ? opt->threads : omp_get_max_threads();
   wv_image rad;
   wv_status st = wv_image_alloc(&rad, s->width, s->height, 3, err);

@@ -317,7 +317,7 @@ static wv_status parse_root(json_t *r, const ctx *c, wv_scene3d *s) {
   static const char *const top[] = {"name",  "comment", "image",  "camera",   "environment", "lights", "materials",
                                     "objects", "edits", "render", "response", "falloff",     "limits", NULL};
   static const char *const ki[] = {"width", "height", "spp", NULL};
-  static const char *const kr[] = {"max_bounces", "yarn_samples", "seed", NULL};
+  static const char *const kr[] = {"max_bounces", "yarn_samples", "seed", "transmission", NULL};
   static const char *const kl[] = {"mesh_mb", NULL};
   wv_error *err = c->err;
   wv_status st;
@@ -375,12 +375,15 @@ static wv_status parse_root(json_t *r, const ctx *c, wv_scene3d *s) {
   }
   s->max_bounces = 3, s->yarn_samples = WV_SCENE3D_DEFAULT_YARN_SAMPLES, s->seed = 1;
   double seed = 1;
+  int transmits = 1;
   if ((st = wv_json_object(r, NULL, "render", kr, 0, &o, err)) ||
       (st = wv_json_int(o, "render", "max_bounces", 0, 64, 0, &s->max_bounces, err)) ||
       (st = wv_json_int(o, "render", "yarn_samples", 1, 64, 0, &s->yarn_samples, err)) ||
-      (st = wv_json_number(o, "render", "seed", 0, 2147483647.0, 0, &seed, err)))
+      (st = wv_json_number(o, "render", "seed", 0, 2147483647.0, 0, &seed, err)) ||
+      (st = wv_json_bool(o, "render", "transmission", 0, &transmits, err)))
     return st;
   s->seed = (uint64_t)seed;
+  s->opaque = !transmits;
   /* the capture scenes' response, without the camera blur (this renderer applies none) */
   if ((st = wv_scene_read_response(r, 0, &s->response, err)) || (st = wv_scene_check_response(&s->response, err)))
     return st;
