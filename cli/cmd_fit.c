@@ -93,6 +93,12 @@ const cli_opt CLI_PAIR_OPTS[] = {
               "the back-lit scene of --transmission (default: flat45-back for\nflat45; other scenes need it)"),
     CLI_O_END};
 
+const cli_opt CLI_PAIR_MODEL_OPTS[] = {
+    CLI_O_STR("--pair-model", NULL, capture_args, pair_model, "M",
+              "with --transmission: the pair model that starts the transmission\ncolours (default: "
+              "models/fabricnet-<scene>+<back-lit scene>.bin\nif there is one, else the prior)"),
+    CLI_O_END};
+
 const cli_opt CLI_MODEL_OPTS[] = {
     CLI_O_STR("--model", NULL, capture_args, model, "M",
               "a model from 'woven train' (default: models/fabricnet-<scene\nname>.bin; the directory can be "
@@ -263,6 +269,7 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
         json_object_set_new(o_json, "ssim_rgb_blurred_photo_t",
                             r->ssim_rgb_blurred_t > -2 ? cli_real(r->ssim_rgb_blurred_t, 6) : json_null());
         json_object_set_new(o_json, "wsc_fit_t", r->wsc_t > -2 ? cli_real(r->wsc_t, 6) : json_null());
+        json_object_set_new(o_json, "kt_start", json_string(r->kt_model ? "pair model" : "prior"));
         json_object_set_new(o_json, "mean_t",
                             json_pack("{s:{s:o,s:o},s:{s:o,s:o}}", "photo", "centre", cli_real(r->mean_t[0][0], 6),
                                       "whole", cli_real(r->mean_t[0][1], 6), "render", "centre",

@@ -44,7 +44,7 @@ typedef struct {
   /* A file written with fit.json (capture: network.json), or NULL. */
   const char *extra_name, *extra_text;
   /* Files read by the job: none may lie inside the directory, which is replaced whole. */
-  const char *inputs[6];
+  const char *inputs[7];
   /* The mesh scene the report shows the fit on (NULL: the bundled draped cloth; "none": no drape). */
   const char *drape;
   wv_capture_progress progress;
@@ -53,6 +53,7 @@ typedef struct {
   const wv_scene *scene_t;
   const wv_image *photo_t;
   const char *photo_t_path;
+  const char *kt_start; /* where a pair's transmission colours start: a pair model's path, or NULL (the prior) */
 } wv_fit_job;
 
 /* What a finished fit wrote, for the caller's summary. */
@@ -67,6 +68,7 @@ typedef struct {
    * of photo [0] and re-render [1] over the centre (half of each side) [0] and the whole frame [1]. */
   int pair;
   double ssim_rgb_t, wsc_t, ssim_rgb_blurred_t, mean_t[2][2];
+  int kt_model; /* a pair's transmission colours started from a pair model (0: the prior) */
 } wv_fit_outcome;
 
 /* The output directory check, before any slow step: refuses a file, a directory holding
@@ -120,6 +122,8 @@ typedef struct {
                     * analysis found the photo's lattice (wv_capture_fit_opts) */
   const char *dir, *drape;
   const char *photo_t, *scene_t; /* a transmission photo and its scene (wv_pair_scene); NULL: none */
+  const char *pair_model;        /* the pair model for the transmission colours' start (NULL: the default,
+                                  * wv_estimate_transmission; none there: the prior) */
   int force;
   void (*on_estimate)(void *user, const wv_estimate *e);
   wv_capture_progress progress; /* its user is on_estimate's too */

@@ -234,7 +234,8 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
                    .ssim_rgb_t = out->ssim_rgb_t,
                    .wsc_t = out->wsc_t,
                    .ssim_rgb_blurred_t = out->ssim_rgb_blurred_t,
-                   .kt_fitted = wv_scene_transmits(job->scene)};
+                   .kt_fitted = wv_scene_transmits(job->scene),
+                   .kt_start = job->kt_start};
   /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
   wv_view_opts vo = {.params = &st->params, .scene = fit_scene, .photo = pphoto, .title = job->title};
   snprintf(path, sizeof path, "%s/viewer.html", dir);
@@ -577,7 +578,7 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
   memset(&job, 0, sizeof job);
   job.opts = o->fit, job.drape = o->drape, job.dir = o->dir, job.force = o->force;
   const char *inputs[] = {o->estimate.photo, o->estimate.scene, o->estimate.model, o->estimate.weights,
-                          o->photo_t, o->scene_t};
+                          o->photo_t, o->scene_t, o->pair_model};
   memcpy(job.inputs, inputs, sizeof inputs);
   wv_status rc = wv_fit_job_check_dir(&job, err);
   if (rc) return rc;
@@ -596,9 +597,21 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
                            o->estimate.photo, &info, &ph_t, err)))
       return rc;
   }
-  if ((rc = wv_estimate_run_scene(&o->estimate, &scene, est, err))) {
+  int kt_model = 0;
+  if ((rc = wv_estimate_run_scene(&o->estimate, &scene, est, err)) ||
+      (o->photo_t && (rc = wv_estimate_transmission(est, &scene_t, &ph_t, o->pair_model, &kt_model, err)))) {
     wv_image_free(&ph_t);
+    if (est->desc) wv_estimate_free(est);
     return rc;
+  }
+  char kt_path[4096];
+  if (kt_model) {
+    const char *d = getenv("WOVEN_MODEL_DIR");
+    if (o->pair_model)
+      snprintf(kt_path, sizeof kt_path, "%s", o->pair_model);
+    else
+      snprintf(kt_path, sizeof kt_path, "fabricnet-%s+%s.bin (%s)", scene.name, scene_t.name,
+               d && *d ? d : "the bundled models");
   }
   if (o->on_estimate) o->on_estimate(o->progress.user, est);
   char *network = wv_params_to_json(&est->params), *nl = network ? realloc(network, strlen(network) + 2) : NULL;
@@ -617,7 +630,9 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
     job.title = "woven capture";
     job.progress = o->progress;
     if (o->photo_t) job.scene_t = &scene_t, job.photo_t = &ph_t, job.photo_t_path = o->photo_t;
+    job.kt_start = kt_model ? kt_path : NULL;
     rc = wv_fit_job_run(&job, out, err);
+    if (!rc) out->kt_model = kt_model;
   }
   wv_image_free(&ph_t);
   free(network);
