@@ -597,21 +597,17 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
                            o->estimate.photo, &info, &ph_t, err)))
       return rc;
   }
-  int kt_model = 0;
+  int kt_model = 0; /* a pair model for the transmission colours' start, checked before the network runs */
+  char kt_path[4096];
+  if (o->photo_t && (rc = wv_estimate_pair_model(&scene, &scene_t, o->pair_model, kt_path, sizeof kt_path, &kt_model, err))) {
+    wv_image_free(&ph_t);
+    return rc;
+  }
   if ((rc = wv_estimate_run_scene(&o->estimate, &scene, est, err)) ||
-      (o->photo_t && (rc = wv_estimate_transmission(est, &scene_t, &ph_t, o->pair_model, &kt_model, err)))) {
+      (kt_model && (rc = wv_estimate_transmission(est, &scene_t, &ph_t, kt_path, err)))) {
     wv_image_free(&ph_t);
     if (est->desc) wv_estimate_free(est);
     return rc;
-  }
-  char kt_path[4096];
-  if (kt_model) {
-    const char *d = getenv("WOVEN_MODEL_DIR");
-    if (o->pair_model)
-      snprintf(kt_path, sizeof kt_path, "%s", o->pair_model);
-    else
-      snprintf(kt_path, sizeof kt_path, "fabricnet-%s+%s.bin (%s)", scene.name, scene_t.name,
-               d && *d ? d : "the bundled models");
   }
   if (o->on_estimate) o->on_estimate(o->progress.user, est);
   char *network = wv_params_to_json(&est->params), *nl = network ? realloc(network, strlen(network) + 2) : NULL;

@@ -59,9 +59,9 @@ wv_status wv_estimate_run_scene(const wv_estimate_opts *o, const wv_scene *s, wv
   wv_fabricnet net;
   if ((rc = wv_fabricnet_load(mpath, &net, err))) return rc;
   if (!(rc = wv_descriptor_create(o->descriptor ? o->descriptor : "default", o->weights, &e->desc, err)) &&
+      !(rc = wv_fabricnet_check_pair(&net, mpath, NULL, err)) &&
       !(rc = wv_fabricnet_check(&net, mpath, wv_descriptor_name(e->desc), wv_descriptor_size(e->desc),
-                                o->any_scene ? NULL : &e->scene, err)) &&
-      !(rc = wv_fabricnet_check_pair(&net, mpath, NULL, err)))
+                                o->any_scene ? NULL : &e->scene, err)))
     rc = wv_photo_load(o->photo, &e->scene, &o->crop, &e->photo, &e->info, err);
   float y[WV_NET_OUT_MAX];
   if (!rc && !o->pattern) {
@@ -84,24 +84,37 @@ wv_status wv_estimate_run_scene(const wv_estimate_opts *o, const wv_scene *s, wv
   return rc;
 }
 
-wv_status wv_estimate_transmission(wv_estimate *e, const wv_scene *scene_t, const wv_image *photo_t, const char *model,
-                                   int *used, wv_error *err) {
-  *used = 0;
-  double t0 = omp_get_wtime();
-  char mpath[4096];
+wv_status wv_estimate_pair_model(const wv_scene *s, const wv_scene *ts, const char *model, char *path, size_t cap,
+                                 int *found, wv_error *err) {
+  *found = 0;
   if (model)
-    snprintf(mpath, sizeof mpath, "%s", model);
+    snprintf(path, cap, "%s", model);
   else
-    default_model(&e->scene, scene_t, mpath, sizeof mpath);
+    default_model(s, ts, path, cap);
   struct stat sb;
-  if (!model && stat(mpath, &sb) != 0) return WV_OK; /* no pair model: the prior's k_t */
+  if (!model && stat(path, &sb) != 0) return WV_OK; /* no pair model: the prior's k_t */
   wv_fabricnet net;
-  wv_status rc = wv_fabricnet_load(mpath, &net, err);
+  wv_status rc = wv_fabricnet_load(path, &net, err);
+  if (rc) return rc;
+  if (!(rc = wv_fabricnet_check_pair(&net, path, ts, err)) &&
+      (strcmp(net.scene, s->name) || net.scene_w != s->width || net.scene_h != s->height))
+    rc = wv_fail(err, WV_ERR_INVALID, "%s: pair model trained on renders of scene '%s' (%d x %d), not '%s' (%d x %d)",
+                 path, net.scene, net.scene_w, net.scene_h, s->name, s->width, s->height);
+  wv_fabricnet_free(&net);
+  if (!rc) *found = 1;
+  return rc;
+}
+
+wv_status wv_estimate_transmission(wv_estimate *e, const wv_scene *scene_t, const wv_image *photo_t, const char *path,
+                                   wv_error *err) {
+  double t0 = omp_get_wtime();
+  wv_fabricnet net;
+  wv_status rc = wv_fabricnet_load(path, &net, err);
   if (rc) return rc;
   size_t nd = wv_descriptor_size(e->desc);
   float *feat = NULL, y[WV_NET_OUT_MAX];
-  if (!(rc = wv_fabricnet_check(&net, mpath, wv_descriptor_name(e->desc), 2 * nd, &e->scene, err)) &&
-      !(rc = wv_fabricnet_check_pair(&net, mpath, scene_t, err)) &&
+  if (!(rc = wv_fabricnet_check_pair(&net, path, scene_t, err)) &&
+      !(rc = wv_fabricnet_check(&net, path, wv_descriptor_name(e->desc), 2 * nd, &e->scene, err)) &&
       !(feat = malloc(sizeof(float) * 2 * nd)))
     rc = wv_fail(err, WV_ERR_NOMEM, "out of memory");
   /* the reflection photo's features, then the transmission photo's, as the pair set has them */
@@ -109,7 +122,6 @@ wv_status wv_estimate_transmission(wv_estimate *e, const wv_scene *scene_t, cons
   if (!rc) rc = wv_descriptor_forward(e->desc, photo_t, feat + nd, err);
   if (!rc) rc = wv_fabricnet_predict_features(&net, feat, y, NULL, err);
   if (!rc) rc = wv_fabricnet_transmission(&net, y, &e->params, err);
-  if (!rc) *used = 1;
   free(feat);
   wv_fabricnet_free(&net);
   e->seconds += omp_get_wtime() - t0;
