@@ -55,7 +55,8 @@ const char *wv_dataset_pattern(const wv_dataset_info *info, int i);
 /* Sample k (0 .. n per_pattern - 1, n patterns) interleaves the patterns: pattern k % n,
  * index k / n. */
 void wv_dataset_sample_name(const wv_dataset_info *info, int k, char *buf, size_t cap);
-/* The prior draw of sample k (deterministic in the dataset seed). */
+#define WV_DATASET_PAIR_WIDTH_LO 0.7 /* a pair set's yarn widths: uniform in this .. 1 (open area up to 9%) */
+/* The prior draw of sample k (deterministic in the dataset seed); a pair set's with open gaps. */
 wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params *p, wv_error *err);
 /* Path of one of a sample's files: ext "json", "png", "t.png" or "feat". */
 void wv_dataset_path(const char *dir, const wv_dataset_info *info, int k, const char *ext, char *buf, size_t cap);

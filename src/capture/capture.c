@@ -609,6 +609,9 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
     if (est->desc) wv_estimate_free(est);
     return rc;
   }
+  /* the same camera sees the cloth at the same angle lit from behind: the pattern choice's
+   * rotation and skew of the weave lattice go to the back-lit scene too */
+  if (o->photo_t && est->chosen) wv_pattern_choice_scene(&est->choice, &scene_t, est->choice.best, &scene_t);
   if (o->on_estimate) o->on_estimate(o->progress.user, est);
   char *network = wv_params_to_json(&est->params), *nl = network ? realloc(network, strlen(network) + 2) : NULL;
   if (nl) strcat(nl, "\n"), network = nl; /* as wv_params_write writes it */

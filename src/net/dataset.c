@@ -157,7 +157,13 @@ wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params
   /* one independent stream per sample: resuming or reordering reproduces every draw */
   int np = wv_dataset_pattern_count(info);
   uint64_t s = wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x64617461ULL);
-  return wv_params_sample_prior(wv_dataset_pattern(info, k % np), s, p, err);
+  wv_status st = wv_params_sample_prior(wv_dataset_pattern(info, k % np), s, p, err);
+  /* A pair set's cloths have open gaps, which the back-lit image shows: the prior has
+   * none (yarn width 1), so a width of its own stream, uniform in WV_DATASET_PAIR_WIDTH_LO .. 1. */
+  if (!st && info->pair)
+    p->yarn_width = WV_DATASET_PAIR_WIDTH_LO + (1 - WV_DATASET_PAIR_WIDTH_LO) *
+                                                  wv_u01d(wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x77696474ULL));
+  return st;
 }
 
 /* Sample k's image in scene s: rendered, then through the camera (stream tag) or quantised. */
