@@ -10,7 +10,7 @@
  * Each pair is captured as `woven capture R --transmission T --scene flat45` captures it: the
  * one-photo network's estimate and pattern choice on R, the transmission colours from the
  * pair model (default models/fabricnet-flat45+flat45-back.bin when it exists; none: the
- * prior's), the back-lit scene with the choice's lattice orientation, the joint fit.
+ * prior's) when they score the lower pair loss (wv_capture_pair_start), the back-lit scene with the choice's lattice orientation, the joint fit.
  * Measured per target: the open area and the transmission colours against the truth (the
  * colour error of a yarn type is |fit - truth| / |truth| over its RGB vector; the larger of
  * the two types is reported), and for each photo the SSIM (per RGB channel) of the re-render
@@ -152,9 +152,12 @@ int main(int argc, char **argv) {
       wv_pattern_choice_scene(pc, &s, pc->best, &e.scene);
       wv_scene scene_t;
       wv_pattern_choice_scene(pc, &st, pc->best, &scene_t);
-      if (found && wv_estimate_transmission(&e, &scene_t, &photo_t, ppath, &err)) die(&err);
       wv_fit_opts o = fo;
       wv_capture_fit_opts(pc, 0, &o);
+      int kt_model = found;
+      if (found && (wv_estimate_transmission(&e, &scene_t, &photo_t, ppath, &err) ||
+                    wv_capture_pair_start(&e, &scene_t, &photo_t, &o, &kt_model, &err)))
+        die(&err);
       wv_params start = e.params;
       wv_fit_state fs;
       if (wv_fit_state_init(&fs, &start, &o, &err) ||
@@ -179,9 +182,9 @@ int main(int argc, char **argv) {
       double kt_e = kt_error(&fs.params, &truth), kt_s = kt_error(&start, &truth);
       int fam_right = !strcmp(wv_weave_family(fs.params.pattern), FAMILIES[f]);
       printf("%s %d %s -> %s: R %.3f/%.3f = %.3f, T %.3f/%.3f = %.3f, open area %.4f -> %.4f (%.2f), k_t error "
-             "%.3f (start %.3f), %d it, %.0f s\n",
+             "%.3f (start %.3f, %s), %d it, %.0f s\n",
              FAMILIES[f], i, pattern, fs.params.pattern, sr, cr, sr / cr, st_, ct, st_ / ct, oa_t, oa_f, oa_err, kt_e,
-             kt_s, fs.iter, secs);
+             kt_s, kt_model == 1 ? "pair model" : "prior", fs.iter, secs);
       fflush(stdout);
       json_array_append_new(
           targets, json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:i,s:f}", "family",

@@ -272,7 +272,9 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
         json_object_set_new(o_json, "ssim_rgb_blurred_photo_t",
                             r->ssim_rgb_blurred_t > -2 ? cli_real(r->ssim_rgb_blurred_t, 6) : json_null());
         json_object_set_new(o_json, "wsc_fit_t", r->wsc_t > -2 ? cli_real(r->wsc_t, 6) : json_null());
-        json_object_set_new(o_json, "kt_start", json_string(r->kt_model ? "pair model" : "prior"));
+        json_object_set_new(o_json, "kt_start", json_string(r->kt_model == 1   ? "pair model"
+                                                            : r->kt_model == 2 ? "prior (the pair model's start scored worse)"
+                                                                               : "prior"));
         json_object_set_new(o_json, "mean_t",
                             json_pack("{s:{s:o,s:o},s:{s:o,s:o}}", "photo", "centre", cli_real(r->mean_t[0][0], 6),
                                       "whole", cli_real(r->mean_t[0][1], 6), "render", "centre",

@@ -9,6 +9,7 @@
 
 #include "testutil.h"
 #include "woven/descriptor.h"
+#include "woven/capture.h"
 #include "woven/fit.h"
 #include "woven/io.h"
 #include "woven/photo.h"
@@ -624,6 +625,48 @@ static void test_width_sweep(void **state) {
   wv_descriptor_free(d);
 }
 
+/* A pair model's transmission colours are kept as the start only when the pair's loss is
+ * lower with them than with the prior's (k_d / 2). */
+static void test_pair_start(void **state) {
+  (void)state;
+  wv_scene s, sb;
+  tu_centre_window(&s, "flat45", 64, 64, 4);
+  tu_centre_window(&sb, "flat45-back", 64, 64, 4);
+  wv_fit_opts o;
+  opts(&o, 1);
+  wv_descriptor *d;
+  assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
+  wv_render_opts ro = {0};
+  for (int run = 0; run < 2; run++) {
+    wv_params tp, prior;
+    target(&tp);
+    prior = tp;
+    wv_params_transmission_default(&prior);
+    if (run == 0) /* the truth away from the prior: a proposal at the truth is kept */
+      for (int y = 0; y < 2; y++)
+        for (int c = 0; c < 3; c++) tp.transmission[y][c] = 0.15 * tp.diffuse[y][c];
+    else /* the truth at the prior: a proposal far off is not */
+      tp = prior;
+    wv_image photo, photo_t;
+    assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
+    assert_int_equal(wv_render(&sb, &tp, &ro, &photo_t, NULL, NULL), WV_OK);
+    wv_estimate e;
+    memset(&e, 0, sizeof e);
+    e.scene = s, e.photo = photo, e.desc = d, e.params = tp;
+    if (run == 1)
+      for (int y = 0; y < 2; y++)
+        for (int c = 0; c < 3; c++) e.params.transmission[y][c] = 0.95;
+    int kt_model = 1;
+    wv_error err = {0};
+    if (wv_capture_pair_start(&e, &sb, &photo_t, &o, &kt_model, &err)) fail_msg("%s", err.msg);
+    assert_int_equal(kt_model, run == 0 ? 1 : 2);
+    for (int y = 0; y < 2; y++)
+      for (int c = 0; c < 3; c++) assert_true(e.params.transmission[y][c] == tp.transmission[y][c]);
+    wv_image_free(&photo), wv_image_free(&photo_t);
+  }
+  wv_descriptor_free(d);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fit_improves), cmocka_unit_test(test_resume_equals_straight),
                                      cmocka_unit_test(test_stopping_rule), cmocka_unit_test(test_fit_stops),
@@ -632,6 +675,7 @@ int main(void) {
                                      cmocka_unit_test(test_colour_split_sees_shading),
                                      cmocka_unit_test(test_colour_split_matches_hues),
                                      cmocka_unit_test(test_limits), cmocka_unit_test(test_noise_sweep),
-                                     cmocka_unit_test(test_fit_pair), cmocka_unit_test(test_width_sweep)};
+                                     cmocka_unit_test(test_fit_pair), cmocka_unit_test(test_width_sweep),
+                                     cmocka_unit_test(test_pair_start)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -328,7 +328,9 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                     "pair through FabricNet).</td></tr>\n", r->kt_start);
     else
       sb_printf(&b, "<tr><td colspan=\"2\">The transmission colours started from the prior (half the start's "
-                    "diffuse colour): there is no pair model for these scenes.</td></tr>\n");
+                    "diffuse colour): %s.</td></tr>\n",
+                r->kt_tried ? "the pair model's estimate scored a higher loss on the two photos"
+                            : "there is no pair model for these scenes");
   }
   char how[96] = "measured from the photo's spectrum unless given";
   if (r->camera_blur_measured >= 0)
