@@ -59,7 +59,7 @@ static double run(const wv_scene *s, int spp, int n) {
 #pragma omp for schedule(dynamic, 1)
     for (int k = 0; k < n; k++) {
       wv_error e2;
-      if (wv_dataset_make_sample(dir, &info, k, 1, fp, d[omp_get_thread_num()], feat, &e2))
+      if (wv_dataset_make_sample(dir, &info, k, 1, fp, NULL, d[omp_get_thread_num()], feat, &e2))
         fprintf(stderr, "%s\n", e2.msg);
     }
     free(feat);

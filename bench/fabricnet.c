@@ -71,8 +71,8 @@ int main(int argc, char **argv) {
     tp = bench_now() - tp + t_load;
     if (tp < t_pred) t_pred = tp;
     /* the error on the mapped parameters (densities rounded), renormalised */
-    wv_fabricnet_targets(&truth, yt);
-    wv_fabricnet_targets(&pred, y);
+    wv_fabricnet_targets(&truth, WV_NET_OUT, yt);
+    wv_fabricnet_targets(&pred, WV_NET_OUT, y);
     for (int i = 0; i < WV_NET_OUT; i++) err_sum[i] += fabs((double)y[i] - yt[i]);
     wv_render_opts ro = {0};
     double sn = 0;

@@ -51,7 +51,7 @@ struct cli_opt {
 #define CLI_O_ENUM(n, T, f, choices, help) {n, NULL, CLI_ENUM, offsetof(T, f), 0, 0, choices, help, NULL, 0}
 #define CLI_O_CUSTOM(n, T, f, lo, hi, fn, meta, help) {n, NULL, CLI_CUSTOM, offsetof(T, f), lo, hi, meta, help, fn, 0}
 #define CLI_O_END {NULL, NULL, CLI_FLAG, 0, 0, 0, NULL, NULL, NULL, 0}
-#define CLI_MAX_TABLES 4
+#define CLI_MAX_TABLES 5
 typedef struct {
   const char *name;   /* the subcommand, for messages */
   const char *usage;  /* usage lines and description, before the options */
@@ -133,6 +133,7 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
 typedef struct {
   const char *photo, *scene, *pattern, *model, *descriptor, *weights, *out, *init, *resume, *drape;
   const char *transmission, *transmission_scene; /* a photo pair (woven fit, woven capture) */
+  const char *pair_model;                        /* woven capture: the pair model */
   wv_crop crop;
   int force, iters_given, align_given;
   wv_fit_opts fit;
@@ -144,6 +145,8 @@ extern const cli_opt CLI_PHOTO_OPTS[];
 extern const cli_opt CLI_MODEL_OPTS[];
 /* --transmission, --transmission-scene (woven fit, woven capture) */
 extern const cli_opt CLI_PAIR_OPTS[];
+/* --pair-model (woven capture) */
+extern const cli_opt CLI_PAIR_MODEL_OPTS[];
 /* The fit's tuning: --iters, --iter-spp, --iter-scale, --seed, --align-radius,
  * --register-radius, --distort-degree, --w-struct, --w-colour, --camera-blur, --colour-split, --no-colour-split, --threads, --drape. */
 extern const cli_opt CLI_FIT_OPTS[];

@@ -7,12 +7,14 @@
 #include "woven/dist.h"
 
 typedef struct {
-  const char *scene, *dir, *descriptor, *weights;
+  const char *scene, *tscene, *dir, *descriptor, *weights;
   int per, seed, spp, no_augment, jobs;
 } dataset_args;
 
 static const cli_opt OPTS[] = {
     CLI_O_STR("--scene", NULL, dataset_args, scene, "S", "a scene file, cylinder or flat45"),
+    CLI_O_STR("--transmission-scene", NULL, dataset_args, tscene, "S",
+              "a back-lit scene (a file or flat45-back): a photo-pair set,\neach sample also rendered lit from behind"),
     CLI_O_INT("--per-pattern", NULL, dataset_args, per, 1, WV_DATASET_MAX_PER_PATTERN, "N", "samples per pattern"),
     CLI_O_STR("--output", "-o", dataset_args, dir, "DIR", "the dataset's directory"),
     CLI_O_INT("--seed", NULL, dataset_args, seed, 0, INT_MAX, "N",
@@ -27,14 +29,16 @@ static const cli_opt OPTS[] = {
 static const cli_cmd CMD = {
     "dataset",
     "usage: woven dataset --scene S.json|cylinder|flat45 --per-pattern N -o DIR [--seed N] [--spp N]\n"
-    "                     [--no-augment] [--jobs N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
+    "                     [--transmission-scene S.json|flat45-back] [--no-augment] [--jobs N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                     [--quiet] [--json]\n"
     "\n"
     "Renders N samples for each built-in weave pattern (plain, basket, the twills, the satins and\n"
     "their 90-degree variants), parameters drawn from the SPEC section 5 priors, passes each\n"
     "through a camera (glints, defocus, exposure and white balance, sensor noise, JPEG), and\n"
-    "caches their descriptor features.\n",
-    "Writes DIR/dataset.json and DIR/samples/<pattern>_<i>.{json,png,feat} (docs/fabricnet.md).\n"
+    "caches their descriptor features. With --transmission-scene each sample is also rendered\n"
+    "lit from behind, for a model that reads a photo pair.\n",
+    "Writes DIR/dataset.json and DIR/samples/<pattern>_<i>.{json,png,feat} (docs/fabricnet.md),\n"
+    "and <pattern>_<i>.t.png for a pair set.\n"
     "Run the same command again to resume after an interruption: finished samples are kept,\n"
     "a larger --per-pattern extends the set; a DIR made with other settings is refused.\n"
     "Under 'mpirun -n N' the processes share the samples (docs/mpi.md); the directory is the same\n"
@@ -66,7 +70,7 @@ static int on_progress(void *user, int done, int todo, double el) {
 
 int cmd_dataset(int argc, char **argv) {
   cli_ctx c = {0, 0, "dataset"};
-  dataset_args da = {NULL, NULL, "default", NULL, 0, 1, 0, 0, 0};
+  dataset_args da = {NULL, NULL, NULL, "default", NULL, 0, 1, 0, 0, 0};
   CLI_PARSE(&CMD, argc, argv, &da, &c);
   if (!da.scene) return cli_usage_error(c.cmd, "--scene is required");
   if (!da.dir) return cli_usage_error(c.cmd, "-o DIR is required");
@@ -78,7 +82,7 @@ int cmd_dataset(int argc, char **argv) {
   dataset_ui ui = {&c, {0}, 0};
   wv_dataset_build_opts o;
   wv_dataset_build_opts_default(&o);
-  o.scene = da.scene, o.dir = da.dir, o.per_pattern = da.per, o.seed = (uint64_t)da.seed, o.spp = da.spp;
+  o.scene = da.scene, o.transmission_scene = da.tscene, o.dir = da.dir, o.per_pattern = da.per, o.seed = (uint64_t)da.seed, o.spp = da.spp;
   o.augment = !da.no_augment, o.jobs = da.jobs, o.descriptor = da.descriptor, o.weights = da.weights;
   o.on_note = on_note, o.on_progress = on_progress, o.user = &ui;
   cli_progress_start(&ui.bar, &c, "dataset");

@@ -93,6 +93,12 @@ const cli_opt CLI_PAIR_OPTS[] = {
               "the back-lit scene of --transmission (default: flat45-back for\nflat45; other scenes need it)"),
     CLI_O_END};
 
+const cli_opt CLI_PAIR_MODEL_OPTS[] = {
+    CLI_O_STR("--pair-model", NULL, capture_args, pair_model, "M",
+              "with --transmission: the pair model that starts the transmission\ncolours (default: "
+              "models/fabricnet-<scene>+<back-lit scene>.bin\nif there is one, else the prior)"),
+    CLI_O_END};
+
 const cli_opt CLI_MODEL_OPTS[] = {
     CLI_O_STR("--model", NULL, capture_args, model, "M",
               "a model from 'woven train' (default: models/fabricnet-<scene\nname>.bin; the directory can be "
@@ -112,6 +118,9 @@ const cli_opt CLI_FIT_OPTS[] = {
     CLI_O_INT("--patience", NULL, capture_args, fit.patience, 0, WV_FIT_MAX_ITERS, "N",
               "end a stage when its smoothed loss has not fallen by 1% in N\niterations; the last stage's end "
               "ends the iterations (default 10;\n0 = run every iteration)"),
+    CLI_O_CLEAR("--no-width-sweep", capture_args, fit.width_sweep,
+                "with --transmission: leave the yarn width (the open gaps) at its\nstart (by default it is searched "
+                "on both photos when the iterations end)"),
     CLI_O_CLEAR("--no-noise-sweep", capture_args, fit.noise_sweep,
                 "leave the noise level to the discrete steps (by default every level\nis tried when the iterations end)"),
     CLI_O_CUSTOM("--seed", capture_args, fit.seed, 0, INT_MAX, parse_seed, "N", "the seed of the discrete steps"),
@@ -263,6 +272,9 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
         json_object_set_new(o_json, "ssim_rgb_blurred_photo_t",
                             r->ssim_rgb_blurred_t > -2 ? cli_real(r->ssim_rgb_blurred_t, 6) : json_null());
         json_object_set_new(o_json, "wsc_fit_t", r->wsc_t > -2 ? cli_real(r->wsc_t, 6) : json_null());
+        json_object_set_new(o_json, "kt_start", json_string(r->kt_model == 1   ? "pair model"
+                                                            : r->kt_model == 2 ? "prior (the pair model's start scored worse)"
+                                                                               : "prior"));
         json_object_set_new(o_json, "mean_t",
                             json_pack("{s:{s:o,s:o},s:{s:o,s:o}}", "photo", "centre", cli_real(r->mean_t[0][0], 6),
                                       "whole", cli_real(r->mean_t[0][1], 6), "render", "centre",

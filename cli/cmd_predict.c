@@ -29,7 +29,7 @@ static const cli_cmd CAPTURE_CMD = {
     "                     [--model M] [--iters N] [--crop x,y,w,h] [--iter-spp N] [--iter-scale N]\n"
     "                     [--[no-]schedule] [--patience N]\n"
     "                     [--align-radius N] [--register-radius N] [--distort-degree N] [--seed N] [--threads N] [--descriptor default|vgg19]\n"
-    "                     [--drape S.json|none] [--transmission T.png [--transmission-scene S]]\n"
+    "                     [--drape S.json|none] [--transmission T.png [--transmission-scene S] [--pair-model M]]\n"
     "                     [--vgg19-weights FILE] [--force] [--quiet] [--json]\n"
     "\n"
     "The whole capture: FabricNet's estimate (as 'woven predict'), then the fit from it (as\n"
@@ -41,7 +41,9 @@ static const cli_cmd CAPTURE_CMD = {
     "report.html, viewer.html, drape.png (the fit on the bundled draped cloth, --drape), maps/,\n"
     "fit.json and checkpoint.json ('woven fit --resume DIR' continues); with --transmission also\n"
     "photo_t.png and render_t.png (the back-lit photo and the fit in the back-lit scene).\n",
-    {{CLI_PHOTO_OPTS, 0}, {CLI_MODEL_OPTS, 0}, {CLI_PAIR_OPTS, 0}, {CLI_FIT_OPTS, 0}}, 1, {offsetof(capture_args, photo)}};
+    {{CLI_PHOTO_OPTS, 0}, {CLI_MODEL_OPTS, 0}, {CLI_PAIR_OPTS, 0}, {CLI_PAIR_MODEL_OPTS, 0}, {CLI_FIT_OPTS, 0}},
+    1,
+    {offsetof(capture_args, photo)}};
 
 /* Why the pattern was chosen: the weave analysis and the deciding scores, on stderr. */
 static void print_choice(cli_ctx *c, const wv_pattern_choice *pc) {
@@ -85,7 +87,7 @@ void cli_capture_opts(const capture_args *a, wv_capture_opts *o) {
                                    .any_scene = a->force};
   o->fit = a->fit, o->iters_given = a->iters_given, o->align_given = a->align_given;
   o->dir = a->out, o->drape = a->drape, o->force = a->force;
-  o->photo_t = a->transmission, o->scene_t = a->transmission_scene;
+  o->photo_t = a->transmission, o->scene_t = a->transmission_scene, o->pair_model = a->pair_model;
 }
 
 static int check_required(const char *cmd, const capture_args *pa) {
@@ -138,6 +140,7 @@ int cmd_capture(int argc, char **argv) {
   CLI_PARSE(&CAPTURE_CMD, argc, argv, &pa, &c);
   int rc = check_required(c.cmd, &pa);
   if (rc) return rc;
+  if (pa.pair_model && !pa.transmission) return cli_usage_error(c.cmd, "--pair-model needs --transmission T.png");
   wv_capture_opts co;
   cli_capture_opts(&pa, &co);
   cli_fit_ui ui;

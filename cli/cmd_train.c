@@ -104,7 +104,7 @@ int cmd_train(int argc, char **argv) {
            r.epochs_run, r.seconds, model, r.best_epoch, r.val_f16, r.val_accuracy, r.val_ce);
   if (c.json) {
     json_t *po = json_object();
-    for (int k = 0; k < WV_NET_OUT; k++)
+    for (int k = 0; k < r.outputs; k++)
       json_object_set_new(po, wv_fabricnet_output_name(k), cli_real(r.val_per_output[k], 5));
     cli_print_json(json_pack("{s:o,s:i,s:o,s:i,s:i,s:i,s:o,s:o,s:o,s:o,s:o}", "model", cli_str(model), "epochs",
                              r.epochs, "seconds", cli_real(r.seconds, 3), "train_samples", r.train, "val_samples",

@@ -135,7 +135,7 @@ static void images(void) {
 static void fabricnet(const wv_scene *s) {
   wv_error err;
   wv_fabricnet n;
-  check(wv_fabricnet_init(&n, "default", 4, s, 7, &err), &err);
+  check(wv_fabricnet_init(&n, "default", 4, s, NULL, 7, &err), &err);
   check(wv_fabricnet_save(seed_path("fabricnet", "model.bin"), &n, &err), &err);
   size_t np = wv_fabricnet_param_count(&n);
   float *m = calloc(np, sizeof(float)), *v = calloc(np, sizeof(float));

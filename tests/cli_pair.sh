@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `woven fit` and `woven capture` with a photo pair (--transmission): a missing, unreadable or
-# wrongly sized transmission photo, a scene with no back-lit counterpart and a front-lit
-# --transmission-scene are refused with a message naming the file or scene, writing nothing;
+# wrongly sized transmission photo, a scene with no back-lit counterpart, a front-lit
+# --transmission-scene and a missing or one-photo --pair-model are refused with a message naming the file or scene, writing nothing;
 # a short pair fit writes photo_t.png and render_t.png, records the pair in fit.json and resumes.
 # Usage: cli_pair.sh WOVEN SOURCE_DIR
 source "$(dirname "$0")/cli_lib.bash"
@@ -33,6 +33,13 @@ check "front-lit transmission scene" 2 "flat45 is not a back-lit scene" -- "$WOV
   --transmission "$T/t.png" --transmission-scene flat45 -o "$T/fitdir" "${fit[@]}"
 check "--transmission-scene alone" 1 "--transmission-scene needs --transmission" -- "$WOVEN" fit "$T/r.png" \
   --scene flat45 --transmission-scene flat45-back -o "$T/fitdir" "${fit[@]}"
+check "--pair-model alone" 1 "--pair-model needs --transmission" -- "$WOVEN" capture "$T/r.png" --scene flat45 \
+  --pair-model "$SRC/models/fabricnet-flat45.bin" -o "$T/fitdir" --iters 2
+check "missing pair model" 3 "$T/nomodel.bin" -- "$WOVEN" capture "$T/r.png" --scene flat45 --transmission "$T/t.png" \
+  --pair-model "$T/nomodel.bin" -o "$T/fitdir" --iters 2
+check "one-photo model as the pair model" 2 "a one-photo model, not a model for a photo pair" -- "$WOVEN" capture \
+  "$T/r.png" --scene flat45 --transmission "$T/t.png" --pair-model "$SRC/models/fabricnet-flat45.bin" -o "$T/fitdir" \
+  --iters 2
 [[ -e $T/fitdir ]] && fail "a refused run left $T/fitdir"
 check "pair fit" 0 '"ssim_rgb_fit_t"' -- "$WOVEN" fit "$T/r.png" --scene flat45 --transmission "$T/t.png" \
   -o "$T/fitdir" "${fit[@]}" --json --quiet

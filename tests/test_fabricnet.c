@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 #include <zlib.h>
 
 #include "testutil.h"
@@ -53,7 +54,7 @@ static void test_gradient(void **state) {
   wv_fabricnet n;
   wv_error e;
   const int nin = 12, batch = 3;
-  assert_int_equal(wv_fabricnet_init(&n, "default", nin, &s, 7, &e), WV_OK);
+  assert_int_equal(wv_fabricnet_init(&n, "default", nin, &s, NULL, 7, &e), WV_OK);
   assert_int_equal(n.n_cls, WV_NET_CLASSES);
   /* larger weights than the init so every layer matters */
   float *t[WV_NET_TENSORS];
@@ -112,7 +113,7 @@ static void test_training_reduces_loss(void **state) {
   wv_fabricnet n;
   wv_error e;
   const int nin = 64, N = 64, batch = 16;
-  assert_int_equal(wv_fabricnet_init(&n, "default", nin, &s, 1, &e), WV_OK);
+  assert_int_equal(wv_fabricnet_init(&n, "default", nin, &s, NULL, 1, &e), WV_OK);
   float *x = malloc(sizeof(float) * N * nin), *y = malloc(sizeof(float) * N * WV_NET_OUT);
   wv_rng r;
   wv_rng_seed(&r, 11);
@@ -150,11 +151,11 @@ static void test_param_mapping(void **state) {
   wv_error e;
   wv_scene s = tiny_scene();
   wv_fabricnet n;
-  assert_int_equal(wv_fabricnet_init(&n, "default", 4, &s, 1, &e), WV_OK);
+  assert_int_equal(wv_fabricnet_init(&n, "default", 4, &s, NULL, 1, &e), WV_OK);
   for (int pat = 0; pat < wv_weave_builtin_count(); pat++) {
     assert_int_equal(wv_params_sample_prior(wv_weave_builtin_name(pat), 99 + pat, &p, &e), WV_OK);
     float y[WV_NET_OUT];
-    wv_fabricnet_targets(&p, y);
+    wv_fabricnet_targets(&p, WV_NET_OUT, y);
     for (int k = 0; k < WV_NET_OUT; k++) assert_true(y[k] >= 0 && y[k] <= 1);
     assert_int_equal(wv_fabricnet_params(&n, y, p.pattern, &q, &e), WV_OK);
     assert_true(fabs(q.density[0] - p.density[0]) < 0.51 && fabs(q.density[1] - p.density[1]) < 0.51);
@@ -215,7 +216,7 @@ static void test_files(void **state) {
   wv_scene s = tiny_scene();
   wv_fabricnet n, m;
   wv_error e;
-  assert_int_equal(wv_fabricnet_init(&n, "default", 100, &s, 5, &e), WV_OK);
+  assert_int_equal(wv_fabricnet_init(&n, "default", 100, &s, NULL, 5, &e), WV_OK);
   for (int i = 0; i < 100; i++) n.mean[i] = 0.01f * i, n.std[i] = 1 + 0.1f * i;
   assert_int_equal(wv_fabricnet_save(path, &n, &e), WV_OK);
   assert_int_equal(wv_fabricnet_load(path, &m, &e), WV_OK);
@@ -368,7 +369,7 @@ static void test_v1_model(void **state) {
   wv_scene s = tiny_scene();
   wv_fabricnet n, m;
   wv_error e;
-  assert_int_equal(wv_fabricnet_init(&n, "default", 40, &s, 9, &e), WV_OK);
+  assert_int_equal(wv_fabricnet_init(&n, "default", 40, &s, NULL, 9, &e), WV_OK);
   n.n_cls = 0; /* the first six tensors only, as version 1 stored them */
   assert_int_equal(wv_fabricnet_save(path, &n, &e), WV_OK);
   char *data;
@@ -441,7 +442,7 @@ static void make_dataset(const char *dir) {
   free(sj);
   wv_descriptor *d;
   assert_int_equal(wv_descriptor_create_default(&d, &e), WV_OK);
-  info.version = WV_DATASET_VERSION, info.renderer = WV_RENDER_VERSION, info.seed = 4, info.per_pattern = 2;
+  info.version = 2, info.renderer = WV_RENDER_VERSION, info.seed = 4, info.per_pattern = 2;
   info.spp = 2, info.augment = 1, info.n_feat = (int)wv_descriptor_size(d);
   snprintf(info.descriptor, sizeof info.descriptor, "%s", wv_descriptor_name(d));
   assert_int_equal(wv_dataset_info_write(dir, &info, &e), WV_OK);
@@ -450,7 +451,7 @@ static void make_dataset(const char *dir) {
   assert_int_equal(mkdir(sub, 0777), 0);
   float *feat = malloc(sizeof(float) * (size_t)info.n_feat);
   for (int k = 0; k < 2 * wv_weave_builtin_count(); k++) {
-    assert_int_equal(wv_dataset_make_sample(dir, &info, k, 0, NULL, d, feat, &e), WV_OK);
+    assert_int_equal(wv_dataset_make_sample(dir, &info, k, 0, NULL, NULL, d, feat, &e), WV_OK);
     assert_true(wv_dataset_sample_done(dir, &info, k));
   }
   free(feat);
@@ -589,6 +590,125 @@ static void test_train(void **state) {
   assert_non_null(strstr(e.msg, "--resume"));
 }
 
+/* Writes scene s under dir/name.json and returns the path. */
+static void write_scene(const wv_scene *s, const char *path) {
+  char *sj = wv_scene_to_json(s);
+  wv_error e;
+  assert_non_null(sj);
+  assert_int_equal(wv_write_file_atomic(path, sj, strlen(sj), &e), WV_OK);
+  free(sj);
+}
+
+/* The features of an 8-bit PNG as a dataset stores them (f16). */
+static void png_features(const char *png, wv_descriptor *d, float *feat, uint16_t *out, int n) {
+  wv_image img;
+  wv_error e;
+  assert_int_equal(wv_image_read(png, &img, NULL, &e), WV_OK);
+  assert_int_equal(wv_descriptor_forward(d, &img, feat, &e), WV_OK);
+  for (int i = 0; i < n; i++) out[i] = wv_f32_to_f16(feat[i]);
+  wv_image_free(&img);
+}
+
+/* A photo-pair set: each sample rendered lit from the front and from behind, its features
+ * the two images' in that order; a model trained on it has the transmission colours among
+ * its outputs, is refused where a one-photo model is wanted, and sets k_t. */
+static void test_pair_dataset_and_model(void **state) {
+  (void)state;
+  const char *dir = tu_tmpdir("fabricnet_pair");
+  wv_scene s, ts;
+  tu_centre_window(&s, "flat45", 64, 48, 1);
+  tu_centre_window(&ts, "flat45-back", 64, 48, 1);
+  snprintf(s.name, sizeof s.name, "tiny");
+  snprintf(ts.name, sizeof ts.name, "tiny-back");
+  char scene[600], tscene[600], ds[600], model[600], path[1100], tpath[1100];
+  snprintf(scene, sizeof scene, "%s/tiny.json", dir);
+  snprintf(tscene, sizeof tscene, "%s/tiny-back.json", dir);
+  snprintf(ds, sizeof ds, "%s/ds", dir);
+  snprintf(model, sizeof model, "%s/pair.bin", dir);
+  write_scene(&s, scene);
+  write_scene(&ts, tscene);
+  wv_dist solo = {0, 1, 0};
+  wv_dataset_build_opts o;
+  wv_dataset_build_opts_default(&o);
+  o.scene = scene, o.transmission_scene = tscene, o.dir = ds, o.per_pattern = 1, o.seed = 3, o.jobs = 1;
+  wv_dataset_build_result r;
+  wv_error e;
+  wv_status st = wv_dataset_build(&solo, &o, &r, &e);
+  if (st) print_message("%s\n", e.msg);
+  assert_int_equal(st, WV_OK);
+  wv_dataset_info info;
+  assert_int_equal(wv_dataset_info_read(ds, &info, &e), WV_OK);
+  wv_descriptor *d;
+  assert_int_equal(wv_descriptor_create_default(&d, &e), WV_OK);
+  int nd = (int)wv_descriptor_size(d);
+  assert_int_equal(info.pair, 1);
+  assert_int_equal(info.version, 3);
+  assert_string_equal(info.tscene.name, "tiny-back");
+  assert_int_equal(info.n_feat, 2 * nd);
+  /* sample 0's stored features: its front-lit image's, then its back-lit image's */
+  float *feat = malloc(sizeof(float) * (size_t)nd);
+  uint16_t *stored = malloc(sizeof(uint16_t) * 2 * (size_t)nd), *want = malloc(sizeof(uint16_t) * 2 * (size_t)nd);
+  wv_dataset_path(ds, &info, 0, "feat", path, sizeof path);
+  assert_int_equal(wv_dataset_read_features(path, 2 * nd, stored, &e), WV_OK);
+  wv_dataset_path(ds, &info, 0, "png", path, sizeof path);
+  wv_dataset_path(ds, &info, 0, "t.png", tpath, sizeof tpath);
+  png_features(path, d, feat, want, nd);
+  png_features(tpath, d, feat, want + nd, nd);
+  assert_memory_equal(stored, want, 2 * (size_t)nd * sizeof(uint16_t));
+  assert_memory_not_equal(stored, stored + nd, (size_t)nd * sizeof(uint16_t));
+  /* without its back-lit image a sample is not done */
+  assert_true(wv_dataset_sample_done(ds, &info, 0));
+  assert_int_equal(unlink(tpath), 0);
+  assert_false(wv_dataset_sample_done(ds, &info, 0));
+  assert_int_equal(wv_dataset_build(&solo, &o, &r, &e), WV_OK);
+  assert_int_equal(r.rendered, 1);
+  /* the same directory as a one-photo set is refused */
+  o.transmission_scene = NULL;
+  assert_int_equal(wv_dataset_build(&solo, &o, &r, &e), WV_ERR_INVALID);
+  assert_non_null(strstr(e.msg, "transmission scene"));
+  /* training: 27 outputs, the loss falls */
+  wv_train_opts to;
+  wv_train_opts_default(&to);
+  to.epochs = 20, to.batch = 4, to.lr = 1e-3, to.val_frac = 0.25;
+  curve cv = {0, 0, 0};
+  to.on_epoch = record_epoch, to.user = &cv;
+  wv_train_result tr;
+  assert_int_equal(wv_train(ds, model, &to, &tr, &e), WV_OK);
+  assert_int_equal(tr.outputs, WV_NET_OUT_PAIR);
+  assert_true(cv.last < 0.8 * cv.first);
+  wv_fabricnet m;
+  assert_int_equal(wv_fabricnet_load(model, &m, &e), WV_OK);
+  assert_int_equal(m.n_out, WV_NET_OUT_PAIR);
+  assert_int_equal(m.n_in, 2 * nd);
+  assert_string_equal(m.tscene, "tiny-back");
+  assert_int_equal(wv_fabricnet_check_pair(&m, model, &ts, &e), WV_OK);
+  assert_int_equal(wv_fabricnet_check_pair(&m, model, NULL, &e), WV_ERR_INVALID);
+  assert_non_null(strstr(e.msg, "pair model"));
+  wv_scene other = ts;
+  snprintf(other.name, sizeof other.name, "other-back");
+  assert_int_equal(wv_fabricnet_check_pair(&m, model, &other, &e), WV_ERR_INVALID);
+  /* its transmission outputs set k_t (every target of a sample round-trips through them) */
+  wv_params p, q;
+  assert_int_equal(wv_dataset_sample_params(&info, 5, &p, &e), WV_OK);
+  float y[WV_NET_OUT_MAX];
+  wv_fabricnet_targets(&p, WV_NET_OUT_PAIR, y);
+  q = p;
+  for (int t = 0; t < 2; t++)
+    for (int c = 0; c < 3; c++) q.transmission[t][c] = 0.5;
+  assert_int_equal(wv_fabricnet_transmission(&m, y, &q, &e), WV_OK);
+  for (int t = 0; t < 2; t++)
+    for (int c = 0; c < 3; c++) assert_true(fabs(q.transmission[t][c] - p.transmission[t][c]) < 1e-5);
+  /* a one-photo model predicts no transmission colours and is refused for a pair */
+  wv_fabricnet n1;
+  assert_int_equal(wv_fabricnet_init(&n1, "default", nd, &s, NULL, 1, &e), WV_OK);
+  assert_int_equal(wv_fabricnet_transmission(&n1, y, &q, &e), WV_ERR_INVALID);
+  assert_int_equal(wv_fabricnet_check_pair(&n1, "one.bin", &ts, &e), WV_ERR_INVALID);
+  wv_fabricnet_free(&n1);
+  wv_fabricnet_free(&m);
+  wv_descriptor_free(d);
+  free(feat), free(stored), free(want);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_gradient),   cmocka_unit_test(test_training_reduces_loss),
@@ -596,6 +716,7 @@ int main(void) {
       cmocka_unit_test(test_files),      cmocka_unit_test(test_features_file),
       cmocka_unit_test(test_v1_model),   cmocka_unit_test(test_augment),
       cmocka_unit_test(test_train),      cmocka_unit_test(test_dataset_build_resumes),
+      cmocka_unit_test(test_pair_dataset_and_model),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

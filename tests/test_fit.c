@@ -9,6 +9,7 @@
 
 #include "testutil.h"
 #include "woven/descriptor.h"
+#include "woven/capture.h"
 #include "woven/fit.h"
 #include "woven/io.h"
 #include "woven/photo.h"
@@ -558,7 +559,7 @@ static void test_fit_pair(void **state) {
   assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
   wv_fit_opts o;
   opts(&o, 12);
-  o.discrete_every = 0, o.colour_split = 0, o.noise_sweep = 0, o.patience = 0;
+  o.discrete_every = 0, o.colour_split = 0, o.noise_sweep = 0, o.width_sweep = 0, o.patience = 0;
   o.align_radius = 0, o.register_radius = 0, o.distort_degree = 0, o.psf_sigma = 0;
   wv_error err = {0};
   double e[3] = {0, 0, 0}; /* k_t error: start, pair fit, reflection-only fit */
@@ -582,6 +583,90 @@ static void test_fit_pair(void **state) {
   wv_descriptor_free(d);
 }
 
+/* A photo pair's open gaps: from a start without gaps (yarn width 1), the width sweep finds
+ * the target's 0.75 (open area 6.25%) on the pair's loss; without it the width stays, and a
+ * fit of the reflection photo alone does not search it. */
+static void test_width_sweep(void **state) {
+  (void)state;
+  wv_scene s, sb;
+  wv_params tp, start;
+  wv_image photo, photo_t;
+  wv_descriptor *d;
+  tu_centre_window(&s, "flat45", 64, 64, 4);
+  tu_centre_window(&sb, "flat45-back", 64, 64, 4);
+  target(&tp);
+  tp.yarn_width = 0.75;
+  start = tp;
+  start.yarn_width = 1.0;
+  wv_render_opts ro = {0};
+  assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
+  assert_int_equal(wv_render(&sb, &tp, &ro, &photo_t, NULL, NULL), WV_OK);
+  assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
+  wv_fit_opts o;
+  opts(&o, 1);
+  o.discrete_every = 0, o.colour_split = 0, o.noise_sweep = 0, o.patience = 0, o.lr = 1e-9;
+  o.align_radius = 0, o.register_radius = 0, o.distort_degree = 0, o.psf_sigma = 0;
+  wv_error err = {0};
+  double width[3];
+  for (int run = 0; run < 3; run++) { /* the pair with the sweep, the pair without, the reflection alone */
+    o.width_sweep = run != 1;
+    wv_fit_state st;
+    assert_int_equal(wv_fit_state_init(&st, &start, &o, &err), WV_OK);
+    if (wv_fit_run_pair(&st, &s, &photo, run < 2 ? &sb : NULL, run < 2 ? &photo_t : NULL, d, &o, NULL, NULL, &err))
+      fail_msg("%s", err.msg);
+    width[run] = st.params.yarn_width;
+    wv_fit_state_free(&st);
+  }
+  print_message("yarn width: target 0.75, pair with the sweep %.4f, without %.4f, reflection alone %.4f\n", width[0],
+                width[1], width[2]);
+  assert_true(fabs(width[0] - 0.75) <= 0.0125 + 1e-9);
+  assert_true(width[1] == 1.0 && width[2] == 1.0);
+  wv_image_free(&photo), wv_image_free(&photo_t);
+  wv_descriptor_free(d);
+}
+
+/* A pair model's transmission colours are kept as the start only when the pair's loss is
+ * lower with them than with the prior's (k_d / 2). */
+static void test_pair_start(void **state) {
+  (void)state;
+  wv_scene s, sb;
+  tu_centre_window(&s, "flat45", 64, 64, 4);
+  tu_centre_window(&sb, "flat45-back", 64, 64, 4);
+  wv_fit_opts o;
+  opts(&o, 1);
+  wv_descriptor *d;
+  assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
+  wv_render_opts ro = {0};
+  for (int run = 0; run < 2; run++) {
+    wv_params tp, prior;
+    target(&tp);
+    prior = tp;
+    wv_params_transmission_default(&prior);
+    if (run == 0) /* the truth away from the prior: a proposal at the truth is kept */
+      for (int y = 0; y < 2; y++)
+        for (int c = 0; c < 3; c++) tp.transmission[y][c] = 0.15 * tp.diffuse[y][c];
+    else /* the truth at the prior: a proposal far off is not */
+      tp = prior;
+    wv_image photo, photo_t;
+    assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
+    assert_int_equal(wv_render(&sb, &tp, &ro, &photo_t, NULL, NULL), WV_OK);
+    wv_estimate e;
+    memset(&e, 0, sizeof e);
+    e.scene = s, e.photo = photo, e.desc = d, e.params = tp;
+    if (run == 1)
+      for (int y = 0; y < 2; y++)
+        for (int c = 0; c < 3; c++) e.params.transmission[y][c] = 0.95;
+    int kt_model = 1;
+    wv_error err = {0};
+    if (wv_capture_pair_start(&e, &sb, &photo_t, &o, &kt_model, &err)) fail_msg("%s", err.msg);
+    assert_int_equal(kt_model, run == 0 ? 1 : 2);
+    for (int y = 0; y < 2; y++)
+      for (int c = 0; c < 3; c++) assert_true(e.params.transmission[y][c] == tp.transmission[y][c]);
+    wv_image_free(&photo), wv_image_free(&photo_t);
+  }
+  wv_descriptor_free(d);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fit_improves), cmocka_unit_test(test_resume_equals_straight),
                                      cmocka_unit_test(test_stopping_rule), cmocka_unit_test(test_fit_stops),
@@ -590,6 +675,7 @@ int main(void) {
                                      cmocka_unit_test(test_colour_split_sees_shading),
                                      cmocka_unit_test(test_colour_split_matches_hues),
                                      cmocka_unit_test(test_limits), cmocka_unit_test(test_noise_sweep),
-                                     cmocka_unit_test(test_fit_pair)};
+                                     cmocka_unit_test(test_fit_pair), cmocka_unit_test(test_width_sweep),
+                                     cmocka_unit_test(test_pair_start)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

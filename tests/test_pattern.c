@@ -28,7 +28,7 @@ static int setup(void **state) {
   tu_centre_window(&f->scene, "flat45", 256, 256, 8);
   assert_int_equal(wv_descriptor_create_default(&f->d, &e), WV_OK);
   int n = (int)wv_descriptor_size(f->d);
-  assert_int_equal(wv_fabricnet_init(&f->net, "default", n, &f->scene, 1, &e), WV_OK);
+  assert_int_equal(wv_fabricnet_init(&f->net, "default", n, &f->scene, NULL, 1, &e), WV_OK);
   f->gram = malloc(sizeof(float) * (size_t)n);
   *state = f;
   return 0;
@@ -53,7 +53,7 @@ static int choose(fixture *f, const char *pattern, uint64_t seed, wv_pattern_cho
   assert_int_equal(wv_params_sample_prior(pattern, seed, &truth, &e), WV_OK);
   assert_int_equal(wv_render(&f->scene, &truth, &ro, &photo, NULL, &e), WV_OK);
   assert_int_equal(wv_descriptor_forward(f->d, &photo, f->gram, &e), WV_OK);
-  wv_fabricnet_targets(&truth, y);
+  wv_fabricnet_targets(&truth, WV_NET_OUT, y);
   assert_int_equal(wv_fabricnet_choose_pattern(&f->net, f->d, &f->scene, &photo, f->gram, y, NULL, c, &e), WV_OK);
   wv_image_free(&photo);
   fprintf(stderr, "%s seed %llu -> %s (%s; lattice %s %.3f, %d families within the margin)\n", pattern,
@@ -101,7 +101,7 @@ static void test_no_lattice_falls_back(void **state) {
   float y[WV_NET_OUT];
   wv_params p;
   wv_params_default("plain", &p, NULL);
-  wv_fabricnet_targets(&p, y);
+  wv_fabricnet_targets(&p, WV_NET_OUT, y);
   assert_int_equal(wv_image_alloc(&photo, f->scene.width, f->scene.height, 3, &e), WV_OK);
   for (size_t i = 0; i < (size_t)photo.w * photo.h * 3; i++) photo.data[i] = 0.4f;
   assert_int_equal(wv_descriptor_forward(f->d, &photo, f->gram, &e), WV_OK);

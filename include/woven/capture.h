@@ -44,7 +44,7 @@ typedef struct {
   /* A file written with fit.json (capture: network.json), or NULL. */
   const char *extra_name, *extra_text;
   /* Files read by the job: none may lie inside the directory, which is replaced whole. */
-  const char *inputs[6];
+  const char *inputs[7];
   /* The mesh scene the report shows the fit on (NULL: the bundled draped cloth; "none": no drape). */
   const char *drape;
   wv_capture_progress progress;
@@ -53,6 +53,8 @@ typedef struct {
   const wv_scene *scene_t;
   const wv_image *photo_t;
   const char *photo_t_path;
+  const char *kt_start; /* where a pair's transmission colours start: a pair model's path, or NULL (the prior) */
+  int kt_tried;         /* ... the prior, after the pair model's start scored worse */
 } wv_fit_job;
 
 /* What a finished fit wrote, for the caller's summary. */
@@ -67,6 +69,8 @@ typedef struct {
    * of photo [0] and re-render [1] over the centre (half of each side) [0] and the whole frame [1]. */
   int pair;
   double ssim_rgb_t, wsc_t, ssim_rgb_blurred_t, mean_t[2][2];
+  int kt_model; /* a pair's transmission colours started from a pair model (1), from the prior after the pair
+                 * model's start scored worse on the pair's loss (2), from the prior without one (0) */
 } wv_fit_outcome;
 
 /* The output directory check, before any slow step: refuses a file, a directory holding
@@ -120,6 +124,8 @@ typedef struct {
                     * analysis found the photo's lattice (wv_capture_fit_opts) */
   const char *dir, *drape;
   const char *photo_t, *scene_t; /* a transmission photo and its scene (wv_pair_scene); NULL: none */
+  const char *pair_model;        /* the pair model for the transmission colours' start (NULL: the default,
+                                  * wv_estimate_transmission; none there: the prior) */
   int force;
   void (*on_estimate)(void *user, const wv_estimate *e);
   wv_capture_progress progress; /* its user is on_estimate's too */
@@ -132,6 +138,12 @@ typedef struct {
  * the best SSIM lands on aliases that erase the weave. The registration still refines
  * them. */
 void wv_capture_fit_opts(const wv_pattern_choice *pc, int align_given, wv_fit_opts *o);
+/* A pair model's transmission colours (in est->params, wv_estimate_transmission) are a
+ * proposal: the pair's loss (both photos, the fit's iteration spp) with them and with the
+ * prior's, k_d / 2, and the lower kept in est->params; *kt_model becomes 2 when the prior's
+ * was (it stays 1 otherwise). */
+wv_status wv_capture_pair_start(wv_estimate *est, const wv_scene *scene_t, const wv_image *photo_t,
+                                const wv_fit_opts *fo, int *kt_model, wv_error *err);
 /* On success est holds the estimate (wv_estimate_free) and out the fit. */
 wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outcome *out, wv_error *err);
 

@@ -2,10 +2,13 @@
  * samples, the camera augmentation of their images and the build of a whole set.
  * DIR/dataset.json: kind "woven-dataset", version, seed, per_pattern, patterns, spp,
  * renderer (WV_RENDER_VERSION that made the images; absent = 1),
- * scene (the full scene JSON), descriptor name and size, image size.
+ * scene (the full scene JSON), descriptor name and size, image size; a pair set (version
+ * 3) also transmission_scene (the back-lit scene's JSON).
  * DIR/samples/<pattern>_<i>.json   parameters (the parameter file format)
  * DIR/samples/<pattern>_<i>.png    capture image, 8-bit
- * DIR/samples/<pattern>_<i>.feat   descriptor features: 16-byte header + f16 values
+ * DIR/samples/<pattern>_<i>.t.png  a pair set's transmission image, 8-bit
+ * DIR/samples/<pattern>_<i>.feat   descriptor features: 16-byte header + f16 values (a pair
+ *                                  set's: the capture image's, then the transmission image's)
  * The feature file is written last (each file atomically): a sample is done when its
  * parameter file reads back with the sample's pattern, its PNG is whole (every chunk's
  * CRC, wv_png_check) and the feature file is complete and its CRC matches. */
@@ -26,9 +29,9 @@
 const char *wv_net_pattern(int i);
 
 #define WV_DATASET_MAX_PER_PATTERN 1000000 /* most samples per pattern in a dataset */
-#define WV_DATASET_VERSION 2 /* 1: the five earlier patterns; 2: every built-in, "augment" */
+#define WV_DATASET_VERSION 3 /* 1: the five earlier patterns; 2: every built-in, "augment"; 3: a pair set */
 typedef struct {
-  int version;  /* 1 or 2: which patterns the samples cycle through (wv_dataset_pattern) */
+  int version;  /* 1, 2 or 3: which patterns the samples cycle through (wv_dataset_pattern); 3 a pair set */
   int renderer; /* WV_RENDER_VERSION of the renderer that made the samples */
   int augment;  /* 1: images pass through wv_camera_augment (version 2 only) */
   uint64_t seed;
@@ -36,8 +39,11 @@ typedef struct {
   int spp;
   wv_scene scene;
   char scene_json[8192];
+  int pair;         /* each sample also rendered in tscene, the back-lit scene */
+  wv_scene tscene;
+  char tscene_json[8192];
   char descriptor[32];
-  int n_feat;
+  int n_feat;       /* features per sample: the descriptor's size, twice it in a pair set */
 } wv_dataset_info;
 
 wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error *err);
@@ -49,22 +55,25 @@ const char *wv_dataset_pattern(const wv_dataset_info *info, int i);
 /* Sample k (0 .. n per_pattern - 1, n patterns) interleaves the patterns: pattern k % n,
  * index k / n. */
 void wv_dataset_sample_name(const wv_dataset_info *info, int k, char *buf, size_t cap);
-/* The prior draw of sample k (deterministic in the dataset seed). */
+#define WV_DATASET_PAIR_WIDTH_LO 0.7 /* a pair set's yarn widths: uniform in this .. 1 (open area up to 9%) */
+/* The prior draw of sample k (deterministic in the dataset seed); a pair set's with open gaps. */
 wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params *p, wv_error *err);
-/* Path of one of a sample's files: ext "json", "png" or "feat". */
+/* Path of one of a sample's files: ext "json", "png", "t.png" or "feat". */
 void wv_dataset_path(const char *dir, const wv_dataset_info *info, int k, const char *ext, char *buf, size_t cap);
-/* 1 when the sample's three files are complete. */
+/* 1 when the sample's files are complete. */
 int wv_dataset_sample_done(const char *dir, const wv_dataset_info *info, int k);
 /* Makes sample k in dir (whose samples/ exists): the prior draw rendered at info's
  * spp with render_threads (0 = all) and the footprints fp (made for info's scene,
  * or NULL), passed through the camera augmentation when info->augment (else only
  * quantised to 8 bits as a photo arrives), then its parameter file, PNG and, last,
- * its features computed by d into feat (n_feat floats of scratch). */
+ * its features computed by d into feat (n_feat floats of scratch). A pair set's sample
+ * is also rendered in the back-lit scene (footprints fp_t, or NULL), with a camera
+ * augmentation of its own. */
 struct wv_descriptor;
 struct wv_footprints;
 wv_status wv_dataset_make_sample(const char *dir, const wv_dataset_info *info, int k, int render_threads,
-                                 const struct wv_footprints *fp, struct wv_descriptor *d, float *feat,
-                                 wv_error *err);
+                                 const struct wv_footprints *fp, const struct wv_footprints *fp_t,
+                                 struct wv_descriptor *d, float *feat, wv_error *err);
 /* What a real camera adds to a render, drawn from seed (docs/fabricnet.md, "Camera
  * augmentation"): on the linear radiance, glint speckle, defocus blur, exposure and
  * white-balance gains and signal-dependent sensor noise; then the scene's response,
@@ -76,6 +85,7 @@ wv_status wv_camera_augment(const wv_scene *s, const wv_image *radiance, uint64_
 /* Building a dataset (woven dataset): resumable, shared over the ranks of dist. */
 typedef struct {
   const char *scene;       /* a scene file or preset name */
+  const char *transmission_scene; /* optional: a back-lit scene (file or preset) for a pair set */
   const char *dir;         /* DIR: dataset.json and samples/ */
   int per_pattern;         /* samples per pattern (1..WV_DATASET_MAX_PER_PATTERN) */
   uint64_t seed;           /* 1 */

@@ -30,22 +30,27 @@
 
 #define WV_NET_OUT (2 + WV_P_REFLECT_COUNT) /* 21: the reflection model's parameters (the transmission
                                               * colours take their prior mean, wv_params_transmission_default) */
+#define WV_NET_OUT_PAIR (2 + WV_P_COUNT)    /* 27: a pair model's, the 21 and the transmission colours */
+#define WV_NET_OUT_MAX WV_NET_OUT_PAIR
 #define WV_NET_HIDDEN 256
 #define WV_NET_SLOPE 0.01f          /* LeakyReLU slope (PyTorch's default) */
 #define WV_NET_CLIP 10.0f         /* standardised features are clipped to +-10 */
 #define WV_NET_CLASSES 16         /* the pattern head: one class per canonical built-in (wv_weave_builtin_count) */
 #define WV_NET_TENSORS 8          /* w1 b1 w2 b2 w3 b3, then the pattern head's w4 b4 */
 
-/* Range of output k (0..20), in the parameter file's units. */
+/* Range of output k (0..WV_NET_OUT_MAX - 1), in the parameter file's units. */
 void wv_fabricnet_output_range(int k, double *lo, double *hi);
 const char *wv_fabricnet_output_name(int k);
-/* Parameters -> 21 targets normalised to [0,1] (clamped). */
-void wv_fabricnet_targets(const wv_params *p, float *y);
+/* Parameters -> the first n_out targets (WV_NET_OUT or WV_NET_OUT_PAIR) normalised to [0,1] (clamped). */
+void wv_fabricnet_targets(const wv_params *p, int n_out, float *y);
 /* Normalised outputs -> parameters with the model's ranges: pattern given, the rest from the pattern's prior mean
- * (Q, thickness, yarn width, seed), densities rounded to whole yarns per inch. */
+ * (Q, thickness, yarn width, seed), densities rounded to whole yarns per inch; the transmission colours from a pair
+ * model's outputs, else the prior mean given the predicted colour. */
 struct wv_fabricnet_s;
 wv_status wv_fabricnet_params(const struct wv_fabricnet_s *n, const float *y, const char *pattern, wv_params *p,
                               wv_error *err);
+/* Only the transmission colours of p from a pair model's outputs (n->n_out == WV_NET_OUT_PAIR). */
+wv_status wv_fabricnet_transmission(const struct wv_fabricnet_s *n, const float *y, wv_params *p, wv_error *err);
 
 /* ---- the network ---- */
 typedef struct wv_fabricnet_s {
@@ -55,7 +60,15 @@ typedef struct wv_fabricnet_s {
   char scene[64];            /* scene name the training renders used */
   int scene_w, scene_h;
   uint32_t scene_crc;        /* CRC-32 of the scene's canonical JSON */
-  double range[WV_NET_OUT][2];
+  /* A pair model (version 3): the back-lit scene of its transmission renders; its input is
+   * the descriptor of the reflection image followed by that of the transmission image
+   * (n_in twice the descriptor's size) and it has WV_NET_OUT_PAIR outputs. Empty name:
+   * a one-photo model of WV_NET_OUT outputs. */
+  char tscene[64];
+  int tscene_w, tscene_h;
+  uint32_t tscene_crc;
+  int n_out;                 /* WV_NET_OUT or WV_NET_OUT_PAIR */
+  double range[WV_NET_OUT_MAX][2];
   /* preprocessing statistics: n_in each */
   float *mean, *std;
   int n_cls;                 /* pattern classes: WV_NET_CLASSES, or 0 (a version 1 model, no head) */
@@ -64,9 +77,11 @@ typedef struct wv_fabricnet_s {
 } wv_fabricnet;
 
 /* Fresh network with the pattern head, weights uniform in +-1/sqrt(fan_in) (PyTorch's
- * Linear default), deterministic in seed; mean 0, std 1. */
-wv_status wv_fabricnet_init(wv_fabricnet *n, const char *descriptor, int n_in, const wv_scene *s, uint64_t seed,
-                            wv_error *err);
+ * Linear default), deterministic in seed; mean 0, std 1. ts NULL: a one-photo model;
+ * else a pair model for the reflection scene s and the back-lit scene ts (n_in: both
+ * images' features). */
+wv_status wv_fabricnet_init(wv_fabricnet *n, const char *descriptor, int n_in, const wv_scene *s, const wv_scene *ts,
+                            uint64_t seed, wv_error *err);
 void wv_fabricnet_free(wv_fabricnet *n);
 size_t wv_fabricnet_param_count(const wv_fabricnet *n);
 /* The weight and bias arrays, in file order, as one list (for the optimiser): the
@@ -76,8 +91,8 @@ void wv_fabricnet_tensors(wv_fabricnet *n, float **t, size_t *len);
 
 /* Signed log1p then standardisation, in place (x: batch x n_in). */
 void wv_fabricnet_preprocess(const wv_fabricnet *n, float *x, int batch);
-/* Activations a training step needs; sizes batch x 256, 256, 21 and batch x
- * WV_NET_CLASSES for the pattern head. */
+/* Activations a training step needs; sizes batch x 256, 256, n_out (room for
+ * WV_NET_OUT_MAX) and batch x WV_NET_CLASSES for the pattern head. */
 typedef struct {
   int cap;
   float *h1, *a1, *h2, *a2, *out;   /* forward */
@@ -86,10 +101,10 @@ typedef struct {
 } wv_fabricnet_acts;
 wv_status wv_fabricnet_acts_alloc(wv_fabricnet_acts *a, int batch, wv_error *err);
 void wv_fabricnet_acts_free(wv_fabricnet_acts *a);
-/* x preprocessed (batch x n_in) -> a->out (batch x 21, in [0,1]) and, with a pattern
+/* x preprocessed (batch x n_in) -> a->out (batch x n_out, in [0,1]) and, with a pattern
  * head, a->prob (batch x n_cls). */
 void wv_fabricnet_forward(const wv_fabricnet *n, const float *x, int batch, wv_fabricnet_acts *a);
-/* Loss L1(out, y) + ce_weight CE(prob, labels): L1 against targets y (batch x 21), softmax
+/* Loss L1(out, y) + ce_weight CE(prob, labels): L1 against targets y (batch x n_out), softmax
  * cross-entropy against the pattern labels (batch, indices of wv_weave_builtin_name; NULL or
  * a model without a head: no CE term). Gradients accumulate into g (same layout as
  * wv_fabricnet_tensors: gw1, gb1, ...). Returns the total loss (before the backward pass);
@@ -97,28 +112,33 @@ void wv_fabricnet_forward(const wv_fabricnet *n, const float *x, int batch, wv_f
 float wv_fabricnet_backward(const wv_fabricnet *n, const float *x, const float *y, const int *labels,
                             float ce_weight, int batch, wv_fabricnet_acts *a, float *const *g, float *l1, float *ce);
 
-/* One image -> 21 normalised outputs (runs the descriptor; the image is the scene's
- * capture image). feat: n_in floats of scratch. probs (optional, may be NULL):
+/* One image -> n_out normalised outputs (runs the descriptor; the image is the scene's
+ * capture image; a one-photo model). feat: n_in floats of scratch. probs (optional, may be NULL):
  * wv_weave_builtin_count() floats, the probability of each canonical built-in pattern,
  * indexed like wv_weave_builtin_name; they sum to 1. A model without a pattern head
  * (format version 1) gives every pattern 1 / count. */
 struct wv_descriptor;
 wv_status wv_fabricnet_predict(const wv_fabricnet *n, struct wv_descriptor *d, const wv_image *img, float *feat,
                                float *y, float *probs, wv_error *err);
-/* The same from the photo's raw descriptor features (n_in floats, preprocessed in place). */
+/* The same from raw descriptor features (n_in floats, preprocessed in place): a pair model's
+ * are the reflection photo's followed by the transmission photo's. */
 wv_status wv_fabricnet_predict_features(const wv_fabricnet *n, float *feat, float *y, float *probs, wv_error *err);
 
 /* ---- model file: a header naming descriptor, scene, layer sizes, ranges and pattern
  * classes, the preprocessing statistics (f32) and the weights (f16), CRC-32 over header and
- * payload. Version 2 adds the pattern head; version 1 files (no head) still load. ---- */
+ * payload. Version 2 adds the pattern head, version 3 the pair model's back-lit scene and
+ * its outputs; versions 1 (no head) and 2 still load. ---- */
 #define WV_NET_MAGIC "WVFNET\r\n"
-#define WV_NET_VERSION 2
+#define WV_NET_VERSION 3 /* the newest read; one-photo models are written in version 2 */
 wv_status wv_fabricnet_save(const char *path, const wv_fabricnet *n, wv_error *err);
 wv_status wv_fabricnet_load(const char *path, wv_fabricnet *n, wv_error *err);
-/* Refuses a model made for another descriptor (name or size) or scene (name or size);
- * the message names the file. */
+/* Refuses a model made for another descriptor (name or size; n_in: the features the model
+ * takes) or scene (name or size); the message names the file. */
 wv_status wv_fabricnet_check(const wv_fabricnet *n, const char *path, const char *descriptor, size_t n_in,
                              const wv_scene *s, wv_error *err);
+/* Refuses a pair model where a one-photo model is wanted (ts NULL), and a one-photo model
+ * or a pair model made for another back-lit scene where a pair model for ts is wanted. */
+wv_status wv_fabricnet_check_pair(const wv_fabricnet *n, const char *path, const wv_scene *ts, wv_error *err);
 
 /* ---- training checkpoint: the same header, f32 weights, Adam moments and the
  * trainer's counters. ---- */

@@ -73,6 +73,8 @@ typedef enum {
 
 const char *wv_param_name(int id);              /* e.g. "diffuse.warp[1]" */
 void wv_param_range(int id, double *lo, double *hi);
+/* The range of yarn_width (not a continuous parameter of the gradient: a photo pair's fit searches it). */
+void wv_param_range_width(double *lo, double *hi);
 double wv_param_get(const wv_params *p, int id);
 void wv_param_set(wv_params *p, int id, double value);
 

@@ -72,6 +72,8 @@ typedef struct {
   const char *photo_t_png, *fit_t_png;
   double ssim_rgb_t, wsc_t, ssim_rgb_blurred_t;
   int kt_fitted; /* the one photo is back-lit: the fit moved k_t */
+  const char *kt_start; /* a pair's transmission colours started from this pair model (NULL: the prior) */
+  int kt_tried;         /* ... the prior after the pair model's start scored worse */
 } wv_report;
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err);

@@ -26,7 +26,8 @@ typedef struct {
   double best_val;           /* its validation L1 + ce_weight CE (the criterion) */
   double val_f16;            /* the saved model's validation L1 (f16 weights) */
   double val_ce, val_accuracy; /* ... its pattern head's CE and accuracy */
-  double val_per_output[WV_NET_OUT];
+  int outputs;               /* the model's outputs: WV_NET_OUT, or WV_NET_OUT_PAIR for a pair dataset */
+  double val_per_output[WV_NET_OUT_MAX];
   double final_train;        /* the last epoch's training L1 */
   double seconds, load_seconds;
 } wv_train_result;

@@ -234,7 +234,9 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
                    .ssim_rgb_t = out->ssim_rgb_t,
                    .wsc_t = out->wsc_t,
                    .ssim_rgb_blurred_t = out->ssim_rgb_blurred_t,
-                   .kt_fitted = wv_scene_transmits(job->scene)};
+                   .kt_fitted = wv_scene_transmits(job->scene),
+                   .kt_start = job->kt_start,
+                   .kt_tried = job->kt_tried};
   /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
   wv_view_opts vo = {.params = &st->params, .scene = fit_scene, .photo = pphoto, .title = job->title};
   snprintf(path, sizeof path, "%s/viewer.html", dir);
@@ -570,6 +572,26 @@ void wv_capture_fit_opts(const wv_pattern_choice *pc, int align_given, wv_fit_op
   o->density_steps = 0; /* random density steps follow what the Gram loss prefers, often an alias */
 }
 
+wv_status wv_capture_pair_start(wv_estimate *est, const wv_scene *scene_t, const wv_image *photo_t,
+                                const wv_fit_opts *fo, int *kt_model, wv_error *err) {
+  wv_params cand[2] = {est->params, est->params};
+  wv_params_transmission_default(&cand[1]);
+  wv_scene sc[2] = {est->scene, *scene_t};
+  const wv_image *ph[2] = {&est->photo, photo_t};
+  double loss[2] = {0, 0};
+  for (int k = 0; k < 2; k++) {
+    sc[k].spp = fo->iter_spp;
+    for (int c = 0; c < 2; c++) {
+      wv_fit_record rec = {0};
+      wv_status rc = wv_fit_loss(&sc[k], ph[k], est->desc, &cand[c], fo, &rec, err);
+      if (rc) return rc;
+      loss[c] += rec.loss;
+    }
+  }
+  if (!(loss[0] < loss[1])) est->params = cand[1], *kt_model = 2;
+  return WV_OK;
+}
+
 wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outcome *out, wv_error *err) {
   memset(est, 0, sizeof *est);
   /* Everything is checked before anything is written; the directory first (cheap). */
@@ -577,7 +599,7 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
   memset(&job, 0, sizeof job);
   job.opts = o->fit, job.drape = o->drape, job.dir = o->dir, job.force = o->force;
   const char *inputs[] = {o->estimate.photo, o->estimate.scene, o->estimate.model, o->estimate.weights,
-                          o->photo_t, o->scene_t};
+                          o->photo_t, o->scene_t, o->pair_model};
   memcpy(job.inputs, inputs, sizeof inputs);
   wv_status rc = wv_fit_job_check_dir(&job, err);
   if (rc) return rc;
@@ -596,8 +618,24 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
                            o->estimate.photo, &info, &ph_t, err)))
       return rc;
   }
-  if ((rc = wv_estimate_run_scene(&o->estimate, &scene, est, err))) {
+  int kt_model = 0; /* a pair model for the transmission colours' start, checked before the network runs */
+  char kt_path[4096];
+  if (o->photo_t && (rc = wv_estimate_pair_model(&scene, &scene_t, o->pair_model, kt_path, sizeof kt_path, &kt_model, err))) {
     wv_image_free(&ph_t);
+    return rc;
+  }
+  if ((rc = wv_estimate_run_scene(&o->estimate, &scene, est, err)) ||
+      (kt_model && (rc = wv_estimate_transmission(est, &scene_t, &ph_t, kt_path, err)))) {
+    wv_image_free(&ph_t);
+    if (est->desc) wv_estimate_free(est);
+    return rc;
+  }
+  /* the same camera sees the cloth at the same angle lit from behind: the pattern choice's
+   * rotation and skew of the weave lattice go to the back-lit scene too */
+  if (o->photo_t && est->chosen) wv_pattern_choice_scene(&est->choice, &scene_t, est->choice.best, &scene_t);
+  if (kt_model && (rc = wv_capture_pair_start(est, &scene_t, &ph_t, &o->fit, &kt_model, err))) {
+    wv_image_free(&ph_t);
+    wv_estimate_free(est);
     return rc;
   }
   if (o->on_estimate) o->on_estimate(o->progress.user, est);
@@ -617,7 +655,9 @@ wv_status wv_capture_run(const wv_capture_opts *o, wv_estimate *est, wv_fit_outc
     job.title = "woven capture";
     job.progress = o->progress;
     if (o->photo_t) job.scene_t = &scene_t, job.photo_t = &ph_t, job.photo_t_path = o->photo_t;
+    job.kt_start = kt_model == 1 ? kt_path : NULL, job.kt_tried = kt_model == 2;
     rc = wv_fit_job_run(&job, out, err);
+    if (!rc) out->kt_model = kt_model;
   }
   wv_image_free(&ph_t);
   free(network);

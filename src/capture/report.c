@@ -323,6 +323,14 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
     if (r->wsc_t > -2) sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td></tr>\n", r->wsc_t);
     sb_printf(&b, "<tr><td colspan=\"2\">The fit was fitted to both photos at once (docs/fit.md, \"Photo "
                   "pairs\"); the back-lit render uses the reflection photo's registration.</td></tr>\n");
+    if (r->kt_start)
+      sb_printf(&b, "<tr><td colspan=\"2\">The transmission colours started from the pair model %s (the photo "
+                    "pair through FabricNet).</td></tr>\n", r->kt_start);
+    else
+      sb_printf(&b, "<tr><td colspan=\"2\">The transmission colours started from the prior (half the start's "
+                    "diffuse colour): %s.</td></tr>\n",
+                r->kt_tried ? "the pair model's estimate scored a higher loss on the two photos"
+                            : "there is no pair model for these scenes");
   }
   char how[96] = "measured from the photo's spectrum unless given";
   if (r->camera_blur_measured >= 0)

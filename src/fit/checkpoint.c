@@ -121,6 +121,7 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   o->distort_degree = 0;                 /* absent before the distortion: none */
   o->schedule = o->patience = 0;         /* absent before the schedule: every iteration alike, all of them */
   o->noise_sweep = 0;                    /* absent before the sweep: the discrete steps alone */
+  o->width_sweep = 0;                    /* absent before the width sweep: the width as it started */
   if ((rc = wv_fit_opts_read_json(json_object_get(root, "opts"), o, err))) return rc;
   wv_params start;
   if ((rc = read_params_obj(root, path, "start", &start, err))) return rc;

@@ -45,7 +45,11 @@ static wv_status check_existing(const wv_dataset_build_opts *o, const wv_dist *d
   wv_scene hs = have.scene;
   char *hj = wv_scene_to_json(&hs);
   char *wj = wv_scene_to_json(&want->scene);
-  const char *why = have.version != want->version   ? "format version"
+  char *htj = have.pair ? wv_scene_to_json(&have.tscene) : NULL, *wtj = want->pair ? wv_scene_to_json(&want->tscene) : NULL;
+  int tdiff = have.pair != want->pair || (have.pair && (!htj || !wtj || strcmp(htj, wtj)));
+  free(htj), free(wtj);
+  const char *why = tdiff                           ? "transmission scene (or none)"
+                    : have.version != want->version ? "format version"
                     : have.seed != want->seed       ? "seed"
                     : have.augment != want->augment ? "camera augmentation setting"
                     : strcmp(have.descriptor, want->descriptor) || have.n_feat != want->n_feat ? "descriptor"
@@ -75,9 +79,9 @@ static wv_status prepare(const wv_dataset_build_opts *o, const wv_dist *dist, wv
   char own[2][4096], path[4096];
   snprintf(own[0], sizeof own[0], "%s/dataset.json", dir);
   snprintf(own[1], sizeof own[1], "%s/samples", dir);
-  const char *inputs[2] = {o->scene, o->weights};
-  wv_status st = wv_check_not_input(own[0], 0, inputs, 2, err);
-  if (!st) st = wv_check_not_input(own[1], 1, inputs, 2, err);
+  const char *inputs[3] = {o->scene, o->weights, o->transmission_scene};
+  wv_status st = wv_check_not_input(own[0], 0, inputs, 3, err);
+  if (!st) st = wv_check_not_input(own[1], 1, inputs, 3, err);
   if (!st) st = mkdir_p(dir, err);
   char lnote[4400];
   if (!st && !(st = wv_dir_lock_acquire(dir, lock, lnote, sizeof lnote, err)) && lnote[0])
@@ -100,7 +104,7 @@ static wv_status prepare(const wv_dataset_build_opts *o, const wv_dist *dist, wv
  * (*first_err the first); *stopped when on_progress asked to stop. */
 static int render_samples(const wv_dataset_build_opts *o, const wv_dist *dist, const wv_dataset_info *want, int *stopped,
                           const int *todo, int ntodo, int jobs, wv_descriptor **desc, const struct wv_footprints *fp,
-                          double t0, wv_error *first_err) {
+                          const struct wv_footprints *fp_t, double t0, wv_error *first_err) {
   int done = 0, failed = 0; /* failed: 1 a sample failed, 2 on_progress asked to stop */
   int nj = jobs < ntodo ? jobs : ntodo;
   /* Samples in parallel with one render thread each beat one sample at a time with
@@ -117,7 +121,7 @@ static int render_samples(const wv_dataset_build_opts *o, const wv_dist *dist, c
       stop = failed;
       if (stop) continue;
       wv_error e = {0};
-      wv_status st = feat ? wv_dataset_make_sample(o->dir, want, todo[t], render_threads, fp, desc[tid], feat, &e)
+      wv_status st = feat ? wv_dataset_make_sample(o->dir, want, todo[t], render_threads, fp, fp_t, desc[tid], feat, &e)
                           : wv_fail(&e, WV_ERR_NOMEM, "out of memory for features");
 #pragma omp critical(dataset_progress)
       {
@@ -152,7 +156,27 @@ wv_status wv_dataset_build(const wv_dist *dist, const wv_dataset_build_opts *o, 
   }
   snprintf(want.scene_json, sizeof want.scene_json, "%s", sj);
   free(sj);
-  want.version = WV_DATASET_VERSION, want.renderer = WV_RENDER_VERSION, want.seed = o->seed;
+  if (o->transmission_scene) { /* a pair set: each sample also rendered lit from behind */
+    if ((st = wv_scene_load(o->transmission_scene, &want.tscene, err))) return st;
+    if (!wv_scene_transmits(&want.tscene))
+      return wv_fail(err, WV_ERR_INVALID,
+                     "%s is not a back-lit scene (a plane with its light below the cloth): it cannot render the "
+                     "transmission images",
+                     o->transmission_scene);
+    if (want.tscene.width != want.scene.width || want.tscene.height != want.scene.height)
+      return wv_fail(err, WV_ERR_INVALID, "the back-lit scene %s renders %d x %d, not the %d x %d of %s",
+                     o->transmission_scene, want.tscene.width, want.tscene.height, want.scene.width,
+                     want.scene.height, o->scene);
+    char *tj = wv_scene_to_json(&want.tscene);
+    if (!tj || strlen(tj) >= sizeof want.tscene_json) {
+      free(tj);
+      return wv_fail(err, WV_ERR_INVALID, "%s: scene description too long", o->transmission_scene);
+    }
+    snprintf(want.tscene_json, sizeof want.tscene_json, "%s", tj);
+    free(tj);
+    want.pair = 1;
+  }
+  want.version = want.pair ? 3 : 2, want.renderer = WV_RENDER_VERSION, want.seed = o->seed;
   want.per_pattern = o->per_pattern, want.augment = o->augment;
   want.spp = o->spp ? o->spp : want.scene.spp;
   int jobs = o->jobs ? o->jobs : omp_get_max_threads();
@@ -162,7 +186,7 @@ wv_status wv_dataset_build(const wv_dist *dist, const wv_dataset_build_opts *o, 
   for (int j = 0; j < jobs && !st; j++) st = wv_descriptor_create(o->descriptor, o->weights, &desc[j], err);
   if (!st) {
     snprintf(want.descriptor, sizeof want.descriptor, "%s", wv_descriptor_name(desc[0]));
-    want.n_feat = (int)wv_descriptor_size(desc[0]);
+    want.n_feat = (int)wv_descriptor_size(desc[0]) * (want.pair ? 2 : 1);
   }
   /* Under mpirun every rank runs this: rank 0 owns the lock and dataset.json, the
    * others only render their share. */
@@ -189,11 +213,12 @@ wv_status wv_dataset_build(const wv_dist *dist, const wv_dataset_build_opts *o, 
   double t0 = omp_get_wtime();
   int done = 0;
   /* Every sample shares the scene: its per-pixel camera geometry is made once. */
-  wv_footprints *fp = NULL;
+  wv_footprints *fp = NULL, *fp_t = NULL;
   if (!rc && ntodo > 0 && (st = wv_footprints_create(&want.scene, jobs, &fp, err))) rc = (int)st;
+  if (!rc && ntodo > 0 && want.pair && (st = wv_footprints_create(&want.tscene, jobs, &fp_t, err))) rc = (int)st;
   if (!rc && ntodo > 0) {
     wv_error first = {0};
-    done = render_samples(o, dist, &want, &res->stopped, todo, ntodo, jobs, desc, fp, t0, &first);
+    done = render_samples(o, dist, &want, &res->stopped, todo, ntodo, jobs, desc, fp, fp_t, t0, &first);
     if (done < 0) {
       done = -1 - done;
       *err = first;
@@ -201,6 +226,7 @@ wv_status wv_dataset_build(const wv_dist *dist, const wv_dataset_build_opts *o, 
     }
   }
   wv_footprints_free(fp);
+  wv_footprints_free(fp_t);
   double el = omp_get_wtime() - t0;
   int local = rc;
   done = wv_dist_sum_int(dist, done);

@@ -45,7 +45,8 @@ wv_status wv_dataset_info_write(const char *dir, const wv_dataset_info *info, wv
   char seed[32];
   snprintf(seed, sizeof seed, "%llu", (unsigned long long)info->seed);
   char names[128];
-  snprintf(names, sizeof names, "samples/<pattern>_<i>.{json,png,feat}, sample k = pattern k%%%d, i = k/%d", np, np);
+  snprintf(names, sizeof names, "samples/<pattern>_<i>.{json,png,%sfeat}, sample k = pattern k%%%d, i = k/%d",
+           info->pair ? "t.png," : "", np, np);
   json_t *o = json_pack("{s:s,s:i,s:i,s:s,s:i,s:o,s:i,s:i,s:{s:s,s:i,s:s},s:{s:i,s:i,s:s},s:o,s:s}", "kind",
                         "woven-dataset", "version", info->version, "renderer", info->renderer, "seed", seed,
                         "per_pattern",
@@ -55,6 +56,14 @@ wv_status wv_dataset_info_write(const char *dir, const wv_dataset_info *info, wv
                         info->scene.width, "height", info->scene.height, "format", "png8", "scene", scene,
                         "sample_names", names);
   if (!o) return wv_fail(err, WV_ERR_INTERNAL, "cannot build dataset.json");
+  if (info->pair) {
+    json_t *ts = json_loads(info->tscene_json, 0, &je);
+    if (!ts) {
+      json_decref(o);
+      return wv_fail(err, WV_ERR_INTERNAL, "back-lit scene JSON does not parse: %s", je.text);
+    }
+    json_object_set_new(o, "transmission_scene", ts);
+  }
   char *text = json_dumps(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
   json_decref(o);
   char path[4096];
@@ -112,6 +121,22 @@ wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error 
     if (!st) snprintf(info->scene_json, sizeof info->scene_json, "%s", sj);
     if (!st) st = wv_scene_parse(sj, path, &info->scene, err);
     free(sj);
+    json_t *ts = json_object_get(o, "transmission_scene");
+    if (!st && (ts != NULL) != (version == 3))
+      st = wv_fail(err, WV_ERR_FORMAT, "%s: a version 3 dataset (a photo pair set) and only it has a transmission_scene", path);
+    if (!st && ts) {
+      info->pair = 1;
+      char *tj = json_dumps(ts, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
+      if (!tj || strlen(tj) >= sizeof info->tscene_json)
+        st = wv_fail(err, WV_ERR_FORMAT, "%s: transmission_scene description too long", path);
+      if (!st) snprintf(info->tscene_json, sizeof info->tscene_json, "%s", tj);
+      if (!st) st = wv_scene_parse(tj, path, &info->tscene, err);
+      if (!st && !wv_scene_transmits(&info->tscene))
+        st = wv_fail(err, WV_ERR_FORMAT, "%s: transmission_scene is not a back-lit scene", path);
+      if (!st && info->n_feat % 2)
+        st = wv_fail(err, WV_ERR_FORMAT, "%s: a pair set holds two images' features: an even count", path);
+      free(tj);
+    }
   }
   json_decref(o);
   return st;
@@ -132,38 +157,60 @@ wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params
   /* one independent stream per sample: resuming or reordering reproduces every draw */
   int np = wv_dataset_pattern_count(info);
   uint64_t s = wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x64617461ULL);
-  return wv_params_sample_prior(wv_dataset_pattern(info, k % np), s, p, err);
+  wv_status st = wv_params_sample_prior(wv_dataset_pattern(info, k % np), s, p, err);
+  /* A pair set's cloths have open gaps, which the back-lit image shows: the prior has
+   * none (yarn width 1), so a width of its own stream, uniform in WV_DATASET_PAIR_WIDTH_LO .. 1. */
+  if (!st && info->pair)
+    p->yarn_width = WV_DATASET_PAIR_WIDTH_LO + (1 - WV_DATASET_PAIR_WIDTH_LO) *
+                                                  wv_u01d(wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x77696474ULL));
+  return st;
+}
+
+/* Sample k's image in scene s: rendered, then through the camera (stream tag) or quantised. */
+static wv_status sample_image(const wv_dataset_info *info, const wv_scene *s, const wv_params *p, int k,
+                              int render_threads, const wv_footprints *fp, uint64_t tag, wv_image *img, wv_error *err) {
+  wv_render_opts ro = {.spp = info->spp, .threads = render_threads, .footprints = fp};
+  wv_image rad = {0};
+  wv_status st = wv_render(s, p, &ro, img, info->augment ? &rad : NULL, err);
+  if (st) return st;
+  if (!info->augment) {
+    wv_image_quantise8(img);
+    return WV_OK;
+  }
+  /* the camera's own stream, apart from the prior draw's */
+  int np = wv_dataset_pattern_count(info);
+  uint64_t seed = wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), tag);
+  wv_image_free(img);
+  st = wv_camera_augment(s, &rad, seed, img, err);
+  wv_image_free(&rad);
+  return st;
 }
 
 wv_status wv_dataset_make_sample(const char *dir, const wv_dataset_info *info, int k, int render_threads,
-                                 const wv_footprints *fp, wv_descriptor *d, float *feat, wv_error *err) {
+                                 const wv_footprints *fp, const wv_footprints *fp_t, wv_descriptor *d, float *feat,
+                                 wv_error *err) {
   wv_params p;
   wv_status st = wv_dataset_sample_params(info, k, &p, err);
   if (st) return st;
-  wv_render_opts ro = {.spp = info->spp, .threads = render_threads, .footprints = fp};
-  wv_image img = {0}, rad = {0};
-  if ((st = wv_render(&info->scene, &p, &ro, &img, info->augment ? &rad : NULL, err))) return st;
-  if (info->augment) {
-    /* the camera's own stream, apart from the prior draw's */
-    int np = wv_dataset_pattern_count(info);
-    uint64_t s = wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x63616d65ULL);
+  wv_image img = {0}, img_t = {0};
+  if ((st = sample_image(info, &info->scene, &p, k, render_threads, fp, 0x63616d65ULL, &img, err))) return st;
+  if (info->pair && (st = sample_image(info, &info->tscene, &p, k, render_threads, fp_t, 0x7472616eULL, &img_t, err))) {
     wv_image_free(&img);
-    st = wv_camera_augment(&info->scene, &rad, s, &img, err);
-    wv_image_free(&rad);
-    if (st) return st;
-  } else {
-    wv_image_quantise8(&img);
+    return st;
   }
   char path[4096];
   wv_dataset_path(dir, info, k, "json", path, sizeof path);
   st = wv_params_write(path, &p, err);
   wv_dataset_path(dir, info, k, "png", path, sizeof path);
   if (!st) st = wv_image_write_png(path, &img, 8, err);
+  wv_dataset_path(dir, info, k, "t.png", path, sizeof path);
+  if (!st && info->pair) st = wv_image_write_png(path, &img_t, 8, err);
   if (!st) st = wv_descriptor_forward(d, &img, feat, err);
+  if (!st && info->pair) st = wv_descriptor_forward(d, &img_t, feat + info->n_feat / 2, err);
   /* features last: their presence marks a finished sample */
   wv_dataset_path(dir, info, k, "feat", path, sizeof path);
   if (!st) st = wv_dataset_write_features(path, feat, info->n_feat, err);
-  wv_image_free(&img);
+  wv_image_free(&img), wv_image_free(&img_t);
   return st;
 }
 
@@ -232,6 +279,8 @@ int wv_dataset_sample_done(const char *dir, const wv_dataset_info *info, int k) 
   if (wv_params_read(p, &prm, &e) || strcmp(prm.pattern, wv_dataset_pattern(info, k % wv_dataset_pattern_count(info)))) return 0;
   wv_dataset_path(dir, info, k, "png", p, sizeof p);
   if (wv_png_check(p, &e)) return 0;
+  wv_dataset_path(dir, info, k, "t.png", p, sizeof p);
+  if (info->pair && wv_png_check(p, &e)) return 0;
   wv_dataset_path(dir, info, k, "feat", p, sizeof p);
   if (stat(p, &sb) != 0 || sb.st_size != 16 + 2 * (off_t)info->n_feat) return 0;
   uint16_t *tmp = malloc(2 * (size_t)info->n_feat);

@@ -15,10 +15,12 @@
 #define WOVEN_MODEL_DIR "models"
 #endif
 
-/* models/fabricnet-<scene>.bin, in $WOVEN_MODEL_DIR or the source tree's models/. */
-static void default_model(const wv_scene *s, char *buf, size_t cap) {
+/* models/fabricnet-<scene>.bin (a pair model: fabricnet-<scene>+<back-lit scene>.bin), in
+ * $WOVEN_MODEL_DIR or the source tree's models/. */
+static void default_model(const wv_scene *s, const wv_scene *ts, char *buf, size_t cap) {
   const char *d = getenv("WOVEN_MODEL_DIR");
-  snprintf(buf, cap, "%s/fabricnet-%s.bin", d && *d ? d : WOVEN_MODEL_DIR, s->name);
+  snprintf(buf, cap, "%s/fabricnet-%s%s%s.bin", d && *d ? d : WOVEN_MODEL_DIR, s->name, ts ? "+" : "",
+           ts ? ts->name : "");
 }
 
 void wv_estimate_free(wv_estimate *e) {
@@ -47,7 +49,7 @@ wv_status wv_estimate_run_scene(const wv_estimate_opts *o, const wv_scene *s, wv
   if (o->model)
     snprintf(mpath, sizeof mpath, "%s", o->model);
   else
-    default_model(&e->scene, mpath, sizeof mpath);
+    default_model(&e->scene, NULL, mpath, sizeof mpath);
   struct stat sb;
   if (!o->model && stat(mpath, &sb) != 0)
     return wv_fail(err, WV_ERR_IO,
@@ -57,10 +59,11 @@ wv_status wv_estimate_run_scene(const wv_estimate_opts *o, const wv_scene *s, wv
   wv_fabricnet net;
   if ((rc = wv_fabricnet_load(mpath, &net, err))) return rc;
   if (!(rc = wv_descriptor_create(o->descriptor ? o->descriptor : "default", o->weights, &e->desc, err)) &&
+      !(rc = wv_fabricnet_check_pair(&net, mpath, NULL, err)) &&
       !(rc = wv_fabricnet_check(&net, mpath, wv_descriptor_name(e->desc), wv_descriptor_size(e->desc),
                                 o->any_scene ? NULL : &e->scene, err)))
     rc = wv_photo_load(o->photo, &e->scene, &o->crop, &e->photo, &e->info, err);
-  float y[WV_NET_OUT];
+  float y[WV_NET_OUT_MAX];
   if (!rc && !o->pattern) {
     e->chosen = 1;
     if (!(rc = wv_fabricnet_predict_pattern(&net, e->desc, &e->scene, &e->photo, NULL, y, &e->choice, err))) {
@@ -78,5 +81,49 @@ wv_status wv_estimate_run_scene(const wv_estimate_opts *o, const wv_scene *s, wv
   wv_fabricnet_free(&net);
   if (rc) wv_estimate_free(e);
   e->seconds = omp_get_wtime() - t0;
+  return rc;
+}
+
+wv_status wv_estimate_pair_model(const wv_scene *s, const wv_scene *ts, const char *model, char *path, size_t cap,
+                                 int *found, wv_error *err) {
+  *found = 0;
+  if (model)
+    snprintf(path, cap, "%s", model);
+  else
+    default_model(s, ts, path, cap);
+  struct stat sb;
+  if (!model && stat(path, &sb) != 0) return WV_OK; /* no pair model: the prior's k_t */
+  wv_fabricnet net;
+  wv_status rc = wv_fabricnet_load(path, &net, err);
+  if (rc) return rc;
+  if (!(rc = wv_fabricnet_check_pair(&net, path, ts, err)) &&
+      (strcmp(net.scene, s->name) || net.scene_w != s->width || net.scene_h != s->height))
+    rc = wv_fail(err, WV_ERR_INVALID, "%s: pair model trained on renders of scene '%s' (%d x %d), not '%s' (%d x %d)",
+                 path, net.scene, net.scene_w, net.scene_h, s->name, s->width, s->height);
+  wv_fabricnet_free(&net);
+  if (!rc) *found = 1;
+  return rc;
+}
+
+wv_status wv_estimate_transmission(wv_estimate *e, const wv_scene *scene_t, const wv_image *photo_t, const char *path,
+                                   wv_error *err) {
+  double t0 = omp_get_wtime();
+  wv_fabricnet net;
+  wv_status rc = wv_fabricnet_load(path, &net, err);
+  if (rc) return rc;
+  size_t nd = wv_descriptor_size(e->desc);
+  float *feat = NULL, y[WV_NET_OUT_MAX];
+  if (!(rc = wv_fabricnet_check_pair(&net, path, scene_t, err)) &&
+      !(rc = wv_fabricnet_check(&net, path, wv_descriptor_name(e->desc), 2 * nd, &e->scene, err)) &&
+      !(feat = malloc(sizeof(float) * 2 * nd)))
+    rc = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  /* the reflection photo's features, then the transmission photo's, as the pair set has them */
+  if (!rc) rc = wv_descriptor_forward(e->desc, &e->photo, feat, err);
+  if (!rc) rc = wv_descriptor_forward(e->desc, photo_t, feat + nd, err);
+  if (!rc) rc = wv_fabricnet_predict_features(&net, feat, y, NULL, err);
+  if (!rc) rc = wv_fabricnet_transmission(&net, y, &e->params, err);
+  free(feat);
+  wv_fabricnet_free(&net);
+  e->seconds += omp_get_wtime() - t0;
   return rc;
 }

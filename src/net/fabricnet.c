@@ -29,8 +29,8 @@ const char *wv_fabricnet_output_name(int k) {
 
 static double clamp01(double v) { return v < 0 ? 0 : v > 1 ? 1 : v; }
 
-void wv_fabricnet_targets(const wv_params *p, float *y) {
-  for (int k = 0; k < WV_NET_OUT; k++) {
+void wv_fabricnet_targets(const wv_params *p, int n_out, float *y) {
+  for (int k = 0; k < n_out && k < WV_NET_OUT_MAX; k++) {
     double lo, hi;
     wv_fabricnet_output_range(k, &lo, &hi);
     double v = k < 2 ? p->density[k] : wv_param_get(p, k - 2);
@@ -38,28 +38,41 @@ void wv_fabricnet_targets(const wv_params *p, float *y) {
   }
 }
 
+/* Output k in the parameter file's units: the model's range, never wider than the program's. */
+static double output_value(const wv_fabricnet *n, const float *y, int k) {
+  double plo, phi;
+  wv_fabricnet_output_range(k, &plo, &phi);
+  double v = n->range[k][0] + clamp01(y[k]) * (n->range[k][1] - n->range[k][0]);
+  return v < plo ? plo : v > phi ? phi : v;
+}
+
 wv_status wv_fabricnet_params(const wv_fabricnet *n, const float *y, const char *pattern, wv_params *p,
                               wv_error *err) {
   wv_status st = wv_params_default(pattern, p, err);
   if (st) return st;
   for (int k = 0; k < WV_NET_OUT; k++) {
-    double plo, phi; /* the program's range: a model's stored range never widens it */
-    wv_fabricnet_output_range(k, &plo, &phi);
-    double v = n->range[k][0] + clamp01(y[k]) * (n->range[k][1] - n->range[k][0]);
-    v = v < plo ? plo : v > phi ? phi : v;
+    double v = output_value(n, y, k);
     if (k < 2)
       p->density[k] = floor(v + 0.5);
     else
       wv_param_set(p, k - 2, v);
   }
+  if (n->n_out == WV_NET_OUT_PAIR) return wv_fabricnet_transmission(n, y, p, err);
   wv_params_transmission_default(p); /* not predicted: the prior mean given the predicted colour */
+  return wv_params_validate(p, err);
+}
+
+wv_status wv_fabricnet_transmission(const wv_fabricnet *n, const float *y, wv_params *p, wv_error *err) {
+  if (n->n_out != WV_NET_OUT_PAIR)
+    return wv_fail(err, WV_ERR_INVALID, "a one-photo model does not predict the transmission colours");
+  for (int k = WV_NET_OUT; k < WV_NET_OUT_PAIR; k++) wv_param_set(p, k - 2, output_value(n, y, k));
   return wv_params_validate(p, err);
 }
 
 /* ---- the network ---- */
 
 static size_t tensor_len(const wv_fabricnet *n, int i) {
-  const int outs[4] = {WV_NET_HIDDEN, WV_NET_HIDDEN, WV_NET_OUT, n->n_cls};
+  const int outs[4] = {WV_NET_HIDDEN, WV_NET_HIDDEN, n->n_out, n->n_cls};
   int in = i / 2 == 0 ? n->n_in : WV_NET_HIDDEN;
   return i % 2 ? (size_t)outs[i / 2] : (size_t)outs[i / 2] * in;
 }
@@ -107,17 +120,24 @@ static uint32_t scene_crc(const wv_scene *s) {
   return c;
 }
 
-wv_status wv_fabricnet_init(wv_fabricnet *n, const char *descriptor, int n_in, const wv_scene *s, uint64_t seed,
-                            wv_error *err) {
+wv_status wv_fabricnet_init(wv_fabricnet *n, const char *descriptor, int n_in, const wv_scene *s, const wv_scene *ts,
+                            uint64_t seed, wv_error *err) {
   memset(n, 0, sizeof *n);
   snprintf(n->descriptor, sizeof n->descriptor, "%s", descriptor);
   snprintf(n->scene, sizeof n->scene, "%s", s->name);
   n->n_in = n_in, n->scene_w = s->width, n->scene_h = s->height, n->scene_crc = scene_crc(s);
+  n->n_out = WV_NET_OUT;
+  if (ts) {
+    if (!ts->name[0]) return wv_fail(err, WV_ERR_INVALID, "a pair model's back-lit scene needs a name");
+    snprintf(n->tscene, sizeof n->tscene, "%s", ts->name);
+    n->tscene_w = ts->width, n->tscene_h = ts->height, n->tscene_crc = scene_crc(ts);
+    n->n_out = WV_NET_OUT_PAIR;
+  }
   if (wv_weave_builtin_count() != WV_NET_CLASSES)
     return wv_fail(err, WV_ERR_INTERNAL, "the weave library has %d built-ins, FabricNet's pattern head %d",
                    wv_weave_builtin_count(), WV_NET_CLASSES);
   n->n_cls = WV_NET_CLASSES;
-  for (int k = 0; k < WV_NET_OUT; k++) wv_fabricnet_output_range(k, &n->range[k][0], &n->range[k][1]);
+  for (int k = 0; k < n->n_out; k++) wv_fabricnet_output_range(k, &n->range[k][0], &n->range[k][1]);
   wv_status st = alloc_net(n, err);
   if (st) return st;
   wv_rng r;
@@ -146,7 +166,7 @@ void wv_fabricnet_preprocess(const wv_fabricnet *n, float *x, int batch) {
 }
 
 wv_status wv_fabricnet_acts_alloc(wv_fabricnet_acts *a, int batch, wv_error *err) {
-  size_t h = (size_t)batch * WV_NET_HIDDEN, o = (size_t)batch * WV_NET_OUT, k = (size_t)batch * WV_NET_CLASSES;
+  size_t h = (size_t)batch * WV_NET_HIDDEN, o = (size_t)batch * WV_NET_OUT_MAX, k = (size_t)batch * WV_NET_CLASSES;
   float *b = calloc(4 * h + 2 * o + 2 * h + 3 * k, sizeof(float));
   if (!b) return wv_fail(err, WV_ERR_NOMEM, "out of memory for activations");
   a->cap = batch;
@@ -168,8 +188,8 @@ void wv_fabricnet_forward(const wv_fabricnet *n, const float *x, int batch, wv_f
   wv_nn_leaky_relu_forward(a->a1, a->h1, WV_NET_SLOPE, h);
   wv_nn_fc_forward(a->h2, a->a1, n->w2, n->b2, batch, WV_NET_HIDDEN, WV_NET_HIDDEN);
   wv_nn_leaky_relu_forward(a->a2, a->h2, WV_NET_SLOPE, h);
-  wv_nn_fc_forward(a->out, a->a2, n->w3, n->b3, batch, WV_NET_HIDDEN, WV_NET_OUT);
-  wv_nn_sigmoid_forward(a->out, a->out, (size_t)batch * WV_NET_OUT);
+  wv_nn_fc_forward(a->out, a->a2, n->w3, n->b3, batch, WV_NET_HIDDEN, n->n_out);
+  wv_nn_sigmoid_forward(a->out, a->out, (size_t)batch * n->n_out);
   if (n->n_cls > 0) {
     wv_nn_fc_forward(a->logits, a->a2, n->w4, n->b4, batch, WV_NET_HIDDEN, n->n_cls);
     wv_nn_softmax_xent_forward(a->prob, a->logits, NULL, batch, n->n_cls);
@@ -179,7 +199,7 @@ void wv_fabricnet_forward(const wv_fabricnet *n, const float *x, int batch, wv_f
 float wv_fabricnet_backward(const wv_fabricnet *n, const float *x, const float *y, const int *labels,
                             float ce_weight, int batch, wv_fabricnet_acts *a, float *const *g, float *l1_out,
                             float *ce_out) {
-  size_t h = (size_t)batch * WV_NET_HIDDEN, o = (size_t)batch * WV_NET_OUT;
+  size_t h = (size_t)batch * WV_NET_HIDDEN, o = (size_t)batch * n->n_out;
   wv_fabricnet_forward(n, x, batch, a);
   float l1 = wv_nn_l1_forward(a->out, y, o), ce = 0;
   int head = n->n_cls > 0 && labels;
@@ -191,7 +211,7 @@ float wv_fabricnet_backward(const wv_fabricnet *n, const float *x, const float *
   wv_nn_l1_backward(a->d_out, a->out, y, 1.0f, o);
   for (size_t i = 0; i < o; i++) a->d_out[i] *= a->out[i] * (1.0f - a->out[i]);
   memset(a->d_a2, 0, h * sizeof(float));
-  wv_nn_fc_backward(a->d_a2, g[4], g[5], a->d_out, a->a2, n->w3, batch, WV_NET_HIDDEN, WV_NET_OUT);
+  wv_nn_fc_backward(a->d_a2, g[4], g[5], a->d_out, a->a2, n->w3, batch, WV_NET_HIDDEN, n->n_out);
   if (head) { /* the pattern head adds its share to d_a2 */
     memset(a->d_logits, 0, (size_t)batch * n->n_cls * sizeof(float));
     wv_nn_softmax_xent_backward(a->d_logits, a->prob, labels, ce_weight, batch, n->n_cls);
@@ -222,7 +242,7 @@ wv_status wv_fabricnet_predict_features(const wv_fabricnet *n, float *feat, floa
   wv_status st = wv_fabricnet_acts_alloc(&a, 1, err);
   if (st) return st;
   wv_fabricnet_forward(n, feat, 1, &a);
-  memcpy(y, a.out, WV_NET_OUT * sizeof(float));
+  memcpy(y, a.out, (size_t)n->n_out * sizeof(float));
   if (probs) {
     int nb = wv_weave_builtin_count();
     for (int i = 0; i < nb; i++) probs[i] = n->n_cls == nb ? a.prob[i] : 1.0f / (float)nb;
@@ -244,15 +264,31 @@ wv_status wv_fabricnet_check(const wv_fabricnet *n, const char *path, const char
   return WV_OK;
 }
 
+wv_status wv_fabricnet_check_pair(const wv_fabricnet *n, const char *path, const wv_scene *ts, wv_error *err) {
+  if (!ts && n->tscene[0])
+    return wv_fail(err, WV_ERR_INVALID,
+                   "%s: a pair model (reflection and transmission photos, back-lit scene '%s'): it needs both photos",
+                   path, n->tscene);
+  if (ts && !n->tscene[0])
+    return wv_fail(err, WV_ERR_INVALID, "%s: a one-photo model, not a model for a photo pair", path);
+  if (ts && (strcmp(n->tscene, ts->name) || n->tscene_w != ts->width || n->tscene_h != ts->height))
+    return wv_fail(err, WV_ERR_INVALID, "%s: pair model made for the back-lit scene '%s' (%d x %d), not '%s' (%d x %d)",
+                   path, n->tscene, n->tscene_w, n->tscene_h, ts->name, ts->width, ts->height);
+  return WV_OK;
+}
+
 /* ---- files ---- */
 
-/* Header sizes and the offsets that moved when version 2 added the pattern classes
- * (docs/fabricnet.md): version 1 is 504 bytes, version 2 512. */
+/* Header sizes and the offsets that moved when version 2 added the pattern classes and
+ * version 3 (pair models) room for their outputs and back-lit scene (docs/fabricnet.md):
+ * version 1 is 504 bytes, version 2 512, version 3 684. */
 typedef struct {
-  size_t hdr, cls, cls_crc, pl_size, pl_crc, hdr_crc;
+  size_t hdr, cls, cls_crc, pl_size, pl_crc, hdr_crc, tscene;
 } layout;
-static const layout LAYOUT_V1 = {504, 0, 0, 488, 496, 500};
-static const layout LAYOUT_V2 = {512, 488, 492, 496, 504, 508};
+static const layout LAYOUT_V1 = {504, 0, 0, 488, 496, 500, 0};
+static const layout LAYOUT_V2 = {512, 488, 492, 496, 504, 508, 0};
+/* 27 output ranges from 152; tscene: name (64 bytes), width, height, CRC-32 of its JSON */
+static const layout LAYOUT_V3 = {684, 584, 588, 668, 676, 680, 592};
 enum { KIND_MODEL = 1, KIND_CHECKPOINT = 2 };
 #define PREPROC_SLOG1P_STD 1
 #define TRAINSTATE_BYTES 32
@@ -302,13 +338,15 @@ static uint32_t classes_crc(int k) {
 
 static wv_status save(const char *path, const wv_fabricnet *n, int kind, const float *m, const float *v,
                       const wv_fabricnet_trainstate *ts, wv_error *err) {
-  const layout *L2 = &LAYOUT_V2;
+  /* a one-photo model in version 2, which older programs read too; a pair model in 3 */
+  int pair = n->tscene[0] != 0;
+  const layout *L2 = pair ? &LAYOUT_V3 : &LAYOUT_V2;
   const size_t HDR = L2->hdr;
   size_t pl = payload_bytes(n, kind), len = HDR + pl;
   unsigned char *b = calloc(len, 1);
   if (!b) return wv_fail(err, WV_ERR_NOMEM, "out of memory writing %s", path);
   memcpy(b, WV_NET_MAGIC, 8);
-  put32(b + 8, WV_NET_VERSION);
+  put32(b + 8, pair ? 3 : 2);
   put32(b + 12, (uint32_t)kind);
   memcpy(b + 16, n->descriptor, strnlen(n->descriptor, 31));
   put32(b + 48, (uint32_t)n->n_in);
@@ -316,11 +354,17 @@ static wv_status save(const char *path, const wv_fabricnet *n, int kind, const f
   put32(b + 116, (uint32_t)n->scene_w);
   put32(b + 120, (uint32_t)n->scene_h);
   put32(b + 124, n->scene_crc);
-  const uint32_t layers[4] = {(uint32_t)n->n_in, WV_NET_HIDDEN, WV_NET_HIDDEN, WV_NET_OUT};
+  const uint32_t layers[4] = {(uint32_t)n->n_in, WV_NET_HIDDEN, WV_NET_HIDDEN, (uint32_t)n->n_out};
   for (int i = 0; i < 4; i++) put32(b + 128 + 4 * i, layers[i]);
   put32(b + 144, PREPROC_SLOG1P_STD);
-  put32(b + 148, WV_NET_OUT);
-  for (int k = 0; k < WV_NET_OUT; k++)
+  put32(b + 148, (uint32_t)n->n_out);
+  if (pair) {
+    memcpy(b + L2->tscene, n->tscene, strnlen(n->tscene, 63));
+    put32(b + L2->tscene + 64, (uint32_t)n->tscene_w);
+    put32(b + L2->tscene + 68, (uint32_t)n->tscene_h);
+    put32(b + L2->tscene + 72, n->tscene_crc);
+  }
+  for (int k = 0; k < n->n_out; k++)
     for (int j = 0; j < 2; j++) {
       uint64_t u;
       memcpy(&u, &n->range[k][j], 8);
@@ -392,7 +436,7 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
   uint32_t version = get32(b + 8);
   if (version < 1 || version > WV_NET_VERSION)
     BAD("%s: %s format version %u; this program reads versions 1 to %d", path, what, version, WV_NET_VERSION);
-  const layout *lay = version == 1 ? &LAYOUT_V1 : &LAYOUT_V2;
+  const layout *lay = version == 1 ? &LAYOUT_V1 : version == 2 ? &LAYOUT_V2 : &LAYOUT_V3;
   const size_t HDR = lay->hdr;
   if (len < HDR) BAD("%s: truncated %s (%zu bytes, header is %zu)", path, what, len, HDR);
   if (get32(b + lay->hdr_crc) != crc32_z(0, b, lay->hdr_crc)) BAD("%s: header checksum mismatch (corrupt file)", path);
@@ -405,10 +449,20 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
     BAD("%s: descriptor or scene name missing in the header", path);
   n->n_in = (int)get32(b + 48);
   n->scene_w = (int)get32(b + 116), n->scene_h = (int)get32(b + 120), n->scene_crc = get32(b + 124);
+  n->n_out = (int)get32(b + 148);
+  if (lay->tscene) { /* version 3: a pair model */
+    if (!str_field(b + lay->tscene, 64, n->tscene)) BAD("%s: back-lit scene name missing in the header", path);
+    n->tscene_w = (int)get32(b + lay->tscene + 64), n->tscene_h = (int)get32(b + lay->tscene + 68);
+    n->tscene_crc = get32(b + lay->tscene + 72);
+  }
+  int want_out = n->tscene[0] ? WV_NET_OUT_PAIR : WV_NET_OUT;
   if (n->n_in < 1 || n->n_in > (1 << 24) || get32(b + 128) != (uint32_t)n->n_in || get32(b + 132) != WV_NET_HIDDEN ||
-      get32(b + 136) != WV_NET_HIDDEN || get32(b + 140) != WV_NET_OUT || get32(b + 148) != WV_NET_OUT)
+      get32(b + 136) != WV_NET_HIDDEN || get32(b + 140) != (uint32_t)want_out || n->n_out != want_out)
     BAD("%s: layer sizes %u-%u-%u-%u; this program's FabricNet is features-%d-%d-%d", path, get32(b + 128),
-        get32(b + 132), get32(b + 136), get32(b + 140), WV_NET_HIDDEN, WV_NET_HIDDEN, WV_NET_OUT);
+        get32(b + 132), get32(b + 136), get32(b + 140), WV_NET_HIDDEN, WV_NET_HIDDEN, want_out);
+  if (n->tscene[0] && (n->tscene_w < 1 || n->tscene_h < 1 || n->tscene_w > WV_SCENE_MAX_SIDE ||
+                       n->tscene_h > WV_SCENE_MAX_SIDE))
+    BAD("%s: invalid back-lit scene size %d x %d", path, n->tscene_w, n->tscene_h);
   if (get32(b + 144) != PREPROC_SLOG1P_STD) BAD("%s: unknown feature preprocessing %u", path, get32(b + 144));
   if (n->scene_w < 1 || n->scene_h < 1 || n->scene_w > WV_SCENE_MAX_SIDE || n->scene_h > WV_SCENE_MAX_SIDE)
     BAD("%s: invalid scene size %d x %d", path, n->scene_w, n->scene_h);
@@ -417,7 +471,7 @@ static wv_status load(const char *path, int kind, wv_fabricnet *n, float **m, fl
     BAD("%s: pattern head of %d classes; this program's library has %d built-ins", path, n->n_cls, WV_NET_CLASSES);
   if (n->n_cls && get32(b + lay->cls_crc) != classes_crc(n->n_cls))
     BAD("%s: the model's pattern classes are not this program's built-in weave library (train it again)", path);
-  for (int k = 0; k < WV_NET_OUT; k++) {
+  for (int k = 0; k < n->n_out; k++) {
     uint64_t u0 = get64(b + 152 + 16 * k), u1 = get64(b + 160 + 16 * k);
     memcpy(&n->range[k][0], &u0, 8), memcpy(&n->range[k][1], &u1, 8);
     if (!isfinite(n->range[k][0]) || !isfinite(n->range[k][1]) || !(n->range[k][0] < n->range[k][1]))

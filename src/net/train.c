@@ -115,7 +115,8 @@ static int read_loss_csv(const char *path, wv_train_epoch *r, int upto) {
 typedef struct {
   int n_feat;
   uint16_t *feat;  /* n samples x n_feat, f16 */
-  float *targets;  /* n x WV_NET_OUT */
+  int n_out;       /* targets per sample: WV_NET_OUT, or WV_NET_OUT_PAIR for a pair set */
+  float *targets;  /* n x n_out */
   int *labels;     /* n: index of the sample's pattern among the built-ins */
   float *x, *y;    /* one batch */
   int *lab;        /* one batch's labels */
@@ -127,7 +128,7 @@ static void make_batch(const wv_fabricnet *net, const trainset *t, const int *id
     const uint16_t *src = t->feat + (size_t)idx[b] * net->n_in;
     float *dst = t->x + (size_t)b * net->n_in;
     for (int i = 0; i < net->n_in; i++) dst[i] = wv_nn_f16_to_f32(src[i]);
-    memcpy(t->y + (size_t)b * WV_NET_OUT, t->targets + (size_t)idx[b] * WV_NET_OUT, WV_NET_OUT * sizeof(float));
+    memcpy(t->y + (size_t)b * t->n_out, t->targets + (size_t)idx[b] * t->n_out, (size_t)t->n_out * sizeof(float));
     t->lab[b] = t->labels[idx[b]];
   }
   wv_fabricnet_preprocess(net, t->x, nb);
@@ -137,16 +138,17 @@ static void make_batch(const wv_fabricnet *net, const trainset *t, const int *id
  * cross-entropy and its accuracy (the most probable pattern is the sample's). */
 static double evaluate(const wv_fabricnet *net, trainset *t, const int *idx, int n, int batch, double *err_out,
                        double *ce_out, double *acc_out) {
-  double s = 0, per[WV_NET_OUT] = {0}, ce = 0;
+  double s = 0, per[WV_NET_OUT_MAX] = {0}, ce = 0;
+  const int no = t->n_out;
   int right = 0;
   wv_fabricnet_acts *a = &t->acts;
   for (int i = 0; i < n; i += batch) {
     int nb = n - i < batch ? n - i : batch;
     make_batch(net, t, idx + i, nb);
     wv_fabricnet_forward(net, t->x, nb, a);
-    for (int j = 0; j < nb * WV_NET_OUT; j++) {
+    for (int j = 0; j < nb * no; j++) {
       double d = fabs((double)a->out[j] - t->y[j]);
-      s += d, per[j % WV_NET_OUT] += d;
+      s += d, per[j % no] += d;
     }
     if (net->n_cls > 0) {
       ce += (double)wv_nn_softmax_xent_forward(NULL, a->logits, t->lab, nb, net->n_cls) * nb;
@@ -159,10 +161,10 @@ static double evaluate(const wv_fabricnet *net, trainset *t, const int *idx, int
     }
   }
   if (err_out)
-    for (int k = 0; k < WV_NET_OUT; k++) err_out[k] = n ? per[k] / n : 0;
+    for (int k = 0; k < no; k++) err_out[k] = n ? per[k] / n : 0;
   if (ce_out) *ce_out = n ? ce / n : 0;
   if (acc_out) *acc_out = n ? (double)right / n : 0;
-  return n ? s / ((double)n * WV_NET_OUT) : 0;
+  return n ? s / ((double)n * no) : 0;
 }
 
 /* The built-in index of a pattern name (earlier names map to their canonical one). */
@@ -211,8 +213,10 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
   trainset t;
   memset(&t, 0, sizeof t);
   t.n_feat = info.n_feat;
+  t.n_out = info.pair ? WV_NET_OUT_PAIR : WV_NET_OUT;
+  res->outputs = t.n_out;
   t.feat = malloc(sizeof(uint16_t) * (size_t)total * info.n_feat);
-  t.targets = malloc(sizeof(float) * (size_t)total * WV_NET_OUT);
+  t.targets = malloc(sizeof(float) * (size_t)total * t.n_out);
   t.labels = malloc(sizeof(int) * (size_t)total);
   int *ids = malloc(sizeof(int) * (size_t)total);
   if (!t.feat || !t.targets || !t.labels || !ids) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for %d samples", total);
@@ -239,7 +243,7 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
       st = wv_fail(err, WV_ERR_FORMAT, "%s: pattern '%s' is not a built-in", ppath, p.pattern);
       break;
     }
-    wv_fabricnet_targets(&p, t.targets + (size_t)n * WV_NET_OUT);
+    wv_fabricnet_targets(&p, t.n_out, t.targets + (size_t)n * t.n_out);
     ids[n++] = k;
   }
   if (!st && missing && !o->partial) {
@@ -277,18 +281,22 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
   if (!st && !hist) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for the loss history");
   if (!st && o->resume) {
     if (!(st = wv_fabricnet_checkpoint_load(ckpt, &net, &am, &av, &ts, err)) &&
-        !(st = wv_fabricnet_check(&net, ckpt, info.descriptor, (size_t)info.n_feat, &info.scene, err))) {
+        !(st = wv_fabricnet_check(&net, ckpt, info.descriptor, (size_t)info.n_feat, &info.scene, err)) &&
+        !(st = wv_fabricnet_check_pair(&net, ckpt, info.pair ? &info.tscene : NULL, err))) {
       snprintf(path, sizeof path, "%s/loss.csv", work);
       int upto = ts.epoch < o->epochs ? ts.epoch : o->epochs;
       nhist = read_loss_csv(path, hist, upto);
       res->resumed_epoch = ts.epoch;
     }
-  } else if (!st && o->init && !(st = wv_fabricnet_init(&net, info.descriptor, info.n_feat, &info.scene, o->seed, err))) {
+  } else if (!st && o->init &&
+             !(st = wv_fabricnet_init(&net, info.descriptor, info.n_feat, &info.scene, info.pair ? &info.tscene : NULL,
+                                      o->seed, err))) {
     /* Fine-tuning: the given model's layers and feature statistics; a pattern head it
      * lacks (a version 1 model) keeps its fresh initialisation. */
     wv_fabricnet from;
     if (!(st = wv_fabricnet_load(o->init, &from, err)) &&
-        !(st = wv_fabricnet_check(&from, o->init, info.descriptor, (size_t)info.n_feat, &info.scene, err))) {
+        !(st = wv_fabricnet_check(&from, o->init, info.descriptor, (size_t)info.n_feat, &info.scene, err)) &&
+        !(st = wv_fabricnet_check_pair(&from, o->init, info.pair ? &info.tscene : NULL, err))) {
       float *tf[WV_NET_TENSORS], *tn[WV_NET_TENSORS];
       size_t lf[WV_NET_TENSORS], ln[WV_NET_TENSORS];
       wv_fabricnet_tensors(&from, tf, lf);
@@ -300,7 +308,9 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
       memcpy(net.range, from.range, sizeof net.range);
       wv_fabricnet_free(&from);
     }
-  } else if (!st && !o->init && !(st = wv_fabricnet_init(&net, info.descriptor, info.n_feat, &info.scene, o->seed, err))) {
+  } else if (!st && !o->init &&
+             !(st = wv_fabricnet_init(&net, info.descriptor, info.n_feat, &info.scene, info.pair ? &info.tscene : NULL,
+                                      o->seed, err))) {
     /* Feature statistics over the training split, after the signed log1p. */
     double *s1 = calloc((size_t)info.n_feat, sizeof(double)), *s2 = calloc((size_t)info.n_feat, sizeof(double));
     if (!s1 || !s2) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for feature statistics");
@@ -346,7 +356,7 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
   size_t P = st ? 0 : wv_fabricnet_param_count(&net);
   float *grad = st ? NULL : calloc(P, sizeof(float));
   t.x = st ? NULL : malloc(sizeof(float) * (size_t)o->batch * info.n_feat);
-  t.y = st ? NULL : malloc(sizeof(float) * (size_t)o->batch * WV_NET_OUT);
+  t.y = st ? NULL : malloc(sizeof(float) * (size_t)o->batch * t.n_out);
   t.lab = st ? NULL : malloc(sizeof(int) * (size_t)o->batch);
   int *order = st ? NULL : malloc(sizeof(int) * (size_t)ntr);
   if (!st && (!grad || !t.x || !t.y || !t.lab || !order)) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for training");

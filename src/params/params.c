@@ -288,6 +288,10 @@ static double *param_slot(wv_params *p, int id) {
 double wv_param_get(const wv_params *p, int id) { return *param_slot((wv_params *)p, id); }
 void wv_param_set(wv_params *p, int id, double v) { *param_slot(p, id) = v; }
 
+void wv_param_range_width(double *lo, double *hi) {
+  *lo = R_WIDTH.lo, *hi = R_WIDTH.hi;
+}
+
 void wv_param_range(int id, double *lo, double *hi) {
   const range *r = id <= WV_P_BETA_WEFT ? &R_BETA
                    : id <= WV_P_KD_WEFT_B ? &R_KD
