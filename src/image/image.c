@@ -46,9 +46,10 @@ double wv_image_mean(const wv_image *a) {
 
 /* One pass of the separable blur along x (vertical 0) or y (1) of a plane whose pixels are
  * `stride` floats apart; taps g[0..2r]; edges clamped; sums in double. Every value sums its
- * taps k ascending whatever the path: the values farther than r from both edges skip the
- * clamp, and along y a row of values is summed at once in acc (w doubles), a tap at a time,
- * so the rows read are read whole. */
+ * taps k ascending whatever the path, but a row of values is summed at once in acc (w
+ * doubles), a tap at a time: the sums are independent (no chain of dependent adds) and the
+ * rows are read whole. Along x the values farther than r from both edges go that way and
+ * skip the clamp; the others keep the plain loop. */
 static void blur_pass(const float *in, float *out, int w, int h, int stride, int vertical, const double *g, int r,
                       double *acc) {
   if (!vertical) {
@@ -56,16 +57,21 @@ static void blur_pass(const float *in, float *out, int w, int h, int stride, int
     for (int y = 0; y < h; y++) {
       const float *row = in + (size_t)y * w * stride;
       float *orow = out + (size_t)y * w * stride;
+      for (int x = lo; x < hi; x++) acc[x] = 0;
+      for (int k = 0; k <= 2 * r; k++) {
+        const float *src = row + (ptrdiff_t)(k - r) * stride;
+        double gk = g[k];
+        for (int x = lo; x < hi; x++) acc[x] += gk * src[(size_t)x * stride];
+      }
       for (int x = 0; x < w; x++) {
-        double s = 0;
         if (x >= lo && x < hi) {
-          const float *src = row + (ptrdiff_t)(x - r) * stride;
-          for (int k = 0; k <= 2 * r; k++) s += g[k] * src[(size_t)k * stride];
-        } else {
-          for (int k = -r; k <= r; k++) {
-            int xx = x + k < 0 ? 0 : x + k >= w ? w - 1 : x + k;
-            s += g[k + r] * row[(size_t)xx * stride];
-          }
+          orow[(size_t)x * stride] = (float)acc[x];
+          continue;
+        }
+        double s = 0;
+        for (int k = -r; k <= r; k++) {
+          int xx = x + k < 0 ? 0 : x + k >= w ? w - 1 : x + k;
+          s += g[k + r] * row[(size_t)xx * stride];
         }
         orow[(size_t)x * stride] = (float)s;
       }
