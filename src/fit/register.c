@@ -301,10 +301,11 @@ static wv_status hill_climb(level_set *ls, const wv_params *base, const double *
 /* Step 1 of the registration: the N_CAND best density pairs of the ratio grid (GLOBAL_STEP
  * apart over the whole range), each at least 4 grid steps from those before it. The grid is
  * not rendered whole: every GLOBAL_COARSE-th density of each first, then from the N_SEED best
- * of those (kept apart), an 8-neighbour climb on the grid itself to its local peak. The
- * peak is 2 to 5 grid steps wide in this window, so the coarse grid lands on its slope and
- * the climb finds the grid's own best; the candidates are those of the whole grid, from a
- * third of its renders. Unrendered grid points are not chosen. When no coarse score reaches
+ * of those (kept apart), an 8-neighbour climb on the grid itself to its local peak. A peak
+ * of a weave that lines up is wider than a coarse step in this window, so the coarse grid
+ * lands on its slope and the climb finds the grid's own best: the candidates are those of
+ * the whole grid (as measured: docs/fit.md), from a third of its renders. Unrendered grid
+ * points are not chosen. When no coarse score reaches
  * GLOBAL_CLEAR (a photo whose weave lines up nowhere in this window: satin1_R.png's best is
  * 0.22, the twills' 0.7), the whole grid is rendered, as with whole (the reference the
  * tests compare with). *renders: how many were rendered. */
