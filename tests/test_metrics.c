@@ -5,6 +5,7 @@
  * use_sample_covariance=False, data_range=1.0) on the same synthetic images,
  * on luminance (Rec. 709 weights) and per channel (channel_axis=2). */
 #include <math.h>
+#include <stdio.h>
 
 #include "testutil.h"
 #include "woven/metrics.h"
@@ -52,7 +53,24 @@ static void test_ssim_reference(void **state) {
   wv_image_free(&a), wv_image_free(&b), wv_image_free(&d), wv_image_free(&small);
 }
 
+/* The values of the implementation before its filter summed a row at a time, bit for bit
+ * (each value sums the same terms in the same order). */
+static void test_ssim_exact(void **state) {
+  (void)state;
+  wv_image a, b, d;
+  make(&a, &b, &d);
+  double s[4];
+  assert_int_equal(wv_ssim(&a, &b, WV_SSIM_LUMA, &s[0], NULL), WV_OK);
+  assert_int_equal(wv_ssim(&a, &b, WV_SSIM_RGB, &s[1], NULL), WV_OK);
+  assert_int_equal(wv_ssim(&a, &d, WV_SSIM_LUMA, &s[2], NULL), WV_OK);
+  assert_int_equal(wv_ssim(&a, &d, WV_SSIM_RGB, &s[3], NULL), WV_OK);
+  fprintf(stderr, "SSIM exact: %a %a %a %a\n", s[0], s[1], s[2], s[3]);
+  const double want[4] = {0x1.f616ba8e179e6p-2, 0x1.e16ff5bc4d6bbp-2, -0x1.4759b04b5a74ep-1, -0x1.4f7868f50d401p-1};
+  for (int i = 0; i < 4; i++) assert_true(s[i] == want[i]);
+  wv_image_free(&a), wv_image_free(&b), wv_image_free(&d);
+}
+
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_ssim_reference)};
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_ssim_reference), cmocka_unit_test(test_ssim_exact)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

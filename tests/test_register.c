@@ -3,13 +3,15 @@
  * in a 128-pixel window,
  * offset through the pixel -> fabric map), and an exact fit is left alone; the cloth's
  * distortion follows a bent cloth and leaves a straight one; neither moves a two-colour
- * fit in register to please the luminance alone. */
+ * fit in register to please the luminance alone; the first step's coarse grid and climbs
+ * give the whole grid's candidates. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "testutil.h"
+#include "fit/fit_internal.h" /* the registration's first step alone */
 #include "woven/fit.h"
 #include "woven/metrics.h"
 #include "woven/render.h"
@@ -253,8 +255,48 @@ static void test_distortion_leaves_a_straight_cloth(void **state) {
   wv_image_free(&photo);
 }
 
+/* The whole-range step: the coarse grid with its climbs picks the candidates the whole
+ * ratio grid picks, the same densities in the same order, from well under half its
+ * renders; for a twill and a satin, each from a start off in both densities. */
+static void test_register_coarse_grid_matches_whole(void **state) {
+  (void)state;
+  const char *pattern[2] = {"twill", "satin"};
+  const double dens[2][2] = {{140, 90}, {120, 160}};
+  for (int t = 0; t < 2; t++) {
+    wv_scene s;
+    tu_centre_window(&s, "flat45", 128, 128, 16);
+    wv_params tp, from;
+    assert_int_equal(wv_params_default(pattern[t], &tp, NULL), WV_OK);
+    tp.density[WV_WARP] = dens[t][0], tp.density[WV_WEFT] = dens[t][1];
+    wv_render_opts ro = {0};
+    wv_image photo;
+    assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
+    from = tp;
+    from.density[WV_WARP] *= 1.07, from.density[WV_WEFT] *= 0.94;
+    wv_fit_opts o;
+    wv_fit_opts_default(&o);
+    wv_fit_state st;
+    wv_error err = {0};
+    assert_int_equal(wv_fit_state_init(&st, &from, &o, &err), WV_OK);
+    double cw[4][2], cc[4][2];
+    int nw = 0, nc = 0, rw = 0, rcn = 0;
+    if (wv_fit_register_candidates(&st, &s, &photo, &o, 1, cw, &nw, &rw, &err)) fail_msg("%s", err.msg);
+    if (wv_fit_register_candidates(&st, &s, &photo, &o, 0, cc, &nc, &rcn, &err)) fail_msg("%s", err.msg);
+    fprintf(stderr, "%s: whole grid %d renders, coarse %d; candidates", pattern[t], rw, rcn);
+    for (int i = 0; i < nw; i++) fprintf(stderr, " (%.2f, %.2f)", cw[i][0], cw[i][1]);
+    fprintf(stderr, "\n");
+    assert_int_equal(nc, nw);
+    assert_true(nw >= 1);
+    for (int i = 0; i < nw; i++) assert_true(cc[i][0] == cw[i][0] && cc[i][1] == cw[i][1]);
+    assert_true(rcn < rw / 2);
+    wv_fit_state_free(&st);
+    wv_image_free(&photo);
+  }
+}
+
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_register_recovers_density_and_phase),
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_register_coarse_grid_matches_whole),
+                                     cmocka_unit_test(test_register_recovers_density_and_phase),
                                      cmocka_unit_test(test_register_keeps_an_exact_fit),
                                      cmocka_unit_test(test_distortion_follows_a_bent_cloth),
                                      cmocka_unit_test(test_distortion_leaves_a_straight_cloth),

@@ -12,4 +12,13 @@ json_t *wv_fit_opts_json(const wv_fit_opts *o);
  * checkpoint may lack keep the value o holds. */
 wv_status wv_fit_opts_read_json(json_t *opts, wv_fit_opts *o, wv_error *err);
 
+/* The registration's first step alone (register.c): up to 4 candidate density pairs of the
+ * whole range, scored in the centre 64 x 64 window of s (as wv_fit_register, with the
+ * fit's camera blur and offset of st) for st's parameters; with whole, from every point of
+ * the ratio grid instead of the coarse grid and its climbs. *renders: how many renders
+ * that took. */
+wv_status wv_fit_register_candidates(const wv_fit_state *st, const wv_scene *s, const wv_image *photo,
+                                     const wv_fit_opts *o, int whole, double cand[4][2], int *nc, int *renders,
+                                     wv_error *err);
+
 #endif

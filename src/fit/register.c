@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fit/fit_internal.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
 #include "woven/render.h"
@@ -292,6 +293,155 @@ static wv_status hill_climb(level_set *ls, const wv_params *base, const double *
 #define GLOBAL_STEP 1.05 /* ratio between neighbouring densities of the coarse grid */
 #define WV_REGISTER_MIN_NCC 0.2 /* phase correlation that counts as the weave lining up */
 #define N_CAND 4         /* candidates from it refined in the larger window */
+#define GLOBAL_WINDOW 64 /* its window's side */
+#define GLOBAL_COARSE 2  /* the grid's first pass: every second density of each */
+#define N_SEED 24        /* coarse points whose neighbourhoods climb on the whole grid */
+#define GLOBAL_CLEAR 0.4 /* below this best coarse score the whole grid is rendered */
+
+/* Step 1 of the registration: the N_CAND best density pairs of the ratio grid (GLOBAL_STEP
+ * apart over the whole range), each at least 4 grid steps from those before it. The grid is
+ * not rendered whole: every GLOBAL_COARSE-th density of each first, then from the N_SEED best
+ * of those (kept apart), an 8-neighbour climb on the grid itself to its local peak. A peak
+ * of a weave that lines up is wider than a coarse step in this window, so the coarse grid
+ * lands on its slope and the climb finds the grid's own best: the candidates are those of
+ * the whole grid (as measured: docs/fit.md), from a third of its renders. Unrendered grid
+ * points are not chosen. When no coarse score reaches
+ * GLOBAL_CLEAR (a photo whose weave lines up nowhere in this window: satin1_R.png's best is
+ * 0.22, the twills' 0.7), the whole grid is rendered, as with whole (the reference the
+ * tests compare with). *renders: how many were rendered. */
+static wv_status global_candidates(level_set *ls, const wv_params *base, int whole, double cand[][2], int *nc,
+                                   int *renders, wv_error *err) {
+  const int n = (int)floor(log(WV_DENSITY_MAX / WV_DENSITY_MIN) / log(GLOBAL_STEP)) + 1;
+  const int step = whole ? 1 : GLOBAL_COARSE, nco = (n + step - 1) / step;
+  *renders = 0;
+  size_t nn = (size_t)n * n;
+  double(*gd)[2] = malloc(sizeof *gd * nn), *grid = malloc(sizeof(double) * nn);
+  double(*q)[2] = malloc(sizeof *q * (nn > 8 * N_SEED ? nn : 8 * N_SEED));
+  int *qk = malloc(sizeof(int) * (nn > 8 * N_SEED ? nn : 8 * N_SEED));
+  double *qv = malloc(sizeof(double) * (nn > 8 * N_SEED ? nn : 8 * N_SEED));
+  char *done = calloc(nn, 1);
+  wv_status rc = WV_OK;
+  if (!gd || !grid || !q || !qk || !qv || !done) rc = wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration grid");
+  for (int i = 0; i < n && !rc; i++)
+    for (int j = 0; j < n; j++) {
+      gd[i * n + j][0] = WV_DENSITY_MIN * pow(GLOBAL_STEP, i), gd[i * n + j][1] = WV_DENSITY_MIN * pow(GLOBAL_STEP, j);
+      grid[i * n + j] = -3;
+    }
+  /* the coarse grid */
+  int m = 0;
+  for (int a = 0; a < nco && !rc; a++)
+    for (int b = 0; b < nco; b++) {
+      int k = a * step * n + b * step;
+      q[m][0] = gd[k][0], q[m][1] = gd[k][1], qk[m++] = k;
+    }
+  if (!rc) rc = eval_many(ls, base, (const double(*)[2])q, m, qv, err);
+  for (int t = 0; t < m && !rc; t++) grid[qk[t]] = qv[t], done[qk[t]] = 1, *renders += in_range(q[t]);
+  /* no clear peak: the scores are noise with many maxima of about one height, which no
+   * few seeds cover; the rest of the grid is rendered */
+  double top = -2;
+  for (int t = 0; t < m && !rc; t++) top = qv[t] > top ? qv[t] : top;
+  if (!rc && !whole && top < GLOBAL_CLEAR) {
+    whole = 1, m = 0;
+    for (size_t k = 0; k < nn; k++)
+      if (!done[k]) q[m][0] = gd[k][0], q[m][1] = gd[k][1], qk[m++] = (int)k;
+    rc = eval_many(ls, base, (const double(*)[2])q, m, qv, err);
+    for (int t = 0; t < m && !rc; t++) grid[qk[t]] = qv[t], done[qk[t]] = 1, *renders += in_range(q[t]);
+  }
+  /* the seeds: the best coarse points, each blanking its coarse neighbours */
+  int seed[N_SEED], ns = 0;
+  if (!rc) {
+    double *cg = malloc(sizeof(double) * (size_t)m);
+    if (!cg) rc = wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration grid");
+    for (int t = 0; t < m && cg; t++) cg[t] = qv[t];
+    for (; cg && !whole && ns < N_SEED; ns++) {
+      int bt = -1;
+      double bv = -2.5;
+      for (int t = 0; t < m; t++)
+        if (cg[t] > bv) bv = cg[t], bt = t;
+      if (bt < 0) break;
+      seed[ns] = qk[bt];
+      int a0 = bt / nco, b0 = bt % nco;
+      for (int a = a0 - 1; a <= a0 + 1; a++)
+        for (int b = b0 - 1; b <= b0 + 1; b++)
+          if (a >= 0 && b >= 0 && a < nco && b < nco) cg[a * nco + b] = -3;
+    }
+    free(cg);
+  }
+  /* each seed climbs on the grid; all the seeds' neighbourhoods render in one batch */
+  int cur[N_SEED], live[N_SEED];
+  for (int t = 0; t < ns; t++) cur[t] = seed[t], live[t] = 1;
+  for (int round = 0; round < n && !rc; round++) {
+    m = 0;
+    for (int t = 0; t < ns; t++) {
+      if (!live[t]) continue;
+      int i0 = cur[t] / n, j0 = cur[t] % n;
+      for (int a = i0 - 1; a <= i0 + 1; a++)
+        for (int b = j0 - 1; b <= j0 + 1; b++) {
+          int k = a * n + b;
+          if (a < 0 || b < 0 || a >= n || b >= n || done[k]) continue;
+          done[k] = 2; /* queued */
+          q[m][0] = gd[k][0], q[m][1] = gd[k][1], qk[m++] = k;
+        }
+    }
+    if (!m) break;
+    if ((rc = eval_many(ls, base, (const double(*)[2])q, m, qv, err))) break;
+    for (int t = 0; t < m; t++) grid[qk[t]] = qv[t], done[qk[t]] = 1, *renders += in_range(q[t]);
+    int moved = 0;
+    for (int t = 0; t < ns; t++) {
+      if (!live[t]) continue;
+      int i0 = cur[t] / n, j0 = cur[t] % n, bk = cur[t];
+      for (int a = i0 - 1; a <= i0 + 1; a++)
+        for (int b = j0 - 1; b <= j0 + 1; b++)
+          if (a >= 0 && b >= 0 && a < n && b < n && grid[a * n + b] > grid[bk]) bk = a * n + b;
+      live[t] = bk != cur[t];
+      cur[t] = bk, moved |= live[t];
+    }
+    if (!moved) break;
+  }
+  /* best remaining, then blank its neighbourhood; the ring just outside the blank is
+   * rendered before the next choice: the slope of a peak there can outscore a weaker peak */
+  for (int c = 0; c < N_CAND && !rc; c++) {
+    int bi = -1, bj = -1;
+    double bv = -2.5;
+    for (int i = 0; i < n; i++)
+      for (int j = 0; j < n; j++)
+        if (done[(size_t)i * n + j] == 1 && grid[(size_t)i * n + j] > bv) bv = grid[(size_t)i * n + j], bi = i, bj = j;
+    if (bi < 0) break;
+    cand[*nc][0] = gd[bi * n + bj][0], cand[*nc][1] = gd[bi * n + bj][1], (*nc)++;
+    for (int i = bi - 3; i <= bi + 3; i++)
+      for (int j = bj - 3; j <= bj + 3; j++)
+        if (i >= 0 && j >= 0 && i < n && j < n) grid[(size_t)i * n + j] = -3, done[(size_t)i * n + j] = 3;
+    if (c == N_CAND - 1) break;
+    m = 0;
+    for (int i = bi - 4; i <= bi + 4; i++)
+      for (int j = bj - 4; j <= bj + 4; j++) {
+        int k = i * n + j;
+        if (i < 0 || j < 0 || i >= n || j >= n || done[k] || (abs(i - bi) < 4 && abs(j - bj) < 4)) continue;
+        q[m][0] = gd[k][0], q[m][1] = gd[k][1], qk[m++] = k;
+      }
+    if (m && (rc = eval_many(ls, base, (const double(*)[2])q, m, qv, err))) break;
+    for (int t = 0; t < m; t++) grid[qk[t]] = qv[t], done[qk[t]] = 1, *renders += in_range(q[t]);
+  }
+  free(gd), free(grid), free(q), free(qk), free(qv), free(done);
+  return rc;
+}
+
+wv_status wv_fit_register_candidates(const wv_fit_state *st, const wv_scene *s, const wv_image *photo,
+                                     const wv_fit_opts *o, int whole, double cand[4][2], int *nc, int *renders,
+                                     wv_error *err) {
+  wv_scene full;
+  wv_fit_scene(st, s, &full);
+  int threads = o->threads > 0 ? o->threads : omp_get_max_threads();
+  threads = threads < 1 ? 1 : threads > MAX_THREADS ? MAX_THREADS : threads;
+  level_set *ls = calloc(1, sizeof *ls);
+  if (!ls) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration");
+  *nc = 0;
+  wv_status rc = set_init(ls, &full, photo, GLOBAL_WINDOW, threads, o, err);
+  if (!rc) rc = global_candidates(ls, &st->params, whole, cand, nc, renders, err);
+  set_free(ls);
+  free(ls);
+  return rc;
+}
 
 wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                           wv_error *err) {
@@ -306,7 +456,7 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
    * large window is found from the wide one of a small window. */
   level_set *S = calloc(4, sizeof *S);
   if (!S) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration");
-  const int sizes[4] = {64, 128, 256, 1 << 30};
+  const int sizes[4] = {GLOBAL_WINDOW, 128, 256, 1 << 30};
   wv_status rc = WV_OK;
   for (int i = 0; i < 4 && !rc; i++) rc = set_init(&S[i], &full, photo, sizes[i], threads, o, err);
   const wv_params *base = &st->params;
@@ -322,27 +472,8 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
    * weft went from 227 to 75) is found here. The best few, kept apart, go on. */
   double cand[N_CAND + 1][2];
   int nc = 0;
-  const int n = (int)floor(log(WV_DENSITY_MAX / WV_DENSITY_MIN) / log(GLOBAL_STEP)) + 1;
-  double(*gd)[2] = rc ? NULL : malloc(sizeof *gd * (size_t)n * n);
-  double *grid = rc ? NULL : malloc(sizeof(double) * (size_t)n * n);
-  if (!rc && (!gd || !grid)) rc = wv_fail(err, WV_ERR_NOMEM, "out of memory for the registration grid");
-  for (int i = 0; i < n && !rc; i++)
-    for (int j = 0; j < n; j++)
-      gd[i * n + j][0] = WV_DENSITY_MIN * pow(GLOBAL_STEP, i), gd[i * n + j][1] = WV_DENSITY_MIN * pow(GLOBAL_STEP, j);
-  if (!rc) rc = eval_many(&S[0], base, (const double(*)[2])gd, n * n, grid, err);
-  for (int c = 0; c < N_CAND && !rc; c++) { /* best remaining, then blank its neighbourhood */
-    int bi = -1, bj = -1;
-    double bv = -2.5;
-    for (int i = 0; i < n; i++)
-      for (int j = 0; j < n; j++)
-        if (grid[(size_t)i * n + j] > bv) bv = grid[(size_t)i * n + j], bi = i, bj = j;
-    if (bi < 0) break;
-    cand[nc][0] = gd[bi * n + bj][0], cand[nc][1] = gd[bi * n + bj][1], nc++;
-    for (int i = bi - 3; i <= bi + 3; i++)
-      for (int j = bj - 3; j <= bj + 3; j++)
-        if (i >= 0 && j >= 0 && i < n && j < n) grid[(size_t)i * n + j] = -3;
-  }
-  free(grid), free(gd);
+  int renders = 0;
+  if (!rc) rc = global_candidates(&S[0], base, 0, cand, &nc, &renders, err);
   /* 2. In the middle window: the grid of whole yarns/inch +-register_radius around
    * the fitted densities (the peak is narrow: a one-at-a-time search walks off
    * it) gives one more candidate; each climbs with steps of 2, 1, 0.5. */

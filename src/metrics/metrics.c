@@ -13,21 +13,26 @@
 #define RAD 5
 
 /* Separable Gaussian filter of one plane over the valid region: out is
- * (w - 10) x (h - 10). tmp holds w x (h - 10). */
+ * (w - 10) x (h - 10). tmp holds w x (h - 10). Each value sums its taps k ascending from
+ * 0; a row of values is summed at once, a tap at a time (independent sums, rows read
+ * whole). */
 static void blur_valid(const double *in, int w, int h, const double *g, double *tmp, double *out) {
   int oh = h - 2 * RAD, ow = w - 2 * RAD;
-  for (int y = 0; y < oh; y++)
-    for (int x = 0; x < w; x++) {
-      double s = 0;
-      for (int k = 0; k < WIN; k++) s += g[k] * in[(size_t)(y + k) * w + x];
-      tmp[(size_t)y * w + x] = s;
+  for (int y = 0; y < oh; y++) {
+    double *t = tmp + (size_t)y * w;
+    for (int x = 0; x < w; x++) t[x] = 0;
+    for (int k = 0; k < WIN; k++) {
+      const double *src = in + (size_t)(y + k) * w;
+      for (int x = 0; x < w; x++) t[x] += g[k] * src[x];
     }
-  for (int y = 0; y < oh; y++)
-    for (int x = 0; x < ow; x++) {
-      double s = 0;
-      for (int k = 0; k < WIN; k++) s += g[k] * tmp[(size_t)y * w + x + k];
-      out[(size_t)y * ow + x] = s;
-    }
+  }
+  for (int y = 0; y < oh; y++) {
+    const double *t = tmp + (size_t)y * w;
+    double *o = out + (size_t)y * ow;
+    for (int x = 0; x < ow; x++) o[x] = 0;
+    for (int k = 0; k < WIN; k++)
+      for (int x = 0; x < ow; x++) o[x] += g[k] * t[x + k];
+  }
 }
 
 static double ssim_plane(const double *a, const double *b, int w, int h, double *buf) {
