@@ -1,6 +1,6 @@
 /* Recovery study of the photo-pair capture on synthetic targets with known parameters.
  *   recover_pair [--per-family N] [--first I] [--family NAME] [--seed S] [--iters N]
- *                [--threads N] [--model M] [--pair-model M|none]
+ *                [--threads N] [--model M] [--pair-model M|none] [--save DIR]
  * Targets: for each family (plain, basket, twill, satin; --family: that one) draws I ..
  * I+N-1 (default 0 .. 1). Draw i of a family takes its built-in 3 i mod n (n built-ins in
  * wv_weave_builtin_name order), a prior draw of it (wv_params_sample_prior, transmission
@@ -15,7 +15,8 @@
  * colour error of a yarn type is |fit - truth| / |truth| over its RGB vector; the larger of
  * the two types is reported), and for each photo the SSIM (per RGB channel) of the re-render
  * against the target over the ceiling, the truth rendered with the fit's noise seed. Prints
- * a line per target, then one JSON object on the last line: per target, per family, overall. */
+ * a line per target, then one JSON object on the last line: per target, per family, overall.
+ * --save DIR (an existing directory) writes each pair and its re-renders as PNGs. */
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -29,6 +30,7 @@
 #include "woven/estimate.h"
 #include "woven/fit.h"
 #include "woven/imgops.h"
+#include "woven/io.h"
 #include "woven/metrics.h"
 #include "woven/pattern.h"
 #include "woven/render.h"
@@ -78,7 +80,7 @@ static double ssim_of(const wv_image *a, const wv_image *b) {
 int main(int argc, char **argv) {
   int per = 2, first = 0, threads = 0, iters = -1;
   uint64_t seed = 1;
-  const char *family = NULL, *model = NULL, *pair_model = NULL;
+  const char *family = NULL, *model = NULL, *pair_model = NULL, *save = NULL;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--per-family") && i + 1 < argc) per = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--first") && i + 1 < argc) first = atoi(argv[++i]);
@@ -88,9 +90,10 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--model") && i + 1 < argc) model = argv[++i];
     else if (!strcmp(argv[i], "--pair-model") && i + 1 < argc) pair_model = argv[++i];
+    else if (!strcmp(argv[i], "--save") && i + 1 < argc) save = argv[++i];
     else {
       fprintf(stderr, "usage: recover_pair [--per-family N] [--first I] [--family NAME] [--seed S] [--iters N]\n"
-                      "                    [--threads N] [--model M] [--pair-model M|none]\n");
+                      "                    [--threads N] [--model M] [--pair-model M|none] [--save DIR]\n");
       return 2;
     }
   }
@@ -175,6 +178,15 @@ int main(int argc, char **argv) {
       ceil_p.seed = fs.params.seed != truth.seed ? fs.params.seed : truth.seed + 1;
       render(&s, &ceil_p, threads, 0, &ceil_r);
       render(&st, &ceil_p, threads, 0, &ceil_t);
+      if (save) { /* the pair and its re-renders, for a look */
+        const wv_image *im[4] = {&photo, &photo_t, &rr, &rt};
+        static const char *const tag[4] = {"R", "T", "fit_R", "fit_T"};
+        for (int k = 0; k < 4; k++) {
+          char path[4096];
+          snprintf(path, sizeof path, "%s/%s_%d_%s.png", save, FAMILIES[f], i, tag[k]);
+          if (wv_image_write_png(path, im[k], 8, &err)) die(&err);
+        }
+      }
       double sr = ssim_of(&photo, &rr), st_ = ssim_of(&photo_t, &rt);
       double cr = ssim_of(&photo, &ceil_r), ct = ssim_of(&photo_t, &ceil_t);
       double oa_t = open_area(&truth), oa_f = open_area(&fs.params);
