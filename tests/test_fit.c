@@ -537,6 +537,19 @@ static void test_noise_sweep(void **state) {
 }
 
 
+/* The pair scenes of the pair tests: 64 x 64 centre windows of flat45 and flat45-back at 4 spp. */
+static void pair_scenes(wv_scene *s, wv_scene *sb) {
+  tu_centre_window(s, "flat45", 64, 64, 4);
+  tu_centre_window(sb, "flat45-back", 64, 64, 4);
+}
+
+/* tp rendered in both scenes, as a photo pair. */
+static void pair_photos(const wv_scene *s, const wv_scene *sb, const wv_params *tp, wv_image *photo, wv_image *photo_t) {
+  wv_render_opts ro = {0};
+  assert_int_equal(wv_render(s, tp, &ro, photo, NULL, NULL), WV_OK);
+  assert_int_equal(wv_render(sb, tp, &ro, photo_t, NULL, NULL), WV_OK);
+}
+
 /* A photo pair: the target rendered in flat45 and flat45-back. Fitted to both, the transmission
  * colours move from the start (the prior, half of k_d) toward the target's; fitted to the
  * front-lit photo alone they stay exactly at the start. */
@@ -546,16 +559,13 @@ static void test_fit_pair(void **state) {
   wv_params tp, start;
   wv_image photo, photo_t;
   wv_descriptor *d;
-  tu_centre_window(&s, "flat45", 64, 64, 4);
-  tu_centre_window(&sb, "flat45-back", 64, 64, 4);
+  pair_scenes(&s, &sb);
   target(&tp);
   for (int y = 0; y < 2; y++)
     for (int c = 0; c < 3; c++) tp.transmission[y][c] = 0.15 * tp.diffuse[y][c];
   start = tp;
   wv_params_transmission_default(&start); /* the prior's k_t, the only difference */
-  wv_render_opts ro = {0};
-  assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
-  assert_int_equal(wv_render(&sb, &tp, &ro, &photo_t, NULL, NULL), WV_OK);
+  pair_photos(&s, &sb, &tp, &photo, &photo_t);
   assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
   wv_fit_opts o;
   opts(&o, 12);
@@ -592,15 +602,12 @@ static void test_width_sweep(void **state) {
   wv_params tp, start;
   wv_image photo, photo_t;
   wv_descriptor *d;
-  tu_centre_window(&s, "flat45", 64, 64, 4);
-  tu_centre_window(&sb, "flat45-back", 64, 64, 4);
+  pair_scenes(&s, &sb);
   target(&tp);
   tp.yarn_width = 0.75;
   start = tp;
   start.yarn_width = 1.0;
-  wv_render_opts ro = {0};
-  assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
-  assert_int_equal(wv_render(&sb, &tp, &ro, &photo_t, NULL, NULL), WV_OK);
+  pair_photos(&s, &sb, &tp, &photo, &photo_t);
   assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
   wv_fit_opts o;
   opts(&o, 1);
@@ -630,13 +637,11 @@ static void test_width_sweep(void **state) {
 static void test_pair_start(void **state) {
   (void)state;
   wv_scene s, sb;
-  tu_centre_window(&s, "flat45", 64, 64, 4);
-  tu_centre_window(&sb, "flat45-back", 64, 64, 4);
+  pair_scenes(&s, &sb);
   wv_fit_opts o;
   opts(&o, 1);
   wv_descriptor *d;
   assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
-  wv_render_opts ro = {0};
   for (int run = 0; run < 2; run++) {
     wv_params tp, prior;
     target(&tp);
@@ -648,8 +653,7 @@ static void test_pair_start(void **state) {
     else /* the truth at the prior: a proposal far off is not */
       tp = prior;
     wv_image photo, photo_t;
-    assert_int_equal(wv_render(&s, &tp, &ro, &photo, NULL, NULL), WV_OK);
-    assert_int_equal(wv_render(&sb, &tp, &ro, &photo_t, NULL, NULL), WV_OK);
+    pair_photos(&s, &sb, &tp, &photo, &photo_t);
     wv_estimate e;
     memset(&e, 0, sizeof e);
     e.scene = s, e.photo = photo, e.desc = d, e.params = tp;

@@ -462,7 +462,8 @@ static wv_status width_sweep(fit_ctx *c, fit_ctx *ct, wv_fit_state *st, wv_error
   double grid[6] = {1.0, 0.9, 0.8, 0.7, 0.6, 0.5};
   for (int k = -1; k < 6 + 6; k++) {
     double w = k < 0 ? st->params.yarn_width : k < 6 ? grid[k] : best_w + (k % 2 ? 1 : -1) * 0.1 / (1 << ((k - 6) / 2 + 1));
-    if (w < lo || w > hi) continue;
+    /* the width as it is was the first tried: its loss would only tie */
+    if (w < lo || w > hi || (k >= 0 && w == st->params.yarn_width)) continue;
     wv_params trial = st->params;
     trial.yarn_width = w;
     wv_fit_record rec = {0};
