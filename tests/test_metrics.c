@@ -5,9 +5,13 @@
  * use_sample_covariance=False, data_range=1.0) on the same synthetic images,
  * on luminance (Rec. 709 weights) and per channel (channel_axis=2). */
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 #include "testutil.h"
+#include "util/hash.h"
+#include "util/select.h"
 #include "woven/metrics.h"
 
 static void make(wv_image *a, wv_image *b, wv_image *d) {
@@ -70,7 +74,60 @@ static void test_ssim_exact(void **state) {
   wv_image_free(&a), wv_image_free(&b), wv_image_free(&d);
 }
 
+/* Rows of the SSIM's filter go to threads: one thread and two give the same bits. */
+static void test_ssim_threads(void **state) {
+  (void)state;
+  wv_image a, b;
+  int W = 97, H = 83;
+  wv_image_alloc(&a, W, H, 3, NULL), wv_image_alloc(&b, W, H, 3, NULL);
+  for (size_t i = 0; i < (size_t)W * H * 3; i++) {
+    a.data[i] = (float)(wv_mix64(i) >> 40) / (float)(1 << 24);
+    b.data[i] = 0.5f * a.data[i] + 0.5f * (float)(wv_mix64(i + 7777) >> 40) / (float)(1 << 24);
+  }
+  double s1, s2;
+  int nt = omp_get_max_threads();
+  omp_set_num_threads(1);
+  assert_int_equal(wv_ssim(&a, &b, WV_SSIM_RGB, &s1, NULL), WV_OK);
+  omp_set_num_threads(2);
+  assert_int_equal(wv_ssim(&a, &b, WV_SSIM_RGB, &s2, NULL), WV_OK);
+  omp_set_num_threads(nt);
+  assert_true(s1 == s2);
+  assert_true(s1 > 0.1 && s1 < 0.99);
+  wv_image_free(&a), wv_image_free(&b);
+}
+
+static int cmp_f(const void *a, const void *b) {
+  float x = *(const float *)a, y = *(const float *)b;
+  return (x > y) - (x < y);
+}
+
+/* The k-th smallest is what a sorted copy holds at k: on random values, on many equal
+ * values, on sorted and reversed input, at every k of small arrays. */
+static void test_select_matches_sort(void **state) {
+  (void)state;
+  enum { N = 301 };
+  float a[N], b[N], sorted[N];
+  for (int kind = 0; kind < 4; kind++)
+    for (int n = 1; n <= N; n += (n < 20 ? 1 : 37)) {
+      for (int i = 0; i < n; i++) {
+        uint64_t h = wv_mix64((uint64_t)(kind * 1000 + n) * 4096 + (uint64_t)i);
+        a[i] = kind == 0 ? (float)(h >> 40) : kind == 1 ? (float)(h % 3) : kind == 2 ? (float)i : (float)(n - i);
+      }
+      for (int i = 0; i < n; i++) sorted[i] = a[i];
+      qsort(sorted, (size_t)n, sizeof(float), cmp_f);
+      for (int k = 0; k < n; k++) {
+        for (int i = 0; i < n; i++) b[i] = a[i];
+        float v = wv_select_float(b, (size_t)n, (size_t)k);
+        assert_true(v == sorted[k]);
+        assert_true(b[k] == v);
+        for (int i = 0; i < k; i++) assert_true(b[i] <= v);
+        for (int i = k + 1; i < n; i++) assert_true(b[i] >= v);
+      }
+    }
+}
+
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_ssim_reference), cmocka_unit_test(test_ssim_exact)};
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_ssim_reference), cmocka_unit_test(test_ssim_exact),
+                                     cmocka_unit_test(test_ssim_threads), cmocka_unit_test(test_select_matches_sort)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "util/select.h"
 #include "woven/metrics.h"
 #include "woven/render.h"
 
@@ -28,11 +29,6 @@
 static const double PI = 3.14159265358979323846;
 
 /* ---- prominence and peaks ---- */
-
-static int cmp_float(const void *a, const void *b) {
-  float x = *(const float *)a, y = *(const float *)b;
-  return (x > y) - (x < y);
-}
 
 /* z: the whitened weave spectrum (wv_spectrum_whiten) clipped to [0, Z_CAP]. */
 static wv_status prominence(const float *spec, int n, float *z, wv_error *err) {
@@ -775,8 +771,8 @@ wv_status wv_spectrum_picture(const float *const *spectra, int k, int n, int zoo
   for (int s = 0; s < k; s++) {
     /* each spectrum from its median (black) to its 99.9th percentile (white) */
     memcpy(tmp, spectra[s], sizeof(float) * (size_t)n * n);
-    qsort(tmp, (size_t)n * n, sizeof(float), cmp_float);
-    float lo = tmp[(size_t)n * n / 2], hi = tmp[(size_t)((double)n * n * 0.999)];
+    float lo = wv_select_float(tmp, (size_t)n * n, (size_t)n * n / 2);
+    float hi = wv_select_float(tmp, (size_t)n * n, (size_t)((double)n * n * 0.999));
     float sc = hi > lo ? 1.0f / (hi - lo) : 0.0f;
     for (int y = 0; y < side; y++)
       for (int x = 0; x < side; x++) {

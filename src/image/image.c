@@ -3,6 +3,7 @@
 #include "woven/image.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stddef.h>
 #include <stdlib.h>
 
@@ -49,12 +50,15 @@ double wv_image_mean(const wv_image *a) {
  * taps k ascending whatever the path, but a row of values is summed at once in acc (w
  * doubles), a tap at a time: the sums are independent (no chain of dependent adds) and the
  * rows are read whole. Along x the values farther than r from both edges go that way and
- * skip the clamp; the others keep the plain loop. */
+ * skip the clamp; the others keep the plain loop. Rows go to threads, each with its own acc
+ * in accs (w doubles a thread). */
 static void blur_pass(const float *in, float *out, int w, int h, int stride, int vertical, const double *g, int r,
-                      double *acc) {
+                      double *accs) {
   if (!vertical) {
     int lo = r < w ? r : w, hi = w - r > lo ? w - r : lo; /* [lo, hi): no clamped tap */
+#pragma omp parallel for schedule(static)
     for (int y = 0; y < h; y++) {
+      double *acc = accs + (size_t)omp_get_thread_num() * w;
       const float *row = in + (size_t)y * w * stride;
       float *orow = out + (size_t)y * w * stride;
       for (int x = lo; x < hi; x++) acc[x] = 0;
@@ -78,7 +82,9 @@ static void blur_pass(const float *in, float *out, int w, int h, int stride, int
     }
     return;
   }
+#pragma omp parallel for schedule(static)
   for (int y = 0; y < h; y++) {
+    double *acc = accs + (size_t)omp_get_thread_num() * w;
     for (int x = 0; x < w; x++) acc[x] = 0;
     for (int k = -r; k <= r; k++) {
       int yy = y + k < 0 ? 0 : y + k >= h ? h - 1 : y + k;
@@ -103,9 +109,9 @@ void wv_gaussian_taps(double sigma, double *g) {
 wv_status wv_blur_plane(const float *in, float *out, int w, int h, int stride, double sigma, wv_error *err) {
   if (!(sigma >= 0.0 && sigma <= 1000.0))
     return wv_fail(err, WV_ERR_INVALID, "blur sigma %g is outside 0..1000 pixels", sigma);
-  int r = wv_gaussian_radius(sigma);
+  int r = wv_gaussian_radius(sigma), nt = omp_get_max_threads();
   float *tmp = malloc(sizeof(float) * (size_t)w * h * stride);
-  double *g = malloc(sizeof(double) * ((size_t)(2 * r + 1) + (size_t)w));
+  double *g = malloc(sizeof(double) * ((size_t)(2 * r + 1) + (size_t)w * nt)); /* taps, a row per thread */
   if (!tmp || !g) {
     free(tmp), free(g);
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for a blur of %d x %d", w, h);

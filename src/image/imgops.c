@@ -37,6 +37,8 @@ wv_status wv_image_downsample(const wv_image *in, int w, int h, wv_image *out, w
   if (!in || !in->data) return wv_fail(err, WV_ERR_INVALID, "downsample: no input image");
   if ((st = wv_image_alloc(out, w, h, in->c, err))) return st;
   double fx = (double)in->w / w, fy = (double)in->h / h, norm = 1.0 / (fx * fy);
+  /* each output row is its own: the same values on any number of threads */
+#pragma omp parallel for schedule(static)
   for (int Y = 0; Y < h; Y++) {
     int y0, y1;
     span(Y, fy, in->h, &y0, &y1);
@@ -67,7 +69,9 @@ wv_status wv_image_downsample_backward(int in_w, int in_h, const wv_image *dout,
   int w = dout->w, h = dout->h;
   double fx = (double)in_w / w, fy = (double)in_h / h, norm = 1.0 / (fx * fy);
   /* Gather form: each input pixel sums the output cells that cover it, so
-   * every din value is written once (no accumulation order to worry about). */
+   * every din value is written once (no accumulation order to worry about), and rows
+   * can go to threads. */
+#pragma omp parallel for schedule(static)
   for (int y = 0; y < in_h; y++) {
     int Y0, Y1;
     span(y, 1.0 / fy, h, &Y0, &Y1);

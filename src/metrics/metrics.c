@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "util/colour.h"
+#include "util/select.h"
 
 #define WIN 11
 #define RAD 5
@@ -15,9 +16,10 @@
 /* Separable Gaussian filter of one plane over the valid region: out is
  * (w - 10) x (h - 10). tmp holds w x (h - 10). Each value sums its taps k ascending from
  * 0; a row of values is summed at once, a tap at a time (independent sums, rows read
- * whole). */
+ * whole). Rows go to threads: the values do not depend on their number. */
 static void blur_valid(const double *in, int w, int h, const double *g, double *tmp, double *out) {
   int oh = h - 2 * RAD, ow = w - 2 * RAD;
+#pragma omp parallel for schedule(static)
   for (int y = 0; y < oh; y++) {
     double *t = tmp + (size_t)y * w;
     for (int x = 0; x < w; x++) t[x] = 0;
@@ -26,6 +28,7 @@ static void blur_valid(const double *in, int w, int h, const double *g, double *
       for (int x = 0; x < w; x++) t[x] += g[k] * src[x];
     }
   }
+#pragma omp parallel for schedule(static)
   for (int y = 0; y < oh; y++) {
     const double *t = tmp + (size_t)y * w;
     double *o = out + (size_t)y * ow;
@@ -179,11 +182,6 @@ wv_status wv_weave_spectrum(const wv_image *img, int x0, int y0, int n, float *o
   return st;
 }
 
-static int cmp_float(const void *a, const void *b) {
-  float x = *(const float *)a, y = *(const float *)b;
-  return (x > y) - (x < y);
-}
-
 /* The logarithm of a noise spectrum's power has the same spread at every level, so z means
  * the same where a blur left little power; log(1 + P) would not (it is P itself where P is
  * small, and its fluctuations would look like peaks). */
@@ -199,8 +197,7 @@ wv_status wv_spectrum_whiten(const float *spec, int n, double floor_z, double ca
   }
   size_t nn = (size_t)n * n;
   for (size_t i = 0; i < nn; i++) vals[i] = spec[i];
-  qsort(vals, nn, sizeof(float), cmp_float);
-  double dead = 1e-6 * expm1((double)vals[nn / 2]);
+  double dead = 1e-6 * expm1((double)wv_select_float(vals, nn, nn / 2));
   for (size_t i = 0; i < nn; i++) lg[i] = (float)log(expm1((double)spec[i]) + 1e-30);
   spec = lg;
 #define RING(u, v) ((int)(sqrt((double)(u) * (u) + (double)(v) * (v)) + 0.5))
@@ -219,12 +216,10 @@ wv_status wv_spectrum_whiten(const float *spec, int n, double floor_z, double ca
     int c = count[r];
     med[r] = mad[r] = 0;
     if (c < 1) continue;
-    qsort(a, (size_t)c, sizeof(float), cmp_float);
-    med[r] = a[c / 2];
+    med[r] = wv_select_float(a, (size_t)c, (size_t)c / 2);
     if (!(exp((double)med[r]) > dead)) continue; /* no power here: no peaks either (mad stays 0) */
     for (int i = 0; i < c; i++) a[i] = fabsf(a[i] - med[r]);
-    qsort(a, (size_t)c, sizeof(float), cmp_float);
-    mad[r] = 1.4826f * a[c / 2];
+    mad[r] = 1.4826f * wv_select_float(a, (size_t)c, (size_t)c / 2);
   }
   for (int v = -n / 2; v < n / 2; v++)
     for (int u = -n / 2; u < n / 2; u++) {
