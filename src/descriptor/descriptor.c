@@ -107,16 +107,15 @@ static wv_status prepare(wv_descriptor *d, const wv_image *img, int need_grad, w
   if (need_grad && !d->dx && !(d->dx = malloc(sizeof(float) * 3 * n)))
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for a %d x %d image", img->w, img->h);
   int bad = 0;
-  for (int c = 0; c < 3; c++) {
-    float m = k_mean[c], s = 1.0f / k_std[c];
-    float *dst = d->x + (size_t)c * n;
-    const float *src = img->data + c;
-    for (size_t i = 0; i < n; i++) {
-      float v = src[3 * i];
+  float *x = d->x;
+  const float *src = img->data;
+#pragma omp parallel for schedule(static) reduction(| : bad)
+  for (size_t i = 0; i < n; i++)
+    for (int c = 0; c < 3; c++) {
+      float v = src[3 * i + c];
       bad |= !isfinite(v);
-      dst[i] = (v - m) * s;
+      x[(size_t)c * n + i] = (v - k_mean[c]) * (1.0f / k_std[c]);
     }
-  }
   if (bad) return wv_fail(err, WV_ERR_INVALID, "image contains NaN or infinite values");
   return WV_OK;
 }
