@@ -231,6 +231,8 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
         cli_real(st->reg_ssim_before, 4), cli_real(st->reg_ssim_after, 4));
     if (o_json) {
       json_object_set_new(o_json, "pattern_choice", pc ? cli_json_text(wv_pattern_choice_to_json(pc)) : json_null());
+      json_object_set_new(o_json, "density_alignment_wsc",
+                          json_pack("[o,o]", cli_real(st->align_wsc_before, 4), cli_real(st->align_wsc_after, 4)));
       json_object_set_new(o_json, "camera_blur_px", cli_real(r->fit_scene.psf_sigma, 3));
       json_object_set_new(o_json, "camera_blur_measured_px", cli_real(st->psf_start, 3));
       json_object_set_new(json_object_get(o_json, "time_s"), "distortion", cli_real(st->timing.distortion, 3));

@@ -118,6 +118,8 @@ typedef struct {
   int colour_split; /* the start's colours: 0 as given, 1..4 split (darker on the warp: 1, 3; weft: 2, 4; 3, 4 twice
                      * as far), 5 both the start's mean */
   double align_ssim_before, align_ssim_after; /* its criterion at the start and end */
+  double align_wsc_before, align_wsc_after; /* the whole image's WSC without and with the densities it found
+                                             * (kept only if it does not fall; -2: not measured) */
   int registered; /* the registration after the alignment is done */
   double offset_mm[2]; /* fabric offset found by the registration (added to the scene's) */
   int psf_done;        /* the camera blur is settled (measured, or given): */

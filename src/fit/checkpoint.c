@@ -251,6 +251,7 @@ wv_status wv_fit_checkpoint_read(const char *path, wv_fit_state *st, wv_fit_opts
                                  size_t name_cap, wv_error *err) {
   memset(st, 0, sizeof *st);
   json_t *root;
+  st->align_wsc_before = st->align_wsc_after = -2; /* not measured */
   wv_status rc = wv_json_load_file(path, &root, err);
   if (rc) return rc;
   rc = read_checkpoint(root, path, st, o, descriptor_name, name_cap, err);

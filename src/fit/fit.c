@@ -254,6 +254,7 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
    * a full round changes nothing (each density alone already moves the SSIM). */
   wv_params cur = st->params;
   for (int y = 0; y < 2; y++) cur.density[y] = floor(cur.density[y] + 0.5);
+  const double d0[2] = {cur.density[0], cur.density[1]}; /* where the search starts */
   double best = -2, before = -2;
   wv_image img;
   if (!(rc = wv_render(&win, &cur, &ro, &img, NULL, err))) {
@@ -282,6 +283,29 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
   wv_image_free(&ref);
   wv_footprints_free(fp);
   if (rc) return rc;
+  /* The window's SSIM rewards a weave in phase with the photo's, and a cloth too fine to
+   * show any weave over one out of phase: a search over the whole range can land on such
+   * a density (an alias several times the photo's). The weave's spectrum does not depend
+   * on the phase, so new densities are kept only if the whole image's weave-spectrum
+   * correlation with the photo does not fall. */
+  st->align_wsc_before = st->align_wsc_after = -2;
+  if (cur.density[0] != d0[0] || cur.density[1] != d0[1]) {
+    wv_scene whole = *s;
+    whole.spp = o->iter_spp;
+    wv_render_opts rw = {.spp = whole.spp, .threads = o->threads};
+    wv_params start = cur;
+    start.density[0] = d0[0], start.density[1] = d0[1];
+    const wv_params *cand[2] = {&start, &cur};
+    double wsc[2] = {-2, -2};
+    for (int k = 0; k < 2 && !rc; k++) {
+      if ((rc = wv_render(&whole, cand[k], &rw, &img, NULL, err))) break;
+      if (wv_wsc(photo, &img, &wsc[k], NULL)) wsc[k] = -2; /* too small to measure: no check */
+      wv_image_free(&img);
+    }
+    if (rc) return rc;
+    st->align_wsc_before = wsc[0], st->align_wsc_after = wsc[1];
+    if (wsc[1] < wsc[0]) cur.density[0] = d0[0], cur.density[1] = d0[1], best = before;
+  }
   st->params.density[0] = cur.density[0], st->params.density[1] = cur.density[1];
   st->align_ssim_before = before, st->align_ssim_after = best;
   st->aligned = 1;

@@ -14,6 +14,7 @@ wv_status wv_fit_state_init(wv_fit_state *st, const wv_params *start, const wv_f
   wv_status s = wv_params_validate(start, err);
   if (s) return s;
   st->start = st->params = *start;
+  st->align_wsc_before = st->align_wsc_after = -2; /* not measured */
   st->rng = wv_mix64(o->seed ^ 0x666974ULL);
   st->log_cap = o->iters > 0 ? o->iters : 1;
   st->log = calloc((size_t)st->log_cap, sizeof *st->log);
