@@ -107,6 +107,8 @@ const cli_opt CLI_MODEL_OPTS[] = {
 
 const cli_opt CLI_FIT_OPTS[] = {
     CLI_O_CUSTOM("--iters", capture_args, fit.iters, 0, WV_FIT_MAX_ITERS, parse_iters, "N", "iterations (default 200)"),
+    CLI_O_REAL("--lr", capture_args, fit.lr, 1e-6, 1, 0, "X",
+               "Adam's step size on the parameters scaled to [0, 1] (default 0.01)"),
     CLI_O_INT("--iter-spp", NULL, capture_args, fit.iter_spp, 1, WV_SCENE_MAX_SPP, "N",
               "samples per pixel while iterating (default 4)"),
     CLI_O_INT("--iter-scale", NULL, capture_args, fit.iter_scale, 1, WV_FIT_MAX_ITER_SCALE, "N",
@@ -162,7 +164,7 @@ static const cli_opt FIT_ONLY_OPTS[] = {
 static const cli_cmd CMD = {
     "fit",
     "usage: woven fit PHOTO --scene S.json|cylinder|flat45 [--init P.json | --pattern NAME] -o DIR\n"
-    "                 [--iters N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
+    "                 [--iters N] [--lr X] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                 [--crop x,y,w,h] [--iter-spp N] [--iter-scale N] [--[no-]schedule]\n"
     "                 [--patience N] [--no-noise-sweep] [--align-radius N]\n"
     "                 [--register-radius N] [--distort-degree N] [--w-struct X] [--w-colour X] [--colour-split]\n"

@@ -26,7 +26,7 @@ static const cli_cmd PREDICT_CMD = {
 static const cli_cmd CAPTURE_CMD = {
     "capture",
     "usage: woven capture PHOTO --scene S.json|cylinder|flat45 -o DIR [--pattern NAME]\n"
-    "                     [--model M] [--iters N] [--crop x,y,w,h] [--iter-spp N] [--iter-scale N]\n"
+    "                     [--model M] [--iters N] [--lr X] [--crop x,y,w,h] [--iter-spp N] [--iter-scale N]\n"
     "                     [--[no-]schedule] [--patience N]\n"
     "                     [--align-radius N] [--register-radius N] [--distort-degree N] [--seed N] [--threads N] [--descriptor default|vgg19]\n"
     "                     [--drape S.json|none] [--transmission T.png [--transmission-scene S] [--pair-model M]]\n"
