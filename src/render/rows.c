@@ -11,6 +11,7 @@
  * computes what the scalar kernel computes for its sample, and every sample is
  * added to row s mod 8 of its pixel in sample order, so the image is the same
  * whatever the packing. */
+#include <stddef.h>
 #include <string.h>
 
 #include "render/render_internal.h"
@@ -188,7 +189,7 @@ WV_INLINE void render_chunk(const wv_camera_rig *rig, const wv_fabric *fab, chun
                             float (*rad)[3], wv_grad_pixel *gp, int grad) {
   int nx, ny;
   wv_pixel_grid(spp, &nx, &ny);
-  memset(C, 0, sizeof *C);
+  memset(C, 0, grad ? sizeof *C : offsetof(chunk, J)); /* the derivative sums only when made */
   for (int i = 0; i < n; i++) {
     wv_footprint fp;
     wv_footprint_prepare(rig, px0 + i, py, &fp);
