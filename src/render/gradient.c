@@ -47,24 +47,42 @@ static const int KT_ID[2] = {WV_P_KT_WARP_R, WV_P_KT_WEFT_R};
 static const int BETA_ID[2] = {WV_P_BETA_WARP, WV_P_BETA_WEFT};
 static const int ALPHA_ID[2] = {WV_P_ALPHA_WARP, WV_P_ALPHA_WEFT};
 
-/* Add a pixel's contribution given gr[c] = dL/dradiance_c. */
-static void accumulate(const wv_grad_model *gm, const double JJ[2][WV_J_COUNT], const double gr[3], double *g) {
+enum { NG = WV_P_COUNT + 1 }; /* the gradient, then the dot */
+
+/* A row's partial sums of the gradient and the dot, as named locals (they stay in
+ * registers over the row); written out into the gradient's slots by sums_out. */
+typedef struct {
+  double df[2][3], ks[2][3]; /* per type: the diffuse (k_d, or k_t with the light behind) and specular albedos */
+  double beta[2], alpha[2], umax, twist, blend, dot;
+} row_sums;
+
+static void sums_out(const wv_grad_model *gm, const row_sums *g, double out[NG]) {
   const int *DF_ID = gm->transmit ? KT_ID : KD_ID;
-  const double(*kdf)[3] = gm->transmit ? gm->kt : gm->kd; /* the diffuse sums' albedo */
+  memset(out, 0, NG * sizeof *out);
   for (int y = 0; y < 2; y++) {
-    const double *J = JJ[y];
+    for (int c = 0; c < 3; c++) out[DF_ID[y] + c] = g->df[y][c], out[KS_ID[y] + c] = g->ks[y][c];
+    out[BETA_ID[y]] = g->beta[y], out[ALPHA_ID[y]] = g->alpha[y];
+  }
+  out[WV_P_UMAX_DEG] = g->umax, out[WV_P_TWIST_DEG] = g->twist, out[WV_P_BLEND] = g->blend;
+  out[WV_P_COUNT] = g->dot;
+}
+
+/* Add a pixel's contribution given gr[c] = dL/dradiance_c; J: its sums / spp, per type. */
+WV_INLINE void accumulate(const wv_grad_model *gm, const double *J, const double gr[3], row_sums *g) {
+  const double(*kdf)[3] = gm->transmit ? gm->kt : gm->kd; /* the diffuse sums' albedo */
+  for (int y = 0; y < 2; y++, J += WV_J_COUNT) {
     double ws = 0, wd = 0; /* dL/dS and dL/dDF of this type */
     for (int c = 0; c < 3; c++) {
-      g[DF_ID[y] + c] += gr[c] * J[WV_J_DF];
-      g[KS_ID[y] + c] += gr[c] * J[WV_J_S];
+      g->df[y][c] += gr[c] * J[WV_J_DF];
+      g->ks[y][c] += gr[c] * J[WV_J_S];
       ws += gr[c] * gm->ks[y][c];
       wd += gr[c] * kdf[y][c];
     }
-    g[BETA_ID[y]] += ws * J[WV_J_S_BETA] + wd * J[WV_J_DF_BETA];
-    g[ALPHA_ID[y]] += ws * J[WV_J_S_ALPHA];
-    g[WV_P_UMAX_DEG] += ws * J[WV_J_S_UMAX] + wd * J[WV_J_DF_UMAX];
-    g[WV_P_TWIST_DEG] += ws * J[WV_J_S_PSI];
-    g[WV_P_BLEND] += wd * J[WV_J_DF_BLEND];
+    g->beta[y] += ws * J[WV_J_S_BETA] + wd * J[WV_J_DF_BETA];
+    g->alpha[y] += ws * J[WV_J_S_ALPHA];
+    g->umax += ws * J[WV_J_S_UMAX] + wd * J[WV_J_DF_UMAX];
+    g->twist += ws * J[WV_J_S_PSI];
+    g->blend += wd * J[WV_J_DF_BLEND];
   }
 }
 
@@ -132,27 +150,9 @@ static void rec_put(wv_grad_record *rec, size_t k, const wv_grad_pixel *pix, con
     }
 }
 
-/* v / spp; a product where that is the same number (spp a power of two), as it is
- * made for every sum of every pixel. */
-static double per_sample(double v, int spp) { return spp & (spp - 1) ? v / spp : v * (1.0 / spp); }
-
-/* Pixel k as the adjoint pass reads it (float mode: widened exactly, the sums / spp). */
-static void rec_get(const wv_grad_record *rec, size_t k, pixel_rec *pr) {
-  double *J = &pr->J[0][0];
-  for (int c = 0; c < 3; c++) pr->slope[c] = rec->slope[3 * k + c];
-  if (rec->dbl) {
-    for (int c = 0; c < 3; c++) pr->cap[c] = rec->capd[3 * k + c];
-    memcpy(J, rec->Jd + NJ * k, NJ * sizeof *J);
-    return;
-  }
-  for (int c = 0; c < 3; c++) pr->cap[c] = rec->capf[3 * k + c];
-  const float *Jf = rec->Jf + NJ * k;
-  int spp = rec->spp;
-  if (spp & (spp - 1))
-    for (int j = 0; j < NJ; j++) J[j] = per_sample(Jf[j], spp);
-  else /* per_sample's product, without its test for every value */
-    for (int j = 0; j < NJ; j++) J[j] = Jf[j] * (1.0 / spp);
-}
+/* v / spp; the product by inv = 1 / spp where that is the same number (spp a power of
+ * two), as it is made for every sum of every pixel (inv made once, outside the loops). */
+static double per_sample(double v, int spp, double inv) { return spp & (spp - 1) ? v / spp : v * inv; }
 
 /* Sensor response of one pixel and its slope; in float mode exactly
  * wv_scene_response's arithmetic, so the capture is wv_render's. */
@@ -170,26 +170,46 @@ static void respond(const wv_scene *s, int dbl, int px, int py, const double rad
 }
 
 /* The pixel's radiance and, with sums, its sums / spp. */
-static void keep(int spp, const wv_grad_pixel *pix, pixel_rec *rec, int sums) {
+static void keep(int spp, double inv, const wv_grad_pixel *pix, pixel_rec *rec, int sums) {
   for (int c = 0; c < 3; c++) rec->rad[c] = pix->rad[c];
   if (sums)
     for (int y = 0; y < 2; y++)
-      for (int j = 0; j < WV_J_COUNT; j++) rec->J[y][j] = per_sample(pix->J[y][j], spp);
+      for (int j = 0; j < WV_J_COUNT; j++) rec->J[y][j] = per_sample(pix->J[y][j], spp, inv);
 }
 
-/* Add a pixel's contribution (and its dot term, in g[WV_P_COUNT]); with gb != NULL (a
- * camera blur) gb holds dL/dradiance already, made by the blur's adjoint. */
-static void backward_pixel(const wv_grad_model *gm, const pixel_rec *rec, const float dc[3], const double *gb,
-                           double *g) {
+/* Add a pixel's contribution and its dot term; with gb != NULL (a camera blur) gb holds
+ * dL/dradiance already, made by the blur's adjoint. */
+WV_INLINE void backward_pixel(const wv_grad_model *gm, const double cap[3], const double slope[3], const double *J,
+                              const float dc[3], const double *gb, row_sums *g) {
   double gr[3];
   for (int c = 0; c < 3; c++) {
-    g[WV_P_COUNT] += (double)dc[c] * rec->cap[c];
-    gr[c] = gb ? gb[c] : (double)dc[c] * rec->slope[c];
+    g->dot += (double)dc[c] * cap[c];
+    gr[c] = gb ? gb[c] : (double)dc[c] * slope[c];
   }
-  accumulate(gm, (const double(*)[WV_J_COUNT])rec->J, gr, g);
+  accumulate(gm, J, gr, g);
 }
 
-enum { NG = WV_P_COUNT + 1 }; /* the gradient, then the dot */
+/* Row y of a record against its adjoint (gb: the row's dL/dradiance with a blur, else
+ * NULL): its partials into out[NG]. */
+static void backward_row(const wv_grad_record *rec, const wv_image *dcap, int y, const double *gb, double *out) {
+  row_sums g;
+  memset(&g, 0, sizeof g);
+  double inv = 1.0 / rec->spp;
+  for (int i = 0; i < rec->w; i++) {
+    size_t k = (size_t)y * rec->w + i;
+    double cap[3], J[NJ];
+    if (rec->dbl) {
+      for (int c = 0; c < 3; c++) cap[c] = rec->capd[3 * k + c];
+      memcpy(J, rec->Jd + NJ * k, sizeof J);
+    } else {
+      const float *Jf = rec->Jf + NJ * k;
+      for (int c = 0; c < 3; c++) cap[c] = rec->capf[3 * k + c];
+      for (int j = 0; j < NJ; j++) J[j] = per_sample(Jf[j], rec->spp, inv);
+    }
+    backward_pixel(&rec->gm, cap, rec->slope + 3 * k, J, wv_image_px(dcap, i, y), gb ? gb + 3 * i : NULL, &g);
+  }
+  sums_out(&rec->gm, &g, out);
+}
 
 /* The camera blur's passes over a record, row by row (wv_psf_run): the radiance or
  * slope .* dL/dcapture in, and out the response (into the record and the capture), the
@@ -244,12 +264,7 @@ static void load_adjoint(void *ctx, int y, double *row) {
 /* dL/dradiance = K^T (slope .* dL/dcapture) of a row: its pixels' contributions. */
 static void store_gradient(void *ctx, int y, const double *gb) {
   const blur_pass *bp = ctx;
-  double *rr = bp->rows + (size_t)y * NG;
-  for (int i = 0; i < bp->rec->w; i++) {
-    pixel_rec pr;
-    rec_get(bp->rec, (size_t)y * bp->rec->w + i, &pr);
-    backward_pixel(&bp->rec->gm, &pr, wv_image_px(bp->dcap, i, y), gb + 3 * i, rr);
-  }
+  backward_row(bp->rec, bp->dcap, y, gb, bp->rows + (size_t)y * NG);
 }
 
 /* dL/dsigma of a row: sum dL/dcapture .* slope .* (dK/dsigma radiance). */
@@ -346,19 +361,23 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
       opt->progress(opt->progress_user, (double)d / H);
     }
     wv_grad_pixel pix[8];
+    double inv = 1.0 / spp;
+    row_sums g;
+    memset(&g, 0, sizeof g);
     for (int i = 0; i < W; i++) {
       if (i % 8 == 0 && !dbl) wv_render_row(&rig, &fab, y0 + r, x0 + i, W - i < 8 ? W - i : 8, spp, NULL, pix);
       if (dbl) wv_grad_pixel_d(&rig, &fab, &Pd, x0 + i, y0 + r, spp, &pix[i % 8]);
       pixel_rec pr;
       float cap[3];
-      keep(spp, &pix[i % 8], &pr, rows || dbl); /* a float record keeps the sums as made */
+      keep(spp, inv, &pix[i % 8], &pr, rows || dbl); /* a float record keeps the sums as made */
       /* with a camera blur the response comes after the loop, on the blurred radiance */
       if (!blur) respond(s, dbl, x0 + i, y0 + r, pr.rad, cap, &pr);
       if (rec) rec_put(rec, (size_t)r * W + i, &pix[i % 8], &pr, !blur);
       if (blur) continue;
       if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);
-      if (rows) backward_pixel(&gm, &pr, wv_image_px(dcap, i, r), NULL, rows + (size_t)r * NG);
+      if (rows) backward_pixel(&gm, pr.cap, pr.slope, &pr.J[0][0], wv_image_px(dcap, i, r), NULL, &g);
     }
+    if (rows) sums_out(&gm, &g, rows + (size_t)r * NG);
 #pragma omp atomic update
     rows_done++;
   }
@@ -436,12 +455,7 @@ wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcap, double
     }
   } else {
 #pragma omp parallel for schedule(static) num_threads(rec->threads)
-    for (int r = 0; r < rec->h; r++)
-      for (int i = 0; i < rec->w; i++) {
-        pixel_rec pr;
-        rec_get(rec, (size_t)r * rec->w + i, &pr);
-        backward_pixel(&rec->gm, &pr, wv_image_px(dcap, i, r), NULL, rows + (size_t)r * NG);
-      }
+    for (int r = 0; r < rec->h; r++) backward_row(rec, dcap, r, NULL, rows + (size_t)r * NG);
   }
   double total[NG];
   memset(total, 0, sizeof total);
