@@ -88,9 +88,11 @@ static void psf_line(const double *wk, int r, int n, int c, const double *in, do
   int lo = r < n ? r : n, hi = n - r > lo ? n - r : lo; /* [lo, hi): the inner values */
   double wt[2 * PSF_R_MAX + 1];
   const double *src[2 * PSF_R_MAX + 1];
-  for (int k = -r; k <= r; k++) /* K: in[q + k], k ascending; K^T: in[q - k], its sources ascending */
-    wt[k + r] = wk[k < 0 ? -k : k], src[k + r] = in + (ptrdiff_t)(lo + k) * c;
-  if (hi > lo) psf_terms(2 * r + 1, wt, src, (size_t)(hi - lo) * c, out + (size_t)lo * c);
+  if (hi > lo) {
+    for (int k = -r; k <= r; k++) /* K: in[q + k], k ascending; K^T: in[q - k], its sources ascending */
+      wt[k + r] = wk[k < 0 ? -k : k], src[k + r] = in + (ptrdiff_t)(lo + k) * c;
+    psf_terms(2 * r + 1, wt, src, (size_t)(hi - lo) * c, out + (size_t)lo * c);
+  }
   for (int q = 0; q < n; q++) {
     if (q == lo && hi > lo) q = hi; /* the inner values are done */
     if (q >= n) break;
