@@ -11,7 +11,8 @@
  * kept instead and wv_record_grad does the same accumulation afterwards. A camera blur
  * (the scene's psf_sigma) couples pixels: the response then waits for every pixel's
  * radiance, the records are always kept, and the adjoint passes through the blur's
- * transpose (wv_psf_apply). */
+ * transpose; each blur pass runs a row at a time over the record (wv_psf_run,
+ * sensor/sensor.h), the work on each row done as it comes out. */
 #include "woven/grad.h"
 
 #include <math.h>
