@@ -3,10 +3,12 @@
  * the capture against wv_render, exact zeros, range edges, determinism; with the
  * light in front (cylinder, flat45) and behind the cloth (flat45-back). */
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "sensor/sensor.h"
 #include "testutil.h"
 #include "woven/grad.h"
 #include "woven/imgops.h"
@@ -541,6 +543,173 @@ static void test_camera_blur_sigma(void **state) {
   wv_record_free(rec), wv_image_free(&cap), wv_image_free(&dc);
 }
 
+/* A record rendered into again (wv_render_record_into) gives what a fresh one gives, bit
+ * for bit, whether its memory grows or is reused, in float and double, with and without a
+ * camera blur; after a failed render into it, it refuses to differentiate until the next
+ * render succeeds. */
+static void test_record_reuse(void **state) {
+  (void)state;
+  tu_rng r = {41};
+  wv_scene s = small_scene("flat45", 48, 40, 4);
+  wv_params p;
+  random_params("twill", &r, &p);
+  wv_error err;
+  wv_image dc;
+  assert_int_equal(wv_image_alloc(&dc, 32, 24, 3, &err), WV_OK);
+  fill_random(&dc, &r);
+  for (int k = 0; k < 4; k++) {
+    int dbl = k & 1;
+    s.psf_sigma = k & 2 ? 0.8 : 0;
+    wv_grad_opts big = {.x0 = 8, .y0 = 10, .width = 32, .height = 24, .double_precision = dbl};
+    wv_grad_opts small = {.x0 = 4, .y0 = 4, .width = 16, .height = 12, .double_precision = dbl};
+    wv_grad_record *fresh, *kept = NULL;
+    wv_image c1, c2;
+    double g1[WV_P_COUNT], g2[WV_P_COUNT], d1, d2, s1, s2;
+    assert_int_equal(wv_render_record(&s, &p, NULL, &big, &c1, &fresh, &err), WV_OK);
+    assert_int_equal(wv_record_grad(fresh, &dc, g1, &d1, &err), WV_OK);
+    assert_int_equal(wv_record_grad_psf(fresh, &dc, &s1, &err), WV_OK);
+    wv_record_free(fresh);
+    /* small first, so the big render grows the record; then the small one again into the big memory */
+    for (int pass = 0; pass < 3; pass++) {
+      const wv_grad_opts *g = pass == 1 ? &big : &small;
+      assert_int_equal(wv_render_record_into(&s, &p, NULL, g, &c2, &kept, &err), WV_OK);
+      assert_non_null(kept);
+      if (pass != 1) {
+        wv_image_free(&c2);
+        continue;
+      }
+      assert_int_equal(wv_record_grad(kept, &dc, g2, &d2, &err), WV_OK);
+      assert_int_equal(wv_record_grad_psf(kept, &dc, &s2, &err), WV_OK);
+      assert_int_equal(memcmp(g1, g2, sizeof g1), 0);
+      assert_true(d1 == d2 && s1 == s2);
+      assert_true((s1 != 0) == (s.psf_sigma > 0));
+      assert_int_equal(memcmp(c1.data, c2.data, sizeof(float) * 32 * 24 * 3), 0);
+      wv_image_free(&c2);
+    }
+    /* the small render left in it does not take the big adjoint */
+    assert_int_equal(wv_record_grad(kept, &dc, g2, NULL, &err), WV_ERR_INVALID);
+    /* a failed render into it: no render kept, refused, then a good render works again */
+    wv_grad_opts bad = {.x0 = 40, .width = 32, .height = 24, .double_precision = dbl};
+    assert_int_equal(wv_render_record_into(&s, &p, NULL, &bad, &c2, &kept, &err), WV_ERR_INVALID);
+    assert_null(c2.data);
+    assert_non_null(kept);
+    assert_int_equal(wv_record_grad(kept, &dc, g2, NULL, &err), WV_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "no render"));
+    assert_int_equal(wv_record_grad_psf(kept, &dc, &s2, &err), WV_ERR_INVALID);
+    assert_int_equal(wv_render_record_into(&s, &p, NULL, &big, &c2, &kept, &err), WV_OK);
+    assert_int_equal(wv_record_grad(kept, &dc, g2, &d2, &err), WV_OK);
+    assert_int_equal(memcmp(g1, g2, sizeof g1), 0);
+    wv_record_free(kept), wv_image_free(&c1), wv_image_free(&c2);
+  }
+  assert_int_equal(wv_render_record_into(&s, &p, NULL, NULL, NULL, NULL, &err), WV_ERR_INVALID);
+  wv_image_free(&dc);
+}
+
+/* Value (x, y, ch) of the camera blur's K, or of dK/dsigma, by the plain double sum over
+ * the 2-D taps with clamped edges (the separable passes' definition, term by term). */
+static double blur_ref(const double *in, int w, int h, int c, double sigma, int x, int y, int ch, int dsigma) {
+  int r = (int)ceil(3 * sigma);
+  double wk[32], dwk[32], sum = 0, m2 = 0;
+  for (int k = 0; k <= r; k++) sum += (k ? 2 : 1) * (wk[k] = exp(-0.5 * k * k / (sigma * sigma)));
+  for (int k = 0; k <= r; k++) wk[k] /= sum, m2 += (k ? 2 : 1) * wk[k] * k * k;
+  for (int k = 0; k <= r; k++) dwk[k] = wk[k] * (k * k - m2) / (sigma * sigma * sigma);
+  double v = 0;
+  for (int ky = -r; ky <= r; ky++)
+    for (int kx = -r; kx <= r; kx++) {
+      int yy = y + ky < 0 ? 0 : y + ky >= h ? h - 1 : y + ky, xx = x + kx < 0 ? 0 : x + kx >= w ? w - 1 : x + kx;
+      int ay = abs(ky), ax = abs(kx);
+      double wt = dsigma ? dwk[ay] * wk[ax] + wk[ay] * dwk[ax] : wk[ay] * wk[ax];
+      v += wt * in[((size_t)yy * w + xx) * c + ch];
+    }
+  return v;
+}
+
+/* The camera blur's row-streamed passes: K and dK/dsigma equal the plain 2-D sums, K^T
+ * is K's transpose, on images narrower than the kernel, single rows, and images of
+ * several bands of rows; and none of them depends on the number of threads. */
+static void test_camera_blur_passes(void **state) {
+  (void)state;
+  tu_rng rg = {43};
+  wv_error err;
+  const int sizes[][2] = {{1, 1}, {3, 70}, {70, 1}, {13, 9}, {29, 75}};
+  const double sigmas[] = {0.3, 0.64, 1.7, 3.2};
+  for (int a = 0; a < 5; a++)
+    for (int b = 0; b < 4; b++) {
+      int w = sizes[a][0], h = sizes[a][1], c = 3;
+      size_t n = (size_t)w * h * c;
+      double *x = malloc(6 * n * sizeof *x), *y = x + n, *kx = y + n, *kty = kx + n, *dk = kty + n, *t = dk + n;
+      for (size_t i = 0; i < n; i++) x[i] = tu_rnd(&rg), y[i] = tu_rnd(&rg) - 0.5;
+      assert_int_equal(wv_psf_apply(sigmas[b], w, h, c, x, kx, 0, &err), WV_OK);
+      assert_int_equal(wv_psf_apply(sigmas[b], w, h, c, y, kty, 1, &err), WV_OK);
+      assert_int_equal(wv_psf_apply_dsigma(sigmas[b], w, h, c, x, dk, &err), WV_OK);
+      double ab = 0, ba = 0, scale = 0;
+      for (int py = 0; py < h; py++)
+        for (int px = 0; px < w; px++)
+          for (int ch = 0; ch < c; ch++) {
+            size_t i = ((size_t)py * w + px) * c + ch;
+            double rk = blur_ref(x, w, h, c, sigmas[b], px, py, ch, 0), rd = blur_ref(x, w, h, c, sigmas[b], px, py, ch, 1);
+            assert_true(fabs(kx[i] - rk) <= 1e-13);
+            assert_true(fabs(dk[i] - rd) <= 1e-12 * (1 + fabs(rd)));
+            ab += kx[i] * y[i], ba += x[i] * kty[i], scale += fabs(kx[i] * y[i]);
+          }
+      assert_true(fabs(ab - ba) <= 1e-13 * scale);
+      /* one thread, then three: the same values bit for bit */
+      int threads = omp_get_max_threads();
+      for (int th = 1; th <= 3; th += 2) {
+        omp_set_num_threads(th);
+        assert_int_equal(wv_psf_apply(sigmas[b], w, h, c, y, t, 1, &err), WV_OK);
+        assert_int_equal(memcmp(t, kty, n * sizeof *t), 0);
+        assert_int_equal(wv_psf_apply_dsigma(sigmas[b], w, h, c, x, t, &err), WV_OK);
+        assert_int_equal(memcmp(t, dk, n * sizeof *t), 0);
+      }
+      omp_set_num_threads(threads);
+      free(x);
+    }
+}
+
+/* dL/dsigma from a record (the blur's derivative made a row at a time and summed by
+ * rows) against the sum over the whole image of dL/dcapture * slope * (dK/dsigma
+ * radiance) with the image-wide wv_psf_apply_dsigma: the radiance is wv_render's, the
+ * slope the response's at the blurred radiance. */
+static void test_camera_blur_sigma_sum(void **state) {
+  (void)state;
+  tu_rng r = {47};
+  wv_error err;
+  wv_scene s;
+  wv_params p;
+  wv_image dc;
+  blur_setup(&r, &s, &p, &dc);
+  const double sigmas[] = {0.64, 1.7};
+  for (int k = 0; k < 2; k++) {
+    s.psf_sigma = sigmas[k];
+    wv_image cap, rad;
+    wv_grad_record *rec;
+    double dsig;
+    assert_int_equal(wv_render_record(&s, &p, NULL, NULL, &cap, &rec, &err), WV_OK);
+    assert_int_equal(wv_record_grad_psf(rec, &dc, &dsig, &err), WV_OK);
+    wv_record_free(rec), wv_image_free(&cap);
+    assert_int_equal(wv_render(&s, &p, NULL, &cap, &rad, &err), WV_OK);
+    size_t n = (size_t)s.width * s.height * 3;
+    double *a = malloc(3 * n * sizeof *a), *blur = a + n, *dk = blur + n;
+    for (size_t i = 0; i < n; i++) a[i] = rad.data[i];
+    assert_int_equal(wv_psf_apply(s.psf_sigma, s.width, s.height, 3, a, blur, 0, &err), WV_OK);
+    assert_int_equal(wv_psf_apply_dsigma(s.psf_sigma, s.width, s.height, 3, a, dk, &err), WV_OK);
+    double ref = 0;
+    for (size_t i = 0; i < n; i++) {
+      int px = (int)(i / 3 % (size_t)s.width), py = (int)(i / 3 / (size_t)s.width);
+      double slope;
+      float v = wv_respond_f(&s, wv_response_mask(&s, px, py), (float)blur[i], &slope);
+      assert_true(v == cap.data[i]); /* the capture is this response */
+      ref += (double)dc.data[i] * slope * dk[i];
+    }
+    print_message("blur sigma %.2f: dL/dsigma %.15e, image-wide sum %.15e\n", sigmas[k], dsig, ref);
+    assert_true(ref != 0.0);
+    assert_true(fabs(dsig - ref) <= 1e-9 * fabs(ref));
+    free(a), wv_image_free(&cap), wv_image_free(&rad);
+  }
+  wv_image_free(&dc);
+}
+
 static void test_errors(void **state) {
   (void)state;
   wv_scene s = small_scene("flat45", 32, 32, 2);
@@ -571,6 +740,8 @@ int main(void) {
       cmocka_unit_test(test_range_edges),        cmocka_unit_test(test_deterministic),
       cmocka_unit_test(test_chain_with_downsampling), cmocka_unit_test(test_record),
       cmocka_unit_test(test_camera_blur),        cmocka_unit_test(test_camera_blur_sigma),
+      cmocka_unit_test(test_record_reuse),       cmocka_unit_test(test_camera_blur_passes),
+      cmocka_unit_test(test_camera_blur_sigma_sum),
       cmocka_unit_test(test_errors)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

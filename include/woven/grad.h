@@ -49,6 +49,13 @@ wv_status wv_render_grad_ex(const wv_scene *s, const wv_params *p, const wv_rend
 typedef struct wv_grad_record wv_grad_record;
 wv_status wv_render_record(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
                            const wv_grad_opts *g, wv_image *capture, wv_grad_record **rec, wv_error *err);
+/* As wv_render_record, into *rec: NULL (a record is made) or a record from an earlier
+ * call, whose memory is reused (grown for a larger image), so that a loop rendering a
+ * record every iteration (the fit) does not map and fault in fresh pages each time.
+ * On failure *rec keeps its memory (still to be freed) but no render: wv_record_grad
+ * refuses it until a render into it succeeds. */
+wv_status wv_render_record_into(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
+                                const wv_grad_opts *g, wv_image *capture, wv_grad_record **rec, wv_error *err);
 wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcapture, double grad[WV_P_COUNT],
                          double *dot, wv_error *err);
 /* dL/dsigma of the scene's camera blur (scene.psf_sigma, pixels) for the same adjoint

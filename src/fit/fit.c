@@ -97,12 +97,14 @@ typedef struct {
   wv_footprints *fp; /* the iteration scene's camera geometry, made once */
   wv_fit_opts wopts; /* a window's options (o points here) */
   int no_prior;      /* the pattern prior is left out (the second photo of a pair: counted once) */
+  wv_grad_record *record; /* the last gradient render's, its memory reused by the next */
 } fit_ctx;
 
 static void ctx_free(fit_ctx *c) {
   wv_image_free(&c->photo), wv_image_free(&c->render), wv_image_free(&c->dcap);
   wv_image_loss_free(c->loss);
   wv_footprints_free(c->fp);
+  wv_record_free(c->record);
 }
 
 static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, wv_descriptor *d, int scale,
@@ -148,15 +150,14 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   wv_image_free(&c->render);
   /* With a gradient wanted, render once and keep each pixel's derivative sums:
    * the adjoint depends on the render, so it is applied afterwards. */
-  wv_grad_record *record = NULL;
-  wv_status st = grad ? wv_render_record(&c->scene, p, &ro, NULL, &c->render, &record, err)
+  wv_status st = grad ? wv_render_record_into(&c->scene, p, &ro, NULL, &c->render, &c->record, err)
                       : wv_render(&c->scene, p, &ro, &c->render, NULL, err);
   if (st) return st;
   double t1 = omp_get_wtime();
   c->timing->render += t1 - t0;
   /* the image terms (and with a gradient wanted, dL/dcapture) */
   wv_loss_terms lt;
-  if ((st = wv_image_loss_eval(c->loss, &c->render, &lt, grad ? &c->dcap : NULL, err))) goto fail;
+  if ((st = wv_image_loss_eval(c->loss, &c->render, &lt, grad ? &c->dcap : NULL, err))) return st;
   /* L_p on beta */
   double mu, sg;
   wv_fit_beta_prior(p->pattern, &mu, &sg);
@@ -168,17 +169,13 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   double t3 = omp_get_wtime();
   c->timing->descriptor += t3 - t1;
   if (!grad) return WV_OK;
-  st = wv_record_grad(record, &c->dcap, grad, NULL, err);
-  if (!st && dpsf) st = wv_record_grad_psf(record, &c->dcap, dpsf, err);
-  wv_record_free(record);
+  st = wv_record_grad(c->record, &c->dcap, grad, NULL, err);
+  if (!st && dpsf) st = wv_record_grad_psf(c->record, &c->dcap, dpsf, err);
   if (st) return st;
   c->timing->gradient += omp_get_wtime() - t3;
   grad[WV_P_BETA_WARP] += wp * (p->heightfield[WV_WARP] - mu) / (sg * sg);
   grad[WV_P_BETA_WEFT] += wp * (p->heightfield[WV_WEFT] - mu) / (sg * sg);
   return WV_OK;
-fail:
-  wv_record_free(record);
-  return st;
 }
 
 wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p,

@@ -11,7 +11,8 @@
  * kept instead and wv_record_grad does the same accumulation afterwards. A camera blur
  * (the scene's psf_sigma) couples pixels: the response then waits for every pixel's
  * radiance, the records are always kept, and the adjoint passes through the blur's
- * transpose (wv_psf_apply). */
+ * transpose; each blur pass runs a row at a time over the record (wv_psf_run,
+ * sensor/sensor.h), the work on each row done as it comes out. */
 #include "woven/grad.h"
 
 #include <math.h>
@@ -47,24 +48,42 @@ static const int KT_ID[2] = {WV_P_KT_WARP_R, WV_P_KT_WEFT_R};
 static const int BETA_ID[2] = {WV_P_BETA_WARP, WV_P_BETA_WEFT};
 static const int ALPHA_ID[2] = {WV_P_ALPHA_WARP, WV_P_ALPHA_WEFT};
 
-/* Add a pixel's contribution given gr[c] = dL/dradiance_c. */
-static void accumulate(const wv_grad_model *gm, const double JJ[2][WV_J_COUNT], const double gr[3], double *g) {
+enum { NG = WV_P_COUNT + 1 }; /* the gradient, then the dot */
+
+/* A row's partial sums of the gradient and the dot, as named locals (they stay in
+ * registers over the row); written out into the gradient's slots by sums_out. */
+typedef struct {
+  double df[2][3], ks[2][3]; /* per type: the diffuse (k_d, or k_t with the light behind) and specular albedos */
+  double beta[2], alpha[2], umax, twist, blend, dot;
+} row_sums;
+
+static void sums_out(const wv_grad_model *gm, const row_sums *g, double out[NG]) {
   const int *DF_ID = gm->transmit ? KT_ID : KD_ID;
-  const double(*kdf)[3] = gm->transmit ? gm->kt : gm->kd; /* the diffuse sums' albedo */
+  memset(out, 0, NG * sizeof *out);
   for (int y = 0; y < 2; y++) {
-    const double *J = JJ[y];
+    for (int c = 0; c < 3; c++) out[DF_ID[y] + c] = g->df[y][c], out[KS_ID[y] + c] = g->ks[y][c];
+    out[BETA_ID[y]] = g->beta[y], out[ALPHA_ID[y]] = g->alpha[y];
+  }
+  out[WV_P_UMAX_DEG] = g->umax, out[WV_P_TWIST_DEG] = g->twist, out[WV_P_BLEND] = g->blend;
+  out[WV_P_COUNT] = g->dot;
+}
+
+/* Add a pixel's contribution given gr[c] = dL/dradiance_c; J: its sums / spp, per type. */
+WV_INLINE void accumulate(const wv_grad_model *gm, const double *J, const double gr[3], row_sums *g) {
+  const double(*kdf)[3] = gm->transmit ? gm->kt : gm->kd; /* the diffuse sums' albedo */
+  for (int y = 0; y < 2; y++, J += WV_J_COUNT) {
     double ws = 0, wd = 0; /* dL/dS and dL/dDF of this type */
     for (int c = 0; c < 3; c++) {
-      g[DF_ID[y] + c] += gr[c] * J[WV_J_DF];
-      g[KS_ID[y] + c] += gr[c] * J[WV_J_S];
+      g->df[y][c] += gr[c] * J[WV_J_DF];
+      g->ks[y][c] += gr[c] * J[WV_J_S];
       ws += gr[c] * gm->ks[y][c];
       wd += gr[c] * kdf[y][c];
     }
-    g[BETA_ID[y]] += ws * J[WV_J_S_BETA] + wd * J[WV_J_DF_BETA];
-    g[ALPHA_ID[y]] += ws * J[WV_J_S_ALPHA];
-    g[WV_P_UMAX_DEG] += ws * J[WV_J_S_UMAX] + wd * J[WV_J_DF_UMAX];
-    g[WV_P_TWIST_DEG] += ws * J[WV_J_S_PSI];
-    g[WV_P_BLEND] += wd * J[WV_J_DF_BLEND];
+    g->beta[y] += ws * J[WV_J_S_BETA] + wd * J[WV_J_DF_BETA];
+    g->alpha[y] += ws * J[WV_J_S_ALPHA];
+    g->umax += ws * J[WV_J_S_UMAX] + wd * J[WV_J_DF_UMAX];
+    g->twist += ws * J[WV_J_S_PSI];
+    g->blend += wd * J[WV_J_DF_BLEND];
   }
 }
 
@@ -76,31 +95,65 @@ typedef struct {
   double J[2][WV_J_COUNT]; /* the pixel's sums / spp */
 } pixel_rec;
 
-/* The same, kept by a float-mode record: the capture and the sums are floats
- * there, so they are stored as floats (about half the memory: under glibc's
- * 32 MB limit for an 800 x 300 image, so the allocator reuses the block from
- * one fit iteration to the next instead of mapping fresh pages). */
-typedef struct {
-  double slope[3];
-  float cap[3], rad[3];
-  float J[2][WV_J_COUNT]; /* the sums, before the division by spp */
-} pixel_rec_f;
+enum { NJ = 2 * WV_J_COUNT };
 
+/* The record: per pixel, row-major, one array per quantity, so that each pass over it
+ * reads only what it needs. A float-mode record keeps the capture, the radiance and
+ * the sums as floats, as they are made (120 bytes a pixel in all); a double-mode one
+ * keeps doubles. The arrays share one block, kept from render to render
+ * (wv_render_record_into). */
 struct wv_grad_record {
-  int w, h, dbl, spp;
+  int w, h, dbl, spp, threads;
+  int valid;        /* 0: the last render into it failed */
   double psf_sigma; /* the scene's camera blur (0: none) */
   wv_grad_model gm;
-  pixel_rec *px;    /* double mode: w * h, row-major */
-  pixel_rec_f *pxf; /* float mode */
+  void *mem;        /* the block */
+  size_t bytes;     /* its size */
+  double *slope;    /* 3 a pixel */
+  float *capf, *radf, *Jf;  /* float mode: 3, 3 and NJ a pixel; the sums before the division by spp */
+  double *capd, *radd, *Jd; /* double mode: the same, the sums / spp */
 };
 
-/* Value i of a record's w x h x 3 radiance (before the camera blur) and of its slope. */
-static double rec_rad(const wv_grad_record *rec, size_t i) {
-  return rec->dbl ? rec->px[i / 3].rad[i % 3] : rec->pxf[i / 3].rad[i % 3];
+/* Room for a W x H render in the record's block, grown when too small. */
+static int rec_room(wv_grad_record *rec, int W, int H, int dbl) {
+  size_t n = (size_t)W * H, v = dbl ? sizeof(double) : sizeof(float);
+  size_t bytes = n * (3 * sizeof(double) + (3 + 3 + NJ) * v);
+  if (bytes > rec->bytes) {
+    free(rec->mem);
+    rec->bytes = 0;
+    if (!(rec->mem = malloc(bytes))) return 0;
+    rec->bytes = bytes;
+  }
+  rec->slope = rec->mem;
+  char *f = (char *)(rec->slope + 3 * n);
+  rec->capf = rec->radf = rec->Jf = NULL, rec->capd = rec->radd = rec->Jd = NULL;
+  if (dbl) rec->capd = (double *)f, rec->radd = rec->capd + 3 * n, rec->Jd = rec->radd + 3 * n;
+  else rec->capf = (float *)f, rec->radf = rec->capf + 3 * n, rec->Jf = rec->radf + 3 * n;
+  return 1;
 }
-static double rec_slope(const wv_grad_record *rec, size_t i) {
-  return rec->dbl ? rec->px[i / 3].slope[i % 3] : rec->pxf[i / 3].slope[i % 3];
+
+/* Pixel k's rendered values into the record (the response's too unless a blur follows). */
+static void rec_put(wv_grad_record *rec, size_t k, const wv_grad_pixel *pix, const pixel_rec *pr, int responded) {
+  for (int c = 0; c < 3; c++) {
+    if (responded) rec->slope[3 * k + c] = pr->slope[c];
+    if (rec->dbl) {
+      rec->radd[3 * k + c] = pr->rad[c];
+      if (responded) rec->capd[3 * k + c] = pr->cap[c];
+    } else {
+      rec->radf[3 * k + c] = (float)pix->rad[c];
+      if (responded) rec->capf[3 * k + c] = (float)pr->cap[c];
+    }
+  }
+  for (int y = 0; y < 2; y++)
+    for (int j = 0; j < WV_J_COUNT; j++) {
+      if (rec->dbl) rec->Jd[NJ * k + y * WV_J_COUNT + j] = pr->J[y][j];
+      else rec->Jf[NJ * k + y * WV_J_COUNT + j] = (float)pix->J[y][j];
+    }
 }
+
+/* v / spp; the product by inv = 1 / spp where that is the same number (spp a power of
+ * two), as it is made for every sum of every pixel (inv made once, outside the loops). */
+static double per_sample(double v, int spp, double inv) { return spp & (spp - 1) ? v / spp : v * inv; }
 
 /* Sensor response of one pixel and its slope; in float mode exactly
  * wv_scene_response's arithmetic, so the capture is wv_render's. */
@@ -117,63 +170,120 @@ static void respond(const wv_scene *s, int dbl, int px, int py, const double rad
   }
 }
 
-/* The pixel's radiance and sums into its record. */
-static void keep(int spp, const wv_grad_pixel *pix, pixel_rec *rec) {
+/* The pixel's radiance and, with sums, its sums / spp. */
+static void keep(int spp, double inv, const wv_grad_pixel *pix, pixel_rec *rec, int sums) {
   for (int c = 0; c < 3; c++) rec->rad[c] = pix->rad[c];
-  for (int y = 0; y < 2; y++)
-    for (int j = 0; j < WV_J_COUNT; j++) rec->J[y][j] = pix->J[y][j] / (double)spp;
+  if (sums)
+    for (int y = 0; y < 2; y++)
+      for (int j = 0; j < WV_J_COUNT; j++) rec->J[y][j] = per_sample(pix->J[y][j], spp, inv);
 }
 
-/* A float-mode pixel stored, and read back exactly. */
-static void rec_store(pixel_rec_f *o, const pixel_rec *r, const wv_grad_pixel *pix) {
-  for (int c = 0; c < 3; c++) o->slope[c] = r->slope[c], o->cap[c] = (float)r->cap[c], o->rad[c] = (float)pix->rad[c];
-  for (int y = 0; y < 2; y++)
-    for (int j = 0; j < WV_J_COUNT; j++) o->J[y][j] = (float)pix->J[y][j];
+/* Add a pixel's contribution and its dot term; with gb != NULL (a camera blur) gb holds
+ * dL/dradiance already, made by the blur's adjoint. */
+WV_INLINE void backward_pixel(const wv_grad_model *gm, const double cap[3], const double slope[3], const double *J,
+                              const float dc[3], const double *gb, row_sums *g) {
+  double gr[3];
+  for (int c = 0; c < 3; c++) {
+    g->dot += (double)dc[c] * cap[c];
+    gr[c] = gb ? gb[c] : (double)dc[c] * slope[c];
+  }
+  accumulate(gm, J, gr, g);
 }
-static void rec_load(const pixel_rec_f *o, int spp, pixel_rec *r) {
-  for (int c = 0; c < 3; c++) r->slope[c] = o->slope[c], r->cap[c] = o->cap[c], r->rad[c] = o->rad[c];
-  for (int y = 0; y < 2; y++)
-    for (int j = 0; j < WV_J_COUNT; j++) r->J[y][j] = (double)o->J[y][j] / (double)spp;
+
+/* Row y of a record against its adjoint (gb: the row's dL/dradiance with a blur, else
+ * NULL): its partials into out[NG]. */
+static void backward_row(const wv_grad_record *rec, const wv_image *dcap, int y, const double *gb, double *out) {
+  row_sums g;
+  memset(&g, 0, sizeof g);
+  double inv = 1.0 / rec->spp;
+  for (int i = 0; i < rec->w; i++) {
+    size_t k = (size_t)y * rec->w + i;
+    double cap[3], J[NJ];
+    if (rec->dbl) {
+      for (int c = 0; c < 3; c++) cap[c] = rec->capd[3 * k + c];
+      memcpy(J, rec->Jd + NJ * k, sizeof J);
+    } else {
+      const float *Jf = rec->Jf + NJ * k;
+      for (int c = 0; c < 3; c++) cap[c] = rec->capf[3 * k + c];
+      for (int j = 0; j < NJ; j++) J[j] = per_sample(Jf[j], rec->spp, inv);
+    }
+    backward_pixel(&rec->gm, cap, rec->slope + 3 * k, J, wv_image_px(dcap, i, y), gb ? gb + 3 * i : NULL, &g);
+  }
+  sums_out(&rec->gm, &g, out);
+}
+
+/* The camera blur's passes over a record, row by row (wv_psf_run): the radiance or
+ * slope .* dL/dcapture in, and out the response (into the record and the capture), the
+ * gradient's per-row partials or dL/dsigma's. */
+typedef struct {
+  const wv_scene *s;
+  const wv_grad_record *rec;
+  wv_grad_record *out;   /* the response pass's record */
+  int x0, y0;            /* the window's corner in the image */
+  wv_image *capture;     /* may be NULL */
+  const wv_image *dcap;  /* dL/dcapture */
+  double *rows;          /* per-row partials */
+} blur_pass;
+
+static void load_radiance(void *ctx, int y, double *row) {
+  const wv_grad_record *rec = ((const blur_pass *)ctx)->rec;
+  size_t m = (size_t)rec->w * 3, o = (size_t)y * m;
+  if (rec->dbl) memcpy(row, rec->radd + o, m * sizeof *row);
+  else
+    for (size_t e = 0; e < m; e++) row[e] = rec->radf[o + e];
 }
 
 /* With a camera blur the response acts on the blurred radiance, which needs every
- * pixel's radiance first: the records' captures and slopes are made here, after the
- * render (wv_scene_capture's arithmetic through wv_psf_apply). */
-static wv_status respond_blurred(const wv_scene *s, int x0, int y0, wv_grad_record *rec, wv_image *capture_out,
-                                 wv_error *err) {
-  size_t np = (size_t)rec->w * rec->h, n = np * 3;
-  double *a = malloc(2 * n * sizeof *a);
-  if (!a) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur");
-  for (size_t i = 0; i < n; i++) a[i] = rec_rad(rec, i);
-  wv_status st = wv_psf_apply(rec->psf_sigma, rec->w, rec->h, 3, a, a + n, 0, err);
-  for (size_t k = 0; k < np && !st; k++) {
-    int i = (int)(k % (size_t)rec->w), r = (int)(k / (size_t)rec->w);
+ * pixel's radiance first: the records' captures and slopes are made after the render,
+ * a row at a time (wv_scene_capture's arithmetic). */
+static void store_response(void *ctx, int y, const double *row) {
+  const blur_pass *bp = ctx;
+  wv_grad_record *rec = bp->out;
+  for (int i = 0; i < rec->w; i++) {
+    size_t k = (size_t)y * rec->w + i;
     double b[3];
-    for (int c = 0; c < 3; c++) b[c] = rec->dbl ? a[n + 3 * k + c] : (double)(float)a[n + 3 * k + c];
+    for (int c = 0; c < 3; c++) b[c] = rec->dbl ? row[3 * i + c] : (double)(float)row[3 * i + c];
     float cap[3];
-    pixel_rec tmp, *pr = rec->dbl ? &rec->px[k] : &tmp;
-    respond(s, rec->dbl, x0 + i, y0 + r, b, cap, pr);
-    if (!rec->dbl)
-      for (int c = 0; c < 3; c++) rec->pxf[k].slope[c] = tmp.slope[c], rec->pxf[k].cap[c] = (float)tmp.cap[c];
-    if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);
+    pixel_rec pr;
+    respond(bp->s, rec->dbl, bp->x0 + i, bp->y0 + y, b, cap, &pr);
+    for (int c = 0; c < 3; c++) {
+      rec->slope[3 * k + c] = pr.slope[c];
+      if (rec->dbl) rec->capd[3 * k + c] = pr.cap[c];
+      else rec->capf[3 * k + c] = cap[c];
+    }
+    if (bp->capture) memcpy(wv_image_px(bp->capture, i, y), cap, sizeof cap);
   }
-  free(a);
-  return st;
 }
 
-/* Add a pixel's contribution (and its dot term, in g[WV_P_COUNT]); with gb != NULL (a
- * camera blur) gb holds dL/dradiance already, made by the blur's adjoint. */
-static void backward_pixel(const wv_grad_model *gm, const pixel_rec *rec, const float dc[3], const double *gb,
-                           double *g) {
-  double gr[3];
-  for (int c = 0; c < 3; c++) {
-    g[WV_P_COUNT] += (double)dc[c] * rec->cap[c];
-    gr[c] = gb ? gb[c] : (double)dc[c] * rec->slope[c];
-  }
-  accumulate(gm, (const double(*)[WV_J_COUNT])rec->J, gr, g);
+/* slope .* dL/dcapture: what the blur's adjoint takes. */
+static void load_adjoint(void *ctx, int y, double *row) {
+  const blur_pass *bp = ctx;
+  size_t m = (size_t)bp->rec->w * 3, o = (size_t)y * m;
+  for (size_t e = 0; e < m; e++) row[e] = (double)bp->dcap->data[o + e] * bp->rec->slope[o + e];
 }
 
-enum { NG = WV_P_COUNT + 1 }; /* the gradient, then the dot */
+/* dL/dradiance = K^T (slope .* dL/dcapture) of a row: its pixels' contributions. */
+static void store_gradient(void *ctx, int y, const double *gb) {
+  const blur_pass *bp = ctx;
+  backward_row(bp->rec, bp->dcap, y, gb, bp->rows + (size_t)y * NG);
+}
+
+/* dL/dsigma of a row: sum dL/dcapture .* slope .* (dK/dsigma radiance). */
+static void store_dsigma(void *ctx, int y, const double *dk) {
+  const blur_pass *bp = ctx;
+  size_t m = (size_t)bp->rec->w * 3, o = (size_t)y * m;
+  double sum = 0;
+  for (size_t e = 0; e < m; e++) sum += (double)bp->dcap->data[o + e] * bp->rec->slope[o + e] * dk[e];
+  bp->rows[y] = sum;
+}
+
+static wv_status blur_run(wv_psf_op op, blur_pass *bp, void (*load)(void *, int, double *),
+                          void (*store)(void *, int, const double *), wv_error *err) {
+  const wv_grad_record *rec = bp->rec;
+  wv_psf_stream ps = {.op = op, .sigma = rec->psf_sigma, .w = rec->w, .h = rec->h, .c = 3,
+                      .threads = rec->threads, .load = load, .store = store, .ctx = bp};
+  return wv_psf_run(&ps, err);
+}
 
 /* The totals out, angles converted from per radian to per degree. */
 static void output(const double total[NG], double grad[WV_P_COUNT], double *dot) {
@@ -184,17 +294,18 @@ static void output(const double total[NG], double grad[WV_P_COUNT], double *dot)
 }
 
 /* The render: either with an adjoint (fused: gradient rows out, nothing kept)
- * or without (every pixel's record kept in rec). */
+ * or without (every pixel kept in rec, a record made here or reused). */
 static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts *opt, const wv_grad_opts *go,
                      const wv_image *dcap, double grad[WV_P_COUNT], double *dot, wv_image *capture_out,
-                     wv_grad_record **rec_out, wv_error *err) {
+                     wv_grad_record *rec, wv_error *err) {
   if (capture_out) memset(capture_out, 0, sizeof *capture_out);
-  if (rec_out) *rec_out = NULL;
+  if (rec) rec->valid = 0;
   if (!s || !p) return wv_fail(err, WV_ERR_INVALID, "render_grad: a scene and parameters are required");
-  if (s->psf_sigma > 0 && !rec_out) {
+  if (s->psf_sigma > 0 && !rec) {
     /* the blur couples pixels: record every pixel, then run the adjoint over the records */
-    wv_grad_record *r = NULL;
-    wv_status st = run(s, p, opt, go, NULL, NULL, NULL, capture_out, &r, err);
+    wv_grad_record *r = calloc(1, sizeof *r);
+    if (!r) return wv_fail(err, WV_ERR_NOMEM, "out of memory for a gradient record");
+    wv_status st = run(s, p, opt, go, NULL, NULL, NULL, capture_out, r, err);
     if (!st) st = wv_record_grad(r, dcap, grad, dot, err);
     wv_record_free(r);
     if (st && capture_out) wv_image_free(capture_out);
@@ -213,7 +324,7 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
   if (st) return st;
   wv_camera_rig rig;
   if ((st = wv_rig_prepare_opts(s, opt, &rig, err))) return st;
-  if (!rec_out && (!dcap || !dcap->data || dcap->w != W || dcap->h != H || dcap->c != 3))
+  if (!rec && (!dcap || !dcap->data || dcap->w != W || dcap->h != H || dcap->c != 3))
     return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", W, H,
                    dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
 
@@ -227,27 +338,21 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
   }
   gm.transmit = rig.transmit;
 
+  int threads = opt && opt->threads > 0 ? opt->threads : omp_get_max_threads();
   double *rows = NULL;
-  wv_grad_record *rec = NULL;
-  if (rec_out) {
-    rec = calloc(1, sizeof *rec);
-    if (rec && dbl) rec->px = malloc((size_t)W * H * sizeof *rec->px);
-    if (rec && !dbl) rec->pxf = malloc((size_t)W * H * sizeof *rec->pxf);
-    if (!rec || (!rec->px && !rec->pxf)) {
-      wv_record_free(rec);
+  if (rec) {
+    if (!rec_room(rec, W, H, dbl))
       return wv_fail(err, WV_ERR_NOMEM, "out of memory for the derivatives of %d x %d pixels", W, H);
-    }
     rec->w = W, rec->h = H, rec->dbl = dbl, rec->spp = spp, rec->gm = gm, rec->psf_sigma = s->psf_sigma;
+    rec->threads = threads;
   } else if (!(rows = calloc((size_t)H * NG, sizeof *rows))) {
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for %d gradient rows", H);
   }
   if (capture_out && (st = wv_image_alloc(capture_out, W, H, 3, err))) {
     free(rows);
-    wv_record_free(rec);
     return st;
   }
-  int threads = opt && opt->threads > 0 ? opt->threads : omp_get_max_threads();
-  int rows_done = 0;
+  int blur = s->psf_sigma > 0, rows_done = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (int r = 0; r < H; r++) {
     if (opt && opt->progress && omp_get_thread_num() == 0) {
@@ -257,27 +362,33 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
       opt->progress(opt->progress_user, (double)d / H);
     }
     wv_grad_pixel pix[8];
+    double inv = 1.0 / spp;
+    row_sums g;
+    memset(&g, 0, sizeof g);
     for (int i = 0; i < W; i++) {
       if (i % 8 == 0 && !dbl) wv_render_row(&rig, &fab, y0 + r, x0 + i, W - i < 8 ? W - i : 8, spp, NULL, pix);
       if (dbl) wv_grad_pixel_d(&rig, &fab, &Pd, x0 + i, y0 + r, spp, &pix[i % 8]);
-      pixel_rec local, *pr = rec && dbl ? &rec->px[(size_t)r * W + i] : &local;
+      pixel_rec pr;
       float cap[3];
-      keep(spp, &pix[i % 8], pr);
+      keep(spp, inv, &pix[i % 8], &pr, rows || dbl); /* a float record keeps the sums as made */
       /* with a camera blur the response comes after the loop, on the blurred radiance */
-      if (!(s->psf_sigma > 0)) respond(s, dbl, x0 + i, y0 + r, pr->rad, cap, pr);
-      if (rec && !dbl) rec_store(&rec->pxf[(size_t)r * W + i], pr, &pix[i % 8]);
-      if (s->psf_sigma > 0) continue;
+      if (!blur) respond(s, dbl, x0 + i, y0 + r, pr.rad, cap, &pr);
+      if (rec) rec_put(rec, (size_t)r * W + i, &pix[i % 8], &pr, !blur);
+      if (blur) continue;
       if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);
-      if (rows) backward_pixel(&gm, pr, wv_image_px(dcap, i, r), NULL, rows + (size_t)r * NG);
+      if (rows) backward_pixel(&gm, pr.cap, pr.slope, &pr.J[0][0], wv_image_px(dcap, i, r), NULL, &g);
     }
+    if (rows) sums_out(&gm, &g, rows + (size_t)r * NG);
 #pragma omp atomic update
     rows_done++;
   }
   if (opt && opt->progress) opt->progress(opt->progress_user, 1.0);
-  if (rec && s->psf_sigma > 0 && (st = respond_blurred(s, x0, y0, rec, capture_out, err))) {
-    wv_record_free(rec);
-    if (capture_out) wv_image_free(capture_out);
-    return st;
+  if (rec && blur) {
+    blur_pass bp = {.s = s, .rec = rec, .out = rec, .x0 = x0, .y0 = y0, .capture = capture_out};
+    if ((st = blur_run(WV_PSF_K, &bp, load_radiance, store_response, err))) {
+      if (capture_out) wv_image_free(capture_out);
+      return st;
+    }
   }
   if (rows) { /* reduce in row order: the sum does not depend on the thread schedule */
     double total[NG];
@@ -287,7 +398,7 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
     output(total, grad, dot);
     free(rows);
   }
-  if (rec_out) *rec_out = rec;
+  if (rec) rec->valid = 1;
   return WV_OK;
 }
 
@@ -298,84 +409,87 @@ wv_status wv_render_grad_ex(const wv_scene *s, const wv_params *p, const wv_rend
   return run(s, p, opt, go, dcap, grad, dot, capture_out, NULL, err);
 }
 
+wv_status wv_render_record_into(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
+                                const wv_grad_opts *g, wv_image *capture, wv_grad_record **rec, wv_error *err) {
+  if (!rec) return wv_fail(err, WV_ERR_INVALID, "render_record: no record pointer");
+  if (!*rec && !(*rec = calloc(1, sizeof **rec)))
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for a gradient record");
+  return run(s, p, opt, g, NULL, NULL, NULL, capture, *rec, err);
+}
+
 wv_status wv_render_record(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
                            const wv_grad_opts *g, wv_image *capture, wv_grad_record **rec, wv_error *err) {
   if (!rec) return wv_fail(err, WV_ERR_INVALID, "render_record: no record pointer");
-  return run(s, p, opt, g, NULL, NULL, NULL, capture, rec, err);
+  *rec = NULL;
+  wv_status st = wv_render_record_into(s, p, opt, g, capture, rec, err);
+  if (st) {
+    wv_record_free(*rec);
+    *rec = NULL;
+  }
+  return st;
+}
+
+/* A record and an adjoint that fit it. */
+static wv_status record_check(const wv_grad_record *rec, const wv_image *dcap, const char *what, wv_error *err) {
+  if (!rec->valid) return wv_fail(err, WV_ERR_INVALID, "%s: the record holds no render (its render failed)", what);
+  if (!dcap || !dcap->data || dcap->w != rec->w || dcap->h != rec->h || dcap->c != 3)
+    return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", rec->w,
+                   rec->h, dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
+  return WV_OK;
 }
 
 wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcap, double grad[WV_P_COUNT], double *dot,
                          wv_error *err) {
   if (!rec || !grad) return wv_fail(err, WV_ERR_INVALID, "record_grad: a record and a gradient array are required");
-  if (!dcap || !dcap->data || dcap->w != rec->w || dcap->h != rec->h || dcap->c != 3)
-    return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", rec->w,
-                   rec->h, dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
-  double total[NG], *gb = NULL;
-  size_t n = (size_t)rec->w * rec->h * 3;
-  if (rec->psf_sigma > 0) {
-    /* dL/dradiance = K^T (slope .* dL/dcapture), K the camera blur */
-    gb = malloc(2 * n * sizeof *gb);
-    if (!gb) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur's adjoint");
-    for (size_t i = 0; i < n; i++)
-      gb[i] = (double)dcap->data[i] * rec_slope(rec, i);
-    wv_status st = wv_psf_apply(rec->psf_sigma, rec->w, rec->h, 3, gb, gb + n, 1, err);
-    if (st) {
-      free(gb);
-      return st;
-    }
-  }
-  memset(total, 0, sizeof total);
+  wv_status st = record_check(rec, dcap, "record_grad", err);
+  if (st) return st;
   /* The same per-row partials as the fused pass, made in parallel and summed in row order:
    * bitwise the same result whatever the threads. */
   double *rows = calloc((size_t)rec->h * NG, sizeof *rows);
-  if (!rows) {
-    free(gb);
-    return wv_fail(err, WV_ERR_NOMEM, "out of memory for %d gradient rows", rec->h);
-  }
-#pragma omp parallel for schedule(static)
-  for (int r = 0; r < rec->h; r++) {
-    double *rr = rows + (size_t)r * NG;
-    for (int i = 0; i < rec->w; i++) {
-      size_t k = (size_t)r * rec->w + i;
-      pixel_rec pr;
-      if (!rec->dbl) rec_load(&rec->pxf[k], rec->spp, &pr);
-      backward_pixel(&rec->gm, rec->dbl ? &rec->px[k] : &pr, wv_image_px(dcap, i, r), gb ? gb + n + 3 * k : NULL,
-                     rr);
+  if (!rows) return wv_fail(err, WV_ERR_NOMEM, "out of memory for %d gradient rows", rec->h);
+  if (rec->psf_sigma > 0) {
+    /* dL/dradiance = K^T (slope .* dL/dcapture), K the camera blur, a row at a time */
+    blur_pass bp = {.rec = rec, .dcap = dcap, .rows = rows};
+    if ((st = blur_run(WV_PSF_KT, &bp, load_adjoint, store_gradient, err))) {
+      free(rows);
+      return st;
     }
+  } else {
+#pragma omp parallel for schedule(static) num_threads(rec->threads)
+    for (int r = 0; r < rec->h; r++) backward_row(rec, dcap, r, NULL, rows + (size_t)r * NG);
   }
+  double total[NG];
+  memset(total, 0, sizeof total);
   for (int r = 0; r < rec->h; r++)
     for (int k = 0; k < NG; k++) total[k] += rows[(size_t)r * NG + k];
   free(rows);
-  free(gb);
   output(total, grad, dot);
   return WV_OK;
 }
 
 wv_status wv_record_grad_psf(const wv_grad_record *rec, const wv_image *dcap, double *dsigma, wv_error *err) {
   if (!rec || !dsigma) return wv_fail(err, WV_ERR_INVALID, "record_grad_psf: a record and an output are required");
-  if (!dcap || !dcap->data || dcap->w != rec->w || dcap->h != rec->h || dcap->c != 3)
-    return wv_fail(err, WV_ERR_INVALID, "dL/dcapture must be a %d x %d RGB image (got %d x %d x %d)", rec->w,
-                   rec->h, dcap ? dcap->w : 0, dcap ? dcap->h : 0, dcap ? dcap->c : 0);
+  wv_status st = record_check(rec, dcap, "record_grad_psf", err);
+  if (st) return st;
   *dsigma = 0;
   if (!(rec->psf_sigma > 0)) return WV_OK;
-  /* capture = respond(K radiance): dL/dsigma = sum dL/dcapture .* slope .* (dK/dsigma radiance) */
-  size_t n = (size_t)rec->w * rec->h * 3;
-  double *a = malloc(2 * n * sizeof *a);
-  if (!a) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur's derivative");
-  for (size_t i = 0; i < n; i++) a[i] = rec_rad(rec, i);
-  wv_status st = wv_psf_apply_dsigma(rec->psf_sigma, rec->w, rec->h, 3, a, a + n, err);
-  double sum = 0;
-  for (size_t i = 0; i < n && !st; i++)
-    sum += (double)dcap->data[i] * rec_slope(rec, i) * a[n + i];
-  free(a);
-  if (!st) *dsigma = sum;
+  /* capture = respond(K radiance): dL/dsigma = sum dL/dcapture .* slope .* (dK/dsigma radiance),
+   * dK/dsigma = dKy Kx + Ky dKx made a row at a time, summed per row, then in row order */
+  double *rows = calloc((size_t)rec->h, sizeof *rows);
+  if (!rows) return wv_fail(err, WV_ERR_NOMEM, "out of memory for %d rows of the camera blur's derivative", rec->h);
+  blur_pass bp = {.rec = rec, .dcap = dcap, .rows = rows};
+  if (!(st = blur_run(WV_PSF_DK, &bp, load_radiance, store_dsigma, err))) {
+    double sum = 0;
+    for (int r = 0; r < rec->h; r++) sum += rows[r];
+    *dsigma = sum;
+  }
+  free(rows);
   return st;
 }
 
 void wv_record_free(wv_grad_record *rec) {
   if (!rec) return;
-  free(rec->px);
-  free(rec->pxf);
+  free(rec->mem);
   free(rec);
 }
 

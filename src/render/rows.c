@@ -11,6 +11,7 @@
  * computes what the scalar kernel computes for its sample, and every sample is
  * added to row s mod 8 of its pixel in sample order, so the image is the same
  * whatever the packing. */
+#include <stddef.h>
 #include <string.h>
 
 #include "render/render_internal.h"
@@ -60,6 +61,35 @@ LANES(lanes_w, wv_w8, uint32_t)
 
 /* ((v0 + v1) + (v2 + v3)) + ((v4 + v5) + (v6 + v7)): WV_ACC_TREE over the lanes. */
 WV_INLINE float tree8(wv_f8 v) { return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7])); }
+
+/* tree8 of eight vectors at once, lane k of the result that of v[k]: the same additions
+ * of the same pairs, made across vectors (each level adds neighbouring lanes). */
+WV_INLINE wv_f8 pairs8(wv_f8 a, wv_f8 b) { /* a0+a1, a2+a3, b0+b1, b2+b3, a4+a5, a6+a7, b4+b5, b6+b7 */
+  return __builtin_shufflevector(a, b, 0, 2, 8, 10, 4, 6, 12, 14) +
+         __builtin_shufflevector(a, b, 1, 3, 9, 11, 5, 7, 13, 15);
+}
+WV_INLINE wv_f8 tree8x8(const wv_f8 v[8]) {
+  wv_f8 p = pairs8(pairs8(v[0], v[1]), pairs8(v[2], v[3])), q = pairs8(pairs8(v[4], v[5]), pairs8(v[6], v[7]));
+  return __builtin_shufflevector(p, q, 0, 1, 2, 3, 8, 9, 10, 11) +
+         __builtin_shufflevector(p, q, 4, 5, 6, 7, 12, 13, 14, 15);
+}
+
+/* v's lanes moved to where idx says: lane r takes v[idx[r]]. */
+#if defined(__clang__)
+WV_INLINE wv_f8 permute8(wv_f8 v, wv_i8 idx) {
+  wv_f8 o;
+  for (int r = 0; r < 8; r++) o[r] = v[idx[r]];
+  return o;
+}
+WV_INLINE wv_i8 permutei8(wv_i8 v, wv_i8 idx) {
+  wv_i8 o;
+  for (int r = 0; r < 8; r++) o[r] = v[idx[r]];
+  return o;
+}
+#else
+WV_INLINE wv_f8 permute8(wv_f8 v, wv_i8 idx) { return __builtin_shuffle(v, idx); }
+WV_INLINE wv_i8 permutei8(wv_i8 v, wv_i8 idx) { return __builtin_shuffle(v, idx); }
+#endif
 
 /* Shade the samples s[k] of pixels slot[k] (lanes with live[k]) and add them
  * into their pixels' sums. uniform: one pixel, eight consecutive samples from a
@@ -128,13 +158,28 @@ WV_INLINE void shade_block(const wv_camera_rig *rig, const wv_fabric *fab, chunk
       }
     return;
   }
-  for (unsigned bits = wv_bits_8(live); bits; bits &= bits - 1) {
-    int k = __builtin_ctz(bits), i = slot[k], r = s[k] % WV_ACC_ROWS;
-    for (int c = 0; c < 3; c++) C->acc[i][c][r] += rad[c][k];
-    if (rig->transmit) C->open[i][r] += open[k];
+  /* Lanes of several pixels: each pixel's lanes moved to their rows (a pixel has at most
+   * one sample per row here, fewer than 8 left), added with zeros in its other rows,
+   * which leave the sums as they are (they start at +0 and never become -0). */
+  unsigned bits = wv_bits_8(live);
+  for (int i = slot[__builtin_ctz(bits)]; bits; i++) {
+    wv_i8 idx = WV_IOTA8, in = wv_splati8(0);
+    for (unsigned b = bits; b; b &= b - 1) {
+      int k = __builtin_ctz(b), r = s[k] % WV_ACC_ROWS;
+      if (slot[k] != i) continue;
+      idx[r] = k, in[r] = -1;
+      bits &= ~(1u << k);
+    }
+    if (!wv_any(in)) continue; /* a pixel whose samples here all missed */
+    for (int c = 0; c < 3; c++) C->acc[i][c] += wv_sel(in, permute8(rad[c], idx), zero);
+    if (rig->transmit) C->open[i] += wv_sel(in, permute8(open, idx), zero);
     if (grad) {
-      int ty = G.warp[k] ? WV_WARP : WV_WEFT;
-      for (int j = 0; j < WV_J_COUNT; j++) C->J[i][ty][j][r] += G.J[j][k];
+      wv_i8 warp = in & permutei8(G.warp, idx), weft = in & ~warp;
+      for (int j = 0; j < WV_J_COUNT; j++) {
+        wv_f8 v = permute8(G.J[j], idx);
+        C->J[i][WV_WARP][j] += wv_sel(warp, v, zero);
+        C->J[i][WV_WEFT][j] += wv_sel(weft, v, zero);
+      }
     }
   }
 }
@@ -144,7 +189,7 @@ WV_INLINE void render_chunk(const wv_camera_rig *rig, const wv_fabric *fab, chun
                             float (*rad)[3], wv_grad_pixel *gp, int grad) {
   int nx, ny;
   wv_pixel_grid(spp, &nx, &ny);
-  memset(C, 0, sizeof *C);
+  memset(C, 0, grad ? sizeof *C : offsetof(chunk, J)); /* the derivative sums only when made */
   for (int i = 0; i < n; i++) {
     wv_footprint fp;
     wv_footprint_prepare(rig, px0 + i, py, &fp);
@@ -167,7 +212,16 @@ WV_INLINE void render_chunk(const wv_camera_rig *rig, const wv_fabric *fab, chun
     shade_block(rig, fab, C, px0, py, nx, ny, slot, full + (g - slot * t), g < n * t, 0, grad);
   }
   for (int i = 0; i < n; i++) {
-    float tot[3];
+    float tot[3], sums[2 * WV_J_COUNT] = {0};
+    if (grad) { /* the sums eight at a time */
+      const wv_f8 *J = &C->J[i][0][0];
+      int j = 0;
+      for (; j + 8 <= 2 * WV_J_COUNT; j += 8) {
+        wv_f8 t = tree8x8(J + j);
+        memcpy(sums + j, &t, sizeof t);
+      }
+      for (; j < 2 * WV_J_COUNT; j++) sums[j] = tree8(J[j]);
+    }
     for (int c = 0; c < 3; c++) tot[c] = tree8(C->acc[i][c]) / (float)spp;
     if (rig->transmit) { /* the light seen through the open gaps, out of focus (wv_gap_glow) */
       float glow = wv_gap_glow(rig, px0 + i, py) * (tree8(C->open[i]) / (float)spp);
@@ -178,7 +232,7 @@ WV_INLINE void render_chunk(const wv_camera_rig *rig, const wv_fabric *fab, chun
     if (gp) {
       for (int c = 0; c < 3; c++) gp[i].rad[c] = tot[c];
       for (int y = 0; y < 2; y++)
-        for (int j = 0; j < WV_J_COUNT; j++) gp[i].J[y][j] = grad ? tree8(C->J[i][y][j]) : 0.0f;
+        for (int j = 0; j < WV_J_COUNT; j++) gp[i].J[y][j] = sums[y * WV_J_COUNT + j];
     }
   }
 }

@@ -4,6 +4,7 @@
  * public per-value encoding and its inverse. The per-value response itself is
  * sensor/response_impl.h. */
 #include <math.h>
+#include <omp.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,6 +43,7 @@ double wv_response_mask(const wv_scene *s, int x, int y) {
 }
 
 void wv_scene_response(const wv_scene *s, const wv_image *rad, wv_image *cap) {
+#pragma omp parallel for schedule(static)
   for (int y = 0; y < rad->h; y++)
     for (int x = 0; x < rad->w; x++) {
       double m = wv_response_mask(s, x, y);
@@ -51,60 +53,80 @@ void wv_scene_response(const wv_scene *s, const wv_image *rad, wv_image *cap) {
     }
 }
 
-/* One 1-D pass along x or y: out += K in, or K^T in when adjoint. Rows along x, and
- * column bands along y (whole rows of memory at a time), go to separate threads: each
- * writes only its own, and every value sums its terms in the same order as one thread
- * would (k ascending for each source pixel), so the result does not depend on the
- * number of threads. */
-static void psf_pass(const double *wk, int r, int w, int h, int c, int along_y, const double *in, double *out,
-                     int adjoint) {
-  if (!along_y) {
-    /* Every value sums its terms in the order of the plain loop "for each i, for each k":
-     * a value of K in takes k ascending, a value of K^T in (sources i ascending) k
-     * descending. Values farther than r from both ends take no clamped term, so they are
-     * summed a whole row at a time, one tap at a time (vectorised); the 2r at the ends
-     * keep the plain loop. */
-    int lo = r < w ? r : w, hi = w - r > lo ? w - r : lo; /* [lo, hi): the inner values */
-#pragma omp parallel for schedule(static)
-    for (int j = 0; j < h; j++) {
-      const double *ir = in + (size_t)j * w * c;
-      double *orow = out + (size_t)j * w * c;
-      for (int kk = 0; kk <= 2 * r; kk++) {
-        int k = adjoint ? r - kk : kk - r;
-        double wt = wk[k < 0 ? -k : k];
-        /* inner value q: K takes in[q + k], K^T in[q - k] */
-        const double *src = ir + (ptrdiff_t)(adjoint ? -k : k) * c;
-        for (size_t e = (size_t)lo * c; e < (size_t)hi * c; e++) orow[e] += wt * src[e];
-      }
-      for (int i = 0; i < w; i++) {
-        if (!adjoint && i >= lo && i < hi) continue;
-        if (adjoint && i >= lo + r && i < hi - r) continue; /* its terms all land on inner values */
-        for (int k = -r; k <= r; k++) {
-          int q = i + k < 0 ? 0 : i + k >= w ? w - 1 : i + k; /* clamped edge */
-          if (adjoint && q >= lo && q < hi) continue;         /* summed above */
-          double wt = wk[k < 0 ? -k : k];
-          for (int ch = 0; ch < c; ch++) {
-            if (adjoint) orow[(size_t)q * c + ch] += wt * ir[(size_t)i * c + ch];
-            else orow[(size_t)i * c + ch] += wt * ir[(size_t)q * c + ch];
-          }
-        }
-      }
+/* The camera blur, K = Ky Kx: a 1-D Gaussian along x on each row, then along y.
+ * Every value of K v sums its terms with k ascending (v at the clamped i + k); every
+ * value q of K^T v sums them in the order of the plain transpose loop "for each source
+ * i ascending, for each k ascending, add to clamp(i + k)". Values whose terms reach no
+ * clamped edge take the same sum either way (the kernel is symmetric), so a row's inner
+ * values are summed a whole row at a time, one tap at a time (vectorised), and only the
+ * r values at each end take the loops with clamping. Everything below follows these
+ * orders, so a value does not depend on the threads, the bands or the path. */
+
+#define PSF_R_MAX (3 * (int)WV_PSF_MAX_SIGMA + 1) /* the largest radius, ceil(3 sigma) */
+#define PSF_TERMS_MAX (2 * (2 * PSF_R_MAX + 1) * (2 * PSF_R_MAX + 1)) /* of a value of K^T or dK */
+
+/* out[e] = sum over the terms t in order of wt[t] * src[t][e], e < m, each value summed
+ * term after term from 0; a block of values at a time, so the sums stay in cache. */
+WV_SIMD_CLONES
+static void psf_terms(int nt, const double *wt, const double *const *src, size_t m, double *restrict out) {
+  enum { B = 64 };
+  for (size_t e0 = 0; e0 < m; e0 += B) {
+    size_t nb = m - e0 < B ? m - e0 : B;
+    double acc[B] = {0};
+    for (int t = 0; t < nt; t++) {
+      const double *restrict s = src[t] + e0;
+      double w = wt[t];
+#pragma omp simd
+      for (size_t j = 0; j < nb; j++) acc[j] += w * s[j];
     }
-    return;
+    memcpy(out + e0, acc, nb * sizeof *out);
   }
-  int row = w * c, band = 256, nb = (row + band - 1) / band;
-#pragma omp parallel for schedule(static)
-  for (int b = 0; b < nb; b++) {
-    int x0 = b * band, x1 = x0 + band < row ? x0 + band : row;
-    for (int i = 0; i < h; i++)
+}
+
+/* One line of n values (c interleaved channels) along x: out = K in, or K^T in. */
+static void psf_line(const double *wk, int r, int n, int c, const double *in, double *out, int adjoint) {
+  int lo = r < n ? r : n, hi = n - r > lo ? n - r : lo; /* [lo, hi): the inner values */
+  double wt[2 * PSF_R_MAX + 1];
+  const double *src[2 * PSF_R_MAX + 1];
+  if (hi > lo) {
+    for (int k = -r; k <= r; k++) /* K: in[q + k], k ascending; K^T: in[q - k], its sources ascending */
+      wt[k + r] = wk[k < 0 ? -k : k], src[k + r] = in + (ptrdiff_t)(lo + k) * c;
+    psf_terms(2 * r + 1, wt, src, (size_t)(hi - lo) * c, out + (size_t)lo * c);
+  }
+  for (int q = 0; q < n; q++) {
+    if (q == lo && hi > lo) q = hi; /* the inner values are done */
+    if (q >= n) break;
+    double *o = out + (size_t)q * c;
+    for (int ch = 0; ch < c; ch++) o[ch] = 0;
+    if (!adjoint) {
       for (int k = -r; k <= r; k++) {
-        int q = i + k < 0 ? 0 : i + k >= h ? h - 1 : i + k;
-        double wt = wk[k < 0 ? -k : k];
-        const double *src = in + (size_t)(adjoint ? i : q) * row;
-        double *dst = out + (size_t)(adjoint ? q : i) * row;
-        for (int x = x0; x < x1; x++) dst[x] += wt * src[x];
+        int i = q + k < 0 ? 0 : q + k >= n ? n - 1 : q + k; /* clamped edge */
+        for (int ch = 0; ch < c; ch++) o[ch] += wk[k < 0 ? -k : k] * in[(size_t)i * c + ch];
+      }
+      continue;
+    }
+    for (int i = q - r < 0 ? 0 : q - r; i <= q + r && i < n; i++)
+      for (int k = -r; k <= r; k++) {
+        int t = i + k < 0 ? 0 : i + k >= n ? n - 1 : i + k;
+        if (t != q) continue;
+        for (int ch = 0; ch < c; ch++) o[ch] += wk[k < 0 ? -k : k] * in[(size_t)i * c + ch];
       }
   }
+}
+
+/* The terms of row q of the blur along y of h rows, appended to wt / src: K takes rows
+ * clamp(q + k), K^T the rows i with clamp(i + k) = q, in the orders above. Source row i
+ * is ring[i % slots]. Returns the new count. */
+static int psf_column(const double *wk, int r, int h, int q, int adjoint, double *const *ring, int slots, int nt,
+                      double *wt, const double **src) {
+  for (int i = adjoint ? (q - r < 0 ? 0 : q - r) : 0; i <= (adjoint ? q + r : 0) && i < h; i++)
+    for (int k = -r; k <= r; k++) {
+      int t = (adjoint ? i : q) + k;
+      t = t < 0 ? 0 : t >= h ? h - 1 : t;
+      if (adjoint && t != q) continue;
+      wt[nt] = wk[k < 0 ? -k : k], src[nt++] = ring[(adjoint ? i : t) % slots];
+    }
+  return nt;
 }
 
 /* The 1-D kernel of the camera blur: wk[0..r] (symmetric, summing to 1 over -r..r) and,
@@ -126,46 +148,134 @@ static wv_status psf_check(double sigma, wv_error *err) {
   return WV_OK;
 }
 
-wv_status wv_psf_apply(double sigma, int w, int h, int c, const double *in, double *out, int adjoint,
-                       wv_error *err) {
-  size_t n = (size_t)w * h * c;
-  if (!(sigma > 0)) {
-    memcpy(out, in, n * sizeof *out);
-    return WV_OK;
+/* Rows y0 .. y1-1 of the result, with a ring of 2r + 1 prepared source rows: K's are
+ * Kx of the input rows, K^T's the input rows, dK's both Kx and dKx of them. */
+static void psf_band(const wv_psf_stream *ps, const double *wk, const double *dwk, int r, int y0, int y1,
+                     double *buf) {
+  size_t m = (size_t)ps->w * ps->c;
+  int slots = 2 * r + 1, h = ps->h;
+  double *ring[2 * PSF_R_MAX + 1], *dring[2 * PSF_R_MAX + 1];
+  for (int j = 0; j < slots; j++) ring[j] = buf + j * m, dring[j] = buf + (slots + j) * m;
+  double *in = buf + 2 * slots * m, *out = in + m, *row = out + m;
+  int next = y0 - r < 0 ? 0 : y0 - r; /* the next source row to prepare */
+  for (int q = y0; q < y1; q++) {
+    for (; next <= q + r && next < h; next++) {
+      double *slot = ring[next % slots];
+      if (ps->op == WV_PSF_KT) {
+        ps->load(ps->ctx, next, slot);
+        continue;
+      }
+      ps->load(ps->ctx, next, in);
+      psf_line(wk, r, ps->w, ps->c, in, slot, 0);
+      if (ps->op == WV_PSF_DK) psf_line(dwk, r, ps->w, ps->c, in, dring[next % slots], 0);
+    }
+    double wt[PSF_TERMS_MAX];
+    const double *src[PSF_TERMS_MAX];
+    switch (ps->op) {
+      case WV_PSF_K: psf_terms(psf_column(wk, r, h, q, 0, ring, slots, 0, wt, src), wt, src, m, out); break;
+      case WV_PSF_KT: /* K^T = Kx^T Ky^T */
+        psf_terms(psf_column(wk, r, h, q, 1, ring, slots, 0, wt, src), wt, src, m, row);
+        psf_line(wk, r, ps->w, ps->c, row, out, 1);
+        break;
+      case WV_PSF_DK: { /* dK = dKy Kx + Ky dKx */
+        int nt = psf_column(dwk, r, h, q, 0, ring, slots, 0, wt, src);
+        psf_terms(psf_column(wk, r, h, q, 0, dring, slots, nt, wt, src), wt, src, m, out);
+        break;
+      }
+    }
+    ps->store(ps->ctx, q, out);
   }
-  wv_status st = psf_check(sigma, err);
+}
+
+wv_status wv_psf_run(const wv_psf_stream *ps, wv_error *err) {
+  wv_status st = psf_check(ps->sigma, err);
   if (st) return st;
-  double wk[3 * (int)WV_PSF_MAX_SIGMA + 2];
-  int r = psf_kernel(sigma, wk, NULL);
-  double *tmp = calloc(n, sizeof *tmp);
-  if (!tmp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur");
-  memset(out, 0, n * sizeof *out);
-  /* K = Ky Kx, so K^T = Kx^T Ky^T: the passes in the other order */
-  psf_pass(wk, r, w, h, c, adjoint, in, tmp, adjoint);
-  psf_pass(wk, r, w, h, c, !adjoint, tmp, out, adjoint);
-  free(tmp);
+  size_t m = (size_t)ps->w * ps->c;
+  double wk[3 * (int)WV_PSF_MAX_SIGMA + 2], dwk[3 * (int)WV_PSF_MAX_SIGMA + 2];
+  int r = ps->sigma > 0 ? psf_kernel(ps->sigma, wk, dwk) : 0;
+  if (!(ps->sigma > 0)) wk[0] = 1, dwk[0] = 0; /* K is the identity, dK vanishes */
+  /* bands of rows in any order: each recomputes the 2r source rows it shares with its
+   * neighbours, few against its own */
+  int band = 4 * r > 32 ? 4 * r : 32, nb = (ps->h + band - 1) / band, fail = 0;
+  int threads = ps->threads > 0 ? ps->threads : omp_get_max_threads();
+  if (threads > nb) threads = nb;
+#pragma omp parallel num_threads(threads)
+  {
+    double *buf = malloc((2 * (size_t)(2 * r + 1) + 3) * m * sizeof *buf);
+    if (!buf) {
+#pragma omp atomic write
+      fail = 1;
+    }
+#pragma omp for schedule(dynamic, 1)
+    for (int b = 0; b < nb; b++)
+      if (buf) psf_band(ps, wk, dwk, r, b * band, (b + 1) * band < ps->h ? (b + 1) * band : ps->h, buf);
+    free(buf);
+  }
+  if (fail) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur");
   return WV_OK;
 }
 
+/* wv_psf_apply's rows: a plain image in, a plain image out. */
+typedef struct {
+  const double *in;
+  double *out;
+  size_t m;
+} plain_rows;
+static void plain_load(void *ctx, int y, double *row) {
+  const plain_rows *p = ctx;
+  memcpy(row, p->in + (size_t)y * p->m, p->m * sizeof *row);
+}
+static void plain_store(void *ctx, int y, const double *row) {
+  const plain_rows *p = ctx;
+  memcpy(p->out + (size_t)y * p->m, row, p->m * sizeof *row);
+}
+
+static wv_status psf_plain(wv_psf_op op, double sigma, int w, int h, int c, const double *in, double *out,
+                           wv_error *err) {
+  plain_rows pr = {in, out, (size_t)w * c};
+  wv_psf_stream ps = {.op = op, .sigma = sigma, .w = w, .h = h, .c = c, .load = plain_load, .store = plain_store,
+                      .ctx = &pr};
+  return wv_psf_run(&ps, err);
+}
+
+wv_status wv_psf_apply(double sigma, int w, int h, int c, const double *in, double *out, int adjoint,
+                       wv_error *err) {
+  if (!(sigma > 0)) {
+    memcpy(out, in, (size_t)w * h * c * sizeof *out);
+    return WV_OK;
+  }
+  return psf_plain(adjoint ? WV_PSF_KT : WV_PSF_K, sigma, w, h, c, in, out, err);
+}
+
 wv_status wv_psf_apply_dsigma(double sigma, int w, int h, int c, const double *in, double *out, wv_error *err) {
-  size_t n = (size_t)w * h * c;
-  memset(out, 0, n * sizeof *out);
-  if (!(sigma > 0)) return WV_OK; /* every derivative of exp(-k^2 / 2 sigma^2) vanishes at 0 */
-  wv_status st = psf_check(sigma, err);
-  if (st) return st;
-  double wk[3 * (int)WV_PSF_MAX_SIGMA + 2], dwk[3 * (int)WV_PSF_MAX_SIGMA + 2];
-  int r = psf_kernel(sigma, wk, dwk);
-  double *tmp = malloc(n * sizeof *tmp);
-  if (!tmp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur's derivative");
-  /* K = Ky Kx: dK = dKy Kx + Ky dKx */
-  memset(tmp, 0, n * sizeof *tmp);
-  psf_pass(wk, r, w, h, c, 0, in, tmp, 0);
-  psf_pass(dwk, r, w, h, c, 1, tmp, out, 0);
-  memset(tmp, 0, n * sizeof *tmp);
-  psf_pass(dwk, r, w, h, c, 0, in, tmp, 0);
-  psf_pass(wk, r, w, h, c, 1, tmp, out, 0);
-  free(tmp);
-  return WV_OK;
+  if (!(sigma > 0)) { /* every derivative of exp(-k^2 / 2 sigma^2) vanishes at 0 */
+    memset(out, 0, (size_t)w * h * c * sizeof *out);
+    return WV_OK;
+  }
+  return psf_plain(WV_PSF_DK, sigma, w, h, c, in, out, err);
+}
+
+/* wv_scene_capture's rows: the radiance image in, the response of the blurred rows out. */
+typedef struct {
+  const wv_scene *s;
+  const wv_image *rad;
+  wv_image *cap;
+} capture_rows;
+static void capture_load(void *ctx, int y, double *row) {
+  const capture_rows *p = ctx;
+  const float *in = wv_image_px(p->rad, 0, y);
+  for (int i = 0; i < p->rad->w * p->rad->c; i++) row[i] = in[i];
+}
+static void capture_store(void *ctx, int y, const double *row) {
+  const capture_rows *p = ctx;
+  float *out = wv_image_px(p->cap, 0, y);
+  for (int x = 0; x < p->cap->w; x++) {
+    double m = wv_response_mask(p->s, x, y);
+    for (int ch = 0; ch < p->cap->c; ch++) {
+      size_t i = (size_t)x * p->cap->c + ch;
+      out[i] = wv_respond_f(p->s, m, (float)row[i], NULL);
+    }
+  }
 }
 
 wv_status wv_scene_capture(const wv_scene *s, const wv_image *rad, wv_image *cap, wv_error *err) {
@@ -173,17 +283,16 @@ wv_status wv_scene_capture(const wv_scene *s, const wv_image *rad, wv_image *cap
     wv_scene_response(s, rad, cap);
     return WV_OK;
   }
-  size_t n = (size_t)rad->w * rad->h * rad->c;
-  double *a = malloc(2 * n * sizeof *a);
-  if (!a) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the camera blur");
-  for (size_t i = 0; i < n; i++) a[i] = rad->data[i];
-  wv_status st = wv_psf_apply(s->psf_sigma, rad->w, rad->h, rad->c, a, a + n, 0, err);
-  if (!st) {
-    wv_image b = *rad;
-    b.data = cap->data; /* the blurred radiance, then the response in place */
-    for (size_t i = 0; i < n; i++) cap->data[i] = (float)a[n + i];
-    wv_scene_response(s, &b, cap);
+  wv_image copy = {0}; /* in place: the blur reads rows the response has written */
+  if (cap->data == rad->data) {
+    wv_status st = wv_image_alloc(&copy, rad->w, rad->h, rad->c, err);
+    if (st) return st;
+    memcpy(copy.data, rad->data, sizeof(float) * rad->w * rad->h * rad->c);
   }
-  free(a);
+  capture_rows cr = {s, copy.data ? &copy : rad, cap};
+  wv_psf_stream ps = {.op = WV_PSF_K, .sigma = s->psf_sigma, .w = rad->w, .h = rad->h, .c = rad->c,
+                      .load = capture_load, .store = capture_store, .ctx = &cr};
+  wv_status st = wv_psf_run(&ps, err);
+  wv_image_free(&copy);
   return st;
 }

@@ -57,6 +57,23 @@ double wv_encode_slope(const wv_scene *s, double linear);
 /* exp(-d^2 / sigma^2), d the distance in pixels of pixel (x, y)'s centre from the centre
  * of a w x h image: the form of the falloff mask and of the gap glow. */
 double wv_pixel_gaussian(int w, int h, int x, int y, double sigma);
+/* The camera blur (wv_psf_apply) streamed by rows: K, its transpose or its derivative by
+ * sigma applied to an image that load delivers row by row (row y's w * c values) and
+ * store takes back row by row, bands of rows on parallel threads, with no image-sized
+ * buffer. store may be called from several threads at once, once for each row. The
+ * values are wv_psf_apply's and wv_psf_apply_dsigma's, bit for bit. sigma <= 0: K is
+ * the identity and dK zero. */
+typedef enum { WV_PSF_K, WV_PSF_KT, WV_PSF_DK } wv_psf_op;
+typedef struct {
+  wv_psf_op op;
+  double sigma;
+  int w, h, c;
+  int threads; /* 0: OpenMP's default */
+  void (*load)(void *ctx, int y, double *row);
+  void (*store)(void *ctx, int y, const double *row);
+  void *ctx;
+} wv_psf_stream;
+wv_status wv_psf_run(const wv_psf_stream *ps, wv_error *err);
 /* The falloff mask at pixel (x, y) of the scene's full image (1 without falloff). */
 double wv_response_mask(const wv_scene *s, int x, int y);
 /* The gap glow's radiance at pixel (x, y) of the rig's full image per unit of open area
