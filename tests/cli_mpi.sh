@@ -52,6 +52,12 @@ for _ in $(seq 400); do
 done
 kill -TERM $job 2>/dev/null
 wait $job 2>/dev/null
+# mpirun can return before its ranks have exited; the resume waits for the lock's holder.
+holder=$(awk '{print $2}' "$T/k/woven.lock" 2>/dev/null)
+for _ in $(seq 600); do
+  [[ -n $holder ]] && kill -0 "$holder" 2>/dev/null || break
+  sleep 0.05
+done
 check "resume after a kill, one process" 0 '"samples": 208' -- ds --per-pattern 13 -o "$T/k" --json
 check "extend, mpirun -n 2" 0 '"rendered"' -- "${MPI[@]}" "$WOVEN" dataset --scene "$T/tiny.json" --seed 5 \
   --jobs 1 --per-pattern 15 -o "$T/k" --json
