@@ -294,7 +294,7 @@ static void uv_gradient(const wv_mesh *m, const uint32_t *ix, float gu[3], float
   }
 }
 
-void wv_faces_make(const wv_mesh *m, wv_face *out, wv_uv_grad *grad) {
+void wv_faces_make(const wv_mesh *m, wv_face *out, wv_face_uv *fuv, wv_uv_grad *grad) {
   for (int t = 0; t < m->nt; t++) {
     const uint32_t *ix = m->idx + 3 * (size_t)t;
     const float *p0 = m->pos + 3 * ix[0], *p1 = m->pos + 3 * ix[1], *p2 = m->pos + 3 * ix[2];
@@ -306,6 +306,14 @@ void wv_faces_make(const wv_mesh *m, wv_face *out, wv_uv_grad *grad) {
     normalize(f->ng);
     for (int k = 0; k < 3; k++) memcpy(f->nrm[k], m->nrm + 3 * ix[k], sizeof f->nrm[k]);
     if (grad) uv_gradient(m, ix, grad[t].gu, grad[t].gv);
+    if (!fuv) continue;
+    wv_face_uv *g = &fuv[t];
+    memset(g, 0, sizeof *g);
+    g->w_sign = m->tan ? m->tan[4 * ix[0] + 3] : 1.0f;
+    for (int k = 0; k < 3; k++) {
+      memcpy(g->uv[k], m->uv + 2 * ix[k], sizeof g->uv[k]);
+      if (m->tan) memcpy(g->tan[k], m->tan + 4 * ix[k], sizeof g->tan[k]);
+    }
   }
 }
 
@@ -332,8 +340,6 @@ static float back_prob(const wv_fabric *f) {
 /* Fills the surface at a hit; wo points back along the ray. */
 static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_hit *hit, const float o[3],
                          const float d[3], int camera, surface *sf) {
-  const wv_mesh *m = &c->w->meshes[hit->geom];
-  const uint32_t *ix = m->idx + 3 * (size_t)hit->prim;
   float b0 = 1 - hit->b1 - hit->b2, bw[3] = {b0, hit->b1, hit->b2};
   const wv_face *fc = &c->w->faces[hit->geom][hit->prim];
   for (int i = 0; i < 3; i++) sf->p[i] = o[i] + hit->t * d[i], sf->ng[i] = fc->ng[i], sf->ns[i] = 0;
@@ -352,13 +358,11 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   if (sf->mat->kind != WV_MAT_FABRIC) return;
   if (!c->s->opaque) sf->trans = 1, sf->pback = back_prob(sf->mat->fab);
   /* fabric frame: x along the interpolated u tangent, made orthogonal to ns; y = +-(ns x t) toward +v */
-  float w_sign = 1;
+  const wv_face_uv *fu = &c->w->face_uv[hit->geom][hit->prim];
+  float w_sign = fu->w_sign;
   for (int i = 0; i < 3; i++) sf->t[i] = 0;
-  if (m->tan) {
-    for (int k = 0; k < 3; k++)
-      for (int i = 0; i < 3; i++) sf->t[i] += bw[k] * m->tan[4 * ix[k] + i];
-    w_sign = m->tan[4 * ix[0] + 3];
-  }
+  for (int k = 0; k < 3; k++)
+    for (int i = 0; i < 3; i++) sf->t[i] += bw[k] * fu->tan[k][i];
   float tn = dot(sf->t, sf->ns);
   for (int i = 0; i < 3; i++) sf->t[i] -= tn * sf->ns[i];
   if (normalize(sf->t) == 0.0f) {
@@ -368,7 +372,7 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   }
   cross(sf->ns, sf->t, sf->b);
   for (int i = 0; i < 3; i++) sf->b[i] *= w_sign;
-  const float *t0 = m->uv + 2 * ix[0], *t1 = m->uv + 2 * ix[1], *t2 = m->uv + 2 * ix[2];
+  const float *t0 = fu->uv[0], *t1 = fu->uv[1], *t2 = fu->uv[2];
   sf->u = b0 * t0[0] + hit->b1 * t1[0] + hit->b2 * t2[0];
   sf->v = b0 * t0[1] + hit->b1 * t1[1] + hit->b2 * t2[1];
   const wv_world_material *mt = sf->mat;
@@ -436,6 +440,16 @@ static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *
 }
 
 static float power_heuristic(float a, float b) { return a * a / (a * a + b * b); }
+
+/* cos and sin of 2 pi u, u in [0, 1): the quarter turns exactly, the rest by the
+ * kernel's polynomials (kernel/fastmath.h, |angle| <= pi / 2, error below 1e-7). */
+static void turn(float u, float *c, float *s) {
+  int k = (int)(4.0f * u); /* 4 u - k is exact */
+  float a = (4.0f * u - (float)k) * (0.5f * PI_F), ca = wv_cos_hp_f(a), sa = wv_sin_hp_f(a);
+  k &= 3;
+  *c = k == 0 ? ca : k == 1 ? -sa : k == 2 ? -ca : sa;
+  *s = k == 0 ? sa : k == 1 ? ca : k == 2 ? -sa : -ca;
+}
 /* The bounce's pdf of direction wi: cosine-weighted about the shading normal
  * (reflection only), or on a transmitting fabric, the side chosen with pback and
  * cosine-weighted about the normal there, times the probability of scattering
@@ -542,7 +556,9 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
       below = u2 < sf.pback;
       u2 = below ? u2 / sf.pback : min2((u2 - sf.pback) / (1.0f - sf.pback), ONE_BELOW);
     }
-    float r = sqrtf(u1), phi = 2 * PI_F * u2, lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(max2(0.0f, 1 - u1));
+    float r = sqrtf(u1), cphi, sphi, lz = sqrtf(max2(0.0f, 1 - u1));
+    turn(u2, &cphi, &sphi);
+    float lx = r * cphi, ly = r * sphi;
     if (below) lz = -lz;
     float a[3], bx[3], by[3];
     a[0] = fabsf(sf.ns[0]) > 0.9f ? 0.0f : 1.0f, a[1] = fabsf(sf.ns[0]) > 0.9f ? 1.0f : 0.0f, a[2] = 0;
@@ -649,6 +665,16 @@ static void draw_depth(const render_ctx *c, thread_state *ts, int px, int py, in
   for (int i = 0; i < m; i++) ts->env[(size_t)depth * spp + idx[i]] = ts->eg[i];
 }
 
+/* Starts fetching what make_surface reads of the n hits (got[i]: a hit), while
+ * the paths before them are handled. */
+static void prefetch_hits(const wv_world *w, const wv_trace_hit *hit, const int *got, int n) {
+  for (int i = 0; i < n; i++) {
+    if (!got[i]) continue;
+    __builtin_prefetch(&w->faces[hit[i].geom][hit[i].prim]);
+    if (w->face_uv[hit[i].geom]) __builtin_prefetch(&w->face_uv[hit[i].geom][hit[i].prim]);
+  }
+}
+
 /* The pixel's spp paths, taken together from vertex to vertex: each vertex's
  * stratified numbers and environment samples are drawn, in batches, only for the
  * paths that reach a surface there, and the paths' shadow rays toward the
@@ -663,12 +689,13 @@ static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, 
   draw_sequence(px, py, spp, s->width, s->seed, NULL, spp, ts->u);
   camera_dirs(&c->cam, px, py, spp, (const float(*)[2])ts->u, ts->dir);
   wv_tracer_intersect_from(w->tracer, c->cam.cpos, (const float(*)[3])ts->dir, spp, ts->hit, ts->got);
+  prefetch_hits(w, ts->hit, ts->got, spp);
   int nyarn = 0;
   for (int j = 0; j < spp; j++) {
     path *p = &P[j];
     memcpy(p->o, c->cam.cpos, sizeof p->o), memcpy(p->d, ts->dir[j], sizeof p->d);
     p->thr[0] = p->thr[1] = p->thr[2] = 1, p->L[0] = p->L[1] = p->L[2] = 0;
-    p->prev_pdf = 0, p->depth = 0, p->bounces = 0, p->got = ts->got[j], p->at = (wv_env_at){0, 0};
+    p->prev_pdf = 0, p->depth = 0, p->bounces = 0, p->got = ts->got[j], p->at = (wv_env_at){0};
     ts->act[j] = j;
     if (!p->got) continue;
     p->hit = ts->hit[j];
@@ -702,9 +729,10 @@ static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, 
         for (int k = 0; k < 3; k++) P[ts->sh_idx[i]].L[k] += P[ts->sh_idx[i]].sh_add[k];
     ts->rays += nb;
     wv_tracer_intersect_n(w->tracer, (const float(*)[3])ts->org, (const float(*)[3])ts->dir, nb, ts->hit, ts->got);
+    prefetch_hits(w, ts->hit, ts->got, nb);
     for (int i = 0; i < nb; i++) { /* the environment's texel of a bounce ray that escapes, read at the next vertex */
       path *p = &P[ts->act[i]];
-      p->got = ts->got[i], p->at = (wv_env_at){0, 0};
+      p->got = ts->got[i], p->at = (wv_env_at){0};
       if (p->got) p->hit = ts->hit[i];
       else if (w->has_env && p->prev_pdf > 0) p->at = wv_envmap_at(&w->env, p->d);
     }

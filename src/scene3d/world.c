@@ -18,6 +18,7 @@ void wv_world_free(wv_world *w) {
   for (int i = 0; i < w->nobjects; i++) wv_mesh_free(&w->meshes[i]);
   for (int i = 0; i < w->nobjects && w->faces; i++) free(w->faces[i]);
   for (int i = 0; i < w->nobjects && w->uv_grad; i++) free(w->uv_grad[i]);
+  for (int i = 0; i < w->nobjects && w->face_uv; i++) free(w->face_uv[i]);
   for (int i = 0; i < w->nmats; i++) {
     free(w->mats[i].fab);
     free(w->mats[i].edits);
@@ -26,7 +27,7 @@ void wv_world_free(wv_world *w) {
   free(w->images);
   wv_tracer_free(w->tracer);
   wv_envmap_free(&w->env);
-  free(w->meshes), free(w->faces), free(w->uv_grad), free(w->material), free(w->mats);
+  free(w->meshes), free(w->faces), free(w->face_uv), free(w->uv_grad), free(w->material), free(w->mats);
   free(w);
 }
 
@@ -193,10 +194,11 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
   w->meshes = calloc((size_t)s->nobjects, sizeof *w->meshes);
   w->faces = calloc((size_t)s->nobjects, sizeof *w->faces);
   w->uv_grad = calloc((size_t)s->nobjects, sizeof *w->uv_grad);
+  w->face_uv = calloc((size_t)s->nobjects, sizeof *w->face_uv);
   w->material = calloc((size_t)s->nobjects, sizeof *w->material);
   w->mats = calloc((size_t)s->nmaterials, sizeof *w->mats);
   w->images = s->nedits ? calloc(2 * (size_t)s->nedits, sizeof *w->images) : NULL;
-  if (!w->meshes || !w->faces || !w->uv_grad || !w->material || !w->mats || (s->nedits && !w->images)) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  if (!w->meshes || !w->faces || !w->uv_grad || !w->face_uv || !w->material || !w->mats || (s->nedits && !w->images)) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
   /* one budget for everything the job holds: maps, meshes, the tracer, the environment */
   budget b = {0, s->mesh_limit_bytes ? s->mesh_limit_bytes : (size_t)WV_MESH_DEFAULT_LIMIT_MB << 20};
   for (int i = 0; i < s->nmaterials && !st; i++, w->nmats++)
@@ -213,15 +215,17 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
     st = make_mesh(s, &s->objects[i], b.limit - b.used, &w->meshes[i], err);
     const char *what = s->objects[i].path ? s->objects[i].path : "a built-in shape";
     if (!st) st = spend(&b, wv_mesh_bytes(w->meshes[i].nv, w->meshes[i].nt), what, err);
-    /* what the path tracer reads per triangle (wv_face; the UV gradients of a fabric's) */
+    /* what the path tracer reads per triangle (wv_face; a fabric's UVs, tangents and
+     * UV gradients), each triangle's records on cache lines of their own */
     const wv_mesh *m = &w->meshes[i];
     int fabric = w->mats[w->material[i]].kind == WV_MAT_FABRIC;
     size_t nt = (size_t)m->nt;
-    if (!st) st = spend(&b, (sizeof(wv_face) + (fabric ? sizeof(wv_uv_grad) : 0)) * nt, what, err);
-    if (!st && (!(w->faces[i] = malloc(sizeof(wv_face) * nt)) ||
+    if (!st) st = spend(&b, (sizeof(wv_face) + (fabric ? sizeof(wv_face_uv) + sizeof(wv_uv_grad) : 0)) * nt, what, err);
+    if (!st && (!(w->faces[i] = aligned_alloc(64, sizeof(wv_face) * (nt ? nt : 1))) ||
+                (fabric && !(w->face_uv[i] = aligned_alloc(64, sizeof(wv_face_uv) * (nt ? nt : 1)))) ||
                 (fabric && !(w->uv_grad[i] = malloc(sizeof(wv_uv_grad) * nt)))))
       st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
-    if (!st) wv_faces_make(m, w->faces[i], w->uv_grad[i]);
+    if (!st) wv_faces_make(m, w->faces[i], w->face_uv[i], w->uv_grad[i]);
   }
   if (!st) {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};

@@ -42,19 +42,29 @@ typedef struct {
   float pad[4];
 } wv_face;
 
+/* Per triangle of a mesh with a fabric on it, what a hit reads next, in one cache
+ * line: its corners' UVs and tangents (the mesh's; 0 without them) and the
+ * tangents' handedness (the first corner's w; 1 without tangents). */
+typedef struct {
+  float uv[3][2];
+  float tan[3][3];
+  float w_sign;
+} wv_face_uv;
+
 /* Per triangle of a mesh with a fabric on it: the UV change per unit move in its
  * plane (rows du/dP and dv/dP). */
 typedef struct {
   float gu[3], gv[3];
 } wv_uv_grad;
 
-/* The faces of mesh m (nt of them) into out, and into grad (unless NULL) their
- * UV gradients. */
-void wv_faces_make(const wv_mesh *m, wv_face *out, wv_uv_grad *grad);
+/* The faces of mesh m (nt of them) into out, and into fuv and grad (unless NULL)
+ * their corners' UVs and tangents and their UV gradients. */
+void wv_faces_make(const wv_mesh *m, wv_face *out, wv_face_uv *fuv, wv_uv_grad *grad);
 
 struct wv_world {
   wv_mesh *meshes; /* one per object */
-  wv_face **faces; /* per object, per triangle */
+  wv_face **faces; /* per object, per triangle (on 64-byte lines) */
+  wv_face_uv **face_uv; /* per object, per triangle (on 64-byte lines); NULL for a mesh without a fabric */
   wv_uv_grad **uv_grad; /* per object, per triangle; NULL for a mesh without a fabric */
   int *material;   /* per object */
   int nobjects;
