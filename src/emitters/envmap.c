@@ -303,7 +303,11 @@ static inline void sincos_small(float x, int short_series, float *s, float *c) {
  * of each uniform number, rescaled: cos theta linear across the row and the
  * longitude across the column (uniform in solid angle), the longitude as a turn
  * of the column's centre. Returns the texel d looks up (rounding at a pixel's edge
- * can move d to its neighbour, and the estimator must use the values of d). */
+ * can move d to its neighbour, and the estimator must use the values of d): the
+ * row by its edges; the column is x itself when the drawn longitude is more than
+ * WV_ENV_MARGIN radians inside its edges, ten times the error of the turn and the
+ * lookup's rounding together (below 2e-6; test_env_pixels), else by its edges. */
+#define WV_ENV_MARGIN 2e-5f
 static inline __attribute__((always_inline)) size_t drawn_dir(const wv_envmap *e, float u1, float u2, int x, int y,
                                                               float d[3]) {
   const float *row = row_cdf(e, y);
@@ -315,9 +319,14 @@ static inline __attribute__((always_inline)) size_t drawn_dir(const wv_envmap *e
   sincos_small((fx - 0.5f) * (2 * PI_F / (float)e->w), e->w >= 8, &sd, &cd);
   const float *c = e->centre_x + 2 * x;
   d[0] = st * (cd * c[0] - sd * c[1]), d[1] = cy, d[2] = st * (cd * c[1] + sd * c[0]);
-  float my, p;
-  to_map(e, d, &my, &p);
-  return (size_t)walk_row(e, my, y) * e->w + walk_col(e, p, x);
+  y = walk_row(e, cy, y);
+  float m = WV_ENV_MARGIN * (float)e->w * (1.0f / (2 * PI_F)); /* the margin as a fraction of the column */
+  if (!(fx > m && fx < 1.0f - m && st > 0.0f)) { /* (at a pole, d has no longitude) */
+    float my, p;
+    to_map(e, d, &my, &p);
+    x = walk_col(e, p, x);
+  }
+  return (size_t)y * e->w + x;
 }
 
 static float no_sample(float d[3], float rgb[3]) {

@@ -22,6 +22,7 @@
 #endif
 
 #define PI_F 3.14159265358979f
+#define INV_PI_F 0.318309886f /* 1 / pi: a product instead of a division */
 #define CMJ_DEPTHS 2 /* path vertices whose light and bounce samples are stratified */
 #define ONE_BELOW 0x1.fffffep-1f /* the largest float below 1 */
 #define PASS_MAX 256 /* path vertices after which a path ends rather than pass through another gap */
@@ -137,13 +138,22 @@ static void cross(const float a[3], const float b[3], float o[3]) {
 }
 static float normalize(float v[3]) {
   float l = sqrtf(dot(v, v));
-  if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
+  if (l > 0) {
+    float inv = 1.0f / l;
+    v[0] *= inv, v[1] *= inv, v[2] *= inv;
+  }
   return l;
 }
 /* fmaxf and fminf as the comparisons they are (a NaN loses to a number), inline:
  * the baseline build calls libm for them. */
-static float max2(float a, float b) { return a >= b || b != b ? a : b; }
-static float min2(float a, float b) { return a <= b || b != b ? a : b; }
+static float max2(float a, float b) {
+  float m = a > b ? a : b; /* maxss; then a NaN b loses (no branches) */
+  return b != b ? a : m;
+}
+static float min2(float a, float b) {
+  float m = a < b ? a : b;
+  return b != b ? a : m;
+}
 static float maxc(const float c[3]) { return max2(c[0], max2(c[1], c[2])); }
 
 /* Edit values at UV (u, v) of a fabric material. */
@@ -203,6 +213,7 @@ typedef struct {
   int spp, K;
   int gaps;                     /* a fabric transmits and has open gaps: paths may pass through */
   float eps;                    /* ray offset */
+  wv_turn_table turn;           /* the bounce's turn about the normal */
   int need[1 + 3 * CMJ_DEPTHS]; /* the stratified dimensions paths use (see rand2) */
 } render_ctx;
 
@@ -340,18 +351,21 @@ static float back_prob(const wv_fabric *f) {
 /* Fills the surface at a hit; wo points back along the ray. */
 static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_hit *hit, const float o[3],
                          const float d[3], int camera, surface *sf) {
-  float b0 = 1 - hit->b1 - hit->b2, bw[3] = {b0, hit->b1, hit->b2};
+  /* in locals (the compiler cannot tell sf from the face and the ray) */
+  const float b1 = hit->b1, b2 = hit->b2, b0 = 1 - b1 - b2, t = hit->t;
   const wv_face *fc = &c->w->faces[hit->geom][hit->prim];
-  for (int i = 0; i < 3; i++) sf->p[i] = o[i] + hit->t * d[i], sf->ng[i] = fc->ng[i], sf->ns[i] = 0;
-  for (int k = 0; k < 3; k++)
-    for (int i = 0; i < 3; i++) sf->ns[i] += bw[k] * fc->nrm[k][i];
-  if (normalize(sf->ns) == 0.0f) memcpy(sf->ns, sf->ng, sizeof sf->ns);
-  if (dot(sf->ns, sf->ng) < 0) /* normals wound against the triangle: trust the normals' side */
-    for (int i = 0; i < 3; i++) sf->ng[i] = -sf->ng[i];
+  float ng[3], ns[3];
+  for (int i = 0; i < 3; i++) {
+    sf->p[i] = o[i] + t * d[i], ng[i] = fc->ng[i];
+    ns[i] = b0 * fc->nrm[0][i] + b1 * fc->nrm[1][i] + b2 * fc->nrm[2][i];
+  }
+  if (normalize(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
+  float flip = dot(ns, ng) < 0 ? -1.0f : 1.0f; /* normals wound against the triangle: trust the normals' side */
   /* two-sided: the side the ray arrives from */
-  if (dot(d, sf->ng) > 0)
-    for (int i = 0; i < 3; i++) sf->ng[i] = -sf->ng[i], sf->ns[i] = -sf->ns[i];
-  if (-dot(d, sf->ns) <= 1e-4f) memcpy(sf->ns, sf->ng, sizeof sf->ns); /* shading normal faces away from the viewer */
+  if (flip * dot(d, ng) > 0) flip = -flip, ns[0] = -ns[0], ns[1] = -ns[1], ns[2] = -ns[2];
+  for (int i = 0; i < 3; i++) ng[i] *= flip;
+  if (-dot(d, ns) <= 1e-4f) memcpy(ns, ng, sizeof ns); /* shading normal faces away from the viewer */
+  memcpy(sf->ng, ng, sizeof ng), memcpy(sf->ns, ns, sizeof ns);
   sf->mat_index = c->w->material[hit->geom];
   sf->mat = &c->w->mats[sf->mat_index];
   sf->nfpos = 0, sf->trans = 0, sf->nopen = 0, sf->pback = 0, sf->pscatter = 1;
@@ -359,22 +373,19 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
   if (!c->s->opaque) sf->trans = 1, sf->pback = back_prob(sf->mat->fab);
   /* fabric frame: x along the interpolated u tangent, made orthogonal to ns; y = +-(ns x t) toward +v */
   const wv_face_uv *fu = &c->w->face_uv[hit->geom][hit->prim];
-  float w_sign = fu->w_sign;
-  for (int i = 0; i < 3; i++) sf->t[i] = 0;
-  for (int k = 0; k < 3; k++)
-    for (int i = 0; i < 3; i++) sf->t[i] += bw[k] * fu->tan[k][i];
-  float tn = dot(sf->t, sf->ns);
-  for (int i = 0; i < 3; i++) sf->t[i] -= tn * sf->ns[i];
-  if (normalize(sf->t) == 0.0f) {
-    float a[3] = {fabsf(sf->ns[0]) > 0.9f ? 0.0f : 1.0f, fabsf(sf->ns[0]) > 0.9f ? 1.0f : 0.0f, 0};
-    cross(sf->ns, a, sf->t);
-    normalize(sf->t);
+  float w_sign = fu->w_sign, tg[3], bt[3];
+  for (int i = 0; i < 3; i++) tg[i] = b0 * fu->tan[0][i] + b1 * fu->tan[1][i] + b2 * fu->tan[2][i];
+  float tn = dot(tg, ns);
+  for (int i = 0; i < 3; i++) tg[i] -= tn * ns[i];
+  if (normalize(tg) == 0.0f) {
+    float a[3] = {fabsf(ns[0]) > 0.9f ? 0.0f : 1.0f, fabsf(ns[0]) > 0.9f ? 1.0f : 0.0f, 0};
+    cross(ns, a, tg);
+    normalize(tg);
   }
-  cross(sf->ns, sf->t, sf->b);
-  for (int i = 0; i < 3; i++) sf->b[i] *= w_sign;
-  const float *t0 = fu->uv[0], *t1 = fu->uv[1], *t2 = fu->uv[2];
-  sf->u = b0 * t0[0] + hit->b1 * t1[0] + hit->b2 * t2[0];
-  sf->v = b0 * t0[1] + hit->b1 * t1[1] + hit->b2 * t2[1];
+  cross(ns, tg, bt);
+  for (int i = 0; i < 3; i++) sf->t[i] = tg[i], sf->b[i] = bt[i] * w_sign;
+  sf->u = b0 * fu->uv[0][0] + b1 * fu->uv[1][0] + b2 * fu->uv[2][0];
+  sf->v = b0 * fu->uv[0][1] + b1 * fu->uv[1][1] + b2 * fu->uv[2][1];
   const wv_world_material *mt = sf->mat;
   eval_edits(mt, sf->u, sf->v, &sf->edit);
   sf->fpos = ts->fpos;
@@ -409,27 +420,26 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
 }
 
 /* BSDF x cosine for light arriving from each of nd <= 2 directions wi[j] (world;
- * NULL: not wanted, f[j] = 0), seen from wo: a fabric is shaded for all of them
- * in one call. Light from below the surface passes a transmitting fabric (the
+ * NULL: not wanted, f[j] = 0), seen from wo, given their cosines with the
+ * geometric and the shading normal (side[j], cs[j]): a fabric is shaded for all of
+ * them in one call. Light from below the surface passes a transmitting fabric (the
  * geometric and shading normals agreeing on the side), nothing else. */
-static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *const *wi, const float wo[3],
-                      float (*f)[3]) {
+static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *const *wi, const float *side,
+                      const float *cs, const float wo[3], float (*f)[3]) {
   float li[2][3];
   const float *want[2] = {NULL, NULL};
   int any = 0;
   for (int j = 0; j < nd; j++) {
     f[j][0] = f[j][1] = f[j][2] = 0;
     if (!wi[j]) continue;
-    float side = dot(wi[j], sf->ng);
-    if (side <= 0.0f && !(sf->trans && side < 0.0f)) continue; /* an opaque surface reflects only */
+    if (side[j] <= 0.0f && !(sf->trans && side[j] < 0.0f)) continue; /* an opaque surface reflects only */
     if (sf->mat->kind == WV_MAT_LAMBERT) {
-      float cs = dot(wi[j], sf->ns);
-      if (cs <= 0) continue;
-      for (int c = 0; c < 3; c++) f[j][c] = sf->mat->albedo[c] * cs / PI_F;
+      if (cs[j] <= 0) continue;
+      for (int c = 0; c < 3; c++) f[j][c] = sf->mat->albedo[c] * (cs[j] * INV_PI_F);
       continue;
     }
-    li[j][0] = dot(wi[j], sf->t), li[j][1] = dot(wi[j], sf->b), li[j][2] = dot(wi[j], sf->ns);
-    if ((side > 0.0f) != (li[j][2] > 0.0f)) continue; /* the triangle and the shading normal disagree on the side */
+    li[j][0] = dot(wi[j], sf->t), li[j][1] = dot(wi[j], sf->b), li[j][2] = cs[j];
+    if ((side[j] > 0.0f) != (cs[j] > 0.0f)) continue; /* the triangle and the shading normal disagree on the side */
     want[j] = li[j], any = 1;
     ts->shades += sf->nfpos;
   }
@@ -441,23 +451,22 @@ static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *
 
 static float power_heuristic(float a, float b) { return a * a / (a * a + b * b); }
 
-/* cos and sin of 2 pi u, u in [0, 1): the quarter turns exactly, the rest by the
- * kernel's polynomials (kernel/fastmath.h, |angle| <= pi / 2, error below 1e-7). */
-static void turn(float u, float *c, float *s) {
-  int k = (int)(4.0f * u); /* 4 u - k is exact */
-  float a = (4.0f * u - (float)k) * (0.5f * PI_F), ca = wv_cos_hp_f(a), sa = wv_sin_hp_f(a);
-  k &= 3;
-  *c = k == 0 ? ca : k == 1 ? -sa : k == 2 ? -ca : sa;
-  *s = k == 0 ? sa : k == 1 ? ca : k == 2 ? -sa : -ca;
+/* Unit vectors x and y completing the unit n to an orthonormal frame (Duff et al.,
+ * "Building an orthonormal basis, revisited", 2017): one division, no square root. */
+static void frame(const float n[3], float x[3], float y[3]) {
+  float sg = n[2] >= 0.0f ? 1.0f : -1.0f, a = -1.0f / (sg + n[2]), b = n[0] * n[1] * a;
+  x[0] = 1.0f + sg * n[0] * n[0] * a, x[1] = sg * b, x[2] = -sg * n[0];
+  y[0] = b, y[1] = sg + n[1] * n[1] * a, y[2] = -n[1];
 }
-/* The bounce's pdf of direction wi: cosine-weighted about the shading normal
- * (reflection only), or on a transmitting fabric, the side chosen with pback and
- * cosine-weighted about the normal there, times the probability of scattering
- * here at all (pscatter: not straight through an open gap). */
-static float bounce_pdf(const surface *sf, const float wi[3]) {
-  float cs = dot(wi, sf->ns);
-  if (!sf->trans) return cs > 0 ? cs / PI_F : 0.0f;
-  return (cs > 0 ? 1.0f - sf->pback : sf->pback) * fabsf(cs) / PI_F * sf->pscatter;
+
+/* The bounce's pdf of a direction at cosine cs with the shading normal:
+ * cosine-weighted about the shading normal (reflection only), or on a transmitting
+ * fabric, the side chosen with pback and cosine-weighted about the normal there,
+ * times the probability of scattering here at all (pscatter: not straight through
+ * an open gap). */
+static float bounce_pdf(const surface *sf, float cs) {
+  if (!sf->trans) return cs > 0 ? cs * INV_PI_F : 0.0f;
+  return (cs > 0 ? 1.0f - sf->pback : sf->pback) * fabsf(cs) * INV_PI_F * sf->pscatter;
 }
 
 /* Area light l hit by the ray (o, d) before tmax: distance and the light's cosine. */
@@ -528,6 +537,7 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
   /* the environment's sample and the bounce direction first: the surface is
    * evaluated for both in one call */
   float ewi[3] = {0, 0, 0}, ele[3] = {0, 0, 0}, epl = 0, bwi[3] = {0, 0, 0}, bpdf = 0, fb[2][3];
+  float side[2] = {0, 0}, cs[2] = {0, 0}; /* the two directions' cosines with the normals ng and ns */
   int env_on = 0;
   if (w->has_env) {
     if (depth < CMJ_DEPTHS) {
@@ -539,14 +549,16 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
       epl = wv_envmap_sample(&w->env, u1, u2, ewi, ele);
     }
     env_on = epl > 0 && maxc(ele) > 0;
+    if (env_on) side[0] = dot(ewi, sf.ng), cs[0] = dot(ewi, sf.ns);
     /* through the sheet, the sample is taken with the probability min(1, 2 pback) (and
      * weighed up by its inverse): behind cloth that transmits little it seldom adds
      * much, and most of it would be shadow rays blocked under the cloth */
-    if (env_on && sf.trans && dot(ewi, sf.ng) < 0) {
+    if (env_on && sf.trans && side[0] < 0) {
       float q = min2(1.0f, 2.0f * sf.pback);
       if (q < 1.0f) {
         env_on = wv_u01(wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 12), s->seed)) < q;
-        for (int k = 0; k < 3; k++) ele[k] /= q;
+        float iq = 1.0f / q;
+        for (int k = 0; k < 3; k++) ele[k] *= iq;
       }
     }
   }
@@ -557,17 +569,17 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
       u2 = below ? u2 / sf.pback : min2((u2 - sf.pback) / (1.0f - sf.pback), ONE_BELOW);
     }
     float r = sqrtf(u1), cphi, sphi, lz = sqrtf(max2(0.0f, 1 - u1));
-    turn(u2, &cphi, &sphi);
+    wv_turn(&c->turn, u2, &cphi, &sphi);
     float lx = r * cphi, ly = r * sphi;
     if (below) lz = -lz;
-    float a[3], bx[3], by[3];
-    a[0] = fabsf(sf.ns[0]) > 0.9f ? 0.0f : 1.0f, a[1] = fabsf(sf.ns[0]) > 0.9f ? 1.0f : 0.0f, a[2] = 0;
-    cross(sf.ns, a, bx), normalize(bx), cross(sf.ns, bx, by);
+    float bx[3], by[3];
+    frame(sf.ns, bx, by);
     for (int k = 0; k < 3; k++) bwi[k] = lx * bx[k] + ly * by[k] + lz * sf.ns[k];
-    bpdf = bounce_pdf(&sf, bwi);
+    side[1] = dot(bwi, sf.ng), cs[1] = dot(bwi, sf.ns);
+    bpdf = bounce_pdf(&sf, cs[1]);
   }
   const float *want[2] = {env_on ? ewi : NULL, bpdf > 0 ? bwi : NULL};
-  eval_bsdf(&sf, ts, 2, want, wo, fb);
+  eval_bsdf(&sf, ts, 2, want, side, cs, wo, fb);
   /* next-event estimation */
   for (int i = 0; i < s->nlights; i++) {
     const wv_light3d *l = &s->lights[i];
@@ -589,7 +601,7 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
         float cosl = -dot(wi, n);
         if (cosl <= 0) continue;
         float pl = dist * dist / ((float)(l->size[0] * l->size[1]) * cosl);
-        wgt = last ? 1.0f : power_heuristic(pl, bounce_pdf(&sf, wi));
+        wgt = last ? 1.0f : power_heuristic(pl, bounce_pdf(&sf, dot(wi, sf.ns)));
         g = 1.0f / pl;
       } else {
         for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
@@ -608,20 +620,21 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
       dist *= 0.9999f;
     }
     if (maxc(li) <= 0) continue;
-    float f[1][3];
+    float f[1][3], lside = dot(wi, sf.ng), lcs = dot(wi, sf.ns);
     const float *lw[1] = {wi};
-    eval_bsdf(&sf, ts, 1, lw, wo, f);
+    eval_bsdf(&sf, ts, 1, lw, &lside, &lcs, wo, f);
     if (maxc(f[0]) <= 0) continue;
     ts->rays++;
-    if (wv_tracer_occluded(w->tracer, dot(wi, sf.ng) > 0 ? org : orgb, wi, 0.0f, dist)) continue;
+    if (wv_tracer_occluded(w->tracer, lside > 0 ? org : orgb, wi, 0.0f, dist)) continue;
     for (int k = 0; k < 3; k++) L[k] += thr[k] * f[0][k] * li[k] * wgt;
   }
   if (env_on && maxc(fb[0]) > 0) {
     ts->rays++;
-    float wgt = last ? 1.0f : power_heuristic(epl, bounce_pdf(&sf, ewi));
+    float wgt = last ? 1.0f : power_heuristic(epl, bounce_pdf(&sf, cs[0]));
     p->shadow = 1;
-    memcpy(p->sh_o, dot(ewi, sf.ng) > 0 ? org : orgb, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
-    for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * wgt / epl;
+    memcpy(p->sh_o, side[0] > 0 ? org : orgb, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
+    float s = wgt / epl;
+    for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * s;
   }
   if (pass) { /* straight on from the far side: the throughput stays (probability and weight both the open fraction) */
     if (depth >= PASS_MAX) return 0;
@@ -631,15 +644,17 @@ static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
     return 1;
   }
   if (last || bpdf <= 0) return 0;
-  for (int k = 0; k < 3; k++) thr[k] *= fb[1][k] / bpdf;
+  float ib = 1.0f / bpdf;
+  for (int k = 0; k < 3; k++) thr[k] *= fb[1][k] * ib;
   float q = min2(0.95f, maxc(thr));
   if (q <= 0) return 0;
   if (p->bounces >= 1) { /* Russian roulette from the third path vertex on */
     uint64_t h = wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 9), s->seed);
     if (wv_u01(h) >= q) return 0;
-    for (int k = 0; k < 3; k++) thr[k] /= q;
+    float iq = 1.0f / q;
+    for (int k = 0; k < 3; k++) thr[k] *= iq;
   }
-  memcpy(o, dot(bwi, sf.ng) > 0 ? org : orgb, sizeof org);
+  memcpy(o, side[1] > 0 ? org : orgb, sizeof org);
   memcpy(d, bwi, sizeof bwi);
   p->prev_pdf = bpdf;
   p->depth++, p->bounces++;
@@ -665,13 +680,22 @@ static void draw_depth(const render_ctx *c, thread_state *ts, int px, int py, in
   for (int i = 0; i < m; i++) ts->env[(size_t)depth * spp + idx[i]] = ts->eg[i];
 }
 
-/* Starts fetching what make_surface reads of the n hits (got[i]: a hit), while
- * the paths before them are handled. */
+/* Starts fetching what make_surface reads of the n hits (got[i]: a hit) into the
+ * second-level cache, while the paths before them are handled (prefetch_path
+ * brings each into the first shortly before its turn). */
 static void prefetch_hits(const wv_world *w, const wv_trace_hit *hit, const int *got, int n) {
   for (int i = 0; i < n; i++) {
     if (!got[i]) continue;
-    __builtin_prefetch(&w->faces[hit[i].geom][hit[i].prim]);
-    if (w->face_uv[hit[i].geom]) __builtin_prefetch(&w->face_uv[hit[i].geom][hit[i].prim]);
+    __builtin_prefetch(&w->faces[hit[i].geom][hit[i].prim], 0, 2);
+    if (w->face_uv[hit[i].geom]) __builtin_prefetch(&w->face_uv[hit[i].geom][hit[i].prim], 0, 2);
+  }
+}
+static void prefetch_path(const wv_world *w, const path *p) {
+  if (p->got) {
+    __builtin_prefetch(&w->faces[p->hit.geom][p->hit.prim]);
+    if (w->face_uv[p->hit.geom]) __builtin_prefetch(&w->face_uv[p->hit.geom][p->hit.prim]);
+  } else if (w->has_env) {
+    __builtin_prefetch(w->env.texel + 4 * p->at.texel);
   }
 }
 
@@ -712,6 +736,7 @@ static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, 
     for (int i = 0; i < n; i++) {
       int j = ts->act[i];
       path *p = &P[j];
+      if (i + 4 < n) prefetch_path(w, &P[ts->act[i + 4]]);
       ts->sample = j, p->shadow = 0;
       int on = path_vertex(c, ts, p);
       if (p->shadow) {
@@ -763,6 +788,7 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
   float extent = w->scene_radius;
   for (int i = 0; i < 3; i++) extent = fmaxf(extent, fabsf(c.cam.cpos[i]));
   c.eps = 2e-5f * extent;
+  wv_turn_table_make(&c.turn);
   /* the stratified dimensions a path can use: camera; per depth environment, area light, bounce */
   int area = 0;
   for (int i = 0; i < s->nlights; i++) area |= s->lights[i].type == WV_LIGHT_AREA;

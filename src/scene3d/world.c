@@ -13,6 +13,13 @@
 #include "util/colour.h"
 #include "woven/io.h"
 
+void wv_turn_table_make(wv_turn_table *t) {
+  for (int k = 0; k < WV_TURN_STEPS; k++) {
+    double a = 2 * 3.14159265358979323846 * k / WV_TURN_STEPS;
+    t->cs[k][0] = (float)cos(a), t->cs[k][1] = (float)sin(a);
+  }
+}
+
 void wv_world_free(wv_world *w) {
   if (!w) return;
   for (int i = 0; i < w->nobjects; i++) wv_mesh_free(&w->meshes[i]);
