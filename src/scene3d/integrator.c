@@ -349,7 +349,7 @@ static float back_prob(const wv_fabric *f) {
 }
 
 /* Fills the surface at a hit; wo points back along the ray. */
-static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_hit *hit, const float o[3],
+static inline __attribute__((always_inline)) void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_hit *hit, const float o[3],
                          const float d[3], int camera, surface *sf) {
   /* in locals (the compiler cannot tell sf from the face and the ray) */
   const float b1 = hit->b1, b2 = hit->b2, b0 = 1 - b1 - b2, t = hit->t;
@@ -424,7 +424,7 @@ static void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_h
  * geometric and the shading normal (side[j], cs[j]): a fabric is shaded for all of
  * them in one call. Light from below the surface passes a transmitting fabric (the
  * geometric and shading normals agreeing on the side), nothing else. */
-static void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *const *wi, const float *side,
+static inline __attribute__((always_inline)) void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *const *wi, const float *side,
                       const float *cs, const float wo[3], float (*f)[3]) {
   float li[2][3];
   const float *want[2] = {NULL, NULL};
@@ -491,7 +491,7 @@ static int hit_area(const wv_light3d *l, const float o[3], const float d[3], flo
  * in p for the caller to trace, with what it adds when unblocked) and, when the
  * path goes on, the next ray in (o, d). Returns 0 when the path ends.
  * ts->sample is the path's sample. */
-static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
+WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
   const wv_scene3d *s = c->s;
   const wv_world *w = c->w;
   const int depth = p->depth;
@@ -704,7 +704,7 @@ static void prefetch_path(const wv_world *w, const path *p) {
  * paths that reach a surface there, and the paths' shadow rays toward the
  * environment and their bounce rays are traced as streams. Each path is the same
  * as traced alone, and the mean is summed in sample order. */
-static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, float out[3]) {
+WV_SIMD_CLONES static void render_pixel(const render_ctx *c, thread_state *ts, int px, int py, float out[3]) {
   const wv_scene3d *s = c->s;
   const wv_world *w = c->w;
   const int spp = c->spp, K = c->K;
