@@ -316,6 +316,9 @@ void wv_faces_make(const wv_mesh *m, wv_face *out, wv_face_uv *fuv, wv_uv_grad *
     cross(e1, e2, f->ng);
     normalize(f->ng);
     for (int k = 0; k < 3; k++) memcpy(f->nrm[k], m->nrm + 3 * ix[k], sizeof f->nrm[k]);
+    f->flat = !memcmp(f->nrm[0], f->nrm[1], sizeof f->nrm[0]) && !memcmp(f->nrm[0], f->nrm[2], sizeof f->nrm[0]) &&
+              normalize(f->nrm[0]) > 0.0f;
+    if (f->flat) memcpy(f->nrm[1], f->nrm[0], sizeof f->nrm[0]), memcpy(f->nrm[2], f->nrm[0], sizeof f->nrm[0]);
     if (grad) uv_gradient(m, ix, grad[t].gu, grad[t].gv);
     if (!fuv) continue;
     wv_face_uv *g = &fuv[t];
@@ -357,9 +360,9 @@ static inline __attribute__((always_inline)) void make_surface(const render_ctx 
   float ng[3], ns[3];
   for (int i = 0; i < 3; i++) {
     sf->p[i] = o[i] + t * d[i], ng[i] = fc->ng[i];
-    ns[i] = b0 * fc->nrm[0][i] + b1 * fc->nrm[1][i] + b2 * fc->nrm[2][i];
+    ns[i] = fc->flat ? fc->nrm[0][i] : b0 * fc->nrm[0][i] + b1 * fc->nrm[1][i] + b2 * fc->nrm[2][i];
   }
-  if (normalize(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
+  if (!fc->flat && normalize(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
   float flip = dot(ns, ng) < 0 ? -1.0f : 1.0f; /* normals wound against the triangle: trust the normals' side */
   /* two-sided: the side the ray arrives from */
   if (flip * dot(d, ng) > 0) flip = -flip, ns[0] = -ns[0], ns[1] = -ns[1], ns[2] = -ns[2];
@@ -630,10 +633,10 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
   }
   if (env_on && maxc(fb[0]) > 0) {
     ts->rays++;
-    float wgt = last ? 1.0f : power_heuristic(epl, bounce_pdf(&sf, cs[0]));
+    /* the power heuristic's weight over the pdf, epl / (epl^2 + bounce pdf^2), in one division */
+    float bp = last ? 0.0f : bounce_pdf(&sf, cs[0]), s = epl / (epl * epl + bp * bp);
     p->shadow = 1;
     memcpy(p->sh_o, side[0] > 0 ? org : orgb, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
-    float s = wgt / epl;
     for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * s;
   }
   if (pass) { /* straight on from the far side: the throughput stays (probability and weight both the open fraction) */
@@ -644,8 +647,12 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
     return 1;
   }
   if (last || bpdf <= 0) return 0;
-  float ib = 1.0f / bpdf;
-  for (int k = 0; k < 3; k++) thr[k] *= fb[1][k] * ib;
+  if (sf.mat->kind == WV_MAT_LAMBERT) { /* (albedo cos / pi) / (cos / pi) */
+    for (int k = 0; k < 3; k++) thr[k] *= side[1] > 0.0f ? sf.mat->albedo[k] : 0.0f;
+  } else {
+    float ib = 1.0f / bpdf;
+    for (int k = 0; k < 3; k++) thr[k] *= fb[1][k] * ib;
+  }
   float q = min2(0.95f, maxc(thr));
   if (q <= 0) return 0;
   if (p->bounces >= 1) { /* Russian roulette from the third path vertex on */

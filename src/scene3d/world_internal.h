@@ -35,11 +35,14 @@ typedef struct {
 } wv_world_image;
 
 /* What a hit on a triangle reads first, in one cache line: its unit geometric
- * normal (the edges' cross product, normalised) and its corners' normals. */
+ * normal (the edges' cross product, normalised) and its corners' normals; flat
+ * (1) when the three are the same, then each normalised (the shading normal
+ * everywhere on the triangle, without interpolating). */
 typedef struct {
   float ng[3];
   float nrm[3][3];
-  float pad[4];
+  int flat;
+  float pad[3];
 } wv_face;
 
 /* Per triangle of a mesh with a fabric on it, what a hit reads next, in one cache
