@@ -16,6 +16,16 @@
 #define PI_F 3.14159265358979f
 #define PI 3.14159265358979323846
 
+/* The batched sampler and the lookup (the path tracer's inner loop) in versions for
+ * AVX-512, AVX2 and plain x86-64, chosen when the program loads, as the shading
+ * kernel's (kernel/lanes.h, WV_SIMD_CLONES; this floor does not include it): the
+ * same operations, so the same results. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11
+#define ENV_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define ENV_CLONES
+#endif
+
 void wv_envmap_free(wv_envmap *e) {
   if (!e) return;
   free(e->rgb), free(e->cdf_row), free(e->cdf_col);
@@ -213,7 +223,7 @@ wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, dou
  * factor sqrt 2), so that a cell of 1 / h holds at most one row's edge. */
 static inline float guide_t(float cy) { return cy >= 0.0f ? sqrtf(1.0f - cy) : 2.0f - sqrtf(1.0f + cy); }
 
-wv_env_at wv_envmap_at(const wv_envmap *e, const float d[3]) {
+ENV_CLONES wv_env_at wv_envmap_at(const wv_envmap *e, const float d[3]) {
   float cy, p;
   to_map(e, d, &cy, &p);
   /* the guides' cells hold at most one edge each (a column spans pi / w of the
@@ -344,7 +354,7 @@ float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float
 
 /* wv_envmap_sample on many numbers, in stages over blocks of draws so that the
  * table reads of different draws (random rows, random texels) overlap. */
-void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_sample *out) {
+ENV_CLONES void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_sample *out) {
   enum { B = 16 };
   for (int j0 = 0; j0 < n; j0 += B) {
     int m = n - j0 < B ? n - j0 : B, y[B], lo[B], hi[B];

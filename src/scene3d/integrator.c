@@ -344,7 +344,7 @@ static void count_open(const render_ctx *c, surface *sf) {
 /* The probability that a fabric's bounce goes through the sheet (a choice of
  * sampling, not of the result): its diffuse transmission at normal incidence
  * (k_t t(T)) against its reflection's albedos (k_d + k_s), within 0.05..0.5. */
-static float back_prob(const wv_fabric *f) {
+float wv_back_prob(const wv_fabric *f) {
   float r = 0, t = 0, tt = WV_CLOTH_TRANSMITTANCE(f->P.thickness);
   for (int y = 0; y < 2; y++) r += maxc(f->P.kd[y]) + maxc(f->P.ks[y]), t += maxc(f->P.kt[y]) * tt;
   float p = r + t > 0 ? t / (r + t) : 0.5f;
@@ -373,7 +373,7 @@ static inline __attribute__((always_inline)) void make_surface(const render_ctx 
   sf->mat = &c->w->mats[sf->mat_index];
   sf->nfpos = 0, sf->trans = 0, sf->nopen = 0, sf->pback = 0, sf->pscatter = 1;
   if (sf->mat->kind != WV_MAT_FABRIC) return;
-  if (!c->s->opaque) sf->trans = 1, sf->pback = back_prob(sf->mat->fab);
+  if (!c->s->opaque) sf->trans = 1, sf->pback = sf->mat->pback;
   /* fabric frame: x along the interpolated u tangent, made orthogonal to ns; y = +-(ns x t) toward +v */
   const wv_face_uv *fu = &c->w->face_uv[hit->geom][hit->prim];
   float w_sign = fu->w_sign, tg[3], bt[3];
@@ -489,6 +489,18 @@ static int hit_area(const wv_light3d *l, const float o[3], const float d[3], flo
   return 1;
 }
 
+/* A path whose ray (o, d) meets nothing: the environment it sees, weighed against
+ * the environment's samples (render_pixel calls it directly without area lights). */
+static inline void escape(const render_ctx *c, path *p) {
+  const wv_world *w = c->w;
+  if (w->has_env && (p->bounces > 0 || c->s->env_visible)) {
+    float le[3], wgt = 1;
+    if (p->prev_pdf > 0) wgt = power_heuristic(p->prev_pdf, wv_envmap_read(&w->env, p->at, le));
+    else wv_envmap_eval(&w->env, p->d, le);
+    for (int k = 0; k < 3; k++) p->L[k] += p->thr[k] * le[k] * wgt;
+  }
+}
+
 /* What the path's ray (o, d) meets at vertex p->depth (p->got, p->hit, p->at):
  * the light it sees there, its shadow ray toward the environment's sample (left
  * in p for the caller to trace, with what it adds when unblocked) and, when the
@@ -509,12 +521,7 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
     for (int k = 0; k < 3; k++) L[k] += thr[k] * (float)l->color[k] * wgt;
   }
   if (!p->got) {
-    if (w->has_env && (p->bounces > 0 || s->env_visible)) {
-      float le[3], wgt = 1;
-      if (p->prev_pdf > 0) wgt = power_heuristic(p->prev_pdf, wv_envmap_read(&w->env, p->at, le));
-      else wv_envmap_eval(&w->env, d, le);
-      for (int k = 0; k < 3; k++) L[k] += thr[k] * le[k] * wgt;
-    }
+    escape(c, p);
     return 0;
   }
   surface sf;
@@ -744,6 +751,10 @@ WV_SIMD_CLONES static void render_pixel(const render_ctx *c, thread_state *ts, i
       int j = ts->act[i];
       path *p = &P[j];
       if (i + 4 < n) prefetch_path(w, &P[ts->act[i + 4]]);
+      if (!p->got && !s->nlights) { /* escaped (no area light it could meet first) */
+        escape(c, p);
+        continue;
+      }
       ts->sample = j, p->shadow = 0;
       int on = path_vertex(c, ts, p);
       if (p->shadow) {

@@ -170,6 +170,7 @@ static wv_status load_material(const wv_material3d *src, const wv_params *overri
   if (!(m->fab = malloc(sizeof *m->fab))) return wv_fail(err, WV_ERR_NOMEM, "out of memory for a fabric");
   if ((st = wv_fabric_prepare(&p, m->fab, err)))
     wv_error_prefix(err, "%s", override ? "--params" : src->params_path);
+  else m->pback = wv_back_prob(m->fab);
   return st;
 }
 

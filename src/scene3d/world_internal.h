@@ -22,6 +22,7 @@ typedef struct {
   wv_fabric *fab;       /* fabric: prepared by the capture renderer's wv_fabric_prepare */
   float uv_mm[2], uv_off[2];
   float albedo[3];      /* lambert */
+  float pback;          /* fabric: wv_back_prob */
   wv_edit_map *edits;
   int nedits;
 } wv_world_material;
@@ -59,6 +60,9 @@ typedef struct {
 typedef struct {
   float gu[3], gv[3];
 } wv_uv_grad;
+
+/* The probability that a fabric's bounce goes through the sheet (integrator.c). */
+float wv_back_prob(const wv_fabric *f);
 
 /* The faces of mesh m (nt of them) into out, and into fuv and grad (unless NULL)
  * their corners' UVs and tangents and their UV gradients. */
