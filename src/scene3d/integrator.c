@@ -155,6 +155,8 @@ static float min2(float a, float b) {
   return b != b ? a : m;
 }
 static float maxc(const float c[3]) { return max2(c[0], max2(c[1], c[2])); }
+/* maxc(c) > 0, without a chain of selects */
+static int any_pos(const float c[3]) { return (c[0] > 0.0f) | (c[1] > 0.0f) | (c[2] > 0.0f); }
 
 /* Edit values at UV (u, v) of a fabric material. */
 static void eval_edits(const wv_world_material *m, float u, float v, fabric_edit *e) {
@@ -351,9 +353,13 @@ float wv_back_prob(const wv_fabric *f) {
   return min2(0.5f, max2(0.05f, p));
 }
 
-/* Fills the surface at a hit; wo points back along the ray. */
-static inline __attribute__((always_inline)) void make_surface(const render_ctx *c, thread_state *ts, const wv_trace_hit *hit, const float o[3],
-                         const float d[3], int camera, surface *sf) {
+static void fabric_surface(const render_ctx *c, thread_state *ts, const wv_trace_hit *hit, int camera, surface *sf);
+
+/* Fills the surface at a hit; wo points back along the ray. The path tracer's hot
+ * path: a fabric's frame and positions are filled out of line (fabric_surface). */
+static inline __attribute__((always_inline)) void make_surface(const render_ctx *c, thread_state *ts,
+                                                               const wv_trace_hit *hit, const float o[3],
+                                                               const float d[3], int camera, surface *sf) {
   /* in locals (the compiler cannot tell sf from the face and the ray) */
   const float b1 = hit->b1, b2 = hit->b2, b0 = 1 - b1 - b2, t = hit->t;
   const wv_face *fc = &c->w->faces[hit->geom][hit->prim];
@@ -372,7 +378,13 @@ static inline __attribute__((always_inline)) void make_surface(const render_ctx 
   sf->mat_index = c->w->material[hit->geom];
   sf->mat = &c->w->mats[sf->mat_index];
   sf->nfpos = 0, sf->trans = 0, sf->nopen = 0, sf->pback = 0, sf->pscatter = 1;
-  if (sf->mat->kind != WV_MAT_FABRIC) return;
+  if (sf->mat->kind == WV_MAT_FABRIC) fabric_surface(c, ts, hit, camera, sf);
+}
+
+/* A fabric's part of the surface at a hit (after make_surface's). */
+static __attribute__((noinline)) void fabric_surface(const render_ctx *c, thread_state *ts, const wv_trace_hit *hit,
+                                                     int camera, surface *sf) {
+  const float b1 = hit->b1, b2 = hit->b2, b0 = 1 - b1 - b2, *ns = sf->ns;
   if (!c->s->opaque) sf->trans = 1, sf->pback = sf->mat->pback;
   /* fabric frame: x along the interpolated u tangent, made orthogonal to ns; y = +-(ns x t) toward +v */
   const wv_face_uv *fu = &c->w->face_uv[hit->geom][hit->prim];
@@ -489,6 +501,76 @@ static int hit_area(const wv_light3d *l, const float o[3], const float d[3], flo
   return 1;
 }
 
+/* Next-event estimation toward the point, spot, directional and area lights: one
+ * shadow ray each (out of the hot path; scenes with the environment alone skip it). */
+static __attribute__((noinline)) void light_samples(const render_ctx *c, thread_state *ts, const surface *sf,
+                                                    int depth, int last, const float wo[3], const float org[3],
+                                                    const float orgb[3], const float thr[3], float L[3]) {
+  const wv_scene3d *s = c->s;
+  const wv_world *w = c->w;
+  for (int i = 0; i < s->nlights; i++) {
+    const wv_light3d *l = &s->lights[i];
+    float wi[3], li[3], dist = INFINITY, wgt = 1;
+    if (l->type == WV_LIGHT_DIRECTIONAL) {
+      for (int k = 0; k < 3; k++) wi[k] = (float)l->dir[k], li[k] = (float)l->color[k];
+    } else {
+      float lp[3], g = 1;
+      for (int k = 0; k < 3; k++) lp[k] = (float)l->pos[k];
+      if (l->type == WV_LIGHT_AREA) {
+        float u1, u2, n[3] = {(float)l->dir[0], (float)l->dir[1], (float)l->dir[2]}, ex[3], ey[3];
+        float a[3] = {fabsf(n[1]) > 0.99f ? 1.0f : 0.0f, fabsf(n[1]) > 0.99f ? 0.0f : 1.0f, 0};
+        cross(a, n, ex), normalize(ex), cross(n, ex, ey);
+        rand2(c, ts, depth, 1, &u1, &u2);
+        for (int k = 0; k < 3; k++)
+          lp[k] += (u1 - 0.5f) * (float)l->size[0] * ex[k] + (u2 - 0.5f) * (float)l->size[1] * ey[k];
+        for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf->p[k];
+        dist = normalize(wi);
+        float cosl = -dot(wi, n);
+        if (cosl <= 0) continue;
+        float pl = dist * dist / ((float)(l->size[0] * l->size[1]) * cosl);
+        wgt = last ? 1.0f : power_heuristic(pl, bounce_pdf(sf, dot(wi, sf->ns)));
+        g = 1.0f / pl;
+      } else {
+        for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf->p[k];
+        dist = normalize(wi);
+        g = 1.0f / (dist * dist);
+        if (l->type == WV_LIGHT_SPOT) {
+          float ca = -(wi[0] * (float)l->dir[0] + wi[1] * (float)l->dir[1] + wi[2] * (float)l->dir[2]);
+          float c0 = cosf((float)(l->cone_deg * 3.14159265358979 / 180)),
+                c1 = cosf((float)((l->cone_deg - l->blend_deg) * 3.14159265358979 / 180));
+          float x = c1 > c0 ? (ca - c0) / (c1 - c0) : (ca >= c0 ? 1.0f : 0.0f);
+          x = fminf(fmaxf(x, 0.0f), 1.0f);
+          g *= x * x * (3 - 2 * x);
+        }
+      }
+      for (int k = 0; k < 3; k++) li[k] = (float)l->color[k] * g;
+      dist *= 0.9999f;
+    }
+    if (maxc(li) <= 0) continue;
+    float f[1][3], lside = dot(wi, sf->ng), lcs = dot(wi, sf->ns);
+    const float *lw[1] = {wi};
+    eval_bsdf(sf, ts, 1, lw, &lside, &lcs, wo, f);
+    if (maxc(f[0]) <= 0) continue;
+    ts->rays++;
+    if (wv_tracer_occluded(w->tracer, lside > 0 ? org : orgb, wi, 0.0f, dist)) continue;
+    for (int k = 0; k < 3; k++) L[k] += thr[k] * f[0][k] * li[k] * wgt;
+  }
+}
+
+/* The area lights the path's ray (o, d) meets before its hit, weighed against their
+ * samples (out of the hot path). */
+static __attribute__((noinline)) void area_hits(const wv_scene3d *s, path *p) {
+  float tmax = p->got ? p->hit.t : INFINITY;
+  for (int i = 0; i < s->nlights; i++) {
+    const wv_light3d *l = &s->lights[i];
+    float t, cosl;
+    if (l->type != WV_LIGHT_AREA || !hit_area(l, p->o, p->d, tmax, &t, &cosl)) continue;
+    float pl = t * t / ((float)(l->size[0] * l->size[1]) * cosl),
+          wgt = p->prev_pdf > 0 ? power_heuristic(p->prev_pdf, pl) : 1;
+    for (int k = 0; k < 3; k++) p->L[k] += p->thr[k] * (float)l->color[k] * wgt;
+  }
+}
+
 /* A path whose ray (o, d) meets nothing: the environment it sees, weighed against
  * the environment's samples (render_pixel calls it directly without area lights). */
 static inline void escape(const render_ctx *c, path *p) {
@@ -511,15 +593,7 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
   const wv_world *w = c->w;
   const int depth = p->depth;
   float *o = p->o, *d = p->d, *thr = p->thr, *L = p->L;
-  float tmax = p->got ? p->hit.t : INFINITY;
-  for (int i = 0; i < s->nlights; i++) { /* area lights the ray sees before the surface */
-    const wv_light3d *l = &s->lights[i];
-    float t, cosl;
-    if (l->type != WV_LIGHT_AREA || !hit_area(l, o, d, tmax, &t, &cosl)) continue;
-    float pl = t * t / ((float)(l->size[0] * l->size[1]) * cosl),
-          wgt = p->prev_pdf > 0 ? power_heuristic(p->prev_pdf, pl) : 1;
-    for (int k = 0; k < 3; k++) L[k] += thr[k] * (float)l->color[k] * wgt;
-  }
+  if (s->nlights) area_hits(s, p); /* area lights the ray sees before the surface */
   if (!p->got) {
     escape(c, p);
     return 0;
@@ -558,7 +632,7 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
       rand2(c, ts, depth, 0, &u1, &u2);
       epl = wv_envmap_sample(&w->env, u1, u2, ewi, ele);
     }
-    env_on = epl > 0 && maxc(ele) > 0;
+    env_on = epl > 0 && any_pos(ele);
     if (env_on) side[0] = dot(ewi, sf.ng), cs[0] = dot(ewi, sf.ns);
     /* through the sheet, the sample is taken with the probability min(1, 2 pback) (and
      * weighed up by its inverse): behind cloth that transmits little it seldom adds
@@ -590,61 +664,14 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
   }
   const float *want[2] = {env_on ? ewi : NULL, bpdf > 0 ? bwi : NULL};
   eval_bsdf(&sf, ts, 2, want, side, cs, wo, fb);
-  /* next-event estimation */
-  for (int i = 0; i < s->nlights; i++) {
-    const wv_light3d *l = &s->lights[i];
-    float wi[3], li[3], dist = INFINITY, wgt = 1;
-    if (l->type == WV_LIGHT_DIRECTIONAL) {
-      for (int k = 0; k < 3; k++) wi[k] = (float)l->dir[k], li[k] = (float)l->color[k];
-    } else {
-      float lp[3], g = 1;
-      for (int k = 0; k < 3; k++) lp[k] = (float)l->pos[k];
-      if (l->type == WV_LIGHT_AREA) {
-        float u1, u2, n[3] = {(float)l->dir[0], (float)l->dir[1], (float)l->dir[2]}, ex[3], ey[3];
-        float a[3] = {fabsf(n[1]) > 0.99f ? 1.0f : 0.0f, fabsf(n[1]) > 0.99f ? 0.0f : 1.0f, 0};
-        cross(a, n, ex), normalize(ex), cross(n, ex, ey);
-        rand2(c, ts, depth, 1, &u1, &u2);
-        for (int k = 0; k < 3; k++)
-          lp[k] += (u1 - 0.5f) * (float)l->size[0] * ex[k] + (u2 - 0.5f) * (float)l->size[1] * ey[k];
-        for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
-        dist = normalize(wi);
-        float cosl = -dot(wi, n);
-        if (cosl <= 0) continue;
-        float pl = dist * dist / ((float)(l->size[0] * l->size[1]) * cosl);
-        wgt = last ? 1.0f : power_heuristic(pl, bounce_pdf(&sf, dot(wi, sf.ns)));
-        g = 1.0f / pl;
-      } else {
-        for (int k = 0; k < 3; k++) wi[k] = lp[k] - sf.p[k];
-        dist = normalize(wi);
-        g = 1.0f / (dist * dist);
-        if (l->type == WV_LIGHT_SPOT) {
-          float ca = -(wi[0] * (float)l->dir[0] + wi[1] * (float)l->dir[1] + wi[2] * (float)l->dir[2]);
-          float c0 = cosf((float)(l->cone_deg * 3.14159265358979 / 180)),
-                c1 = cosf((float)((l->cone_deg - l->blend_deg) * 3.14159265358979 / 180));
-          float x = c1 > c0 ? (ca - c0) / (c1 - c0) : (ca >= c0 ? 1.0f : 0.0f);
-          x = fminf(fmaxf(x, 0.0f), 1.0f);
-          g *= x * x * (3 - 2 * x);
-        }
-      }
-      for (int k = 0; k < 3; k++) li[k] = (float)l->color[k] * g;
-      dist *= 0.9999f;
-    }
-    if (maxc(li) <= 0) continue;
-    float f[1][3], lside = dot(wi, sf.ng), lcs = dot(wi, sf.ns);
-    const float *lw[1] = {wi};
-    eval_bsdf(&sf, ts, 1, lw, &lside, &lcs, wo, f);
-    if (maxc(f[0]) <= 0) continue;
-    ts->rays++;
-    if (wv_tracer_occluded(w->tracer, lside > 0 ? org : orgb, wi, 0.0f, dist)) continue;
-    for (int k = 0; k < 3; k++) L[k] += thr[k] * f[0][k] * li[k] * wgt;
-  }
-  if (env_on && maxc(fb[0]) > 0) {
+  if (s->nlights) light_samples(c, ts, &sf, depth, last, wo, org, orgb, thr, L); /* next-event estimation */
+  if (env_on && any_pos(fb[0])) {
     ts->rays++;
     /* the power heuristic's weight over the pdf, epl / (epl^2 + bounce pdf^2), in one division */
-    float bp = last ? 0.0f : bounce_pdf(&sf, cs[0]), s = epl / (epl * epl + bp * bp);
+    float bp = last ? 0.0f : bounce_pdf(&sf, cs[0]), ws = epl / (epl * epl + bp * bp);
     p->shadow = 1;
     memcpy(p->sh_o, side[0] > 0 ? org : orgb, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
-    for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * s;
+    for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * ws;
   }
   if (pass) { /* straight on from the far side: the throughput stays (probability and weight both the open fraction) */
     if (depth >= PASS_MAX) return 0;
