@@ -274,12 +274,14 @@ static void guide_check(const float *cdf, int n, float u, int *lo, int *hi) {
   if (*hi > n || !(u < cdf[*hi])) *hi = n;
 }
 
-/* Index i with cdf[i] <= u < cdf[i + 1] (skipping empty intervals), between lo and hi. */
+/* Index i with cdf[i] <= u < cdf[i + 1] (skipping empty intervals), between lo and hi
+ * (cdf[lo] <= u < cdf[hi]): the last i in [lo, hi) with cdf[i] <= u, by halving the
+ * range with a select instead of a branch (the comparisons are not predictable). */
 static int bisect(const float *cdf, int lo, int hi, float u) {
-  while (hi - lo > 1) {
-    int mid = (lo + hi) / 2;
-    if (cdf[mid] <= u) lo = mid;
-    else hi = mid;
+  for (int n = hi - lo; n > 1;) { /* the answer lies in [lo, lo + n) */
+    int half = n / 2;
+    lo = cdf[lo + half] <= u ? lo + half : lo;
+    n -= half;
   }
   return lo;
 }
@@ -355,7 +357,7 @@ float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float
 /* wv_envmap_sample on many numbers, in stages over blocks of draws so that the
  * table reads of different draws (random rows, random texels) overlap. */
 ENV_CLONES void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_sample *out) {
-  enum { B = 16 };
+  enum { B = 32 };
   for (int j0 = 0; j0 < n; j0 += B) {
     int m = n - j0 < B ? n - j0 : B, y[B], lo[B], hi[B];
     wv_env_at at[B];
