@@ -144,6 +144,13 @@ static float normalize(float v[3]) {
   }
   return l;
 }
+/* Unit vectors x and y completing the unit n to an orthonormal frame (Duff et al.,
+ * "Building an orthonormal basis, revisited", 2017): one division, no square root. */
+static void frame(const float n[3], float x[3], float y[3]) {
+  float sg = n[2] >= 0.0f ? 1.0f : -1.0f, a = -1.0f / (sg + n[2]), b = n[0] * n[1] * a;
+  x[0] = 1.0f + sg * n[0] * n[0] * a, x[1] = sg * b, x[2] = -sg * n[0];
+  y[0] = b, y[1] = sg + n[1] * n[1] * a, y[2] = -n[1];
+}
 /* fmaxf and fminf as the comparisons they are (a NaN loses to a number), inline:
  * the baseline build calls libm for them. */
 static float max2(float a, float b) {
@@ -206,6 +213,7 @@ typedef struct {
   int nopen;        /* of the positions, those in an open gap (the path may pass straight through) */
   float pback;      /* probability that a bounce goes through the sheet */
   float pscatter;   /* probability that the path scatters here (not straight through a gap) */
+  const float (*frame)[3]; /* x and y completing ns to an orthonormal frame (a flat face's), or NULL */
 } surface;
 
 typedef struct {
@@ -320,7 +328,11 @@ void wv_faces_make(const wv_mesh *m, wv_face *out, wv_face_uv *fuv, wv_uv_grad *
     for (int k = 0; k < 3; k++) memcpy(f->nrm[k], m->nrm + 3 * ix[k], sizeof f->nrm[k]);
     f->flat = !memcmp(f->nrm[0], f->nrm[1], sizeof f->nrm[0]) && !memcmp(f->nrm[0], f->nrm[2], sizeof f->nrm[0]) &&
               normalize(f->nrm[0]) > 0.0f;
-    if (f->flat) memcpy(f->nrm[1], f->nrm[0], sizeof f->nrm[0]), memcpy(f->nrm[2], f->nrm[0], sizeof f->nrm[0]);
+    if (f->flat) {
+      if (dot(f->nrm[0], f->ng) < 0)
+        for (int i = 0; i < 3; i++) f->ng[i] = -f->ng[i];
+      frame(f->nrm[0], f->nrm[1], f->nrm[2]);
+    }
     if (grad) uv_gradient(m, ix, grad[t].gu, grad[t].gv);
     if (!fuv) continue;
     wv_face_uv *g = &fuv[t];
@@ -363,17 +375,20 @@ static inline __attribute__((always_inline)) void make_surface(const render_ctx 
   /* in locals (the compiler cannot tell sf from the face and the ray) */
   const float b1 = hit->b1, b2 = hit->b2, b0 = 1 - b1 - b2, t = hit->t;
   const wv_face *fc = &c->w->faces[hit->geom][hit->prim];
-  float ng[3], ns[3];
-  for (int i = 0; i < 3; i++) {
-    sf->p[i] = o[i] + t * d[i], ng[i] = fc->ng[i];
-    ns[i] = fc->flat ? fc->nrm[0][i] : b0 * fc->nrm[0][i] + b1 * fc->nrm[1][i] + b2 * fc->nrm[2][i];
+  float ng[3], ns[3], flip = 1;
+  for (int i = 0; i < 3; i++) sf->p[i] = o[i] + t * d[i], ng[i] = fc->ng[i];
+  sf->frame = NULL;
+  if (fc->flat) { /* ng already on the normals' side */
+    memcpy(ns, fc->nrm[0], sizeof ns), sf->frame = &fc->nrm[1];
+  } else {
+    for (int i = 0; i < 3; i++) ns[i] = b0 * fc->nrm[0][i] + b1 * fc->nrm[1][i] + b2 * fc->nrm[2][i];
+    if (normalize(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
+    if (dot(ns, ng) < 0) flip = -1; /* normals wound against the triangle: trust the normals' side */
   }
-  if (!fc->flat && normalize(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
-  float flip = dot(ns, ng) < 0 ? -1.0f : 1.0f; /* normals wound against the triangle: trust the normals' side */
-  /* two-sided: the side the ray arrives from */
+  /* two-sided: the side the ray arrives from (the frame's x and y serve the turned normal too) */
   if (flip * dot(d, ng) > 0) flip = -flip, ns[0] = -ns[0], ns[1] = -ns[1], ns[2] = -ns[2];
   for (int i = 0; i < 3; i++) ng[i] *= flip;
-  if (-dot(d, ns) <= 1e-4f) memcpy(ns, ng, sizeof ns); /* shading normal faces away from the viewer */
+  if (-dot(d, ns) <= 1e-4f) memcpy(ns, ng, sizeof ns), sf->frame = NULL; /* shading normal faces away from the viewer */
   memcpy(sf->ng, ng, sizeof ng), memcpy(sf->ns, ns, sizeof ns);
   sf->mat_index = c->w->material[hit->geom];
   sf->mat = &c->w->mats[sf->mat_index];
@@ -466,13 +481,6 @@ static inline __attribute__((always_inline)) void eval_bsdf(const surface *sf, t
 
 static float power_heuristic(float a, float b) { return a * a / (a * a + b * b); }
 
-/* Unit vectors x and y completing the unit n to an orthonormal frame (Duff et al.,
- * "Building an orthonormal basis, revisited", 2017): one division, no square root. */
-static void frame(const float n[3], float x[3], float y[3]) {
-  float sg = n[2] >= 0.0f ? 1.0f : -1.0f, a = -1.0f / (sg + n[2]), b = n[0] * n[1] * a;
-  x[0] = 1.0f + sg * n[0] * n[0] * a, x[1] = sg * b, x[2] = -sg * n[0];
-  y[0] = b, y[1] = sg + n[1] * n[1] * a, y[2] = -n[1];
-}
 
 /* The bounce's pdf of a direction at cosine cs with the shading normal:
  * cosine-weighted about the shading normal (reflection only), or on a transmitting
@@ -657,7 +665,8 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
     float lx = r * cphi, ly = r * sphi;
     if (below) lz = -lz;
     float bx[3], by[3];
-    frame(sf.ns, bx, by);
+    if (sf.frame) memcpy(bx, sf.frame[0], sizeof bx), memcpy(by, sf.frame[1], sizeof by);
+    else frame(sf.ns, bx, by);
     for (int k = 0; k < 3; k++) bwi[k] = lx * bx[k] + ly * by[k] + lz * sf.ns[k];
     side[1] = dot(bwi, sf.ng), cs[1] = dot(bwi, sf.ns);
     bpdf = bounce_pdf(&sf, cs[1]);

@@ -37,8 +37,10 @@ typedef struct {
 
 /* What a hit on a triangle reads first, in one cache line: its unit geometric
  * normal (the edges' cross product, normalised) and its corners' normals; flat
- * (1) when the three are the same, then each normalised (the shading normal
- * everywhere on the triangle, without interpolating). */
+ * (1) when the three are the same: then nrm[0] is their normalised value (the
+ * shading normal everywhere on the triangle, without interpolating), ng is turned
+ * to its side (as make_surface would), and nrm[1], nrm[2] complete it to an
+ * orthonormal frame (the bounce's, without computing it per hit). */
 typedef struct {
   float ng[3];
   float nrm[3][3];
