@@ -144,12 +144,13 @@ static float normalize(float v[3]) {
   }
   return l;
 }
-/* Unit vectors x and y completing the unit n to an orthonormal frame (Duff et al.,
- * "Building an orthonormal basis, revisited", 2017): one division, no square root. */
+/* Unit vectors x and y completing the unit n to the bounce's frame: x = n x a
+ * normalised (a: the x axis, or the y axis when n is near the x axis), y = n x x.
+ * (Another frame would draw the same distribution, but its stratified directions
+ * would no longer line up with those of references rendered with this one.) */
 static void frame(const float n[3], float x[3], float y[3]) {
-  float sg = n[2] >= 0.0f ? 1.0f : -1.0f, a = -1.0f / (sg + n[2]), b = n[0] * n[1] * a;
-  x[0] = 1.0f + sg * n[0] * n[0] * a, x[1] = sg * b, x[2] = -sg * n[0];
-  y[0] = b, y[1] = sg + n[1] * n[1] * a, y[2] = -n[1];
+  float a[3] = {fabsf(n[0]) > 0.9f ? 0.0f : 1.0f, fabsf(n[0]) > 0.9f ? 1.0f : 0.0f, 0};
+  cross(n, a, x), normalize(x), cross(n, x, y);
 }
 /* fmaxf and fminf as the comparisons they are (a NaN loses to a number), inline:
  * the baseline build calls libm for them. */
@@ -385,8 +386,8 @@ static inline __attribute__((always_inline)) void make_surface(const render_ctx 
     if (normalize(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
     if (dot(ns, ng) < 0) flip = -1; /* normals wound against the triangle: trust the normals' side */
   }
-  /* two-sided: the side the ray arrives from (the frame's x and y serve the turned normal too) */
-  if (flip * dot(d, ng) > 0) flip = -flip, ns[0] = -ns[0], ns[1] = -ns[1], ns[2] = -ns[2];
+  /* two-sided: the side the ray arrives from (the face's frame is that of its own normal) */
+  if (flip * dot(d, ng) > 0) flip = -flip, ns[0] = -ns[0], ns[1] = -ns[1], ns[2] = -ns[2], sf->frame = NULL;
   for (int i = 0; i < 3; i++) ng[i] *= flip;
   if (-dot(d, ns) <= 1e-4f) memcpy(ns, ng, sizeof ns), sf->frame = NULL; /* shading normal faces away from the viewer */
   memcpy(sf->ng, ng, sizeof ng), memcpy(sf->ns, ns, sizeof ns);
