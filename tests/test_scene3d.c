@@ -814,6 +814,43 @@ static void test_deterministic(void **state) {
   wv_image_free(&a), wv_image_free(&ra);
 }
 
+/* Rays leaving the bundled scene's floor (planar; the cloth and the ball are not)
+ * that the box test says meet nothing meet nothing in the tracer either: upward
+ * rays from points just above the floor, grazing ones included; most are decided by
+ * the box, and some of the others do meet the cloth or the ball. */
+static void test_leaves_scene(void **state) {
+  (void)state;
+  wv_scene3d s;
+  wv_world *w;
+  wv_error err = {0};
+  char *text;
+  assert_int_equal(wv_read_file(WOVEN_SOURCE_DIR "/scenes/drape-studio.json", &text, NULL, &err), WV_OK);
+  if (wv_scene3d_parse(text, "drape-studio", WOVEN_SOURCE_DIR "/scenes", &s, &err)) fail_msg("%s", err.msg);
+  free(text);
+  if (wv_world_load(&s, NULL, 1, &w, &err)) fail_msg("%s", err.msg);
+  assert_int_equal(w->nobjects, 3);
+  assert_true(!w->planar[0] && !w->planar[1] && w->planar[2]); /* cloth, ball, floor */
+  enum { N = 200000 };
+  int culled = 0, hits = 0, wrong = 0;
+  for (int j = 0; j < N; j++) {
+    float o[3], d[3];
+    double u = wv_u01(wv_hash4(9, (uint64_t)j, 0, 1)), v = wv_u01(wv_hash4(9, (uint64_t)j, 1, 1));
+    double a = 2 * M_PI * wv_u01(wv_hash4(9, (uint64_t)j, 2, 1)), z = j % 10 ? wv_u01(wv_hash4(9, (uint64_t)j, 3, 1)) : 1e-4 * u;
+    o[0] = (float)(500 * (2 * u - 1)), o[1] = 0.05f, o[2] = (float)(500 * (2 * v - 1));
+    d[0] = (float)(sqrt(1 - z * z) * cos(a)), d[1] = (float)z, d[2] = (float)(sqrt(1 - z * z) * sin(a));
+    wv_trace_hit hit;
+    int got;
+    wv_tracer_intersect_n(w->tracer, (const float(*)[3])&o, (const float(*)[3])&d, 1, &hit, &got);
+    hits += got;
+    if (wv_world_leaves_scene(w, 2, o, d)) culled++, wrong += got;
+  }
+  print_message("%d of %d rays from the floor decided by the box, %d meet something, %d wrongly\n", culled, N, hits, wrong);
+  assert_int_equal(wrong, 0);
+  assert_true(culled > N / 2 && hits > N / 20);
+  wv_world_free(w);
+  wv_scene3d_free(&s);
+}
+
 /* Rays traced together (streams of any length, over the 64-ray batches and under
  * the length at which a stream is traced ray by ray) find what each ray alone finds. */
 static void test_tracer_streams(void **state) {
@@ -889,6 +926,7 @@ int main(void) {
       cmocka_unit_test(test_edits),
       cmocka_unit_test(test_cloth),         cmocka_unit_test(test_parse_errors),
       cmocka_unit_test(test_deterministic), cmocka_unit_test(test_tracer_streams),
+      cmocka_unit_test(test_leaves_scene),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

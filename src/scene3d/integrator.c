@@ -224,6 +224,7 @@ typedef struct {
   int spp, K;
   int gaps;                     /* a fabric transmits and has open gaps: paths may pass through */
   float eps;                    /* ray offset */
+  int cull;                     /* rays leaving a planar object may skip the tracer (wv_world_leaves_scene) */
   wv_turn_table turn;           /* the bounce's turn about the normal */
   int need[1 + 3 * CMJ_DEPTHS]; /* the stratified dimensions paths use (see rand2) */
 } render_ctx;
@@ -240,6 +241,7 @@ typedef struct {
   wv_env_at at;     /* the environment's texel along a bounce ray */
   int shadow;       /* a shadow ray toward the environment's sample waits (render_pixel traces it) */
   float sh_o[3], sh_d[3], sh_add[3]; /* it, and what it adds to L when nothing blocks it */
+  int sh_leave, leave; /* the planar object the shadow ray and the ray (o, d) leave, or -1 */
 } path;
 
 /* Per thread: scratch, counters, the current pixel's paths and their stratified
@@ -609,6 +611,10 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
   }
   surface sf;
   make_surface(c, ts, &p->hit, o, d, depth == 0, &sf);
+  /* on a planar object, rays leaving it from the side the path came from (from org)
+   * cannot meet it again: render_pixel tests them against the other objects' box */
+  int plane = c->cull && w->planar[p->hit.geom] ? p->hit.geom : -1;
+  p->leave = -1;
   float wo[3] = {-d[0], -d[1], -d[2]}, org[3], orgb[3];
   int last = p->bounces >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
   /* ray origins on the side the ray came from, and on the other (light through the sheet) */
@@ -679,7 +685,7 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
     ts->rays++;
     /* the power heuristic's weight over the pdf, epl / (epl^2 + bounce pdf^2), in one division */
     float bp = last ? 0.0f : bounce_pdf(&sf, cs[0]), ws = epl / (epl * epl + bp * bp);
-    p->shadow = 1;
+    p->shadow = 1, p->sh_leave = side[0] > 0 ? plane : -1;
     memcpy(p->sh_o, side[0] > 0 ? org : orgb, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
     for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * ws;
   }
@@ -707,6 +713,7 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
   }
   memcpy(o, side[1] > 0 ? org : orgb, sizeof org);
   memcpy(d, bwi, sizeof bwi);
+  p->leave = side[1] > 0 ? plane : -1;
   p->prev_pdf = bpdf;
   p->depth++, p->bounces++;
   return 1;
@@ -780,7 +787,7 @@ WV_SIMD_CLONES static void render_pixel(const render_ctx *c, thread_state *ts, i
   ts->rays += spp;
   if (nyarn) draw_sequence(px, py, spp * K, s->width, wv_mix64(s->seed ^ 0x7961726eULL), ts->yidx, nyarn, ts->yarn);
   for (int depth = 0, n = spp; n > 0; depth++) { /* the n paths in act reach vertex depth */
-    int m = 0, nsh = 0, nb = 0;
+    int m = 0, nsh = 0, nb = 0, nt = 0; /* nt of the nb rays that go on need the tracer */
     for (int i = 0; i < n; i++)
       if (P[ts->act[i]].got) ts->idx[m++] = ts->act[i];
     draw_depth(c, ts, px, py, depth, ts->idx, m);
@@ -795,12 +802,21 @@ WV_SIMD_CLONES static void render_pixel(const render_ctx *c, thread_state *ts, i
       ts->sample = j, p->shadow = 0;
       int on = path_vertex(c, ts, p);
       if (p->shadow) {
-        memcpy(ts->sh_o[nsh], p->sh_o, sizeof p->sh_o), memcpy(ts->sh_d[nsh], p->sh_d, sizeof p->sh_d);
-        ts->sh_t[nsh] = INFINITY, ts->sh_idx[nsh++] = j;
+        if (p->sh_leave >= 0 && wv_world_leaves_scene(w, p->sh_leave, p->sh_o, p->sh_d)) { /* unblocked */
+          for (int k = 0; k < 3; k++) p->L[k] += p->sh_add[k];
+        } else {
+          memcpy(ts->sh_o[nsh], p->sh_o, sizeof p->sh_o), memcpy(ts->sh_d[nsh], p->sh_d, sizeof p->sh_d);
+          ts->sh_t[nsh] = INFINITY, ts->sh_idx[nsh++] = j;
+        }
       }
       if (!on) continue;
-      memcpy(ts->dir[nb], p->d, sizeof p->d), memcpy(ts->org[nb], p->o, sizeof p->o);
       ts->act[nb++] = j;
+      if (p->leave >= 0 && wv_world_leaves_scene(w, p->leave, p->o, p->d)) { /* escapes */
+        p->got = 0;
+        continue;
+      }
+      memcpy(ts->dir[nt], p->d, sizeof p->d), memcpy(ts->org[nt], p->o, sizeof p->o);
+      ts->idx[nt++] = j; /* (the vertex's list is no longer needed) */
     }
     wv_tracer_occluded_n(w->tracer, (const float(*)[3])ts->sh_o, (const float(*)[3])ts->sh_d, ts->sh_t, nsh,
                          ts->sh_occ);
@@ -808,13 +824,17 @@ WV_SIMD_CLONES static void render_pixel(const render_ctx *c, thread_state *ts, i
       if (!ts->sh_occ[i])
         for (int k = 0; k < 3; k++) P[ts->sh_idx[i]].L[k] += P[ts->sh_idx[i]].sh_add[k];
     ts->rays += nb;
-    wv_tracer_intersect_n(w->tracer, (const float(*)[3])ts->org, (const float(*)[3])ts->dir, nb, ts->hit, ts->got);
-    prefetch_hits(w, ts->hit, ts->got, nb);
+    wv_tracer_intersect_n(w->tracer, (const float(*)[3])ts->org, (const float(*)[3])ts->dir, nt, ts->hit, ts->got);
+    prefetch_hits(w, ts->hit, ts->got, nt);
+    for (int i = 0; i < nt; i++) {
+      path *p = &P[ts->idx[i]];
+      p->got = ts->got[i];
+      if (p->got) p->hit = ts->hit[i];
+    }
     for (int i = 0; i < nb; i++) { /* the environment's texel of a bounce ray that escapes, read at the next vertex */
       path *p = &P[ts->act[i]];
-      p->got = ts->got[i], p->at = (wv_env_at){0};
-      if (p->got) p->hit = ts->hit[i];
-      else if (w->has_env && p->prev_pdf > 0) p->at = wv_envmap_at(&w->env, p->d);
+      p->at = (wv_env_at){0};
+      if (!p->got && w->has_env && p->prev_pdf > 0) p->at = wv_envmap_at(&w->env, p->d);
     }
     n = nb;
   }
@@ -843,6 +863,7 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
   float extent = w->scene_radius;
   for (int i = 0; i < 3; i++) extent = fmaxf(extent, fabsf(c.cam.cpos[i]));
   c.eps = 2e-5f * extent;
+  c.cull = c.eps >= 4 * w->plane_tol;
   wv_turn_table_make(&c.turn);
   /* the stratified dimensions a path can use: camera; per depth environment, area light, bounce */
   int area = 0;

@@ -35,6 +35,7 @@ void wv_world_free(wv_world *w) {
   wv_tracer_free(w->tracer);
   wv_envmap_free(&w->env);
   free(w->meshes), free(w->faces), free(w->face_uv), free(w->uv_grad), free(w->material), free(w->mats);
+  free(w->planar), free(w->others);
   free(w);
 }
 
@@ -193,6 +194,61 @@ static wv_status make_mesh(const wv_scene3d *s, const wv_object3d *o, size_t lim
   return wv_mesh_tangents(m, name, err);
 }
 
+/* Which objects are planar, and the box around the others of each (wv_world's
+ * planar, others, plane_tol): lo..hi bound all the meshes. */
+static wv_status find_planes(wv_world *w, const float lo[3], const float hi[3], wv_error *err) {
+  int n = w->nobjects;
+  w->planar = calloc((size_t)(n ? n : 1), sizeof *w->planar);
+  w->others = malloc(sizeof *w->others * (size_t)(n ? n : 1));
+  if (!w->planar || !w->others) return wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  double ext = 0; /* the largest coordinate: float positions are within 1e-7 of it of their true places */
+  for (int k = 0; k < 3; k++) ext = fmax(ext, fmax(fabs((double)lo[k]), fabs((double)hi[k])));
+  w->plane_tol = (float)(1e-6 * ext);
+  float pad = (float)(1e-5 * ext);
+  for (int i = 0; i < n; i++) {
+    const wv_mesh *m = &w->meshes[i];
+    if (m->nt > 0) { /* the plane of the first triangle, all vertices within plane_tol of it */
+      const float *ng = w->faces[i][0].ng, *v0 = m->pos + 3 * m->idx[0];
+      double c = (double)ng[0] * v0[0] + (double)ng[1] * v0[1] + (double)ng[2] * v0[2];
+      int flat = ng[0] != 0 || ng[1] != 0 || ng[2] != 0;
+      for (int v = 0; v < m->nv && flat; v++) {
+        const float *p = m->pos + 3 * v;
+        flat = fabs((double)ng[0] * p[0] + (double)ng[1] * p[1] + (double)ng[2] * p[2] - c) <= w->plane_tol;
+      }
+      w->planar[i] = flat;
+    }
+    float *blo = w->others[i][0], *bhi = w->others[i][1];
+    for (int k = 0; k < 3; k++) blo[k] = INFINITY, bhi[k] = -INFINITY;
+    for (int j = 0; j < n; j++)
+      for (int v = 0; v < w->meshes[j].nv && j != i; v++)
+        for (int k = 0; k < 3; k++) {
+          float p = w->meshes[j].pos[3 * v + k];
+          blo[k] = p < blo[k] ? p : blo[k], bhi[k] = p > bhi[k] ? p : bhi[k];
+        }
+    for (int k = 0; k < 3; k++) blo[k] -= pad, bhi[k] += pad;
+  }
+  return WV_OK;
+}
+
+int wv_world_leaves_scene(const wv_world *w, int obj, const float o[3], const float d[3]) {
+  const float *lo = w->others[obj][0], *hi = w->others[obj][1];
+  float t0 = 0, t1 = INFINITY;
+  for (int k = 0; k < 3; k++) { /* slabs: the box's padding covers the rounding */
+    if (!(lo[k] <= hi[k])) return 1; /* no other object */
+    if (d[k] == 0.0f) {
+      if (o[k] < lo[k] || o[k] > hi[k]) return 1;
+      continue;
+    }
+    float inv = 1.0f / d[k], a = (lo[k] - o[k]) * inv, b = (hi[k] - o[k]) * inv;
+    if (a > b) {
+      float t = a;
+      a = b, b = t;
+    }
+    t0 = a > t0 ? a : t0, t1 = b < t1 ? b : t1;
+  }
+  return t0 > t1;
+}
+
 wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int threads, wv_world **out,
                         wv_error *err) {
   *out = NULL;
@@ -249,6 +305,7 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
     }
     w->scene_radius = 0.5f * sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                    (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    if (!st) st = find_planes(w, lo, hi, err);
     if (list) st = wv_tracer_create(list, s->nobjects, threads, b.limit - b.used, &w->tracer, err);
     free(list);
   }

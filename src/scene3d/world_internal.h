@@ -85,7 +85,18 @@ struct wv_world {
   int has_env;
   wv_envmap env;
   float scene_radius; /* of the meshes' bounding sphere, for ray offsets */
+  /* Rays that leave a plane: per object, planar (all its vertices within plane_tol of
+   * one plane, e.g. a floor) and the box around all the other objects (padded), which
+   * a ray leaving it must enter to meet anything (wv_world_leaves_scene). */
+  int *planar;
+  float (*others)[2][3];
+  float plane_tol;
 };
+
+/* Whether the ray from o along d, leaving planar object obj from a point at least
+ * 4 plane_tol off its plane on the side d points to, surely meets nothing: it misses
+ * the box around the other objects (so the tracer need not be asked). */
+int wv_world_leaves_scene(const wv_world *w, int obj, const float o[3], const float d[3]);
 
 /* cos and sin of 2 pi u for u in [0, 1) without libm (the bounce's turn about the
  * normal): the table's turn at the step below u (in double, rounded), turned on by
