@@ -70,9 +70,6 @@ WV_SIMD_CLONES static void shade_lanes(const wv_fabric *f, int m, const float (*
   for (int i = 0; i < m; i++) r[i][0] = rad[0][i], r[i][1] = rad[1][i], r[i][2] = rad[2][i];
 }
 
-/* Below this many points a call shades them one by one (the 8-lane call's cost). */
-#define SHADE_LANES_MIN 3
-
 /* THE adapter between the mesh renderer and the fabric shading model: for each
  * of nd light directions wi[j] (NULL: not wanted), the average of (f_s + f_d)
  * mu_i over n fabric positions (mm) into out[j], with the view wo, both in the
@@ -81,7 +78,8 @@ WV_SIMD_CLONES static void shade_lanes(const wv_fabric *f, int m, const float (*
  * specular and diffuse transmission, 0 in an open gap) for wi below it.
  * Everything the mesh renderer knows about the fabric model is here: it runs the
  * shading kernel (kernel/kernel.h; all the points of all directions in 8-lane
- * calls, or the scalar flavour wv_shade_f for one or two) with unit light, with
+ * calls, even one or two: its AVX2 and AVX-512 versions take less time than two
+ * points in the scalar flavour, and give each lane its result) with unit light, with
  * the parameters of a per-thread copy of the prepared fabric when edits change
  * k_d, beta or alpha at this point. */
 static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric_edit *e, int nd,
@@ -102,30 +100,18 @@ static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric
     }
     f = scratch;
   }
-  if (lanes < SHADE_LANES_MIN) {
-    for (int j = 0; j < nd; j++) {
-      if (!on[j]) continue;
-      wv_dirs_f d;
-      wv_dirs_make_f(wi[j], wo, 1.0f, &d);
-      for (int k = 0; k < n; k++) {
-        float r[3];
-        wv_shade_f(f, &f->P, &d, pos[k][0], pos[k][1], r, NULL);
-        out[j][0] += r[0], out[j][1] += r[1], out[j][2] += r[2];
-      }
+  /* lanes in the order (direction, position): each sum in the scalar order */
+  float lp[8][2], lw[8][3], r[8][3];
+  int owner[8], j = on[0] ? 0 : 1, k = 0;
+  for (int l = 0; l < lanes;) {
+    int m = 0;
+    for (; m < 8 && l < lanes; m++, l++) {
+      lp[m][0] = pos[k][0], lp[m][1] = pos[k][1], memcpy(lw[m], wi[j], sizeof lw[m]), owner[m] = j;
+      if (++k == n) k = 0, j++;
     }
-  } else { /* lanes in the order (direction, position): each sum in the scalar order */
-    float lp[8][2], lw[8][3], r[8][3];
-    int owner[8], j = on[0] ? 0 : 1, k = 0;
-    for (int l = 0; l < lanes;) {
-      int m = 0;
-      for (; m < 8 && l < lanes; m++, l++) {
-        lp[m][0] = pos[k][0], lp[m][1] = pos[k][1], memcpy(lw[m], wi[j], sizeof lw[m]), owner[m] = j;
-        if (++k == n) k = 0, j++;
-      }
-      shade_lanes(f, m, (const float(*)[2])lp, (const float(*)[3])lw, wo, r);
-      for (int i = 0; i < m; i++)
-        out[owner[i]][0] += r[i][0], out[owner[i]][1] += r[i][1], out[owner[i]][2] += r[i][2];
-    }
+    shade_lanes(f, m, (const float(*)[2])lp, (const float(*)[3])lw, wo, r);
+    for (int i = 0; i < m; i++)
+      out[owner[i]][0] += r[i][0], out[owner[i]][1] += r[i][1], out[owner[i]][2] += r[i][2];
   }
   float inv = 1.0f / (float)n;
   for (int j = 0; j < nd; j++)
