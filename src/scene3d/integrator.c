@@ -55,14 +55,14 @@ typedef struct {
 
 /* Fabric points shaded eight at a time by the kernel's 8-lane flavour, which
  * gives each lane the scalar flavour's result bit for bit: lane i at position
- * pos[i] (mm), light from wi[i], view wo, unit light; m <= 8 lanes. */
+ * pos[i] (mm), light from wi[i], view wo + wo_step i, unit light; m <= 8 lanes. */
 WV_SIMD_CLONES static void shade_lanes(const wv_fabric *f, int m, const float (*pos)[2], const float (*wi)[3],
-                                       const float wo[3], float (*r)[3]) {
+                                       const float *wo, int wo_step, float (*r)[3]) {
   wv_f8 x, y, vi[3], vo[3], rad[3];
   for (int i = 0; i < 8; i++) {
     int l = i < m ? i : 0; /* lanes past the end: a copy of lane 0, result dropped */
     x[i] = pos[l][0], y[i] = pos[l][1];
-    for (int k = 0; k < 3; k++) vi[k][i] = wi[l][k], vo[k][i] = wo[k];
+    for (int k = 0; k < 3; k++) vi[k][i] = wi[l][k], vo[k][i] = wo[l * wo_step + k];
   }
   wv_dirs_8 d;
   wv_dirs_make_8(vi, vo, wv_splat8(1.0f), &d);
@@ -109,7 +109,7 @@ static void shade_fabric(const wv_fabric *base, wv_fabric *scratch, const fabric
       lp[m][0] = pos[k][0], lp[m][1] = pos[k][1], memcpy(lw[m], wi[j], sizeof lw[m]), owner[m] = j;
       if (++k == n) k = 0, j++;
     }
-    shade_lanes(f, m, (const float(*)[2])lp, (const float(*)[3])lw, wo, r);
+    shade_lanes(f, m, (const float(*)[2])lp, (const float(*)[3])lw, wo, 0, r);
     for (int i = 0; i < m; i++)
       out[owner[i]][0] += r[i][0], out[owner[i]][1] += r[i][1], out[owner[i]][2] += r[i][2];
   }
@@ -203,6 +203,20 @@ typedef struct {
   const float (*frame)[3]; /* x and y completing ns to an orthonormal frame (a flat face's), or NULL */
 } surface;
 
+/* A path's vertex between vertex_begin and vertex_end (render_pixel shades the
+ * directions of several fabric vertices together in between). */
+typedef struct {
+  surface sf;
+  float wo[3], org[3], orgb[3];      /* the view; ray origins on the path's side and the other */
+  float ewi[3], ele[3], epl;         /* the environment's sample */
+  float bwi[3], bpdf;                /* the bounce */
+  float side[2], cs[2], fb[2][3];    /* the two directions' cosines and BSDF x cosine */
+  float pos[2];                      /* a deferred fabric's position (sf.fpos points here) */
+  int last, pass, env_on, plane, nshade;
+  float li[2][3], lo[3];             /* a fabric's directions and view in its frame, to shade */
+  const float *lwant[2];
+} vertex;
+
 typedef struct {
   const wv_scene3d *s;
   const wv_world *w;
@@ -252,6 +266,8 @@ typedef struct {
   int *yidx;           /* spp x K: the yarn positions wanted */
   float (*ug)[2];      /* spp: the numbers of the environment samples wanted */
   wv_env_sample *eg;   /* spp: their samples */
+  vertex *vtx;         /* spp: the paths' vertices between vertex_begin and vertex_end */
+  int *dq;             /* spp: the fabric vertices whose shading waits (shade_waiting) */
   uint64_t pixel;
   int sample;
 } thread_state;
@@ -440,16 +456,19 @@ static __attribute__((noinline)) void fabric_surface(const render_ctx *c, thread
 
 /* BSDF x cosine for light arriving from each of nd <= 2 directions wi[j] (world;
  * NULL: not wanted, f[j] = 0), seen from wo, given their cosines with the
- * geometric and the shading normal (side[j], cs[j]): a fabric is shaded for all of
- * them in one call. Light from below the surface passes a transmitting fabric (the
- * geometric and shading normals agreeing on the side), nothing else. */
-static inline __attribute__((always_inline)) void eval_bsdf(const surface *sf, thread_state *ts, int nd, const float *const *wi, const float *side,
-                      const float *cs, const float wo[3], float (*f)[3]) {
-  float li[2][3];
-  const float *want[2] = {NULL, NULL};
+ * geometric and the shading normal (side[j], cs[j]) (eval_bsdf): a fabric is shaded
+ * for all of them in one call. Light from below the surface passes a transmitting
+ * fabric (the geometric and shading normals agreeing on the side), nothing else.
+ * In two halves: bsdf_prepare evaluates a Lambert surface and leaves a fabric's
+ * wanted directions in its frame (want[j] = li[j] or NULL, the view in lo; returns
+ * their count), shade_surface shades them. */
+static inline __attribute__((always_inline)) int bsdf_prepare(const surface *sf, thread_state *ts, int nd,
+                                                             const float *const *wi, const float *side,
+                                                             const float *cs, const float wo[3], float (*f)[3],
+                                                             float (*li)[3], const float **want, float lo[3]) {
   int any = 0;
   for (int j = 0; j < nd; j++) {
-    f[j][0] = f[j][1] = f[j][2] = 0;
+    f[j][0] = f[j][1] = f[j][2] = 0, want[j] = NULL;
     if (!wi[j]) continue;
     if (side[j] <= 0.0f && !(sf->trans && side[j] < 0.0f)) continue; /* an opaque surface reflects only */
     if (sf->mat->kind == WV_MAT_LAMBERT) {
@@ -459,13 +478,26 @@ static inline __attribute__((always_inline)) void eval_bsdf(const surface *sf, t
     }
     li[j][0] = dot(wi[j], sf->t), li[j][1] = dot(wi[j], sf->b), li[j][2] = cs[j];
     if ((side[j] > 0.0f) != (cs[j] > 0.0f)) continue; /* the triangle and the shading normal disagree on the side */
-    want[j] = li[j], any = 1;
+    want[j] = li[j], any++;
     ts->shades += sf->nfpos;
   }
-  if (!any) return;
-  float lo[3] = {dot(wo, sf->t), dot(wo, sf->b), dot(wo, sf->ns)};
-  shade_fabric(sf->mat->fab, ts->scratch[sf->mat_index], &sf->edit, nd, want, lo, (const float(*)[2])sf->fpos,
+  if (any) lo[0] = dot(wo, sf->t), lo[1] = dot(wo, sf->b), lo[2] = dot(wo, sf->ns);
+  return any;
+}
+/* (eval_bsdf's second half: the fabric's wanted directions, as bsdf_prepare left them) */
+static void shade_surface(const surface *sf, thread_state *ts, const float *const *want, const float lo[3],
+                          float (*f)[3]) {
+  shade_fabric(sf->mat->fab, ts->scratch[sf->mat_index], &sf->edit, 2, want, lo, (const float(*)[2])sf->fpos,
                sf->nfpos, f);
+}
+static inline __attribute__((always_inline)) void eval_bsdf(const surface *sf, thread_state *ts, int nd,
+                                                          const float *const *wi, const float *side,
+                                                          const float *cs, const float wo[3], float (*f)[3]) {
+  float li[2][3], lo[3];
+  const float *want[2] = {NULL, NULL};
+  if (bsdf_prepare(sf, ts, nd, wi, side, cs, wo, f, li, want, lo))
+    shade_fabric(sf->mat->fab, ts->scratch[sf->mat_index], &sf->edit, nd, want, lo, (const float(*)[2])sf->fpos,
+                 sf->nfpos, f);
 }
 
 static float power_heuristic(float a, float b) { return a * a / (a * a + b * b); }
@@ -580,31 +612,26 @@ static inline void escape(const render_ctx *c, path *p) {
   }
 }
 
-/* What the path's ray (o, d) meets at vertex p->depth (p->got, p->hit, p->at):
- * the light it sees there, its shadow ray toward the environment's sample (left
- * in p for the caller to trace, with what it adds when unblocked) and, when the
- * path goes on, the next ray in (o, d). Returns 0 when the path ends.
- * ts->sample is the path's sample. */
-WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, path *p) {
+/* The first half of what the path's ray (o, d) meets at vertex p->depth (p->got,
+ * p->hit): the surface, the environment's sample and the bounce's direction, with
+ * the BSDF of a Lambert surface, and what is left to shade of a fabric (v->nshade
+ * directions, v->lwant in its frame). ts->sample is the path's sample. */
+WV_SIMD_CLONES static void vertex_begin(const render_ctx *c, thread_state *ts, path *p, vertex *v) {
   const wv_scene3d *s = c->s;
   const wv_world *w = c->w;
   const int depth = p->depth;
-  float *o = p->o, *d = p->d, *thr = p->thr, *L = p->L;
-  if (s->nlights) area_hits(s, p); /* area lights the ray sees before the surface */
-  if (!p->got) {
-    escape(c, p);
-    return 0;
-  }
-  surface sf;
-  make_surface(c, ts, &p->hit, o, d, depth == 0, &sf);
+  const float *d = p->d;
+  surface *sf = &v->sf;
+  make_surface(c, ts, &p->hit, p->o, d, depth == 0, sf);
   /* on a planar object, rays leaving it from the side the path came from (from org)
    * cannot meet it again: render_pixel tests them against the other objects' box */
-  int plane = c->cull && w->planar[p->hit.geom] ? p->hit.geom : -1;
+  v->plane = c->cull && w->planar[p->hit.geom] ? p->hit.geom : -1;
   p->leave = -1;
-  float wo[3] = {-d[0], -d[1], -d[2]}, org[3], orgb[3];
-  int last = p->bounces >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
+  float *org = v->org, *orgb = v->orgb, *side = v->side, *cs = v->cs, *ewi = v->ewi, *ele = v->ele, *bwi = v->bwi;
+  for (int i = 0; i < 3; i++) v->wo[i] = -d[i];
+  int last = v->last = p->bounces >= s->max_bounces; /* no bounce follows: light samples take the whole weight */
   /* ray origins on the side the ray came from, and on the other (light through the sheet) */
-  for (int i = 0; i < 3; i++) org[i] = sf.p[i] + c->eps * sf.ng[i], orgb[i] = sf.p[i] - c->eps * sf.ng[i];
+  for (int i = 0; i < 3; i++) org[i] = sf->p[i] + c->eps * sf->ng[i], orgb[i] = sf->p[i] - c->eps * sf->ng[i];
   /* Straight through an open gap with the probability of the positions' open fraction
    * (the kernel shades those positions 0), else scatter: the light samples below are
    * taken either way, the bounce only when scattering. The bounce's numbers make the
@@ -612,34 +639,35 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
    * stretched back over 0..1 for the bounce. */
   float u1 = 0, u2 = 0;
   if (!last) rand2(c, ts, depth, 2, &u1, &u2);
-  else if (sf.nopen) u1 = wv_u01(wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 10), s->seed));
+  else if (sf->nopen) u1 = wv_u01(wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 10), s->seed));
   int pass = 0;
-  if (sf.nopen) {
-    float po = 1.0f - sf.pscatter;
-    pass = sf.nopen == sf.nfpos || u1 < po;
-    if (!pass) u1 = min2((u1 - po) / sf.pscatter, ONE_BELOW);
+  if (sf->nopen) {
+    float po = 1.0f - sf->pscatter;
+    pass = sf->nopen == sf->nfpos || u1 < po;
+    if (!pass) u1 = min2((u1 - po) / sf->pscatter, ONE_BELOW);
   }
+  v->pass = pass;
   /* the environment's sample and the bounce direction first: the surface is
    * evaluated for both in one call */
-  float ewi[3] = {0, 0, 0}, ele[3] = {0, 0, 0}, epl = 0, bwi[3] = {0, 0, 0}, bpdf = 0, fb[2][3];
-  float side[2] = {0, 0}, cs[2] = {0, 0}; /* the two directions' cosines with the normals ng and ns */
+  for (int k = 0; k < 3; k++) ewi[k] = ele[k] = bwi[k] = 0;
+  v->epl = 0, v->bpdf = 0, side[0] = side[1] = cs[0] = cs[1] = 0; /* cosines with the normals ng and ns */
   int env_on = 0;
   if (w->has_env) {
     if (depth < CMJ_DEPTHS) {
       const wv_env_sample *es = &ts->env[depth * c->spp + ts->sample];
-      memcpy(ewi, es->d, sizeof ewi), memcpy(ele, es->rgb, sizeof ele), epl = es->pdf;
+      memcpy(ewi, es->d, sizeof v->ewi), memcpy(ele, es->rgb, sizeof v->ele), v->epl = es->pdf;
     } else {
-      float u1, u2;
-      rand2(c, ts, depth, 0, &u1, &u2);
-      epl = wv_envmap_sample(&w->env, u1, u2, ewi, ele);
+      float e1, e2;
+      rand2(c, ts, depth, 0, &e1, &e2);
+      v->epl = wv_envmap_sample(&w->env, e1, e2, ewi, ele);
     }
-    env_on = epl > 0 && any_pos(ele);
-    if (env_on) side[0] = dot(ewi, sf.ng), cs[0] = dot(ewi, sf.ns);
+    env_on = v->epl > 0 && any_pos(ele);
+    if (env_on) side[0] = dot(ewi, sf->ng), cs[0] = dot(ewi, sf->ns);
     /* through the sheet, the sample is taken with the probability min(1, 2 pback) (and
      * weighed up by its inverse): behind cloth that transmits little it seldom adds
      * much, and most of it would be shadow rays blocked under the cloth */
-    if (env_on && sf.trans && side[0] < 0) {
-      float q = min2(1.0f, 2.0f * sf.pback);
+    if (env_on && sf->trans && side[0] < 0) {
+      float q = min2(1.0f, 2.0f * sf->pback);
       if (q < 1.0f) {
         env_on = wv_u01(wv_hash4(ts->pixel, (uint64_t)ts->sample, (uint64_t)(16 * depth + 12), s->seed)) < q;
         float iq = 1.0f / q;
@@ -647,46 +675,57 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
       }
     }
   }
+  v->env_on = env_on;
   if (!last && !pass) { /* bounce: cosine-weighted about the shading normal, or through a transmitting fabric */
     int below = 0; /* through the sheet where u2 falls below pback, u2 then stretched back over 0..1 */
-    if (sf.trans) {
-      below = u2 < sf.pback;
-      u2 = below ? u2 / sf.pback : min2((u2 - sf.pback) / (1.0f - sf.pback), ONE_BELOW);
+    if (sf->trans) {
+      below = u2 < sf->pback;
+      u2 = below ? u2 / sf->pback : min2((u2 - sf->pback) / (1.0f - sf->pback), ONE_BELOW);
     }
     float r = sqrtf(u1), cphi, sphi, lz = sqrtf(max2(0.0f, 1 - u1));
     wv_turn(&c->turn, u2, &cphi, &sphi);
     float lx = r * cphi, ly = r * sphi;
     if (below) lz = -lz;
     float bx[3], by[3];
-    if (sf.frame) memcpy(bx, sf.frame[0], sizeof bx), memcpy(by, sf.frame[1], sizeof by);
-    else frame(sf.ns, bx, by);
-    for (int k = 0; k < 3; k++) bwi[k] = lx * bx[k] + ly * by[k] + lz * sf.ns[k];
-    side[1] = dot(bwi, sf.ng), cs[1] = dot(bwi, sf.ns);
-    bpdf = bounce_pdf(&sf, cs[1]);
+    if (sf->frame) memcpy(bx, sf->frame[0], sizeof bx), memcpy(by, sf->frame[1], sizeof by);
+    else frame(sf->ns, bx, by);
+    for (int k = 0; k < 3; k++) bwi[k] = lx * bx[k] + ly * by[k] + lz * sf->ns[k];
+    side[1] = dot(bwi, sf->ng), cs[1] = dot(bwi, sf->ns);
+    v->bpdf = bounce_pdf(sf, cs[1]);
   }
-  const float *want[2] = {env_on ? ewi : NULL, bpdf > 0 ? bwi : NULL};
-  eval_bsdf(&sf, ts, 2, want, side, cs, wo, fb);
-  if (s->nlights) light_samples(c, ts, &sf, depth, last, wo, org, orgb, thr, L); /* next-event estimation */
-  if (env_on && any_pos(fb[0])) {
+  const float *want[2] = {env_on ? ewi : NULL, v->bpdf > 0 ? bwi : NULL};
+  v->nshade = bsdf_prepare(sf, ts, 2, want, side, cs, v->wo, v->fb, v->li, v->lwant, v->lo);
+}
+
+/* The rest of path_vertex's vertex, its BSDF evaluated (v->fb): the light samples, the
+ * shadow ray toward the environment's sample, and the next ray. Returns 0 when the
+ * path ends. */
+WV_SIMD_CLONES static int vertex_end(const render_ctx *c, thread_state *ts, path *p, vertex *v) {
+  const wv_scene3d *s = c->s;
+  const int depth = p->depth, last = v->last;
+  const surface *sf = &v->sf;
+  float *thr = p->thr, (*fb)[3] = v->fb;
+  if (s->nlights) light_samples(c, ts, sf, depth, last, v->wo, v->org, v->orgb, thr, p->L); /* next-event estimation */
+  if (v->env_on && any_pos(fb[0])) {
     ts->rays++;
     /* the power heuristic's weight over the pdf, epl / (epl^2 + bounce pdf^2), in one division */
-    float bp = last ? 0.0f : bounce_pdf(&sf, cs[0]), ws = epl / (epl * epl + bp * bp);
-    p->shadow = 1, p->sh_leave = side[0] > 0 ? plane : -1;
-    memcpy(p->sh_o, side[0] > 0 ? org : orgb, sizeof org), memcpy(p->sh_d, ewi, sizeof ewi);
-    for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * ele[k] * ws;
+    float bp = last ? 0.0f : bounce_pdf(sf, v->cs[0]), ws = v->epl / (v->epl * v->epl + bp * bp);
+    p->shadow = 1, p->sh_leave = v->side[0] > 0 ? v->plane : -1;
+    memcpy(p->sh_o, v->side[0] > 0 ? v->org : v->orgb, sizeof p->sh_o), memcpy(p->sh_d, v->ewi, sizeof p->sh_d);
+    for (int k = 0; k < 3; k++) p->sh_add[k] = thr[k] * fb[0][k] * v->ele[k] * ws;
   }
-  if (pass) { /* straight on from the far side: the throughput stays (probability and weight both the open fraction) */
+  if (v->pass) { /* straight on from the far side: the throughput stays (probability and weight both the open fraction) */
     if (depth >= PASS_MAX) return 0;
-    memcpy(o, orgb, sizeof orgb);
+    memcpy(p->o, v->orgb, sizeof p->o);
     p->prev_pdf = 0; /* no light sample sees through the gap: what the ray meets counts whole */
     p->depth++;
     return 1;
   }
-  if (last || bpdf <= 0) return 0;
-  if (sf.mat->kind == WV_MAT_LAMBERT) { /* (albedo cos / pi) / (cos / pi) */
-    for (int k = 0; k < 3; k++) thr[k] *= side[1] > 0.0f ? sf.mat->albedo[k] : 0.0f;
+  if (last || v->bpdf <= 0) return 0;
+  if (sf->mat->kind == WV_MAT_LAMBERT) { /* (albedo cos / pi) / (cos / pi) */
+    for (int k = 0; k < 3; k++) thr[k] *= v->side[1] > 0.0f ? sf->mat->albedo[k] : 0.0f;
   } else {
-    float ib = 1.0f / bpdf;
+    float ib = 1.0f / v->bpdf;
     for (int k = 0; k < 3; k++) thr[k] *= fb[1][k] * ib;
   }
   float q = min2(0.95f, maxc(thr));
@@ -697,12 +736,60 @@ WV_SIMD_CLONES static int path_vertex(const render_ctx *c, thread_state *ts, pat
     float iq = 1.0f / q;
     for (int k = 0; k < 3; k++) thr[k] *= iq;
   }
-  memcpy(o, side[1] > 0 ? org : orgb, sizeof org);
-  memcpy(d, bwi, sizeof bwi);
-  p->leave = side[1] > 0 ? plane : -1;
-  p->prev_pdf = bpdf;
+  memcpy(p->o, v->side[1] > 0 ? v->org : v->orgb, sizeof p->o);
+  memcpy(p->d, v->bwi, sizeof p->d);
+  p->leave = v->side[1] > 0 ? v->plane : -1;
+  p->prev_pdf = v->bpdf;
   p->depth++, p->bounces++;
   return 1;
+}
+
+/* The fabric vertices ts->dq[0 .. nq-1] (one position each, without edits) shaded
+ * together: their wanted directions, eight lanes (vertex, direction) to a kernel
+ * call, a call's lanes all of one fabric; each result as shade_fabric gives it. */
+static void shade_waiting(thread_state *ts, int nq) {
+  float lp[8][2], lw[8][3], lo[8][3], r[8][3], *dst[8];
+  const wv_fabric *f = NULL;
+  int m = 0;
+  for (int q = 0; q <= nq; q++) {
+    vertex *v = q < nq ? &ts->vtx[ts->dq[q]] : NULL;
+    for (int j = 0; j < 2 || !v; j++) {
+      int on = v && v->lwant[j] && v->lwant[j][2] != 0.0f && v->lo[2] > 0.0f; /* as shade_fabric's */
+      if (m && (!v || m == 8 || (on && v->sf.mat->fab != f))) { /* a call's worth */
+        shade_lanes(f, m, (const float(*)[2])lp, (const float(*)[3])lw, lo[0], 3, r);
+        for (int i = 0; i < m; i++)
+          for (int k = 0; k < 3; k++) dst[i][k] = (dst[i][k] + r[i][k]) * 1.0f; /* the sum of one position */
+        m = 0;
+      }
+      if (!v) break;
+      if (!on) continue;
+      f = v->sf.mat->fab;
+      memcpy(lp[m], v->pos, sizeof lp[m]), memcpy(lw[m], v->lwant[j], sizeof lw[m]), memcpy(lo[m], v->lo, sizeof lo[m]);
+      dst[m++] = v->fb[j];
+    }
+  }
+}
+
+/* After path p's vertex (on: it goes on): its shadow ray and its next ray into the
+ * pixel's lists for the tracer, unless the box around the other objects decides them. */
+static inline __attribute__((always_inline)) void queue_rays(const wv_world *w, thread_state *ts, path *p, int j,
+                                                           int on, int *nsh, int *nb, int *nt) {
+  if (p->shadow) {
+    if (p->sh_leave >= 0 && wv_world_leaves_scene(w, p->sh_leave, p->sh_o, p->sh_d)) { /* unblocked */
+      for (int k = 0; k < 3; k++) p->L[k] += p->sh_add[k];
+    } else {
+      memcpy(ts->sh_o[*nsh], p->sh_o, sizeof p->sh_o), memcpy(ts->sh_d[*nsh], p->sh_d, sizeof p->sh_d);
+      ts->sh_t[*nsh] = INFINITY, ts->sh_idx[(*nsh)++] = j;
+    }
+  }
+  if (!on) return;
+  ts->act[(*nb)++] = j;
+  if (p->leave >= 0 && wv_world_leaves_scene(w, p->leave, p->o, p->d)) { /* escapes */
+    p->got = 0;
+    return;
+  }
+  memcpy(ts->dir[*nt], p->d, sizeof p->d), memcpy(ts->org[*nt], p->o, sizeof p->o);
+  ts->idx[(*nt)++] = j; /* (the vertex's list is no longer needed) */
 }
 
 /* The stratified numbers of path vertex depth (environment, area light, bounce)
@@ -773,7 +860,7 @@ WV_SIMD_CLONES static void render_pixel(const render_ctx *c, thread_state *ts, i
   ts->rays += spp;
   if (nyarn) draw_sequence(px, py, spp * K, s->width, wv_mix64(s->seed ^ 0x7961726eULL), ts->yidx, nyarn, ts->yarn);
   for (int depth = 0, n = spp; n > 0; depth++) { /* the n paths in act reach vertex depth */
-    int m = 0, nsh = 0, nb = 0, nt = 0; /* nt of the nb rays that go on need the tracer */
+    int m = 0, nsh = 0, nb = 0, nt = 0, nq = 0; /* nt of the nb rays that go on need the tracer */
     for (int i = 0; i < n; i++)
       if (P[ts->act[i]].got) ts->idx[m++] = ts->act[i];
     draw_depth(c, ts, px, py, depth, ts->idx, m);
@@ -781,28 +868,27 @@ WV_SIMD_CLONES static void render_pixel(const render_ctx *c, thread_state *ts, i
       int j = ts->act[i];
       path *p = &P[j];
       if (i + 4 < n) prefetch_path(w, &P[ts->act[i + 4]]);
-      if (!p->got && !s->nlights) { /* escaped (no area light it could meet first) */
+      if (s->nlights) area_hits(s, p); /* area lights the ray sees before the surface */
+      if (!p->got) {
         escape(c, p);
         continue;
       }
       ts->sample = j, p->shadow = 0;
-      int on = path_vertex(c, ts, p);
-      if (p->shadow) {
-        if (p->sh_leave >= 0 && wv_world_leaves_scene(w, p->sh_leave, p->sh_o, p->sh_d)) { /* unblocked */
-          for (int k = 0; k < 3; k++) p->L[k] += p->sh_add[k];
-        } else {
-          memcpy(ts->sh_o[nsh], p->sh_o, sizeof p->sh_o), memcpy(ts->sh_d[nsh], p->sh_d, sizeof p->sh_d);
-          ts->sh_t[nsh] = INFINITY, ts->sh_idx[nsh++] = j;
-        }
-      }
-      if (!on) continue;
-      ts->act[nb++] = j;
-      if (p->leave >= 0 && wv_world_leaves_scene(w, p->leave, p->o, p->d)) { /* escapes */
-        p->got = 0;
+      vertex *v = &ts->vtx[j];
+      vertex_begin(c, ts, p, v);
+      if (v->nshade && v->sf.nfpos == 1 && !v->sf.edit.active) { /* shaded with the others like it, below */
+        memcpy(v->pos, v->sf.fpos[0], sizeof v->pos), v->sf.fpos = &v->pos;
+        ts->dq[nq++] = j;
         continue;
       }
-      memcpy(ts->dir[nt], p->d, sizeof p->d), memcpy(ts->org[nt], p->o, sizeof p->o);
-      ts->idx[nt++] = j; /* (the vertex's list is no longer needed) */
+      if (v->nshade) shade_surface(&v->sf, ts, v->lwant, v->lo, v->fb);
+      queue_rays(w, ts, p, j, vertex_end(c, ts, p, v), &nsh, &nb, &nt);
+    }
+    shade_waiting(ts, nq);
+    for (int q = 0; q < nq; q++) {
+      int j = ts->dq[q];
+      ts->sample = j;
+      queue_rays(w, ts, &P[j], j, vertex_end(c, ts, &P[j], &ts->vtx[j]), &nsh, &nb, &nt);
     }
     wv_tracer_occluded_n(w->tracer, (const float(*)[3])ts->sh_o, (const float(*)[3])ts->sh_d, ts->sh_t, nsh,
                          ts->sh_occ);
@@ -895,9 +981,10 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     me->yidx = malloc(sizeof *me->yidx * spp * K);
     me->ug = malloc(sizeof *me->ug * spp);
     me->eg = malloc(sizeof *me->eg * spp);
+    me->vtx = malloc(sizeof *me->vtx * spp), me->dq = malloc(sizeof *me->dq * spp);
     fail |= !me->scratch || !me->fpos || !me->u || !me->yarn || !me->env || !me->dir || !me->org || !me->sh_o ||
             !me->sh_d || !me->sh_t || !me->sh_idx || !me->sh_occ || !me->ydir || !me->hit || !me->got || !me->paths ||
-            !me->idx || !me->act || !me->yidx || !me->ug || !me->eg;
+            !me->idx || !me->act || !me->yidx || !me->ug || !me->eg || !me->vtx || !me->dq;
     for (int m = 0; m < w->nmats && !fail; m++)
       if (w->mats[m].nedits) {
         fail |= !(me->scratch[m] = malloc(sizeof(wv_fabric)));
@@ -927,7 +1014,7 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
     for (int m = 0; m < w->nmats && me->scratch; m++) free(me->scratch[m]);
     free(me->scratch), free(me->fpos), free(me->u), free(me->yarn), free(me->env);
     free(me->dir), free(me->org), free(me->sh_o), free(me->sh_d), free(me->sh_t), free(me->sh_idx), free(me->sh_occ), free(me->ydir), free(me->hit), free(me->got), free(me->paths), free(me->idx), free(me->act), free(me->yidx), free(me->ug);
-    free(me->eg);
+    free(me->eg), free(me->vtx), free(me->dq);
   }
   free(ts);
   if (fail) {
