@@ -211,7 +211,6 @@ typedef struct {
   float ewi[3], ele[3], epl;         /* the environment's sample */
   float bwi[3], bpdf;                /* the bounce */
   float side[2], cs[2], fb[2][3];    /* the two directions' cosines and BSDF x cosine */
-  float pos[2];                      /* a deferred fabric's position (sf.fpos points here) */
   int last, pass, env_on, plane, nshade;
   float li[2][3], lo[3];             /* a fabric's directions and view in its frame, to shade */
   const float *lwant[2];
@@ -249,7 +248,7 @@ typedef struct {
 typedef struct {
   _Alignas(64) wv_fabric **scratch; /* per material, NULL without edits; the state on cache lines of its own */
   double rays, shades;
-  float (*fpos)[2];    /* K positions */
+  float (*fpos)[2];    /* spp x K: the fabric positions of each path's surface */
   float (*u)[2];       /* (1 + 3 CMJ_DEPTHS) x spp: camera; per depth: environment, area light, bounce */
   float (*yarn)[2];    /* spp x K: the yarn positions */
   wv_env_sample *env;  /* CMJ_DEPTHS x spp: the environment's samples of the numbers in u */
@@ -423,7 +422,7 @@ static __attribute__((noinline)) void fabric_surface(const render_ctx *c, thread
   sf->v = b0 * fu->uv[0][1] + b1 * fu->uv[1][1] + b2 * fu->uv[2][1];
   const wv_world_material *mt = sf->mat;
   eval_edits(mt, sf->u, sf->v, &sf->edit);
-  sf->fpos = ts->fpos;
+  sf->fpos = ts->fpos + (size_t)ts->sample * c->K;
   if (!camera) {
     sf->fpos[0][0] = sf->u * mt->uv_mm[0] + mt->uv_off[0], sf->fpos[0][1] = sf->v * mt->uv_mm[1] + mt->uv_off[1];
     sf->nfpos = 1;
@@ -744,29 +743,42 @@ WV_SIMD_CLONES static int vertex_end(const render_ctx *c, thread_state *ts, path
   return 1;
 }
 
-/* The fabric vertices ts->dq[0 .. nq-1] (one position each, without edits) shaded
- * together: their wanted directions, eight lanes (vertex, direction) to a kernel
- * call, a call's lanes all of one fabric; each result as shade_fabric gives it. */
+/* Lanes of shade_waiting: m of them shaded, each result added to its sum. */
+static void shade_flush(const wv_fabric *f, int m, const float (*lp)[2], const float (*lw)[3], const float (*lo)[3],
+                        float *const *dst) {
+  float r[8][3];
+  shade_lanes(f, m, lp, lw, lo[0], 3, r);
+  for (int i = 0; i < m; i++)
+    for (int c = 0; c < 3; c++) dst[i][c] += r[i][c];
+}
+
+/* The fabric vertices ts->dq[0 .. nq-1] (without edits) shaded together: the
+ * positions of their wanted directions, eight lanes (vertex, direction, position) to
+ * a kernel call, a call's lanes all of one fabric; each sum over the positions in
+ * shade_fabric's order, and its mean, as shade_fabric gives it. */
 static void shade_waiting(thread_state *ts, int nq) {
-  float lp[8][2], lw[8][3], lo[8][3], r[8][3], *dst[8];
+  float lp[8][2], lw[8][3], lo[8][3], *dst[8];
   const wv_fabric *f = NULL;
   int m = 0;
-  for (int q = 0; q <= nq; q++) {
-    vertex *v = q < nq ? &ts->vtx[ts->dq[q]] : NULL;
-    for (int j = 0; j < 2 || !v; j++) {
-      int on = v && v->lwant[j] && v->lwant[j][2] != 0.0f && v->lo[2] > 0.0f; /* as shade_fabric's */
-      if (m && (!v || m == 8 || (on && v->sf.mat->fab != f))) { /* a call's worth */
-        shade_lanes(f, m, (const float(*)[2])lp, (const float(*)[3])lw, lo[0], 3, r);
-        for (int i = 0; i < m; i++)
-          for (int k = 0; k < 3; k++) dst[i][k] = (dst[i][k] + r[i][k]) * 1.0f; /* the sum of one position */
-        m = 0;
+  for (int q = 0; q < nq; q++) {
+    vertex *v = &ts->vtx[ts->dq[q]];
+    for (int j = 0; j < 2; j++) {
+      if (!(v->lwant[j] && v->lwant[j][2] != 0.0f && v->lo[2] > 0.0f)) continue; /* as shade_fabric's */
+      for (int k = 0; k < v->sf.nfpos; k++) {
+        if (m == 8 || (m && v->sf.mat->fab != f)) shade_flush(f, m, lp, lw, lo, dst), m = 0;
+        f = v->sf.mat->fab;
+        memcpy(lp[m], v->sf.fpos[k], sizeof lp[m]), memcpy(lw[m], v->lwant[j], sizeof lw[m]);
+        memcpy(lo[m], v->lo, sizeof lo[m]), dst[m++] = v->fb[j];
       }
-      if (!v) break;
-      if (!on) continue;
-      f = v->sf.mat->fab;
-      memcpy(lp[m], v->pos, sizeof lp[m]), memcpy(lw[m], v->lwant[j], sizeof lw[m]), memcpy(lo[m], v->lo, sizeof lo[m]);
-      dst[m++] = v->fb[j];
     }
+  }
+  if (m) shade_flush(f, m, lp, lw, lo, dst);
+  for (int q = 0; q < nq; q++) {
+    vertex *v = &ts->vtx[ts->dq[q]];
+    float inv = 1.0f / (float)v->sf.nfpos;
+    for (int j = 0; j < 2; j++)
+      if (v->lwant[j] && v->lwant[j][2] != 0.0f && v->lo[2] > 0.0f)
+        v->fb[j][0] *= inv, v->fb[j][1] *= inv, v->fb[j][2] *= inv;
   }
 }
 
@@ -876,8 +888,7 @@ WV_SIMD_CLONES static void render_pixel(const render_ctx *c, thread_state *ts, i
       ts->sample = j, p->shadow = 0;
       vertex *v = &ts->vtx[j];
       vertex_begin(c, ts, p, v);
-      if (v->nshade && v->sf.nfpos == 1 && !v->sf.edit.active) { /* shaded with the others like it, below */
-        memcpy(v->pos, v->sf.fpos[0], sizeof v->pos), v->sf.fpos = &v->pos;
+      if (v->nshade && !v->sf.edit.active) { /* shaded with the others like it, below */
         ts->dq[nq++] = j;
         continue;
       }
@@ -963,7 +974,7 @@ wv_status wv_scene3d_render(const wv_scene3d *s, const wv_world *w, const wv_sce
   for (int t = 0; t < threads && !fail; t++) {
     thread_state *me = &ts[t];
     me->scratch = calloc((size_t)w->nmats, sizeof *me->scratch);
-    me->fpos = malloc(sizeof *me->fpos * K);
+    me->fpos = malloc(sizeof *me->fpos * spp * K);
     me->u = malloc(sizeof *me->u * (1 + 3 * CMJ_DEPTHS) * spp);
     me->yarn = malloc(sizeof *me->yarn * spp * K);
     me->env = malloc(sizeof *me->env * CMJ_DEPTHS * spp);
