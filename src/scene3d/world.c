@@ -230,25 +230,6 @@ static wv_status find_planes(wv_world *w, const float lo[3], const float hi[3], 
   return WV_OK;
 }
 
-int wv_world_leaves_scene(const wv_world *w, int obj, const float o[3], const float d[3]) {
-  const float *lo = w->others[obj][0], *hi = w->others[obj][1];
-  float t0 = 0, t1 = INFINITY;
-  for (int k = 0; k < 3; k++) { /* slabs: the box's padding covers the rounding */
-    if (!(lo[k] <= hi[k])) return 1; /* no other object */
-    if (d[k] == 0.0f) {
-      if (o[k] < lo[k] || o[k] > hi[k]) return 1;
-      continue;
-    }
-    float inv = 1.0f / d[k], a = (lo[k] - o[k]) * inv, b = (hi[k] - o[k]) * inv;
-    if (a > b) {
-      float t = a;
-      a = b, b = t;
-    }
-    t0 = a > t0 ? a : t0, t1 = b < t1 ? b : t1;
-  }
-  return t0 > t1;
-}
-
 wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int threads, wv_world **out,
                         wv_error *err) {
   *out = NULL;

@@ -95,8 +95,21 @@ struct wv_world {
 
 /* Whether the ray from o along d, leaving planar object obj from a point at least
  * 4 plane_tol off its plane on the side d points to, surely meets nothing: it misses
- * the box around the other objects (so the tracer need not be asked). */
-int wv_world_leaves_scene(const wv_world *w, int obj, const float o[3], const float d[3]);
+ * the box around the other objects (so the tracer need not be asked). The slabs
+ * without branches (the signs of d are not predictable); the box's padding covers
+ * the rounding; a 0 in d as 1e-30 (the slab then reached beyond any other's, or
+ * never left). */
+static inline int wv_world_leaves_scene(const wv_world *w, int obj, const float o[3], const float d[3]) {
+  const float *lo = w->others[obj][0], *hi = w->others[obj][1];
+  if (!(lo[0] <= hi[0])) return 1; /* no other object */
+  float t0 = 0, t1 = INFINITY;
+  for (int k = 0; k < 3; k++) {
+    float inv = 1.0f / (d[k] != 0.0f ? d[k] : 1e-30f), a = (lo[k] - o[k]) * inv, b = (hi[k] - o[k]) * inv;
+    float near = a < b ? a : b, far = a < b ? b : a;
+    t0 = near > t0 ? near : t0, t1 = far < t1 ? far : t1;
+  }
+  return t0 > t1;
+}
 
 /* cos and sin of 2 pi u for u in [0, 1) without libm (the bounce's turn about the
  * normal): the table's turn at the step below u (in double, rounded), turned on by
