@@ -22,11 +22,18 @@ typedef struct {
   double total;   /* sum of the sampling weights (luminance x sin theta) */
   float rot_c, rot_s; /* rotation about +y */
   /* Lookup tables (what the path tracer reads per sample, kept small and local):
-   * texel: w x h x 4, the radiance and the pixel's probability times w h (one
-   * cache line per lookup); guide_row: WV_ENV_GUIDE + 1 and guide_col: h x
-   * (WV_ENV_GUIDE + 1), where the CDF passes i / WV_ENV_GUIDE (search start points). */
+   * texel: w x h x 4, the radiance and the pixel's solid-angle density (one cache
+   * line per lookup); guide_row: WV_ENV_GUIDE + 1 and guide_col: h x
+   * (WV_ENV_GUIDE + 1), where the CDF passes i / WV_ENV_GUIDE (search start points).
+   * A direction's pixel without trigonometry: edge_y (h + 1), cos theta at the rows'
+   * edges; edge_x (w + 1), the columns' edges as pseudo-angles (emitters/envmap.c);
+   * guide_y (2 h + 1) and guide_x (2 w + 1), the row and the column at each of
+   * equal steps of a coordinate close to theta and of the pseudo-angle; centre_x
+   * (w x 2), the unit horizontal world direction (x, z) through each column's centre. */
   float *texel;
   int *guide_row, *guide_col;
+  float *edge_y, *edge_x, *centre_x;
+  int *guide_y, *guide_x;
 } wv_envmap;
 #define WV_ENV_GUIDE 64
 
@@ -51,12 +58,12 @@ float wv_envmap_lookup(const wv_envmap *e, const float d[3], float rgb[3]);
  * fetching it, wv_envmap_read (later, after other work) reads it. */
 typedef struct {
   size_t texel;
-  float sin_t;
 } wv_env_at;
 wv_env_at wv_envmap_at(const wv_envmap *e, const float d[3]);
 float wv_envmap_read(const wv_envmap *e, wv_env_at a, float rgb[3]);
-/* A direction drawn with density ~ luminance x (u1, u2 in [0,1)); returns its
- * pdf (0 when the map is black) and the radiance in rgb. */
+/* A direction drawn with density ~ luminance x (u1, u2 in [0,1)): a pixel by the
+ * CDFs, then a point uniform in solid angle within it (uniform in cos theta and in
+ * longitude); returns its pdf (0 when the map is black) and the radiance in rgb. */
 float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float rgb[3]);
 /* wv_envmap_sample for n pairs u[j] (the same results), faster than one by one. */
 typedef struct {

@@ -1,6 +1,9 @@
 /* Equirectangular environment maps: lookup, importance sampling by luminance
- * times sin(theta) (piecewise constant over pixels, so the pdf and the lookup
- * agree exactly), and the built-in environments generated in code. */
+ * times sin(theta) (piecewise constant over pixels, uniform in solid angle within
+ * each, so the pdf and the lookup agree exactly), and the built-in environments
+ * generated in code. A direction's pixel is found by comparisons with tables of
+ * the pixels' edges, and a drawn direction is built from a table of the columns'
+ * centres: no trigonometry per sample. */
 #define _DEFAULT_SOURCE /* madvise's MADV_HUGEPAGE */
 #include <math.h>
 #include <stdlib.h>
@@ -13,10 +16,21 @@
 #define PI_F 3.14159265358979f
 #define PI 3.14159265358979323846
 
+/* The batched sampler and the lookup (the path tracer's inner loop) in versions for
+ * AVX-512, AVX2 and plain x86-64, chosen when the program loads, as the shading
+ * kernel's (kernel/lanes.h, WV_SIMD_CLONES; this floor does not include it): the
+ * same operations, so the same results. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11
+#define ENV_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define ENV_CLONES
+#endif
+
 void wv_envmap_free(wv_envmap *e) {
   if (!e) return;
   free(e->rgb), free(e->cdf_row), free(e->cdf_col);
   free(e->texel), free(e->guide_row), free(e->guide_col);
+  free(e->edge_y), free(e->edge_x), free(e->centre_x), free(e->guide_y), free(e->guide_x);
   memset(e, 0, sizeof *e);
 }
 
@@ -27,7 +41,8 @@ size_t wv_envmap_bytes(int w, int h) {
   size_t texel = (size_t)w * h * 4 * sizeof(float), huge = (size_t)1 << 21;
   if (texel >= huge / 2) texel = (texel + huge - 1) / huge * huge;
   return ((size_t)w * h * 3 + (size_t)(h + 1) + (size_t)h * (w + 1)) * sizeof(float) + (size_t)(h + 1) * sizeof(double) +
-         texel + (size_t)(h + 1) * (WV_ENV_GUIDE + 1) * sizeof(int);
+         texel + (size_t)(h + 1) * (WV_ENV_GUIDE + 1) * sizeof(int) +
+         ((size_t)(h + 1) + (size_t)(w + 1) + 2 * (size_t)w) * sizeof(float) + ((size_t)(2 * h + 1) + (size_t)(2 * w + 1)) * sizeof(int);
 }
 
 static float pixel_prob(const wv_envmap *e, int x, int y) {
@@ -57,24 +72,86 @@ static void *table_alloc(size_t bytes) {
   return p;
 }
 
-/* The tables the lookups and the sampler read (emitters.h): texel and the guides. */
-static wv_status build_lookup(wv_envmap *e, const char *name, wv_error *err) {
+/* The pseudo-angle of the horizontal direction (a, b), not both 0: from 0 to 4 as
+ * atan2(b, a) goes round from 0 to 2 pi, and monotone in it (the quadrant, plus
+ * where the direction meets the square |a| + |b| = 1); one division. In float for
+ * the lookups, in double for the table of the columns' edges. */
+static inline float pseudo_angle(float a, float b) {
+  float s = fabsf(a) + fabsf(b);
+  int same = (a >= 0.0f) == (b >= 0.0f), q = 2 * (b < 0.0f) + !same; /* the quadrant */
+  float t = (same ? fabsf(b) : fabsf(a)) / (s > 0.0f ? s : 1.0f);   /* b / s, -a / s, -b / s or a / s */
+  return (float)q + t;
+}
+static double pseudo_angle_d(double a, double b) {
+  double s = fabs(a) + fabs(b);
+  if (!(s > 0.0)) return 0.0;
+  if (b >= 0.0) return a >= 0.0 ? b / s : 1.0 - a / s;
+  return a < 0.0 ? 2.0 - b / s : 3.0 + a / s;
+}
+
+/* The row of cos theta = cy and the column of pseudo-angle p, by walking the edge
+ * tables from a nearby row or column: row y holds edge_y[y] >= cy > edge_y[y + 1]
+ * (theta in [pi y / h, pi (y + 1) / h)), column x edge_x[x] <= p < edge_x[x + 1]. */
+static inline int walk_row(const wv_envmap *e, float cy, int y) {
+  while (y > 0 && cy > e->edge_y[y]) y--;
+  while (y + 1 < e->h && cy <= e->edge_y[y + 1]) y++;
+  return y;
+}
+static inline int walk_col(const wv_envmap *e, float p, int x) {
+  while (x > 0 && p < e->edge_x[x]) x--;
+  while (x + 1 < e->w && p >= e->edge_x[x + 1]) x++;
+  return x;
+}
+
+/* World direction -> cos theta and the pseudo-angle of the longitude in the map
+ * (turned by -rotation about +y; longitude phi from -z toward +x, measured from
+ * phi = -pi, the map's left edge). */
+static inline void to_map(const wv_envmap *e, const float d[3], float *cy, float *p) {
+  float mx = e->rot_c * d[0] - e->rot_s * d[2], mz = e->rot_s * d[0] + e->rot_c * d[2];
+  *cy = d[1] < -1.0f ? -1.0f : d[1] > 1.0f ? 1.0f : d[1];
+  *p = pseudo_angle(mz, -mx); /* phi + pi is the angle of (mz, -mx) */
+}
+
+/* The tables the lookups and the sampler read (emitters.h): texel, the guides,
+ * the edges and the columns' centres. */
+static wv_status build_lookup(wv_envmap *e, double rot, const char *name, wv_error *err) {
   int w = e->w, h = e->h;
   e->texel = table_alloc((size_t)w * h * 4 * sizeof(float));
   e->guide_row = malloc((WV_ENV_GUIDE + 1) * sizeof(int));
   e->guide_col = malloc((size_t)h * (WV_ENV_GUIDE + 1) * sizeof(int));
-  if (!e->texel || !e->guide_row || !e->guide_col) {
+  e->edge_y = malloc((size_t)(h + 1) * sizeof(float));
+  e->edge_x = malloc((size_t)(w + 1) * sizeof(float));
+  e->centre_x = malloc((size_t)w * 2 * sizeof(float));
+  e->guide_y = malloc((size_t)(2 * h + 1) * sizeof(int));
+  e->guide_x = malloc((size_t)(2 * w + 1) * sizeof(int));
+  if (!e->texel || !e->guide_row || !e->guide_col || !e->edge_y || !e->edge_x || !e->centre_x || !e->guide_y ||
+      !e->guide_x) {
     wv_envmap_free(e);
     return wv_fail(err, WV_ERR_NOMEM, "%s: out of memory for the environment's tables", name);
   }
-  for (int y = 0; y < h; y++)
+  for (int y = 0; y <= h; y++) e->edge_y[y] = (float)cos(PI * y / h);
+  e->edge_y[0] = 1.0f, e->edge_y[h] = -1.0f;
+  for (int x = 0; x <= w; x++) e->edge_x[x] = (float)pseudo_angle_d(cos(2 * PI * x / w), sin(2 * PI * x / w));
+  e->edge_x[0] = 0.0f, e->edge_x[w] = 4.0f;
+  for (int x = 0; x < w; x++) { /* (mx, mz) = (-sin, cos) of phi + pi, turned to the world */
+    double a = 2 * PI * (x + 0.5) / w, mx = -sin(a), mz = cos(a), rc = cos(rot), rs = sin(rot);
+    e->centre_x[2 * x] = (float)(rc * mx + rs * mz), e->centre_x[2 * x + 1] = (float)(-rs * mx + rc * mz);
+  }
+  for (int g = 0, y = 0; g <= 2 * h; g++) { /* cell g: guide_t(cy) in [g / h, (g + 1) / h) */
+    double t = (double)g / h, cy = t <= 1 ? 1 - t * t : (2 - t) * (2 - t) - 1;
+    e->guide_y[g] = y = walk_row(e, (float)cy, y);
+  }
+  for (int g = 0, x = 0; g <= 2 * w; g++) e->guide_x[g] = x = walk_col(e, (float)(2.0 * g / w), x);
+  for (int y = 0; y < h; y++) {
+    /* the pixels' solid angle: the band between the rows' edges, over one column */
+    double omega = (cos(PI * y / h) - cos(PI * (y + 1) / h)) * 2 * PI / w;
     for (int x = 0; x < w; x++) {
       float *t = e->texel + ((size_t)y * w + x) * 4;
       const float *c = e->rgb + ((size_t)y * w + x) * 3;
       t[0] = c[0], t[1] = c[1], t[2] = c[2];
-      /* the first two factors of the pdf, in the order wv_envmap_lookup continues them */
-      t[3] = pixel_prob(e, x, y) * (float)w * (float)h;
+      t[3] = (float)(pixel_prob(e, x, y) / omega); /* the density within the pixel */
     }
+  }
   make_guide(e->cdf_row, h, e->guide_row);
   for (int y = 0; y < h; y++) make_guide(e->cdf_col + (size_t)y * (w + 1), w, e->guide_col + (size_t)y * (WV_ENV_GUIDE + 1));
   return WV_OK;
@@ -138,25 +215,28 @@ wv_status wv_envmap_init(wv_envmap *e, const wv_image *img, double strength, dou
   e->total = total;
   double r = rot_deg * PI / 180.0;
   e->rot_c = (float)cos(r), e->rot_s = (float)sin(r);
-  return build_lookup(e, name, err);
+  return build_lookup(e, r, name, err);
 }
 
-/* World direction -> pixel of the map (turned by -rotation about +y). */
-static void to_pixel(const wv_envmap *e, const float d[3], int *x, int *y, float *sin_t) {
-  float mx = e->rot_c * d[0] - e->rot_s * d[2], mz = e->rot_s * d[0] + e->rot_c * d[2];
-  float cy = d[1] < -1.0f ? -1.0f : d[1] > 1.0f ? 1.0f : d[1];
-  float theta = acosf(cy), phi = atan2f(mx, -mz);
-  int ix = (int)((phi + PI_F) / (2 * PI_F) * e->w), iy = (int)(theta / PI_F * e->h);
-  *x = ix < 0 ? 0 : ix >= e->w ? e->w - 1 : ix;
-  *y = iy < 0 ? 0 : iy >= e->h ? e->h - 1 : iy;
-  *sin_t = sqrtf(1.0f - cy * cy);
-}
+/* The guide's coordinate of cos theta = cy: sqrt(1 - cy) on the upper half, 2 -
+ * sqrt(1 + cy) on the lower, from 0 to 2 and nearly proportional to theta (within a
+ * factor sqrt 2), so that a cell of 1 / h holds at most one row's edge. */
+static inline float guide_t(float cy) { return cy >= 0.0f ? sqrtf(1.0f - cy) : 2.0f - sqrtf(1.0f + cy); }
 
-wv_env_at wv_envmap_at(const wv_envmap *e, const float d[3]) {
-  int x, y;
-  wv_env_at a;
-  to_pixel(e, d, &x, &y, &a.sin_t);
-  a.texel = (size_t)y * e->w + x;
+ENV_CLONES wv_env_at wv_envmap_at(const wv_envmap *e, const float d[3]) {
+  float cy, p;
+  to_map(e, d, &cy, &p);
+  /* the guides' cells hold at most one edge each (a column spans pi / w of the
+   * pseudo-angle or more, a row 1 / (sqrt 2 h) or more of guide_t): one step from
+   * the cell's row and column, the walk only to undo rounding at a cell's edge */
+  int gy = (int)(guide_t(cy) * (float)e->h), gx = (int)(p * (float)e->w * 0.5f);
+  gy = gy < 0 ? 0 : gy > 2 * e->h ? 2 * e->h : gy;
+  gx = gx < 0 ? 0 : gx > 2 * e->w ? 2 * e->w : gx;
+  int y = e->guide_y[gy], x = e->guide_x[gx];
+  y += y + 1 < e->h && cy <= e->edge_y[y + 1];
+  x += x + 1 < e->w && p >= e->edge_x[x + 1];
+  y = walk_row(e, cy, y), x = walk_col(e, p, x);
+  wv_env_at a = {(size_t)y * e->w + x};
   __builtin_prefetch(e->texel + 4 * a.texel);
   return a;
 }
@@ -164,8 +244,7 @@ wv_env_at wv_envmap_at(const wv_envmap *e, const float d[3]) {
 float wv_envmap_read(const wv_envmap *e, wv_env_at a, float rgb[3]) {
   const float *c = e->texel + 4 * a.texel;
   rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
-  if (!(e->total > 0) || a.sin_t <= 0.0f) return 0.0f;
-  return c[3] / (2.0f * PI_F * PI_F * a.sin_t);
+  return e->total > 0 ? c[3] : 0.0f;
 }
 
 void wv_envmap_eval(const wv_envmap *e, const float d[3], float rgb[3]) { wv_envmap_read(e, wv_envmap_at(e, d), rgb); }
@@ -195,12 +274,14 @@ static void guide_check(const float *cdf, int n, float u, int *lo, int *hi) {
   if (*hi > n || !(u < cdf[*hi])) *hi = n;
 }
 
-/* Index i with cdf[i] <= u < cdf[i + 1] (skipping empty intervals), between lo and hi. */
+/* Index i with cdf[i] <= u < cdf[i + 1] (skipping empty intervals), between lo and hi
+ * (cdf[lo] <= u < cdf[hi]): the last i in [lo, hi) with cdf[i] <= u, by halving the
+ * range with a select instead of a branch (the comparisons are not predictable). */
 static int bisect(const float *cdf, int lo, int hi, float u) {
-  while (hi - lo > 1) {
-    int mid = (lo + hi) / 2;
-    if (cdf[mid] <= u) lo = mid;
-    else hi = mid;
+  for (int n = hi - lo; n > 1;) { /* the answer lies in [lo, lo + n) */
+    int half = n / 2;
+    lo = cdf[lo + half] <= u ? lo + half : lo;
+    n -= half;
   }
   return lo;
 }
@@ -215,26 +296,49 @@ static int find(const float *cdf, const int *guide, int n, float u) {
 static const int *row_guide(const wv_envmap *e, int y) { return e->guide_col + (size_t)y * (WV_ENV_GUIDE + 1); }
 static const float *row_cdf(const wv_envmap *e, int y) { return e->cdf_col + (size_t)y * (e->w + 1); }
 
+/* sin and cos of x, |x| <= pi / 2, by their Taylor series (error below 1e-7): the
+ * offset from a column's centre, at most pi / w. Up to x^7 and x^8 for |x| <= pi / 8
+ * (w >= 8; the next terms below 2e-8 of the result), else to x^11 and x^12. */
+static inline void sincos_small(float x, int short_series, float *s, float *c) {
+  float x2 = x * x;
+  if (short_series) {
+    *s = x * (1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040))));
+    *c = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 * (1.0f / 40320))));
+    return;
+  }
+  *s = x * (1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040 + x2 * (1.0f / 362880 + x2 * (-1.0f / 39916800))))));
+  *c = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 * (1.0f / 40320 + x2 * (-1.0f / 3628800 +
+       x2 * (1.0f / 479001600))))));
+}
+
 /* The direction through pixel (x, y) of the draw: where inside it, the leftover
- * of each uniform number, rescaled. Returns 1 when d surely looks up (x, y) again
- * (to_pixel would give it): its point lies WV_ENV_MARGIN of a pixel inside the
- * pixel's edges, and away from the poles, where cos theta in float no longer
- * tells rows apart finely. The margin is about seven times the error of the float
- * round trip (angles -> d -> angles), at most 3e-3 of a pixel at 8192 x 4096; the
- * pole test keeps the error of acos(cos theta), (h / pi) 2 ulp(1) / sin theta rows,
- * below an eighth of the margin. */
-#define WV_ENV_MARGIN 0.02f
-static int drawn_dir(const wv_envmap *e, float u1, float u2, int x, int y, float d[3]) {
+ * of each uniform number, rescaled: cos theta linear across the row and the
+ * longitude across the column (uniform in solid angle), the longitude as a turn
+ * of the column's centre. Returns the texel d looks up (rounding at a pixel's edge
+ * can move d to its neighbour, and the estimator must use the values of d): the
+ * row by its edges; the column is x itself when the drawn longitude is more than
+ * WV_ENV_MARGIN radians inside its edges, ten times the error of the turn and the
+ * lookup's rounding together (below 2e-6; test_env_pixels), else by its edges. */
+#define WV_ENV_MARGIN 2e-5f
+static inline __attribute__((always_inline)) size_t drawn_dir(const wv_envmap *e, float u1, float u2, int x, int y,
+                                                              float d[3]) {
   const float *row = row_cdf(e, y);
   float fy = (u1 - e->cdf_row[y]) / (e->cdf_row[y + 1] - e->cdf_row[y]);
   float fx = (u2 - row[x]) / (row[x + 1] - row[x]);
   fy = fy < 0 ? 0 : fy > 0.999999f ? 0.999999f : fy;
   fx = fx < 0 ? 0 : fx > 0.999999f ? 0.999999f : fx;
-  float theta = PI_F * (y + fy) / e->h, phi = 2 * PI_F * (x + fx) / e->w - PI_F;
-  float st = sinf(theta), mx = st * sinf(phi), my = cosf(theta), mz = -st * cosf(phi);
-  d[0] = e->rot_c * mx + e->rot_s * mz, d[1] = my, d[2] = -e->rot_s * mx + e->rot_c * mz;
-  const float m = WV_ENV_MARGIN;
-  return fx > m && fx < 1 - m && fy > m && fy < 1 - m && st * m > 8 * 2.4e-7f * (float)e->h / PI_F;
+  float cy = e->edge_y[y] + fy * (e->edge_y[y + 1] - e->edge_y[y]), st = sqrtf((1.0f - cy) * (1.0f + cy)), sd, cd;
+  sincos_small((fx - 0.5f) * (2 * PI_F / (float)e->w), e->w >= 8, &sd, &cd);
+  const float *c = e->centre_x + 2 * x;
+  d[0] = st * (cd * c[0] - sd * c[1]), d[1] = cy, d[2] = st * (cd * c[1] + sd * c[0]);
+  y = walk_row(e, cy, y);
+  float m = WV_ENV_MARGIN * (float)e->w * (1.0f / (2 * PI_F)); /* the margin as a fraction of the column */
+  if (!(fx > m && fx < 1.0f - m && st > 0.0f)) { /* (at a pole, d has no longitude) */
+    float my, p;
+    to_map(e, d, &my, &p);
+    x = walk_col(e, p, x);
+  }
+  return (size_t)y * e->w + x;
 }
 
 static float no_sample(float d[3], float rgb[3]) {
@@ -246,16 +350,14 @@ float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float
   if (!(e->total > 0)) return no_sample(d, rgb);
   int y = find(e->cdf_row, e->guide_row, e->h, u1);
   int x = find(row_cdf(e, y), row_guide(e, y), e->w, u2);
-  drawn_dir(e, u1, u2, x, y, d);
-  /* radiance and pdf where d looks up (not the drawn pixel): rounding at a pixel's
-   * edge can move d to its neighbour, and the estimator must use the values of d */
-  return wv_envmap_lookup(e, d, rgb);
+  wv_env_at a = {drawn_dir(e, u1, u2, x, y, d)};
+  return wv_envmap_read(e, a, rgb);
 }
 
 /* wv_envmap_sample on many numbers, in stages over blocks of draws so that the
  * table reads of different draws (random rows, random texels) overlap. */
-void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_sample *out) {
-  enum { B = 16 };
+ENV_CLONES void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_sample *out) {
+  enum { B = 32 };
   for (int j0 = 0; j0 < n; j0 += B) {
     int m = n - j0 < B ? n - j0 : B, y[B], lo[B], hi[B];
     wv_env_at at[B];
@@ -278,13 +380,8 @@ void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_s
       const float *cdf = row_cdf(e, y[j]);
       guide_check(cdf, e->w, v[j][1], &lo[j], &hi[j]);
       int x = bisect(cdf, lo[j], hi[j], v[j][1]);
-      if (drawn_dir(e, v[j][0], v[j][1], x, y[j], o[j].d)) { /* to_pixel's answer, without its acos and atan2 */
-        float cy = o[j].d[1] < -1.0f ? -1.0f : o[j].d[1] > 1.0f ? 1.0f : o[j].d[1];
-        at[j].texel = (size_t)y[j] * e->w + x, at[j].sin_t = sqrtf(1.0f - cy * cy);
-        __builtin_prefetch(e->texel + 4 * at[j].texel);
-      } else {
-        at[j] = wv_envmap_at(e, o[j].d);
-      }
+      at[j].texel = drawn_dir(e, v[j][0], v[j][1], x, y[j], o[j].d);
+      __builtin_prefetch(e->texel + 4 * at[j].texel);
     }
     for (int j = 0; j < m; j++) o[j].pdf = wv_envmap_read(e, at[j], o[j].rgb);
   }

@@ -13,11 +13,19 @@
 #include "util/colour.h"
 #include "woven/io.h"
 
+void wv_turn_table_make(wv_turn_table *t) {
+  for (int k = 0; k < WV_TURN_STEPS; k++) {
+    double a = 2 * 3.14159265358979323846 * k / WV_TURN_STEPS;
+    t->cs[k][0] = (float)cos(a), t->cs[k][1] = (float)sin(a);
+  }
+}
+
 void wv_world_free(wv_world *w) {
   if (!w) return;
   for (int i = 0; i < w->nobjects; i++) wv_mesh_free(&w->meshes[i]);
   for (int i = 0; i < w->nobjects && w->faces; i++) free(w->faces[i]);
   for (int i = 0; i < w->nobjects && w->uv_grad; i++) free(w->uv_grad[i]);
+  for (int i = 0; i < w->nobjects && w->face_uv; i++) free(w->face_uv[i]);
   for (int i = 0; i < w->nmats; i++) {
     free(w->mats[i].fab);
     free(w->mats[i].edits);
@@ -26,7 +34,8 @@ void wv_world_free(wv_world *w) {
   free(w->images);
   wv_tracer_free(w->tracer);
   wv_envmap_free(&w->env);
-  free(w->meshes), free(w->faces), free(w->uv_grad), free(w->material), free(w->mats);
+  free(w->meshes), free(w->faces), free(w->face_uv), free(w->uv_grad), free(w->material), free(w->mats);
+  free(w->planar), free(w->others);
   free(w);
 }
 
@@ -162,6 +171,7 @@ static wv_status load_material(const wv_material3d *src, const wv_params *overri
   if (!(m->fab = malloc(sizeof *m->fab))) return wv_fail(err, WV_ERR_NOMEM, "out of memory for a fabric");
   if ((st = wv_fabric_prepare(&p, m->fab, err)))
     wv_error_prefix(err, "%s", override ? "--params" : src->params_path);
+  else m->pback = wv_back_prob(m->fab);
   return st;
 }
 
@@ -184,6 +194,42 @@ static wv_status make_mesh(const wv_scene3d *s, const wv_object3d *o, size_t lim
   return wv_mesh_tangents(m, name, err);
 }
 
+/* Which objects are planar, and the box around the others of each (wv_world's
+ * planar, others, plane_tol): lo..hi bound all the meshes. */
+static wv_status find_planes(wv_world *w, const float lo[3], const float hi[3], wv_error *err) {
+  int n = w->nobjects;
+  w->planar = calloc((size_t)(n ? n : 1), sizeof *w->planar);
+  w->others = malloc(sizeof *w->others * (size_t)(n ? n : 1));
+  if (!w->planar || !w->others) return wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  double ext = 0; /* the largest coordinate: float positions are within 1e-7 of it of their true places */
+  for (int k = 0; k < 3; k++) ext = fmax(ext, fmax(fabs((double)lo[k]), fabs((double)hi[k])));
+  w->plane_tol = (float)(1e-6 * ext);
+  float pad = (float)(1e-5 * ext);
+  for (int i = 0; i < n; i++) {
+    const wv_mesh *m = &w->meshes[i];
+    if (m->nt > 0) { /* the plane of the first triangle, all vertices within plane_tol of it */
+      const float *ng = w->faces[i][0].ng, *v0 = m->pos + 3 * m->idx[0];
+      double c = (double)ng[0] * v0[0] + (double)ng[1] * v0[1] + (double)ng[2] * v0[2];
+      int flat = ng[0] != 0 || ng[1] != 0 || ng[2] != 0;
+      for (int v = 0; v < m->nv && flat; v++) {
+        const float *p = m->pos + 3 * v;
+        flat = fabs((double)ng[0] * p[0] + (double)ng[1] * p[1] + (double)ng[2] * p[2] - c) <= w->plane_tol;
+      }
+      w->planar[i] = flat;
+    }
+    float *blo = w->others[i][0], *bhi = w->others[i][1];
+    for (int k = 0; k < 3; k++) blo[k] = INFINITY, bhi[k] = -INFINITY;
+    for (int j = 0; j < n; j++)
+      for (int v = 0; v < w->meshes[j].nv && j != i; v++)
+        for (int k = 0; k < 3; k++) {
+          float p = w->meshes[j].pos[3 * v + k];
+          blo[k] = p < blo[k] ? p : blo[k], bhi[k] = p > bhi[k] ? p : bhi[k];
+        }
+    for (int k = 0; k < 3; k++) blo[k] -= pad, bhi[k] += pad;
+  }
+  return WV_OK;
+}
+
 wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int threads, wv_world **out,
                         wv_error *err) {
   *out = NULL;
@@ -193,10 +239,11 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
   w->meshes = calloc((size_t)s->nobjects, sizeof *w->meshes);
   w->faces = calloc((size_t)s->nobjects, sizeof *w->faces);
   w->uv_grad = calloc((size_t)s->nobjects, sizeof *w->uv_grad);
+  w->face_uv = calloc((size_t)s->nobjects, sizeof *w->face_uv);
   w->material = calloc((size_t)s->nobjects, sizeof *w->material);
   w->mats = calloc((size_t)s->nmaterials, sizeof *w->mats);
   w->images = s->nedits ? calloc(2 * (size_t)s->nedits, sizeof *w->images) : NULL;
-  if (!w->meshes || !w->faces || !w->uv_grad || !w->material || !w->mats || (s->nedits && !w->images)) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
+  if (!w->meshes || !w->faces || !w->uv_grad || !w->face_uv || !w->material || !w->mats || (s->nedits && !w->images)) st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
   /* one budget for everything the job holds: maps, meshes, the tracer, the environment */
   budget b = {0, s->mesh_limit_bytes ? s->mesh_limit_bytes : (size_t)WV_MESH_DEFAULT_LIMIT_MB << 20};
   for (int i = 0; i < s->nmaterials && !st; i++, w->nmats++)
@@ -213,15 +260,17 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
     st = make_mesh(s, &s->objects[i], b.limit - b.used, &w->meshes[i], err);
     const char *what = s->objects[i].path ? s->objects[i].path : "a built-in shape";
     if (!st) st = spend(&b, wv_mesh_bytes(w->meshes[i].nv, w->meshes[i].nt), what, err);
-    /* what the path tracer reads per triangle (wv_face; the UV gradients of a fabric's) */
+    /* what the path tracer reads per triangle (wv_face; a fabric's UVs, tangents and
+     * UV gradients), each triangle's records on cache lines of their own */
     const wv_mesh *m = &w->meshes[i];
     int fabric = w->mats[w->material[i]].kind == WV_MAT_FABRIC;
     size_t nt = (size_t)m->nt;
-    if (!st) st = spend(&b, (sizeof(wv_face) + (fabric ? sizeof(wv_uv_grad) : 0)) * nt, what, err);
-    if (!st && (!(w->faces[i] = malloc(sizeof(wv_face) * nt)) ||
+    if (!st) st = spend(&b, (sizeof(wv_face) + (fabric ? sizeof(wv_face_uv) + sizeof(wv_uv_grad) : 0)) * nt, what, err);
+    if (!st && (!(w->faces[i] = aligned_alloc(64, sizeof(wv_face) * (nt ? nt : 1))) ||
+                (fabric && !(w->face_uv[i] = aligned_alloc(64, sizeof(wv_face_uv) * (nt ? nt : 1)))) ||
                 (fabric && !(w->uv_grad[i] = malloc(sizeof(wv_uv_grad) * nt)))))
       st = wv_fail(err, WV_ERR_NOMEM, "out of memory");
-    if (!st) wv_faces_make(m, w->faces[i], w->uv_grad[i]);
+    if (!st) wv_faces_make(m, w->faces[i], w->face_uv[i], w->uv_grad[i]);
   }
   if (!st) {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -237,6 +286,7 @@ wv_status wv_world_load(const wv_scene3d *s, const wv_params *override, int thre
     }
     w->scene_radius = 0.5f * sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                    (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    if (!st) st = find_planes(w, lo, hi, err);
     if (list) st = wv_tracer_create(list, s->nobjects, threads, b.limit - b.used, &w->tracer, err);
     free(list);
   }
