@@ -9,6 +9,7 @@
 #include "testutil.h"
 
 #define M_PI 3.14159265358979323846
+#include "woven/imgops.h"
 #include "woven/io.h"
 #include "woven/maps.h"
 #include "woven/grad.h"
@@ -233,6 +234,46 @@ static void render_params(const char *scene, const wv_params *p, int size, int s
   if (wv_render(&s, p, &o, out, NULL, &err)) fail_msg("%s", err.msg);
 }
 
+/* The same view on an image twice smaller (wv_scene_downscale, as a fit iterating at
+ * --iter-scale 2 sees it): the back-lit rig's gap glow, falloff and blur, all given in
+ * pixels, keep their place on the cloth, so the small render matches the large one
+ * averaged down. */
+static void test_downscale(void **state) {
+  (void)state;
+  wv_params p;
+  wv_params_default("plain", &p, NULL);
+  p.yarn_width = 0.7, p.density[0] = p.density[1] = 60;
+  wv_scene s, half;
+  wv_error err = {0};
+  assert_int_equal(wv_scene_preset("flat45-back", &s, &err), WV_OK);
+  crop_scene(&s, 128, 128);
+  s.glow_radiance = 0.5, s.psf_sigma = 2; /* below the clip; a blur too */
+  wv_scene_downscale(&s, 2, &half);
+  assert_int_equal(half.width, 64);
+  assert_true(half.glow_sigma == s.glow_sigma / 2 && half.psf_sigma == 1);
+  wv_render_opts o = {.spp = 16};
+  wv_image big, small, down;
+  assert_int_equal(wv_render(&s, &p, &o, &big, NULL, &err), WV_OK);
+  assert_int_equal(wv_render(&half, &p, &o, &small, NULL, &err), WV_OK);
+  assert_int_equal(wv_image_downsample(&big, 64, 64, &down, &err), WV_OK);
+  /* the glow's ring between 8 and 24 pixels of the small image's centre, and the whole */
+  double ring[2] = {0, 0}, whole[2] = {0, 0};
+  int nr = 0;
+  for (int y = 0; y < 64; y++)
+    for (int x = 0; x < 64; x++) {
+      double r = hypot(x + 0.5 - 32, y + 0.5 - 32), a = 0, b = 0;
+      for (int c = 0; c < 3; c++) a += wv_image_px(&small, x, y)[c] / 3, b += wv_image_px(&down, x, y)[c] / 3;
+      whole[0] += a / 4096, whole[1] += b / 4096;
+      if (r >= 8 && r < 24) ring[0] += a, ring[1] += b, nr++;
+    }
+  ring[0] /= nr, ring[1] /= nr;
+  print_message("downscale: ring %.4f against %.4f averaged down, whole %.4f against %.4f\n", ring[0], ring[1],
+                whole[0], whole[1]);
+  assert_true(fabs(ring[0] - ring[1]) < 0.03 * ring[1]);
+  assert_true(fabs(whole[0] - whole[1]) < 0.03 * whole[1]);
+  wv_image_free(&big), wv_image_free(&small), wv_image_free(&down);
+}
+
 /* The back-lit rig (flat45-back): light passes where the front-lit rig without its
  * light is black; open gaps show the light itself (the gap glow), brighter where
  * the gaps are wider than a pixel (a lower density); the colour is the
@@ -397,7 +438,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_deterministic), cmocka_unit_test(test_footprints_cache),
                                      cmocka_unit_test(test_default_spp_converged),
                                      cmocka_unit_test(test_twill90_is_mirrored_twill), cmocka_unit_test(test_maps_tile),
-                                     cmocka_unit_test(test_back_lit), cmocka_unit_test(test_maps_transmission),
+                                     cmocka_unit_test(test_back_lit), cmocka_unit_test(test_downscale),
+                                     cmocka_unit_test(test_maps_transmission),
                                      cmocka_unit_test(test_golden)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

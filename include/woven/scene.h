@@ -81,6 +81,10 @@ int wv_scene_distorted(const wv_scene *s);
  * it (light z < 0, the camera in front). The light is then on the far side of every point,
  * and the fabric transmits (docs/model.md); otherwise it reflects. */
 int wv_scene_transmits(const wv_scene *s);
+/* s seen by the same camera on an image scale times smaller (width / scale x height / scale,
+ * rounded down): what the scene measures in pixels (the falloff, the camera blur, the gap
+ * glow) divided by scale. scale <= 1: a copy. */
+void wv_scene_downscale(const wv_scene *s, int scale, wv_scene *out);
 
 /* Sensor response: capture = mask * encode(clip(exposure * radiance)). In place allowed.
  * (Its adjoint is applied inside the gradient renderer, woven/grad.h.) The camera blur is

@@ -117,12 +117,7 @@ static wv_status ctx_init(fit_ctx *c, const wv_scene *s, const wv_image *photo, 
   so.iter_scale = scale;
   wv_status st = wv_fit_check_sizes(s, d, &so, err);
   if (st) return st;
-  c->scene = *s;
-  if (scale > 1) {
-    c->scene.width = s->width / scale, c->scene.height = s->height / scale;
-    c->scene.falloff_sigma = s->falloff_sigma / scale;
-    c->scene.psf_sigma = s->psf_sigma / scale; /* the blur in pixels of the smaller image */
-  }
+  wv_scene_downscale(s, scale, &c->scene);
   if (spp > 0) c->scene.spp = spp;
   if (photo->w != s->width || photo->h != s->height)
     return wv_fail(err, WV_ERR_INVALID, "the photo is %d x %d but the scene renders %d x %d", photo->w, photo->h,

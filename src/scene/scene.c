@@ -262,6 +262,16 @@ wv_status wv_scene_validate(const wv_scene *s, wv_error *err) {
 
 int wv_scene_transmits(const wv_scene *s) { return s->shape == WV_SHAPE_PLANE && s->light_pos[2] < 0; }
 
+void wv_scene_downscale(const wv_scene *s, int scale, wv_scene *out) {
+  *out = *s;
+  if (scale <= 1) return;
+  out->width = s->width / scale, out->height = s->height / scale;
+  /* what is measured in pixels shrinks with them */
+  out->falloff_sigma = s->falloff_sigma / scale;
+  out->psf_sigma = s->psf_sigma / scale;
+  out->glow_sigma = s->glow_sigma / scale;
+}
+
 int wv_scene_distorted(const wv_scene *s) {
   for (int k = 0; k < 2; k++)
     for (int t = 0; t < WV_DISTORT_TERMS; t++)
