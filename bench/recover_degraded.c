@@ -2,7 +2,7 @@
  * rig: yarns 1 to 2.5 pixels apart, irregular cloths, and what a camera does to a photo.
  *   recover_degraded [--per-family N] [--first I] [--family NAME[,NAME...]] [--seed S]
  *                    [--degrade on|off] [--iters N] [--iter-spp N] [--iter-scale N]
- *                    [--threads N] [--jobs N] [--model M] [--save DIR]
+ *                    [--w-struct X] [--threads N] [--jobs N] [--model M] [--save DIR]
  * Targets: for each family (plain, basket, twill, satin; --family: those listed) draws I ..
  * I+N-1 (default 0 .. 7). Draw i of a family takes its built-in 3 i mod n (n built-ins in
  * wv_weave_builtin_name order: the first draws cover both orientations of the asymmetric
@@ -412,7 +412,7 @@ static double ypi_one_px(const wv_scene *s) {
 static int usage(void) {
   fprintf(stderr, "usage: recover_degraded [--per-family N] [--first I] [--family NAME[,NAME...]] [--seed S]\n"
                   "                        [--degrade on|off] [--iters N] [--iter-spp N] [--iter-scale N]\n"
-                  "                        [--threads N] [--jobs N] [--model M] [--save DIR]\n");
+                  "                        [--w-struct X] [--threads N] [--jobs N] [--model M] [--save DIR]\n");
   return 1;
 }
 
@@ -432,6 +432,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--iters")) o.iters = atoi(v);
     else if (!strcmp(a, "--iter-spp")) o.iter_spp = atoi(v);
     else if (!strcmp(a, "--iter-scale")) o.iter_scale = atoi(v);
+    else if (!strcmp(a, "--w-struct")) o.w_struct = atof(v);
     else if (!strcmp(a, "--threads")) o.threads = atoi(v);
     else if (!strcmp(a, "--jobs")) jobs = atoi(v);
     else if (!strcmp(a, "--model")) model = v;
@@ -502,10 +503,10 @@ int main(int argc, char **argv) {
       json_object_set_new(fams, FAMILIES[f], json_pack("{s:i,s:f,s:f,s:f}", "targets", n, "family_right",
                                                        (double)fr / n, "mean_ratio", fs / n, "min_ratio", fl));
   }
-  json_t *out = json_pack("{s:s,s:s,s:I,s:b,s:i,s:i,s:i,s:i,s:i,s:i,s:f,s:f,s:f,s:o,s:o}", "mode", "degraded",
+  json_t *out = json_pack("{s:s,s:s,s:I,s:b,s:i,s:i,s:i,s:i,s:i,s:f,s:i,s:f,s:f,s:f,s:o,s:o}", "mode", "degraded",
                           "scene", s.name, "seed", (json_int_t)pl.seed, "degrade", pl.degrade, "per_family", per,
                           "first", first, "iters", o.iters, "iter_spp", o.iter_spp, "iter_scale", o.iter_scale,
-                          "targets", nt, "family_right_pct", 100.0 * right / nt, "mean_ratio", sum / nt, "min_ratio",
+                          "w_struct", o.w_struct, "targets", nt, "family_right_pct", 100.0 * right / nt, "mean_ratio", sum / nt, "min_ratio",
                           lo, "families", fams, "per_target", list);
   char *text = json_dumps(out, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(6));
   json_decref(out);
