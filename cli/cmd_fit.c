@@ -137,7 +137,8 @@ const cli_opt CLI_FIT_OPTS[] = {
               "then, on a plane, the cloth's distortion: a polynomial of degree N\ndisplacing the fabric so that "
               "the weave stays in register across the\nwhole photo; kept if the SSIM rises (default 3; 0 = off)"),
     CLI_O_REAL("--w-struct", capture_args, fit.w_struct, 0, 100, 0, "X",
-               "weight of the structure term, the weave's log power spectrum\n(default 0.002; 0 = off)"),
+               "weight of the structure term, the weave's log power spectrum\n(default 0: off; 0.002 puts it at the "
+               "other terms' order)"),
     CLI_O_REAL("--w-colour", capture_args, fit.w_colour, 0, 100, 0, "X",
                "weight of the detail-colour term, how the colour varies between\nyarns (default 0.1; 0 = off)"),
     CLI_O_FLAG("--colour-split", capture_args, fit.colour_split,

@@ -61,7 +61,7 @@ typedef struct {
 
 void wv_fit_opts_default(wv_fit_opts *o);
 #define WV_FIT_PSF_AUTO -1.0
-#define WV_FIT_W_STRUCT 0.002 /* the structure term's weight (docs/fit.md: how it was chosen) */
+#define WV_FIT_W_STRUCT 0.0 /* the structure term's weight: off by default (docs/fit.md: why) */
 #define WV_FIT_W_COLOUR 0.1   /* the detail-colour term's weight (docs/fit.md: how it was chosen) */
 
 /* The schedule (docs/fit.md, "Schedule and stopping rule"). */
