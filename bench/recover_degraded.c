@@ -506,8 +506,8 @@ int main(int argc, char **argv) {
   json_t *out = json_pack("{s:s,s:s,s:I,s:b,s:i,s:i,s:i,s:i,s:i,s:f,s:i,s:f,s:f,s:f,s:o,s:o}", "mode", "degraded",
                           "scene", s.name, "seed", (json_int_t)pl.seed, "degrade", pl.degrade, "per_family", per,
                           "first", first, "iters", o.iters, "iter_spp", o.iter_spp, "iter_scale", o.iter_scale,
-                          "w_struct", o.w_struct, "targets", nt, "family_right_pct", 100.0 * right / nt, "mean_ratio", sum / nt, "min_ratio",
-                          lo, "families", fams, "per_target", list);
+                          "w_struct", o.w_struct, "targets", nt, "family_right_pct", 100.0 * right / nt,
+                          "mean_ratio", sum / nt, "min_ratio", lo, "families", fams, "per_target", list);
   char *text = json_dumps(out, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(6));
   json_decref(out);
   if (!text) return 1;
