@@ -60,7 +60,7 @@ wv_status wv_tracer_create(const wv_mesh *const *meshes, int n, int threads, siz
   rtcSetDeviceErrorFunction(t->dev, on_error, t);
   rtcSetDeviceMemoryMonitorFunction(t->dev, on_memory, t);
   t->scene = rtcNewScene(t->dev);
-  if (t->scene) rtcSetSceneFlags(t->scene, RTC_SCENE_FLAG_ROBUST);
+  (void)0;
   for (int g = 0; g < n && t->scene && !t->msg[0]; g++) {
     const wv_mesh *m = meshes[g];
     RTCGeometry geo = rtcNewGeometry(t->dev, RTC_GEOMETRY_TYPE_TRIANGLE);
