@@ -320,18 +320,26 @@ static inline void sincos_small(float x, int short_series, float *s, float *c) {
  * WV_ENV_MARGIN radians inside its edges, ten times the error of the turn and the
  * lookup's rounding together (below 2e-6; test_env_pixels), else by its edges. */
 #define WV_ENV_MARGIN 2e-5f
-static inline __attribute__((always_inline)) size_t drawn_dir(const wv_envmap *e, float u1, float u2, int x, int y,
-                                                              float d[3]) {
-  const float *row = row_cdf(e, y);
-  float fy = (u1 - e->cdf_row[y]) / (e->cdf_row[y + 1] - e->cdf_row[y]);
-  float fx = (u2 - row[x]) / (row[x + 1] - row[x]);
+/* drawn_dir's arithmetic on the tables' values at the draw's row y and column x (r0,
+ * r1: cdf_row at y and y + 1; c0, c1: the row's CDF at x and x + 1; e0, e1: edge_y at
+ * y and y + 1; k0, k1: the column's centre), as env_dirs_8 does it on eight lanes: the
+ * direction into d, and the column's fraction fx and sin theta st that texel_of reads. */
+static inline __attribute__((always_inline)) void dir_in_pixel(float u1, float u2, float r0, float r1, float c0,
+                                                               float c1, float e0, float e1, float k0, float k1,
+                                                               float dphi, int short_series, float d[3], float *fxo,
+                                                               float *sto) {
+  float fy = (u1 - r0) / (r1 - r0);
+  float fx = (u2 - c0) / (c1 - c0);
   fy = fy < 0 ? 0 : fy > 0.999999f ? 0.999999f : fy;
   fx = fx < 0 ? 0 : fx > 0.999999f ? 0.999999f : fx;
-  float cy = e->edge_y[y] + fy * (e->edge_y[y + 1] - e->edge_y[y]), st = sqrtf((1.0f - cy) * (1.0f + cy)), sd, cd;
-  sincos_small((fx - 0.5f) * (2 * PI_F / (float)e->w), e->w >= 8, &sd, &cd);
-  const float *c = e->centre_x + 2 * x;
-  d[0] = st * (cd * c[0] - sd * c[1]), d[1] = cy, d[2] = st * (cd * c[1] + sd * c[0]);
-  y = walk_row(e, cy, y);
+  float cy = e0 + fy * (e1 - e0), st = sqrtf((1.0f - cy) * (1.0f + cy)), sd, cd;
+  sincos_small((fx - 0.5f) * dphi, short_series, &sd, &cd);
+  d[0] = st * (cd * k0 - sd * k1), d[1] = cy, d[2] = st * (cd * k1 + sd * k0);
+  *fxo = fx, *sto = st;
+}
+/* The texel of drawn direction d of row y and column x (fx, st from dir_in_pixel). */
+static inline size_t texel_of(const wv_envmap *e, const float d[3], float fx, float st, int x, int y) {
+  y = walk_row(e, d[1], y);
   float m = WV_ENV_MARGIN * (float)e->w * (1.0f / (2 * PI_F)); /* the margin as a fraction of the column */
   if (!(fx > m && fx < 1.0f - m && st > 0.0f)) { /* (at a pole, d has no longitude) */
     float my, p;
@@ -339,6 +347,14 @@ static inline __attribute__((always_inline)) size_t drawn_dir(const wv_envmap *e
     x = walk_col(e, p, x);
   }
   return (size_t)y * e->w + x;
+}
+static inline __attribute__((always_inline)) size_t drawn_dir(const wv_envmap *e, float u1, float u2, int x, int y,
+                                                              float d[3]) {
+  const float *row = row_cdf(e, y);
+  float fx, st;
+  dir_in_pixel(u1, u2, e->cdf_row[y], e->cdf_row[y + 1], row[x], row[x + 1], e->edge_y[y], e->edge_y[y + 1],
+               e->centre_x[2 * x], e->centre_x[2 * x + 1], 2 * PI_F / (float)e->w, e->w >= 8, d, &fx, &st);
+  return texel_of(e, d, fx, st, x, y);
 }
 
 static float no_sample(float d[3], float rgb[3]) {
@@ -354,10 +370,52 @@ float wv_envmap_sample(const wv_envmap *e, float u1, float u2, float d[3], float
   return wv_envmap_read(e, a, rgb);
 }
 
+/* dir_in_pixel on nb blocks of eight lanes (in[k][j]: lane j's u1, u2, r0, r1, c0,
+ * c1, k0, k1, e0, e1): the lanes' directions into d[.][j], their fx and st. Eight
+ * lanes to a vector register: the same operations in the same order, so the same
+ * results. */
+#define ENV_BLOCK 32 /* draws to a stage of wv_envmap_sample_n */
+/* (the vectors never cross a call: the helpers are inlined, so no ABI question) */
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef float env_v8 __attribute__((vector_size(32)));
+typedef int env_i8 __attribute__((vector_size(32)));
+static inline __attribute__((always_inline)) env_v8 env_sel(env_i8 m, env_v8 a, env_v8 b) { return (env_v8)((m & (env_i8)a) | (~m & (env_i8)b)); }
+/* sincos_small on eight lanes */
+static inline __attribute__((always_inline)) void env_sincos_8(env_v8 x, int short_series, env_v8 *s, env_v8 *c) {
+  env_v8 x2 = x * x;
+  if (short_series) {
+    *s = x * (1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040))));
+    *c = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 * (1.0f / 40320))));
+    return;
+  }
+  *s = x * (1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040 + x2 * (1.0f / 362880 + x2 * (-1.0f / 39916800))))));
+  *c = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 * (1.0f / 40320 + x2 * (-1.0f / 3628800 +
+       x2 * (1.0f / 479001600))))));
+}
+static inline __attribute__((always_inline)) void env_dirs_8(float (*in)[ENV_BLOCK], int nb, float dphi, int short_series,
+                                                             float (*d)[ENV_BLOCK], float *fxo, float *sto) {
+  const env_v8 zero = {0}, top = zero + 0.999999f;
+  for (int b = 0; b < nb; b++) {
+    env_v8 a[10], fy, fx, cy, st, q, sd, cd;
+    for (int k = 0; k < 10; k++) memcpy(&a[k], in[k] + 8 * b, sizeof a[k]);
+    fy = (a[0] - a[2]) / (a[3] - a[2]);
+    fx = (a[1] - a[4]) / (a[5] - a[4]);
+    fy = env_sel(fy < zero, zero, env_sel(fy > top, top, fy));
+    fx = env_sel(fx < zero, zero, env_sel(fx > top, top, fx));
+    cy = a[8] + fy * (a[9] - a[8]);
+    q = (1.0f - cy) * (1.0f + cy);
+    for (int l = 0; l < 8; l++) st[l] = sqrtf(q[l]);
+    env_sincos_8((fx - 0.5f) * dphi, short_series, &sd, &cd);
+    env_v8 d0 = st * (cd * a[6] - sd * a[7]), d2 = st * (cd * a[7] + sd * a[6]);
+    memcpy(d[0] + 8 * b, &d0, sizeof d0), memcpy(d[1] + 8 * b, &cy, sizeof cy), memcpy(d[2] + 8 * b, &d2, sizeof d2);
+    memcpy(fxo + 8 * b, &fx, sizeof fx), memcpy(sto + 8 * b, &st, sizeof st);
+  }
+}
+
 /* wv_envmap_sample on many numbers, in stages over blocks of draws so that the
  * table reads of different draws (random rows, random texels) overlap. */
 ENV_CLONES void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_sample *out) {
-  enum { B = 32 };
+  enum { B = ENV_BLOCK };
   for (int j0 = 0; j0 < n; j0 += B) {
     int m = n - j0 < B ? n - j0 : B, y[B], lo[B], hi[B];
     wv_env_at at[B];
@@ -376,11 +434,24 @@ ENV_CLONES void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2
       __builtin_prefetch(row_cdf(e, y[j]) + lo[j]);
       __builtin_prefetch(row_cdf(e, y[j]) + (hi[j] < e->w ? hi[j] : e->w));
     }
+    /* the columns, then the directions eight at a time (the same operations as
+     * drawn_dir's, lane by lane), then their texels */
+    _Alignas(32) float in[10][B], fx[B], st[B], dd[3][B];
+    int x[B];
     for (int j = 0; j < m; j++) {
       const float *cdf = row_cdf(e, y[j]);
       guide_check(cdf, e->w, v[j][1], &lo[j], &hi[j]);
-      int x = bisect(cdf, lo[j], hi[j], v[j][1]);
-      at[j].texel = drawn_dir(e, v[j][0], v[j][1], x, y[j], o[j].d);
+      x[j] = bisect(cdf, lo[j], hi[j], v[j][1]);
+      in[0][j] = v[j][0], in[1][j] = v[j][1], in[2][j] = e->cdf_row[y[j]], in[3][j] = e->cdf_row[y[j] + 1];
+      in[4][j] = cdf[x[j]], in[5][j] = cdf[x[j] + 1], in[6][j] = e->centre_x[2 * x[j]];
+      in[7][j] = e->centre_x[2 * x[j] + 1], in[8][j] = e->edge_y[y[j]], in[9][j] = e->edge_y[y[j] + 1];
+    }
+    for (int j = m; j < (m + 7) / 8 * 8; j++) /* lanes past the end: a copy of the first, dropped */
+      for (int k = 0; k < 10; k++) in[k][j] = in[k][0];
+    env_dirs_8(in, (m + 7) / 8, 2 * PI_F / (float)e->w, e->w >= 8, dd, fx, st);
+    for (int j = 0; j < m; j++) {
+      o[j].d[0] = dd[0][j], o[j].d[1] = dd[1][j], o[j].d[2] = dd[2][j];
+      at[j].texel = texel_of(e, o[j].d, fx[j], st[j], x[j], y[j]);
       __builtin_prefetch(e->texel + 4 * at[j].texel);
     }
     for (int j = 0; j < m; j++) o[j].pdf = wv_envmap_read(e, at[j], o[j].rgb);
