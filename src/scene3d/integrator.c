@@ -376,24 +376,31 @@ static void fabric_surface(const render_ctx *c, thread_state *ts, const wv_trace
 static inline __attribute__((always_inline)) void make_surface(const render_ctx *c, thread_state *ts,
                                                                const wv_trace_hit *hit, const float o[3],
                                                                const float d[3], int camera, surface *sf) {
-  /* in locals (the compiler cannot tell sf from the face and the ray) */
+  /* in locals (the compiler cannot tell sf from the face and the ray), copied element
+   * by element: a block copy of a local written element by element reads it back
+   * from memory, wider than its stores were (a stall: no store forwarding) */
   const float b1 = hit->b1, b2 = hit->b2, b0 = 1 - b1 - b2, t = hit->t;
   const wv_face *fc = &c->w->faces[hit->geom][hit->prim];
   float ng[3], ns[3], flip = 1;
   for (int i = 0; i < 3; i++) sf->p[i] = o[i] + t * d[i], ng[i] = fc->ng[i];
   sf->frame = NULL;
   if (fc->flat) { /* ng already on the normals' side */
-    memcpy(ns, fc->nrm[0], sizeof ns), sf->frame = &fc->nrm[1];
+    for (int i = 0; i < 3; i++) ns[i] = fc->nrm[0][i];
+    sf->frame = &fc->nrm[1];
   } else {
     for (int i = 0; i < 3; i++) ns[i] = b0 * fc->nrm[0][i] + b1 * fc->nrm[1][i] + b2 * fc->nrm[2][i];
-    if (normalize(ns) == 0.0f) memcpy(ns, ng, sizeof ns);
+    if (normalize(ns) == 0.0f)
+      for (int i = 0; i < 3; i++) ns[i] = ng[i];
     if (dot(ns, ng) < 0) flip = -1; /* normals wound against the triangle: trust the normals' side */
   }
   /* two-sided: the side the ray arrives from (the face's frame is that of its own normal) */
   if (flip * dot(d, ng) > 0) flip = -flip, ns[0] = -ns[0], ns[1] = -ns[1], ns[2] = -ns[2], sf->frame = NULL;
   for (int i = 0; i < 3; i++) ng[i] *= flip;
-  if (-dot(d, ns) <= 1e-4f) memcpy(ns, ng, sizeof ns), sf->frame = NULL; /* shading normal faces away from the viewer */
-  memcpy(sf->ng, ng, sizeof ng), memcpy(sf->ns, ns, sizeof ns);
+  if (-dot(d, ns) <= 1e-4f) { /* shading normal faces away from the viewer */
+    for (int i = 0; i < 3; i++) ns[i] = ng[i];
+    sf->frame = NULL;
+  }
+  for (int i = 0; i < 3; i++) sf->ng[i] = ng[i], sf->ns[i] = ns[i];
   sf->mat_index = c->w->material[hit->geom];
   sf->mat = &c->w->mats[sf->mat_index];
   sf->nfpos = 0, sf->trans = 0, sf->nopen = 0, sf->pback = 0, sf->pscatter = 1;
