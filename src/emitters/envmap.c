@@ -243,7 +243,9 @@ ENV_CLONES wv_env_at wv_envmap_at(const wv_envmap *e, const float d[3]) {
 
 float wv_envmap_read(const wv_envmap *e, wv_env_at a, float rgb[3]) {
   const float *c = e->texel + 4 * a.texel;
-  rgb[0] = c[0], rgb[1] = c[1], rgb[2] = c[2];
+  /* one block (8 + 4 bytes): a caller reading rgb back as a vector then finds it
+   * stored as it reads it (three separate stores stall such a load) */
+  memcpy(rgb, c, 3 * sizeof *rgb);
   return e->total > 0 ? c[3] : 0.0f;
 }
 
