@@ -417,46 +417,52 @@ static inline __attribute__((always_inline)) void env_dirs_8(float (*in)[ENV_BLO
 /* wv_envmap_sample on many numbers, in stages over blocks of draws so that the
  * table reads of different draws (random rows, random texels) overlap. */
 ENV_CLONES void wv_envmap_sample_n(const wv_envmap *e, int n, const float (*u)[2], wv_env_sample *out) {
-  enum { B = ENV_BLOCK };
-  for (int j0 = 0; j0 < n; j0 += B) {
-    int m = n - j0 < B ? n - j0 : B, y[B], lo[B], hi[B];
-    wv_env_at at[B];
-    const float(*v)[2] = u + j0;
-    wv_env_sample *o = out + j0;
-    if (!(e->total > 0)) {
-      for (int j = 0; j < m; j++) o[j].pdf = no_sample(o[j].d, o[j].rgb);
-      continue;
+  enum { B = ENV_BLOCK, S = 4 * ENV_BLOCK };
+  if (!(e->total > 0)) {
+    for (int j = 0; j < n; j++) out[j].pdf = no_sample(out[j].d, out[j].rgb);
+    return;
+  }
+  /* the texels read after all the blocks of up to S draws: while a block's texels
+   * come, the next block is drawn */
+  for (int s0 = 0; s0 < n; s0 += S) {
+    int ns = n - s0 < S ? n - s0 : S;
+    wv_env_at at[S];
+    for (int j0 = s0; j0 < s0 + ns; j0 += B) {
+      int m = s0 + ns - j0 < B ? s0 + ns - j0 : B, y[B], lo[B], hi[B];
+      const float(*v)[2] = u + j0;
+      wv_env_sample *o = out + j0;
+      wv_env_at *a = at + (j0 - s0);
+      for (int j = 0; j < m; j++) {
+        y[j] = find(e->cdf_row, e->guide_row, e->h, v[j][0]); /* the row CDF: small, cached */
+        __builtin_prefetch(row_guide(e, y[j]) + guide_cell(v[j][1]));
+      }
+      for (int j = 0; j < m; j++) {
+        guide_read(row_guide(e, y[j]), v[j][1], &lo[j], &hi[j]);
+        __builtin_prefetch(row_cdf(e, y[j]) + lo[j]);
+        __builtin_prefetch(row_cdf(e, y[j]) + (hi[j] < e->w ? hi[j] : e->w));
+      }
+      /* the columns, then the directions eight at a time (the same operations as
+       * drawn_dir's, lane by lane), then their texels */
+      _Alignas(32) float in[10][B], fx[B], st[B], dd[3][B];
+      int x[B];
+      for (int j = 0; j < m; j++) {
+        const float *cdf = row_cdf(e, y[j]);
+        guide_check(cdf, e->w, v[j][1], &lo[j], &hi[j]);
+        x[j] = bisect(cdf, lo[j], hi[j], v[j][1]);
+        in[0][j] = v[j][0], in[1][j] = v[j][1], in[2][j] = e->cdf_row[y[j]], in[3][j] = e->cdf_row[y[j] + 1];
+        in[4][j] = cdf[x[j]], in[5][j] = cdf[x[j] + 1], in[6][j] = e->centre_x[2 * x[j]];
+        in[7][j] = e->centre_x[2 * x[j] + 1], in[8][j] = e->edge_y[y[j]], in[9][j] = e->edge_y[y[j] + 1];
+      }
+      for (int j = m; j < (m + 7) / 8 * 8; j++) /* lanes past the end: a copy of the first, dropped */
+        for (int k = 0; k < 10; k++) in[k][j] = in[k][0];
+      env_dirs_8(in, (m + 7) / 8, 2 * PI_F / (float)e->w, e->w >= 8, dd, fx, st);
+      for (int j = 0; j < m; j++) {
+        o[j].d[0] = dd[0][j], o[j].d[1] = dd[1][j], o[j].d[2] = dd[2][j];
+        a[j].texel = texel_of(e, o[j].d, fx[j], st[j], x[j], y[j]);
+        __builtin_prefetch(e->texel + 4 * a[j].texel);
+      }
     }
-    for (int j = 0; j < m; j++) {
-      y[j] = find(e->cdf_row, e->guide_row, e->h, v[j][0]); /* the row CDF: small, cached */
-      __builtin_prefetch(row_guide(e, y[j]) + guide_cell(v[j][1]));
-    }
-    for (int j = 0; j < m; j++) {
-      guide_read(row_guide(e, y[j]), v[j][1], &lo[j], &hi[j]);
-      __builtin_prefetch(row_cdf(e, y[j]) + lo[j]);
-      __builtin_prefetch(row_cdf(e, y[j]) + (hi[j] < e->w ? hi[j] : e->w));
-    }
-    /* the columns, then the directions eight at a time (the same operations as
-     * drawn_dir's, lane by lane), then their texels */
-    _Alignas(32) float in[10][B], fx[B], st[B], dd[3][B];
-    int x[B];
-    for (int j = 0; j < m; j++) {
-      const float *cdf = row_cdf(e, y[j]);
-      guide_check(cdf, e->w, v[j][1], &lo[j], &hi[j]);
-      x[j] = bisect(cdf, lo[j], hi[j], v[j][1]);
-      in[0][j] = v[j][0], in[1][j] = v[j][1], in[2][j] = e->cdf_row[y[j]], in[3][j] = e->cdf_row[y[j] + 1];
-      in[4][j] = cdf[x[j]], in[5][j] = cdf[x[j] + 1], in[6][j] = e->centre_x[2 * x[j]];
-      in[7][j] = e->centre_x[2 * x[j] + 1], in[8][j] = e->edge_y[y[j]], in[9][j] = e->edge_y[y[j] + 1];
-    }
-    for (int j = m; j < (m + 7) / 8 * 8; j++) /* lanes past the end: a copy of the first, dropped */
-      for (int k = 0; k < 10; k++) in[k][j] = in[k][0];
-    env_dirs_8(in, (m + 7) / 8, 2 * PI_F / (float)e->w, e->w >= 8, dd, fx, st);
-    for (int j = 0; j < m; j++) {
-      o[j].d[0] = dd[0][j], o[j].d[1] = dd[1][j], o[j].d[2] = dd[2][j];
-      at[j].texel = texel_of(e, o[j].d, fx[j], st[j], x[j], y[j]);
-      __builtin_prefetch(e->texel + 4 * at[j].texel);
-    }
-    for (int j = 0; j < m; j++) o[j].pdf = wv_envmap_read(e, at[j], o[j].rgb);
+    for (int j = 0; j < ns; j++) out[s0 + j].pdf = wv_envmap_read(e, at[j], out[s0 + j].rgb);
   }
 }
 
