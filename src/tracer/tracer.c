@@ -135,9 +135,36 @@ static int intersect_stream(const wv_tracer *t, const float *o, size_t ostride, 
   return hits;
 }
 
+/* Rays from one origin in packets of 16 (Embree's coherent packet traversal, without
+ * a stream's sorting into packets). */
 int wv_tracer_intersect_from(const wv_tracer *t, const float o[3], const float (*d)[3], int n, wv_trace_hit *hit,
                              int *got) {
-  return intersect_stream(t, o, 0, d, n, RTC_INTERSECT_CONTEXT_FLAG_COHERENT, hit, got);
+  struct RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  int hits = 0;
+  for (int j0 = 0; j0 < n; j0 += 16) {
+    _Alignas(64) struct RTCRayHit16 rh;
+    _Alignas(64) int valid[16];
+    for (int k = 0; k < 16; k++) {
+      int j = j0 + k < n ? j0 + k : j0; /* lanes past the end: a copy of the first, not traced */
+      valid[k] = j0 + k < n ? -1 : 0;
+      rh.ray.org_x[k] = o[0], rh.ray.org_y[k] = o[1], rh.ray.org_z[k] = o[2];
+      rh.ray.dir_x[k] = d[j][0], rh.ray.dir_y[k] = d[j][1], rh.ray.dir_z[k] = d[j][2];
+      rh.ray.tnear[k] = 0.0f, rh.ray.tfar[k] = INFINITY, rh.ray.time[k] = 0.0f, rh.ray.mask[k] = 0xffffffffu;
+      rh.ray.id[k] = 0, rh.ray.flags[k] = 0;
+      rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect16(valid, t->scene, &ctx, &rh);
+    for (int k = 0; k < 16 && j0 + k < n; k++) {
+      int j = j0 + k;
+      got[j] = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+      hits += got[j];
+      if (got[j])
+        hit[j] = (wv_trace_hit){rh.ray.tfar[k], rh.hit.u[k], rh.hit.v[k], (int)rh.hit.geomID[k], (int)rh.hit.primID[k]};
+    }
+  }
+  return hits;
 }
 
 int wv_tracer_intersect_n(const wv_tracer *t, const float (*o)[3], const float (*d)[3], int n, wv_trace_hit *hit,

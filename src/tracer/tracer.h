@@ -25,7 +25,7 @@ wv_status wv_tracer_create(const wv_mesh *const *meshes, int n, int threads, siz
 void wv_tracer_free(wv_tracer *t);
 
 /* Closest hits of n rays from o along d[j] (0 < t): got[j] = 0 on a miss, else
- * 1 and hit[j]. Traced together (Embree's coherent streams): for rays that start
+ * 1 and hit[j]. Traced together (Embree's coherent packets of 16): for rays that start
  * together and diverge little, camera rays. Returns the number of hits.
  * Thread-safe. */
 int wv_tracer_intersect_from(const wv_tracer *t, const float o[3], const float (*d)[3], int n, wv_trace_hit *hit,
