@@ -59,8 +59,9 @@ wv_status wv_tracer_create(const wv_mesh *const *meshes, int n, int threads, siz
   }
   rtcSetDeviceErrorFunction(t->dev, on_error, t);
   rtcSetDeviceMemoryMonitorFunction(t->dev, on_memory, t);
+  /* (Embree's robust mode off: it took 4% of a render, and the few hits it changes
+   * move no image beyond its noise; docs/measurements.md) */
   t->scene = rtcNewScene(t->dev);
-  (void)0;
   for (int g = 0; g < n && t->scene && !t->msg[0]; g++) {
     const wv_mesh *m = meshes[g];
     RTCGeometry geo = rtcNewGeometry(t->dev, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -135,8 +136,8 @@ static int intersect_stream(const wv_tracer *t, const float *o, size_t ostride, 
   return hits;
 }
 
-/* Rays from one origin in packets of 16 (Embree's coherent packet traversal, without
- * a stream's sorting into packets). */
+/* Rays from one origin in packets of 16 with Embree's coherent traversal (1% of a
+ * render faster than the same rays as one coherent stream). */
 int wv_tracer_intersect_from(const wv_tracer *t, const float o[3], const float (*d)[3], int n, wv_trace_hit *hit,
                              int *got) {
   struct RTCIntersectContext ctx;
