@@ -280,6 +280,9 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
         json_object_set_new(o_json, "kt_start", json_string(r->kt_model == 1   ? "pair model"
                                                             : r->kt_model == 2 ? "prior (the pair model's start scored worse)"
                                                                                : "prior"));
+        json_object_set_new(o_json, "open_area_photo", st->open_measured ? cli_real(st->open_photo, 6) : json_null());
+        json_object_set_new(o_json, "open_area_fit",
+                            cli_real((1 - st->params.yarn_width) * (1 - st->params.yarn_width), 6));
         json_object_set_new(o_json, "mean_t",
                             json_pack("{s:{s:o,s:o},s:{s:o,s:o}}", "photo", "centre", cli_real(r->mean_t[0][0], 6),
                                       "whole", cli_real(r->mean_t[0][1], 6), "render", "centre",

@@ -346,10 +346,46 @@ static void test_rank(void **state) {
   }
 }
 
+/* The open area from the back-lit rig's gap glow: renders of a plain and a twill with gaps
+ * in flat45-back give their open area (1 - width)^2 within 10%; without gaps, none; a
+ * front-lit scene has no glow to measure by. */
+static void test_open_area(void **state) {
+  (void)state;
+  const char *pats[2] = {"plain", "twill"};
+  const double widths[3] = {1.0, 0.85, 0.75};
+  for (int k = 0; k < 2; k++)
+    for (int i = 0; i < 3; i++) {
+      wv_params p;
+      wv_error e = {0};
+      assert_int_equal(wv_params_sample_prior(pats[k], 7 + k, &p, &e), WV_OK);
+      p.density[WV_WARP] = 120, p.density[WV_WEFT] = 100, p.yarn_width = widths[i];
+      wv_scene s;
+      tu_centre_window(&s, "flat45-back", SIDE, SIDE, 8);
+      wv_render_opts ro = {0};
+      wv_image img;
+      assert_int_equal(wv_render(&s, &p, &ro, &img, NULL, &e), WV_OK);
+      wv_open_area oa;
+      assert_int_equal(wv_open_area_measure(&s, &img, &oa, &e), WV_OK);
+      double truth = (1 - widths[i]) * (1 - widths[i]);
+      print_message("%s, width %.2f: open area %.4f, measured %.4f (%d blocks)\n", pats[k], widths[i], truth,
+                    oa.open_area, oa.blocks);
+      assert_true(oa.found);
+      if (truth > 0) assert_true(fabs(oa.open_area - truth) <= 0.1 * truth);
+      else assert_true(fabs(oa.open_area) < 0.002);
+      if (k == 0 && i == 2) {
+        wv_scene front;
+        tu_centre_window(&front, "flat45", SIDE, SIDE, 8);
+        assert_int_equal(wv_open_area_measure(&front, &img, &oa, &e), WV_ERR_INVALID);
+        assert_non_null(strstr(e.msg, "no gap glow"));
+      }
+      wv_image_free(&img);
+    }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_wsc),         cmocka_unit_test(test_wsc_whitened), cmocka_unit_test(test_gaussian), cmocka_unit_test(test_lattice_recovers),
-      cmocka_unit_test(test_lattice_refine), cmocka_unit_test(test_no_lattice),  cmocka_unit_test(test_rank),
+      cmocka_unit_test(test_lattice_refine), cmocka_unit_test(test_no_lattice),  cmocka_unit_test(test_rank), cmocka_unit_test(test_open_area),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

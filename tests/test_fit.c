@@ -185,6 +185,16 @@ static void test_stopping_rule(void **state) {
   assert_true(wv_fit_converged(log, 0, 60, 10));
   for (int i = 0; i < 80; i++) log[i].loss = pow(0.997, i); /* 3% in 10 iterations */
   assert_false(wv_fit_converged(log, 0, 60, 10));
+  /* a pair: the reflection photo's loss still falls by 3% in 10 iterations under a flat,
+   * ten times larger transmission loss (the sum falls by 0.3%): not converged; once the
+   * reflection's is flat too, converged */
+  for (int i = 0; i < 80; i++) log[i].loss_t = 10, log[i].loss = log[i].loss_t + pow(0.997, i);
+  assert_false(wv_fit_converged(log, 0, 60, 10));
+  for (int i = 0; i < 80; i++) log[i].loss = log[i].loss_t + pow(0.97, i < 30 ? i : 30);
+  assert_true(wv_fit_converged(log, 0, 60, 10));
+  /* ... and a transmission loss still falling keeps it going */
+  for (int i = 0; i < 80; i++) log[i].loss_t = 10 * pow(0.997, i), log[i].loss = log[i].loss_t + pow(0.97, 30);
+  assert_false(wv_fit_converged(log, 0, 60, 10));
 }
 
 /* A fit that starts at the target stops long before its 200 iterations (the rule ends
@@ -591,7 +601,8 @@ static void pair_photos(const wv_scene *s, const wv_scene *sb, const wv_params *
 
 /* A photo pair: the target rendered in flat45 and flat45-back. Fitted to both, the transmission
  * colours move from the start (the prior, half of k_d) toward the target's; fitted to the
- * front-lit photo alone they stay exactly at the start. */
+ * front-lit photo alone they stay exactly at the start; every other parameter comes out of
+ * the two fits the same. */
 static void test_fit_pair(void **state) {
   (void)state;
   wv_scene s, sb;
@@ -612,6 +623,7 @@ static void test_fit_pair(void **state) {
   o.align_radius = 0, o.register_radius = 0, o.distort_degree = 0, o.psf_sigma = 0;
   wv_error err = {0};
   double e[3] = {0, 0, 0}; /* k_t error: start, pair fit, reflection-only fit */
+  wv_params fitted[2];
   for (int run = 0; run < 2; run++) {
     wv_fit_state st;
     assert_int_equal(wv_fit_state_init(&st, &start, &o, &err), WV_OK);
@@ -623,8 +635,14 @@ static void test_fit_pair(void **state) {
         e[1 + run] += fabs(st.params.transmission[y][c] - tp.transmission[y][c]);
         if (run == 1) assert_true(st.params.transmission[y][c] == start.transmission[y][c]);
       }
+    fitted[run] = st.params;
     wv_fit_state_free(&st);
   }
+  /* the back-lit photo moves k_t alone: every other parameter as the reflection photo alone
+   * fits it, exactly */
+  for (int i = 0; i < WV_P_REFLECT_COUNT; i++)
+    assert_true(wv_param_get(&fitted[0], i) == wv_param_get(&fitted[1], i));
+  assert_true(fitted[0].density[0] == fitted[1].density[0] && fitted[0].density[1] == fitted[1].density[1]);
   print_message("k_t error: start %.4f, pair %.4f, reflection only %.4f\n", e[0], e[1], e[2]);
   assert_true(e[1] < 0.8 * e[0]);
   assert_true(e[2] == e[0]);

@@ -123,4 +123,21 @@ char *wv_lattice_to_json(const wv_lattice *l, const wv_lattice_ranking *r);
  * scaled to its own range and enlarged `zoom` times, 4 white pixels apart; RGB. */
 wv_status wv_spectrum_picture(const float *const *spectra, int k, int n, int zoom, wv_image *out, wv_error *err);
 
+/* The open area of a back-lit photo (the scene's size, encoded as the scene encodes), measured on
+ * its gap glow: the rig adds wv_scene.glow_radiance times a Gaussian of glow_sigma pixels centred
+ * on the image, times the fraction of the pixel's lines of sight that cross a gap, to the
+ * radiance. Blocks of the photo's linear radiance within 5 sigma of the centre (blocks that
+ * reach the clip left out) are fitted by least squares as a quadratic in x and y (the light
+ * the yarns pass) plus an amplitude times the Gaussian; the amplitude over glow_radiance is
+ * the open area (it may come out a little below 0 on a cloth without gaps). found = 0 when
+ * the centre is clipped or too small to tell the bump from the quadratic. An error when the
+ * scene has no glow or the photo is not its size. docs/analysis.md. */
+typedef struct {
+  int found;
+  double open_area;  /* the fraction of the cloth that is open (1 - yarn_width)^2 */
+  double amplitude;  /* the glow's linear radiance at the image's centre */
+  int blocks, clipped; /* the blocks fitted, the blocks left out as clipped */
+} wv_open_area;
+wv_status wv_open_area_measure(const wv_scene *s, const wv_image *photo, wv_open_area *out, wv_error *err);
+
 #endif

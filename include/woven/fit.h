@@ -95,6 +95,7 @@ typedef struct {
   int iter;
   double loss, gram, prior, pixel, structure, colour;
   int discrete_tried, discrete_kept;
+  double loss_t; /* a pair: the transmission photo's part of loss (0 for one photo) */
 } wv_fit_record;
 
 /* Time spent, seconds. */
@@ -105,7 +106,9 @@ typedef struct {
 /* The stopping rule on the iterations from .. to - 1 of log (one stage): S_j, the mean of
  * the WV_FIT_SMOOTH losses ending at j (all within the stage), has not fallen in the last
  * `patience` iterations: the least S_j there is not below (1 - WV_FIT_MIN_GAIN) times the
- * least S_j before them. Needs at least patience + WV_FIT_SMOOTH iterations; 0 when
+ * least S_j before them. A pair's two photos are judged apart (loss - loss_t and loss_t):
+ * both must have stopped falling, so that one photo's larger loss does not hide the
+ * other's progress. Needs at least patience + WV_FIT_SMOOTH iterations; 0 when
  * patience <= 0. It reads the losses alone, so a resumed fit stops where a straight one
  * does. */
 int wv_fit_converged(const wv_fit_record *log, int from, int to, int patience);
@@ -132,6 +135,8 @@ typedef struct {
   int distorted;       /* the distortion after the registration is done */
   double distort_extent_mm, distort[2][WV_DISTORT_TERMS]; /* found (added to the scene's; wv_scene) */
   double dist_ssim_before, dist_ssim_after; /* SSIM of the whole image (RGB, 16 spp) */
+  int open_measured;   /* a pair: the open area was measured on the back-lit photo's gap glow ... */
+  double open_photo;   /* ... as this (wv_open_area_measure), and the yarn width set to match it */
   float adam_m[WV_P_COUNT], adam_v[WV_P_COUNT]; /* wv_nn_adam's moments */
   uint64_t rng;
   wv_fit_record *log; /* iter entries */

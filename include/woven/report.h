@@ -74,6 +74,8 @@ typedef struct {
   int kt_fitted; /* the one photo is back-lit: the fit moved k_t */
   const char *kt_start; /* a pair's transmission colours started from this pair model (NULL: the prior) */
   int kt_tried;         /* ... the prior after the pair model's start scored worse */
+  int open_measured;    /* a pair's open area was measured on the back-lit photo's gap glow ... */
+  double open_area;     /* ... as this (the yarn width set to match it) */
 } wv_report;
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err);

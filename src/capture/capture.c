@@ -236,7 +236,9 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
                    .ssim_rgb_blurred_t = out->ssim_rgb_blurred_t,
                    .kt_fitted = wv_scene_transmits(job->scene),
                    .kt_start = job->kt_start,
-                   .kt_tried = job->kt_tried};
+                   .kt_tried = job->kt_tried,
+                   .open_measured = st->open_measured,
+                   .open_area = st->open_photo};
   /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
   wv_view_opts vo = {.params = &st->params, .scene = fit_scene, .photo = pphoto, .title = job->title};
   snprintf(path, sizeof path, "%s/viewer.html", dir);

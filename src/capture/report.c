@@ -321,8 +321,12 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                     "<td>%.4f</td></tr>\n",
                 WV_BLURRED_COPY_SIGMA, r->ssim_rgb_blurred_t);
     if (r->wsc_t > -2) sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td></tr>\n", r->wsc_t);
-    sb_printf(&b, "<tr><td colspan=\"2\">The fit was fitted to both photos at once (docs/fit.md, \"Photo "
-                  "pairs\"); the back-lit render uses the reflection photo's registration.</td></tr>\n");
+    sb_printf(&b, "<tr><td colspan=\"2\">One set of parameters for both photos (docs/fit.md, \"Photo pairs\"): "
+                  "the back-lit photo fitted the transmission colours, the reflection photo the rest; the back-lit "
+                  "render uses the reflection photo's registration.</td></tr>\n");
+    if (r->open_measured)
+      sb_printf(&b, "<tr><td>open area, measured on the back-lit photo's gap glow (the yarn width set to "
+                    "match)</td><td>%.2f%%</td></tr>\n", 100 * (r->open_area > 0 ? r->open_area : 0));
     if (r->kt_start)
       sb_printf(&b, "<tr><td colspan=\"2\">The transmission colours started from the pair model %s (the photo "
                     "pair through FabricNet).</td></tr>\n", r->kt_start);

@@ -57,6 +57,7 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
                                                 "discrete", st->timing.discrete, "total", st->timing.total));
   json_object_set_new(root, "opts", wv_fit_opts_json(o));
   json_object_set_new(root, "colour_split", json_integer(st->colour_split));
+  if (st->open_measured) json_object_set_new(root, "open_area_photo", json_real(st->open_photo));
   json_object_set_new(root, "camera_blur",
                       json_pack("{s:b,s:f,s:f,s:b,s:f,s:f}", "done", st->psf_done, "sigma_px", st->psf_sigma, "measured_px",
                                 st->psf_start, "fitted", st->psf_fit, "adam_m", (double)st->psf_m, "adam_v",
@@ -64,8 +65,8 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_t *log = json_array();
   for (int i = 0; i < st->iter; i++) {
     const wv_fit_record *r = &st->log[i];
-    json_array_append_new(log, json_pack("[i,f,f,f,f,i,i,f,f]", r->iter, r->loss, r->gram, r->prior, r->pixel,
-                                         r->discrete_tried, r->discrete_kept, r->structure, r->colour));
+    json_array_append_new(log, json_pack("[i,f,f,f,f,i,i,f,f,f]", r->iter, r->loss, r->gram, r->prior, r->pixel,
+                                         r->discrete_tried, r->discrete_kept, r->structure, r->colour, r->loss_t));
   }
   json_object_set_new(root, "log", log);
   char *text = json_dumps(root, JSON_COMPACT | JSON_REAL_PRECISION(17));
@@ -170,6 +171,10 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   long long cs = 0; /* the start's colour split (absent before it existed: none) */
   if ((rc = wv_json_integer(root, NULL, "colour_split", 0, 5, 0, &cs, err))) return rc;
   st->colour_split = (int)cs;
+  /* a pair's open area measured on its gap glow (absent: not measured, the width is searched) */
+  st->open_measured = json_object_get(root, "open_area_photo") != NULL;
+  if (st->open_measured && (rc = wv_json_number(root, NULL, "open_area_photo", -1, 1, 1, &st->open_photo, err)))
+    return rc;
   json_t *reg = json_object_get(root, "registration"); /* absent in checkpoints before it existed */
   if (reg) {
     json_t *done = json_object_get(reg, "done"), *off = json_object_get(reg, "offset_mm");
@@ -214,8 +219,8 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
     json_t *e = json_array_get(log, i);
     /* the 8th value, the structure term, and the 9th, the detail-colour term, are absent in
      * fits made before they existed */
-    if (!json_is_array(e) || json_array_size(e) < 7 || json_array_size(e) > 9)
-      return wv_fail(err, WV_ERR_INVALID, "'log[%d]' must be an array of 7 to 9 values", i);
+    if (!json_is_array(e) || json_array_size(e) < 7 || json_array_size(e) > 10)
+      return wv_fail(err, WV_ERR_INVALID, "'log[%d]' must be an array of 7 to 10 values", i);
     double *v[4] = {&r->loss, &r->gram, &r->prior, &r->pixel};
     long long x;
     char name[40];
@@ -231,8 +236,8 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
       if ((rc = wv_json_integer_value(json_array_get(e, (size_t)k + 5), name, 0, 1, &x, err))) return rc;
       *(k ? &r->discrete_kept : &r->discrete_tried) = (int)x;
     }
-    r->structure = r->colour = 0;
-    double *extra[2] = {&r->structure, &r->colour};
+    r->structure = r->colour = r->loss_t = 0; /* absent in older checkpoints */
+    double *extra[3] = {&r->structure, &r->colour, &r->loss_t};
     for (int k = 7; k < (int)json_array_size(e); k++) {
       snprintf(name, sizeof name, "log[%d][%d]", i, k);
       if ((rc = wv_json_number_value(json_array_get(e, (size_t)k), name, -1e30, 1e30, extra[k - 7], err))) return rc;

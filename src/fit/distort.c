@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "util/linalg.h"
 #include "woven/fit.h"
 #include "woven/metrics.h"
 #include "woven/render.h"
@@ -116,31 +117,6 @@ static int shared_peaks(const float *wp, const float *wr, int w, int h, double (
   return n;
 }
 
-/* Solves the symmetric positive definite n x n system m x = b in place (Cholesky; m is
- * overwritten). Returns 0 when m is not positive definite. */
-static int solve_spd(double *m, double *b, int n) {
-  for (int j = 0; j < n; j++) {
-    double s = m[j * n + j];
-    for (int k = 0; k < j; k++) s -= m[j * n + k] * m[j * n + k];
-    if (!(s > 0)) return 0;
-    m[j * n + j] = sqrt(s);
-    for (int i = j + 1; i < n; i++) {
-      double t = m[i * n + j];
-      for (int k = 0; k < j; k++) t -= m[i * n + k] * m[j * n + k];
-      m[i * n + j] = t / m[j * n + j];
-    }
-  }
-  for (int i = 0; i < n; i++) { /* L y = b */
-    for (int k = 0; k < i; k++) b[i] -= m[i * n + k] * b[k];
-    b[i] /= m[i * n + i];
-  }
-  for (int i = n - 1; i >= 0; i--) { /* L^T x = y */
-    for (int k = i + 1; k < n; k++) b[i] -= m[k * n + i] * b[k];
-    b[i] /= m[i * n + i];
-  }
-  return 1;
-}
-
 /* Everything one estimate reads: per frequency its fabric frequency g (cycles per mm of
  * fabric x and y) and, at each grid point, c = photo conj(render) (its phase is how far
  * the render's weave is behind the photo's there), and the points' terms. */
@@ -182,7 +158,7 @@ static void fit_phases(const phase_data *pd, int n, double theta[2][N_COEF]) {
       M[i * m + i] += 1e-9 * tr + 1e-300; /* a ridge: terms the data cannot see stay put */
       for (int j = i + 1; j < m; j++) M[i * m + j] = M[j * m + i];
     }
-    if (!solve_spd(M, rhs, m)) break;
+    if (!wv_solve_spd(M, rhs, m)) break;
     for (int t = 0; t < n; t++) theta[0][t] += rhs[t], theta[1][t] += rhs[n + t];
   }
 }

@@ -10,6 +10,7 @@
 
 #include "util/colour.h"
 #include "util/hash.h"
+#include "woven/analysis.h"
 #include "woven/grad.h"
 #include "woven/imgops.h"
 #include "woven/loss.h"
@@ -50,18 +51,23 @@ void wv_fit_beta_prior(const char *pattern, double *mu, double *sigma) {
   else *mu = 1.0, *sigma = 1.0;
 }
 
-int wv_fit_converged(const wv_fit_record *log, int from, int to, int patience) {
-  int first = from + WV_FIT_SMOOTH - 1; /* the first iteration with a whole window in the stage */
-  if (patience <= 0 || to - patience <= first) return 0;
+/* The rule on one photo's losses: part 0 the reflection photo's, 1 the transmission photo's. */
+static int stalled(const wv_fit_record *log, int first, int to, int patience, int part) {
   double before = INFINITY, recent = INFINITY;
   for (int j = first; j < to; j++) {
     double m = 0;
-    for (int k = j - WV_FIT_SMOOTH + 1; k <= j; k++) m += log[k].loss;
+    for (int k = j - WV_FIT_SMOOTH + 1; k <= j; k++) m += part ? log[k].loss_t : log[k].loss - log[k].loss_t;
     m /= WV_FIT_SMOOTH;
     if (j < to - patience) before = m < before ? m : before;
     else recent = m < recent ? m : recent;
   }
   return !(recent < (1 - WV_FIT_MIN_GAIN) * before);
+}
+
+int wv_fit_converged(const wv_fit_record *log, int from, int to, int patience) {
+  int first = from + WV_FIT_SMOOTH - 1; /* the first iteration with a whole window in the stage */
+  if (patience <= 0 || to - patience <= first) return 0;
+  return stalled(log, first, to, patience, 0) && stalled(log, first, to, patience, 1);
 }
 
 /* The last iteration (exclusive) the stage may reach. */
@@ -185,18 +191,24 @@ wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d
 
 /* The loss of a photo pair: the reflection photo's (c) plus, when ct is not NULL, the
  * transmission photo's (its prior left out), their gradients summed; rec's terms are the sums. */
+/* The loss of p on the reflection photo (c) and, for a pair, the transmission photo (ct):
+ * rec sums both, loss_r (may be NULL) receives the reflection photo's alone. The gradient
+ * takes the transmission photo's on the transmission colours only: the geometry, the
+ * reflection colours and the camera blur follow the reflection photo, as a fit of it alone
+ * does (a back-lit photo pulls them elsewhere: docs/fit.md, "Photo pairs"). */
 static wv_status evaluate_pair(fit_ctx *c, fit_ctx *ct, const wv_params *p, wv_fit_record *rec, double grad[WV_P_COUNT],
-                               double *dpsf, wv_error *err) {
+                               double *dpsf, double *loss_r, wv_error *err) {
   wv_status rc = evaluate(c, p, rec, grad, dpsf, err);
+  if (loss_r) *loss_r = rec->loss;
   if (rc || !ct) return rc;
   wv_fit_record rt = {0};
-  double gt[WV_P_COUNT] = {0}, dt = 0;
-  if ((rc = evaluate(ct, p, &rt, grad ? gt : NULL, dpsf ? &dt : NULL, err))) return rc;
+  double gt[WV_P_COUNT] = {0};
+  if ((rc = evaluate(ct, p, &rt, grad ? gt : NULL, NULL, err))) return rc;
   rec->loss += rt.loss, rec->gram += rt.gram, rec->pixel += rt.pixel, rec->structure += rt.structure;
+  rec->loss_t = rt.loss;
   rec->colour += rt.colour;
   if (grad)
-    for (int i = 0; i < WV_P_COUNT; i++) grad[i] += gt[i];
-  if (dpsf) *dpsf += dt;
+    for (int i = WV_P_REFLECT_COUNT; i < WV_P_COUNT; i++) grad[i] += gt[i];
   return WV_OK;
 }
 
@@ -452,14 +464,14 @@ static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
  * segment's height by its own random factor, so a cloth's irregularity shows only in
  * statistics that one random step of +-1, judged by one noisy loss, rarely climbs far
  * along; the renders share their samples, so the losses differ by the level alone. */
-static wv_status noise_sweep(fit_ctx *c, fit_ctx *ct, wv_fit_state *st, wv_error *err) {
+static wv_status noise_sweep(fit_ctx *c, wv_fit_state *st, wv_error *err) {
   double best = INFINITY;
   int best_q = st->params.noise_level;
   for (int q = 0; q <= 10; q++) {
     wv_params trial = st->params;
     trial.noise_level = q;
     wv_fit_record rec = {0};
-    wv_status rc = evaluate_pair(c, ct, &trial, &rec, NULL, NULL, err);
+    wv_status rc = evaluate_pair(c, NULL, &trial, &rec, NULL, NULL, NULL, err);
     if (rc) return rc;
     if (rec.loss < best || (rec.loss == best && q == st->params.noise_level)) best = rec.loss, best_q = q;
   }
@@ -483,7 +495,7 @@ static wv_status width_sweep(fit_ctx *c, fit_ctx *ct, wv_fit_state *st, wv_error
     wv_params trial = st->params;
     trial.yarn_width = w;
     wv_fit_record rec = {0};
-    wv_status rc = evaluate_pair(c, ct, &trial, &rec, NULL, NULL, err);
+    wv_status rc = evaluate_pair(c, ct, &trial, &rec, NULL, NULL, NULL, err);
     if (rc) return rc;
     if (rec.loss < best) best = rec.loss, best_w = w;
   }
@@ -588,6 +600,20 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
     st->timing.render = saved.render, st->timing.descriptor = saved.descriptor; /* counted as a discrete step */
     st->timing.discrete += omp_get_wtime() - td;
   }
+  if (!rc && st->iter == 0 && pair && o->width_sweep && o->iters > 0 && s_t->glow_radiance > 0) {
+    /* the open area as the back-lit photo's gap glow shows it: its loss alone rejects the gaps
+     * while the rest of the fit is off (docs/fit.md, "Photo pairs") */
+    double td = omp_get_wtime();
+    wv_open_area oa;
+    if (!(rc = wv_open_area_measure(s_t, photo_t, &oa, err)) && oa.found) {
+      double lo, hi, open = oa.open_area > 0 ? oa.open_area : 0;
+      wv_param_range_width(&lo, &hi);
+      double w = 1 - sqrt(open);
+      st->params.yarn_width = w < lo ? lo : w > hi ? hi : w;
+      st->open_measured = 1, st->open_photo = oa.open_area;
+    }
+    st->timing.discrete += omp_get_wtime() - td;
+  }
   while (!rc && stage < 2) {
     int k = stage > 0;
     fit_ctx *c = &cx[k];
@@ -609,7 +635,8 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
     rec.iter = st->iter;
     double g[WV_P_COUNT] = {0};
     double dpsf = 0;
-    if ((rc = evaluate_pair(c, tc, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, err))) break;
+    double loss_r;
+    if ((rc = evaluate_pair(c, tc, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, &loss_r, err))) break;
     int t = st->iter + 1;
     /* Discrete search: a random step is kept only if it lowers the loss. It is compared with
      * this iteration's render (the parameters the gradient was taken at), so it costs one
@@ -621,9 +648,10 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
       wv_params trial = st->params;
       if (discrete_step(&trial, &st->rng, st->iter, o->iters, o->density_steps)) {
         wv_fit_record alt = {0};
-        if ((rc = evaluate_pair(c, tc, &trial, &alt, NULL, NULL, err))) break;
+        /* the densities and the noise level: the geometry, the reflection photo's */
+        if ((rc = evaluate_pair(c, NULL, &trial, &alt, NULL, NULL, NULL, err))) break;
         rec.discrete_tried = 1;
-        if (alt.loss < rec.loss) {
+        if (alt.loss < loss_r) {
           st->params = trial;
           rec.discrete_kept = 1;
         }
@@ -673,8 +701,8 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
       wv_fit_timing saved = st->timing;
       c->scene.psf_sigma = (st->psf_done ? st->psf_sigma : s->psf_sigma) / scale;
       if (tc) tc->scene.psf_sigma = c->scene.psf_sigma;
-      if (pair && o->width_sweep && (rc = width_sweep(c, tc, st, err))) break;
-      if (o->noise_sweep && (rc = noise_sweep(c, tc, st, err))) break;
+      if (pair && o->width_sweep && !st->open_measured && (rc = width_sweep(c, tc, st, err))) break;
+      if (o->noise_sweep && (rc = noise_sweep(c, st, err))) break;
       st->timing.render = saved.render, st->timing.descriptor = saved.descriptor;
       st->timing.discrete += omp_get_wtime() - td;
     }
