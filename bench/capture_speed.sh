@@ -5,7 +5,8 @@
 # descriptor, discrete steps, registration, distortion) and the pattern choice's seconds.
 # Prints JSON: the medians, every run, the load average before and after (the machine may
 # be shared: CPU seconds depend little on the load, wall seconds do), and the last run's
-# quality (SSIM per RGB channel, WSC, family, iterations) so a faster run can be checked.
+# quality (SSIM per RGB channel, WSC, family, iterations; with --transmission the back-lit
+# photo's SSIM, its blurred copy's, WSC, open area and mean brightness) so a faster run can be checked.
 # Usage: bench/capture_speed.sh WOVEN PHOTO [RUNS=3] [CAPTURE ARGS... (default --scene flat45)]
 set -euo pipefail
 WOVEN=$1 PHOTO=$2 RUNS=${3:-3}
@@ -41,7 +42,9 @@ out = {
     "quality": {"iterations": last.get("iterations"), "ssim_rgb_fit": last.get("ssim_rgb_fit"),
                 "wsc_fit": last.get("wsc_fit"), "wsc_whitened_fit": last.get("wsc_whitened_fit"),
                 "family": last.get("pattern_choice", {}).get("family"),
-                "pattern": last.get("pattern_choice", {}).get("chosen")},
+                "pattern": last.get("pattern_choice", {}).get("chosen"),
+                **{k: last[k] for k in ("ssim_rgb_fit_t", "ssim_rgb_blurred_photo_t", "wsc_fit_t", "open_area_photo",
+                                        "open_area_fit", "mean_t") if k in last}},
     "each": [{"wall_s": r["wall_s"], "cpu_s": r["cpu_s"], "stages_s": r["stages_s"]} for r in rows],
 }
 print(json.dumps(out))
