@@ -121,8 +121,9 @@ const cli_opt CLI_FIT_OPTS[] = {
               "end a stage when its smoothed loss has not fallen by 1% in N\niterations; the last stage's end "
               "ends the iterations (default 10;\n0 = run every iteration)"),
     CLI_O_CLEAR("--no-width-sweep", capture_args, fit.width_sweep,
-                "with --transmission: leave the yarn width (the open gaps) at its\nstart (by default it is searched "
-                "on both photos when the iterations end)"),
+                "with --transmission: leave the yarn width (the open gaps) at its\nstart (by default it is set to the "
+                "open area the back-lit photo's gap\nglow measures, or, in a rig without a glow, searched on both "
+                "photos\nwhen the iterations end)"),
     CLI_O_CLEAR("--no-noise-sweep", capture_args, fit.noise_sweep,
                 "leave the noise level to the discrete steps (by default every level\nis tried when the iterations end)"),
     CLI_O_CUSTOM("--seed", capture_args, fit.seed, 0, INT_MAX, parse_seed, "N", "the seed of the discrete steps"),

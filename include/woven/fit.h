@@ -52,8 +52,10 @@ typedef struct {
                        * iterations, the second on the whole image; 0 (default): one stage, the whole image */
   int noise_sweep;    /* 1: when the iterations end, every noise level 0..10 is rendered and the one with
                        * the lowest loss kept (1); 0: the noise level moves by the discrete steps alone */
-  int width_sweep;    /* a photo pair: 1: when the iterations end, the yarn width (the open gaps) is searched
-                       * on the pair's loss, before the noise sweep (1); 0: it stays at its start */
+  int width_sweep;    /* a photo pair: 1: the yarn width (the open gaps) is set before the first iteration to
+                       * the open area the back-lit photo's gap glow measures (wv_open_area_measure), or, in a
+                       * back-lit scene without a glow, searched on the pair's loss when the iterations end,
+                       * before the noise sweep (1); 0: it stays at its start */
   int patience;       /* the stopping rule (wv_fit_converged): a stage ends when its smoothed loss has not
                        * fallen by WV_FIT_MIN_GAIN in this many iterations, and the last stage ends the
                        * iterations (WV_FIT_PATIENCE; 0: every stage runs to its limit, `iters` in all) */
