@@ -6,7 +6,6 @@
  * is fitted by least squares as a quadratic in x and y plus an amplitude times the bump,
  * and the amplitude over the glow's radiance is the open area. */
 #include <math.h>
-#include <stdlib.h>
 
 #include "sensor/sensor.h"
 #include "util/linalg.h"

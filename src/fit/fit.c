@@ -189,8 +189,6 @@ wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d
   return st;
 }
 
-/* The loss of a photo pair: the reflection photo's (c) plus, when ct is not NULL, the
- * transmission photo's (its prior left out), their gradients summed; rec's terms are the sums. */
 /* The loss of p on the reflection photo (c) and, for a pair, the transmission photo (ct):
  * rec sums both, loss_r (may be NULL) receives the reflection photo's alone. The gradient
  * takes the transmission photo's on the transmission colours only: the geometry, the
@@ -471,7 +469,7 @@ static wv_status noise_sweep(fit_ctx *c, wv_fit_state *st, wv_error *err) {
     wv_params trial = st->params;
     trial.noise_level = q;
     wv_fit_record rec = {0};
-    wv_status rc = evaluate_pair(c, NULL, &trial, &rec, NULL, NULL, NULL, err);
+    wv_status rc = evaluate(c, &trial, &rec, NULL, NULL, err); /* geometry: the reflection photo's */
     if (rc) return rc;
     if (rec.loss < best || (rec.loss == best && q == st->params.noise_level)) best = rec.loss, best_q = q;
   }
@@ -649,7 +647,7 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
       if (discrete_step(&trial, &st->rng, st->iter, o->iters, o->density_steps)) {
         wv_fit_record alt = {0};
         /* the densities and the noise level: the geometry, the reflection photo's */
-        if ((rc = evaluate_pair(c, NULL, &trial, &alt, NULL, NULL, NULL, err))) break;
+        if ((rc = evaluate(c, &trial, &alt, NULL, NULL, err))) break;
         rec.discrete_tried = 1;
         if (alt.loss < loss_r) {
           st->params = trial;
