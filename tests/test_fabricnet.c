@@ -673,7 +673,7 @@ static void test_pair_dataset_and_model(void **state) {
   curve cv = {0, 0, 0};
   to.on_epoch = record_epoch, to.user = &cv;
   wv_train_result tr;
-  assert_int_equal(wv_train(ds, model, &to, &tr, &e), WV_OK);
+  if (wv_train(ds, model, &to, &tr, &e)) fail_msg("%s", e.msg);
   assert_int_equal(tr.outputs, WV_NET_OUT_PAIR);
   assert_true(cv.last < 0.8 * cv.first);
   wv_fabricnet m;

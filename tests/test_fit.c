@@ -135,26 +135,33 @@ static void test_resume_equals_straight(void **state) {
   assert_memory_equal(&a.params, &b.params, sizeof a.params);
   for (int i = 0; i < 12; i++) assert_true(a.log[i].loss == b.log[i].loss);
   wv_fit_state_free(&a), wv_fit_state_free(&b);
-  /* a version 1 checkpoint (Adam's moments of the reflection model's parameters only) still
-   * reads: the same moments, 0 for the transmission colours */
+  /* older checkpoints still read: version 1 (Adam's moments of the reflection model's
+   * parameters only) and 2 (and k_t's): the same moments, 0 for the parameters after them */
   wv_fit_state c, v1;
   assert_int_equal(wv_fit_checkpoint_read(path, &c, &o2, name, sizeof name, &err), WV_OK);
-  json_t *root = json_load_file(path, 0, NULL);
-  assert_non_null(root);
-  json_object_set_new(root, "version", json_integer(1));
-  for (int k = 0; k < 2; k++) {
-    json_t *m = json_object_get(root, k ? "adam_v" : "adam_m");
-    while (json_array_size(m) > WV_P_REFLECT_COUNT) json_array_remove(m, json_array_size(m) - 1);
+  char old_path[300];
+  snprintf(old_path, sizeof old_path, "%s.old", path);
+  for (int ver = 2; ver >= 1; ver--) {
+    int nm = ver == 1 ? WV_P_REFLECT_COUNT : WV_P_KST_WARP_R;
+    json_t *root = json_load_file(path, 0, NULL);
+    assert_non_null(root);
+    json_object_set_new(root, "version", json_integer(ver));
+    for (int k = 0; k < 2; k++) {
+      json_t *m = json_object_get(root, k ? "adam_v" : "adam_m");
+      while ((int)json_array_size(m) > nm) json_array_remove(m, json_array_size(m) - 1);
+    }
+    assert_int_equal(json_dump_file(root, old_path, 0), 0);
+    json_decref(root);
+    assert_int_equal(wv_fit_checkpoint_read(old_path, &v1, &o2, name, sizeof name, &err), WV_OK);
+    for (int i = 0; i < WV_P_COUNT; i++) {
+      assert_true(v1.adam_m[i] == (i < nm ? c.adam_m[i] : 0.0f));
+      assert_true(v1.adam_v[i] == (i < nm ? c.adam_v[i] : 0.0f));
+    }
+    wv_fit_state_free(&v1);
   }
-  assert_int_equal(json_dump_file(root, path, 0), 0);
-  json_decref(root);
-  assert_int_equal(wv_fit_checkpoint_read(path, &v1, &o2, name, sizeof name, &err), WV_OK);
-  for (int i = 0; i < WV_P_COUNT; i++) {
-    assert_true(v1.adam_m[i] == (i < WV_P_REFLECT_COUNT ? c.adam_m[i] : 0.0f));
-    assert_true(v1.adam_v[i] == (i < WV_P_REFLECT_COUNT ? c.adam_v[i] : 0.0f));
-  }
+  remove(old_path);
   assert_true(c.adam_v[0] != 0.0f);
-  wv_fit_state_free(&c), wv_fit_state_free(&v1);
+  wv_fit_state_free(&c);
   /* a damaged checkpoint is refused with its name */
   FILE *f = fopen(path, "w");
   fputs("{\"kind\": \"woven-fit-checkpoint\", \"version\": 1}", f);

@@ -51,18 +51,21 @@ static void test_parse_and_round_trip(void **state) {
 
 static void expect_bad(const char *text, wv_status code, const char *needle);
 
-/* Version 1 files (no "version", no "transmission") read with k_t = k_d / 2; files are
- * written as version 2 with the transmission colours; a newer version is refused. */
+/* Version 1 files (no "version", no "transmission") read with k_t = k_d / 2, versions 1 and
+ * 2 (no "transmission_specular") with k_st = k_s; files are written as version 3 with the
+ * transmission colours; a newer version is refused. */
 static void test_versions(void **state) {
   (void)state;
   wv_params p, q;
   wv_error err = {0};
   assert_int_equal(wv_params_parse(GOOD, "v1.json", &p, &err), WV_OK);
   for (int y = 0; y < 2; y++)
-    for (int c = 0; c < 3; c++) assert_true(p.transmission[y][c] == 0.5 * p.diffuse[y][c]);
+    for (int c = 0; c < 3; c++)
+      assert_true(p.transmission[y][c] == 0.5 * p.diffuse[y][c] && p.transmission_specular[y][c] == p.specular[y][c]);
   char *text = wv_params_to_json(&p);
-  assert_non_null(strstr(text, "\"version\": 2"));
+  assert_non_null(strstr(text, "\"version\": 3"));
   assert_non_null(strstr(text, "\"transmission\""));
+  assert_non_null(strstr(text, "\"transmission_specular\""));
   assert_int_equal(wv_params_parse(text, "v2.json", &q, &err), WV_OK);
   free(text);
   assert_memory_equal(&p, &q, sizeof p);
@@ -72,19 +75,29 @@ static void test_versions(void **state) {
                                    "t.json", &q, &err),
                    WV_OK);
   assert_true(q.transmission[WV_WARP][1] == 0.2 && q.transmission[WV_WEFT][2] == 0.05);
+  assert_true(q.transmission_specular[WV_WARP][1] == q.specular[WV_WARP][1]);
+  assert_int_equal(wv_params_parse("{\"version\": 3, \"pattern\": \"plain\", \"specular\": {\"warp\": 0.8},"
+                                   " \"transmission_specular\": {\"warp\": [0.1, 0.2, 0.3], \"weft\": 0.05}}",
+                                   "t.json", &q, &err),
+                   WV_OK);
+  assert_true(q.transmission_specular[WV_WARP][2] == 0.3 && q.transmission_specular[WV_WEFT][0] == 0.05);
+  assert_true(q.transmission[WV_WARP][0] == 0.25); /* k_t's default as before */
   assert_int_equal(wv_params_parse("{\"version\": 1, \"pattern\": \"plain\", \"diffuse\": {\"weft\": 0.8}}", "t.json",
                                    &q, &err),
                    WV_OK);
   assert_true(q.transmission[WV_WEFT][0] == 0.4 && q.transmission[WV_WARP][0] == 0.25);
   wv_params_default("satin", &q, NULL);
   assert_true(q.transmission[WV_WARP][1] == 0.25); /* the prior mean: half of k_d = 0.5 */
-  expect_bad("{\"version\": 3, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
+  assert_true(q.transmission_specular[WV_WEFT][1] == 0.5); /* k_s */
+  expect_bad("{\"version\": 4, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
   expect_bad("{\"version\": 0, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
   expect_bad("{\"version\": 1.5, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
   expect_bad("{\"pattern\": \"twill\", \"transmission\": {\"weft\": [0.1, 1.2, 0]}}", WV_ERR_INVALID,
              "transmission.weft");
   expect_bad("{\"pattern\": \"twill\", \"transmission\": {\"warp\": [0.1]}}", WV_ERR_INVALID,
              "transmission.warp");
+  expect_bad("{\"pattern\": \"twill\", \"transmission_specular\": {\"weft\": [0.1, -0.2, 0]}}", WV_ERR_INVALID,
+             "transmission_specular.weft");
 }
 
 static void test_param_vector(void **state) {
@@ -104,9 +117,10 @@ static void test_param_vector(void **state) {
   assert_true(p.roughness[WV_WEFT] == 0.505);
   /* the transmission colours come after the reflection model's parameters */
   assert_int_equal(WV_P_REFLECT_COUNT, 19);
-  assert_int_equal(WV_P_COUNT, 25);
+  assert_int_equal(WV_P_COUNT, 31);
   assert_string_equal(wv_param_name(WV_P_KT_WEFT_B), "transmission.weft[2]");
-  assert_true(p.transmission[WV_WEFT][2] == 0.5);
+  assert_string_equal(wv_param_name(WV_P_KST_WARP_G), "transmission_specular.warp[1]");
+  assert_true(p.transmission[WV_WEFT][2] == 0.5 && p.transmission_specular[WV_WARP][0] == 0.5);
 }
 
 /* Each bad text must fail with the given code and a message containing 'needle'. */
@@ -304,6 +318,11 @@ static void test_prior_samples(void **state) {
         double f = p.diffuse[y][0] > 0 ? p.transmission[y][0] / p.diffuse[y][0] : 0.5;
         assert_true(f >= 0.1 && f <= 0.9);
         for (int c = 0; c < 3; c++) assert_true(fabs(p.transmission[y][c] - f * p.diffuse[y][c]) < 1e-12);
+        /* specular transmission: the specular colour times one factor in 0.1..1 */
+        double fs = p.specular[y][0] > 0 ? p.transmission_specular[y][0] / p.specular[y][0] : 0.5;
+        assert_true(fs >= 0.1 && fs <= 1.0);
+        for (int c = 0; c < 3; c++)
+          assert_true(fabs(p.transmission_specular[y][c] - fs * p.specular[y][c]) < 1e-12);
       }
       same_colour += !memcmp(p.diffuse[0], p.diffuse[1], sizeof p.diffuse[0]);
       assert_true(p.noise_level >= 0 && p.noise_level <= 5);

@@ -277,13 +277,15 @@ static void test_downscale(void **state) {
 /* The back-lit rig (flat45-back): light passes where the front-lit rig without its
  * light is black; open gaps show the light itself (the gap glow), brighter where
  * the gaps are wider than a pixel (a lower density); the colour is the
- * transmission colour's. */
+ * transmission colours': the diffuse one's, and the specular one's apart from the specular
+ * reflection's. */
 static void test_back_lit(void **state) {
   (void)state;
   wv_params p;
   wv_params_default("twill", &p, NULL);
   for (int y = 0; y < 2; y++)
-    for (int c = 0; c < 3; c++) p.specular[y][c] = 0.1, p.diffuse[y][c] = 0.4, p.transmission[y][c] = 0.3;
+    for (int c = 0; c < 3; c++)
+      p.specular[y][c] = p.transmission_specular[y][c] = 0.1, p.diffuse[y][c] = 0.4, p.transmission[y][c] = 0.3;
   wv_image front, back;
   wv_scene s;
   wv_error err = {0};
@@ -326,6 +328,19 @@ static void test_back_lit(void **state) {
   render_params("flat45-back", &p, 64, 8, 0, &blue);
   assert_true(centre_mean(&red, 64, 0) > 2 * centre_mean(&red, 64, 2));
   assert_true(centre_mean(&blue, 64, 2) > 2 * centre_mean(&blue, 64, 0));
+  /* no diffuse transmission: a green specular transmission colour makes the light through the
+   * cloth green, whatever the specular reflection's colour (red); black without it */
+  wv_image green, none;
+  wv_params q = p;
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++)
+      q.transmission[y][c] = 0, q.transmission_specular[y][c] = c == 1 ? 0.8 : 0.05, q.specular[y][c] = c == 0;
+  render_params("flat45-back", &q, 64, 8, 0, &green);
+  assert_true(centre_mean(&green, 64, 1) > 0.02 && centre_mean(&green, 64, 1) > 3 * centre_mean(&green, 64, 0));
+  memset(q.transmission_specular, 0, sizeof q.transmission_specular);
+  render_params("flat45-back", &q, 64, 8, 0, &none);
+  assert_true(centre_mean(&none, 64, 0) == 0.0 && centre_mean(&none, 64, 1) == 0.0);
+  wv_image_free(&green), wv_image_free(&none);
   /* the forward renderer and the gradient renderer's capture agree, glow included */
   wv_image dc, cap;
   double g[WV_P_COUNT];

@@ -30,7 +30,8 @@
 
 #define WV_NET_OUT (2 + WV_P_REFLECT_COUNT) /* 21: the reflection model's parameters (the transmission
                                               * colours take their prior mean, wv_params_transmission_default) */
-#define WV_NET_OUT_PAIR (2 + WV_P_COUNT)    /* 27: a pair model's, the 21 and the transmission colours */
+#define WV_NET_OUT_PAIR (2 + WV_P_KST_WARP_R) /* 27: a pair model's, the 21 and the diffuse transmission
+                                              * colours k_t (k_st starts at its default and is fitted) */
 #define WV_NET_OUT_MAX WV_NET_OUT_PAIR
 #define WV_NET_HIDDEN 256
 #define WV_NET_SLOPE 0.01f          /* LeakyReLU slope (PyTorch's default) */

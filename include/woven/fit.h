@@ -72,6 +72,7 @@ void wv_fit_opts_default(wv_fit_opts *o);
 #define WV_FIT_SMOOTH 5          /* the smoothed loss: the mean of this many consecutive losses */
 #define WV_FIT_MIN_GAIN 0.01     /* a relative fall of the smoothed loss that counts as progress */
 #define WV_FIT_PATIENCE 10       /* the default patience (0: every iteration runs; docs/measurements.md) */
+#define WV_FIT_LR_T_SCALE 3      /* the transmission colours' learning rate: this times lr (docs/fit.md) */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000

@@ -19,6 +19,7 @@ typedef struct {
   double diffuse[2][3];              /* k_d RGB: 0..1 */
   double specular[2][3];             /* k_s RGB: 0..1 */
   double transmission[2][3];         /* k_t RGB: 0..1, diffuse transmission colour (light through the yarn) */
+  double transmission_specular[2][3]; /* k_st RGB: 0..1, the specular transmission's colour */
   double roughness[2];               /* alpha: 0.01..1 */
   double twist_deg;                  /* psi: -60..60 */
   double inclination_deg;            /* u_max: 5..70 */
@@ -30,9 +31,10 @@ typedef struct {
   int specular_noise;                /* 1: glints U_s on (default); 0: U_s = 1 */
 } wv_params;
 
-/* The parameter file's format version: 2 adds "transmission" (files without the key,
- * version 1, read with k_t at its default, wv_params_transmission_default). */
-#define WV_PARAMS_VERSION 2
+/* The parameter file's format version: 2 adds "transmission" (k_t), 3
+ * "transmission_specular" (k_st); a file without either key reads with its default
+ * (wv_params_transmission_default), which renders it as its version did. */
+#define WV_PARAMS_VERSION 3
 
 /* Prior mean of a built-in pattern (also the fit's start without a network). */
 wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err);
@@ -40,9 +42,12 @@ wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err);
  * (the 90-degree patterns mirror their base: warp and weft ranges swapped, twist
  * negated). Deterministic in seed. */
 wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *p, wv_error *err);
-/* The transmission colour's default (and prior mean): half the diffuse albedo, k_t = k_d / 2
- * per yarn type and channel: light through a yarn takes the yarn's colour. */
+/* The transmission colours' defaults, per yarn type and channel: k_t = k_d / 2 (the prior's
+ * mean: light through a yarn takes the yarn's colour) and k_st = k_s (the fibres that
+ * reflect the light are the ones that scatter it through). */
 void wv_params_transmission_default(wv_params *p);
+/* Only k_st's default, k_st = k_s. */
+void wv_params_transmission_specular_default(wv_params *p);
 
 /* Every value in range, pattern known; the message names the key. */
 wv_status wv_params_validate(const wv_params *p, wv_error *err);
@@ -56,7 +61,7 @@ wv_status wv_params_write(const char *path, const wv_params *p, wv_error *err);
 /* The continuous parameters, in a fixed order (the differentiable renderer's and
  * the fit's vector). Values are in the file's units (angles in degrees). The
  * reflection model's come first (WV_P_REFLECT_COUNT of them: what a front-lit
- * photo shows, and FabricNet predicts); the transmission colours follow. */
+ * photo shows, and FabricNet predicts); the transmission colours follow (k_t, then k_st). */
 typedef enum {
   WV_P_BETA_WARP, WV_P_BETA_WEFT,
   WV_P_KD_WARP_R, WV_P_KD_WARP_G, WV_P_KD_WARP_B,
@@ -67,6 +72,8 @@ typedef enum {
   WV_P_UMAX_DEG, WV_P_BLEND, WV_P_TWIST_DEG,
   WV_P_KT_WARP_R, WV_P_KT_WARP_G, WV_P_KT_WARP_B,
   WV_P_KT_WEFT_R, WV_P_KT_WEFT_G, WV_P_KT_WEFT_B,
+  WV_P_KST_WARP_R, WV_P_KST_WARP_G, WV_P_KST_WARP_B,
+  WV_P_KST_WEFT_R, WV_P_KST_WEFT_G, WV_P_KST_WEFT_B,
   WV_P_COUNT
 } wv_param_id;
 #define WV_P_REFLECT_COUNT WV_P_KT_WARP_R /* 19 */

@@ -108,7 +108,7 @@ def test_fit_one_parameter(base):
     truth[i] = 0.4
     target = wt.render(torch.tensor(truth), base, "flat45", spp=2, threads=2, window=(192, 192, 128, 128))
     theta = torch.tensor(base.vector, requires_grad=True)
-    mask = torch.zeros(25, dtype=torch.float64)
+    mask = torch.zeros(len(woven.PARAM_NAMES), dtype=torch.float64)
     mask[i] = 1
     opt = torch.optim.Adam([theta], lr=0.05)
     first = None
@@ -126,12 +126,12 @@ def test_fit_one_parameter(base):
 
 def test_errors(base):
     theta = torch.tensor(base.vector, requires_grad=True)
-    with pytest.raises(ValueError, match="25"):
+    with pytest.raises(ValueError, match="31"):
         wt.render(theta[:5], base, "flat45", spp=1)
     with pytest.raises(TypeError):
         wt.render(base.vector, base, "flat45", spp=1)
     with pytest.raises(TypeError):
-        wt.render(torch.zeros(25, dtype=torch.int64), base, "flat45", spp=1)
+        wt.render(torch.zeros(31, dtype=torch.int64), base, "flat45", spp=1)
     bad = theta.detach().clone()
     bad[0] = math.nan
     with pytest.raises(woven.WovenError, match="heightfield.warp"):

@@ -29,7 +29,7 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
                                   const char *descriptor_name, wv_error *err) {
   json_t *root = json_object();
   json_object_set_new(root, "kind", json_string("woven-fit-checkpoint"));
-  json_object_set_new(root, "version", json_integer(2)); /* 2: Adam's moments of every WV_P_COUNT parameter */
+  json_object_set_new(root, "version", json_integer(3)); /* 3: Adam's moments of every WV_P_COUNT parameter */
   json_object_set_new(root, "descriptor", json_string(descriptor_name));
   json_object_set_new(root, "iter", json_integer(st->iter));
   json_object_set_new(root, "aligned", json_boolean(st->aligned));
@@ -109,10 +109,12 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   json_t *kind = json_object_get(root, "kind");
   json_t *ver = json_object_get(root, "version");
   if (!json_is_string(kind) || strcmp(json_string_value(kind), "woven-fit-checkpoint") || !json_is_integer(ver) ||
-      json_integer_value(ver) < 1 || json_integer_value(ver) > 2)
-    return wv_fail(err, WV_ERR_FORMAT, "not a woven fit checkpoint (version 1 or 2)");
-  /* version 1: moments of the reflection model's parameters only (the others start at 0) */
-  int nm = json_integer_value(ver) == 1 ? WV_P_REFLECT_COUNT : WV_P_COUNT;
+      json_integer_value(ver) < 1 || json_integer_value(ver) > 3)
+    return wv_fail(err, WV_ERR_FORMAT, "not a woven fit checkpoint (version 1, 2 or 3)");
+  /* moments of the reflection model's parameters only (version 1), and k_t's (version 2):
+   * the others start at 0 */
+  json_int_t v = json_integer_value(ver);
+  int nm = v == 1 ? WV_P_REFLECT_COUNT : v == 2 ? WV_P_KST_WARP_R : WV_P_COUNT;
   wv_fit_opts_default(o);
   o->register_radius = 0; /* absent in checkpoints older than the registration */
   o->w_struct = 0, o->colour_split = 0; /* absent before the structure term: a resume stays without it */

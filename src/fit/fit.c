@@ -669,9 +669,18 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
       gz[i] = isfinite(gi) ? (float)gi : 0.0f;
       z[i] = (float)((wv_param_get(&st->params, i) - lo) / (hi - lo));
     }
-    wv_nn_adam adam = {.n = WV_P_COUNT, .lr = (float)o->lr, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f,
+    wv_nn_adam adam = {.n = WV_P_REFLECT_COUNT, .lr = (float)o->lr, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f,
                        .weight_decay = 0.0f, .t = st->iter, .m = st->adam_m, .v = st->adam_v};
     wv_nn_adam_step_box(&adam, z, gz, 0.0f, 1.0f);
+    /* The transmission colours take larger steps (WV_FIT_LR_T_SCALE): Adam moves each
+     * normalised parameter about lr an iteration, so a colour that starts far off (k_st starts
+     * at k_s) would keep the back-lit photo's loss falling, and the fit going, for a hundred
+     * iterations; the image is linear in them, so larger steps do not overshoot for long. */
+    wv_nn_adam adam_t = adam;
+    adam_t.t = st->iter; /* the same step count as the other parameters' */
+    adam_t.n = WV_P_COUNT - WV_P_REFLECT_COUNT, adam_t.lr = (float)(o->lr * WV_FIT_LR_T_SCALE);
+    adam_t.m = st->adam_m + WV_P_REFLECT_COUNT, adam_t.v = st->adam_v + WV_P_REFLECT_COUNT;
+    wv_nn_adam_step_box(&adam_t, z + WV_P_REFLECT_COUNT, gz + WV_P_REFLECT_COUNT, 0.0f, 1.0f);
     /* a front-lit scene shows nothing of the transmission colours: they keep their values exactly
      * (a pair's transmission photo shows them) */
     int np = wv_scene_transmits(s) || pair ? WV_P_COUNT : WV_P_REFLECT_COUNT;

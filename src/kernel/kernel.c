@@ -41,6 +41,7 @@ wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
       P->kd[t][c] = (float)p->diffuse[t][c];
       P->ks[t][c] = (float)p->specular[t][c];
       P->kt[t][c] = (float)p->transmission[t][c];
+      P->kst[t][c] = (float)p->transmission_specular[t][c];
     }
     wv_shade_params_set_roughness(P, t, (float)p->roughness[t]);
   }
@@ -71,7 +72,8 @@ void wv_shade_params_double(const wv_params *p, wv_shade_params_d *P) {
     P->pia[t] = 3.14159265358979323846 * a;
     P->ia[t] = 1.0 / a;
     for (int c = 0; c < 3; c++)
-      P->kd[t][c] = p->diffuse[t][c], P->ks[t][c] = p->specular[t][c], P->kt[t][c] = p->transmission[t][c];
+      P->kd[t][c] = p->diffuse[t][c], P->ks[t][c] = p->specular[t][c], P->kt[t][c] = p->transmission[t][c],
+      P->kst[t][c] = p->transmission_specular[t][c];
   }
   P->sin_psi = sin(p->twist_deg * DEG), P->cos_psi = cos(p->twist_deg * DEG);
   P->noise = 0.1 * (double)p->noise_level;

@@ -51,7 +51,7 @@
  * radiance of channel c = sum over types y of ks[y][c] S + kd[y][c] DF, and
  * the derivatives of S and DF with respect to the non-linear parameters. With
  * the light behind the cloth the same sums hold the transmission: S the
- * specular's, DF the diffuse's, whose albedo is then kt[y][c]. */
+ * specular's, DF the diffuse's, whose albedos are then kst[y][c] and kt[y][c]. */
 enum {
   WV_J_S,        /* specular factor f_s mu_i / k_s (with the glint) */
   WV_J_DF,       /* diffuse factor f_d mu_i / k_d */
@@ -80,7 +80,7 @@ enum { WV_T_BETA, WV_T_UMAX, WV_T_PSI };
     R noise;                   /* 0.1 Q */                                                           \
     R alpha[2], k[2], ia2m1[2], pia[2], ia[2]; /* alpha, 1 - alpha^2, 1/alpha^2 - 1, pi alpha, 1/alpha */ \
     R kd[2][3], ks[2][3];      /* albedos */                                                         \
-    R kt[2][3];                /* transmission colours */                                            \
+    R kt[2][3], kst[2][3];     /* transmission colours: diffuse, specular */                        \
     R blend, thickness;        /* diffuse blend w, SpongeCake thickness T */                         \
   }
 typedef WV_SHADE_PARAMS(float) wv_shade_params_f;

@@ -444,7 +444,7 @@ WV_INLINE void WV_FN(wv_cloth_chords)(const K_PARAMS *P, const WV_FN(wv_yarn_cel
  * as the scene's gap glow), and with G what the gradient sums: the same sums as
  * for reflection (J_S the specular transmission, J_DF the diffuse transmission)
  * for the yarn type the light passes (G->warp). On the visible yarn:
- *   k_s S_t + k_t F_t,  S_t = g D(h) E(T lv) / (4 mu_o) t(T lh),
+ *   k_st S_t + k_t F_t,  S_t = g D(h) E(T lv) / (4 mu_o) t(T lh),
  *   F_t = (w max(0, n_back.wi) + (1 - w) |mu_i|) / pi t(T (lv + lh)),
  * t(tau) = 1 / (1 + tau / 2) the diffuse transmittance of a slab of optical
  * thickness tau; in a gap beside it, over the crossing yarn: k_t F_t with the
@@ -512,9 +512,9 @@ WV_INLINE void WV_FN(wv_shade_trans)(const wv_fabric *fab, const K_PARAMS *P, co
   WV_L diff_ni = WV_B(0), diff_w = WV_B(0);
   WV_L diff = WV_FN(wv_diffuse)(ni, ami, P->blend, G ? &diff_ni : NULL, G ? &diff_w : NULL) * A;
   for (int ch = 0; ch < 3; ch++) {
-    WV_L ks = WV_FN(wv_pick)(warp, P->ks[WV_WARP][ch], P->ks[WV_WEFT][ch]);
+    WV_L kst = WV_FN(wv_pick)(warp, P->kst[WV_WARP][ch], P->kst[WV_WEFT][ch]);
     WV_L kt = WV_FN(wv_pick)(tw, P->kt[WV_WARP][ch], P->kt[WV_WEFT][ch]);
-    rad[ch] = wv_sel(opn, WV_B(0), d->light * (ks * spec + kt * diff));
+    rad[ch] = wv_sel(opn, WV_B(0), d->light * (kst * spec + kt * diff));
   }
   if (!G) return;
   WV_L dd[2]; /* d(diff = diffuse(ni) A) */

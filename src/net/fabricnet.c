@@ -57,8 +57,8 @@ wv_status wv_fabricnet_params(const wv_fabricnet *n, const float *y, const char 
     else
       wv_param_set(p, k - 2, v);
   }
-  if (n->n_out == WV_NET_OUT_PAIR) return wv_fabricnet_transmission(n, y, p, err);
-  wv_params_transmission_default(p); /* not predicted: the prior mean given the predicted colour */
+  wv_params_transmission_default(p); /* not predicted: the prior mean given the predicted colours */
+  if (n->n_out == WV_NET_OUT_PAIR) return wv_fabricnet_transmission(n, y, p, err); /* k_t predicted */
   return wv_params_validate(p, err);
 }
 

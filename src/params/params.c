@@ -24,6 +24,7 @@ static const range R_BETA = {"heightfield", 0, 2};
 static const range R_KD = {"diffuse", 0, 1};
 static const range R_KS = {"specular", 0, 1};
 static const range R_KT = {"transmission", 0, 1};
+static const range R_KST = {"transmission_specular", 0, 1};
 static const range R_ALPHA = {"roughness", 0.01, 1};
 static const range R_TWIST = {"twist_deg", -60, 60};
 static const range R_UMAX = {"inclination_deg", 5, 70};
@@ -77,9 +78,15 @@ wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err) {
   return WV_OK;
 }
 
+void wv_params_transmission_specular_default(wv_params *p) {
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) p->transmission_specular[y][c] = p->specular[y][c];
+}
+
 void wv_params_transmission_default(wv_params *p) {
   for (int y = 0; y < 2; y++)
     for (int c = 0; c < 3; c++) p->transmission[y][c] = 0.5 * p->diffuse[y][c];
+  wv_params_transmission_specular_default(p);
 }
 
 static wv_status check(const range *r, const char *sub, double v, wv_error *err) {
@@ -114,6 +121,7 @@ wv_status wv_params_validate(const wv_params *p, wv_error *err) {
       if ((st = check(&R_KD, yn[y], p->diffuse[y][c], err))) return st;
       if ((st = check(&R_KS, yn[y], p->specular[y][c], err))) return st;
       if ((st = check(&R_KT, yn[y], p->transmission[y][c], err))) return st;
+      if ((st = check(&R_KST, yn[y], p->transmission_specular[y][c], err))) return st;
     }
   }
   if ((st = check(&R_TWIST, NULL, p->twist_deg, err))) return st;
@@ -145,7 +153,7 @@ static wv_status get_pair(json_t *root, const char *key, int n, double *warp, do
 
 static const char *const KNOWN_KEYS[] = {
     "version",   "pattern",     "weave",          "density",         "heightfield",   "diffuse",
-    "specular",  "transmission", "roughness",     "twist_deg",       "inclination_deg", "diffuse_blend",
+    "specular",  "transmission", "transmission_specular", "roughness",     "twist_deg",       "inclination_deg", "diffuse_blend",
     "noise_level", "thickness", "yarn_width",     "seed",            "specular_noise",  "comment", NULL};
 
 static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
@@ -186,6 +194,8 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
       (st = get_pair(root, "diffuse", 3, p->diffuse[0], p->diffuse[1], err)) ||
       (st = get_pair(root, "specular", 3, p->specular[0], p->specular[1], err)) ||
       (st = get_pair(root, "transmission", 3, p->transmission[0], p->transmission[1], err)) ||
+      (st = get_pair(root, "transmission_specular", 3, p->transmission_specular[0], p->transmission_specular[1],
+                     err)) ||
       (st = wv_json_number(root, NULL, "twist_deg", WV_JSON_FINITE, 0, &p->twist_deg, err)) ||
       (st = wv_json_number(root, NULL, "inclination_deg", WV_JSON_FINITE, 0, &p->inclination_deg, err)) ||
       (st = wv_json_number(root, NULL, "diffuse_blend", WV_JSON_FINITE, 0, &p->diffuse_blend, err)) ||
@@ -196,8 +206,12 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
       (st = wv_json_bool(root, NULL, "specular_noise", 0, &p->specular_noise, err)))
     return st;
   p->seed = (int64_t)seed;
-  /* a file without the key (every version 1 file): the yarn's colour, from its diffuse albedo */
-  if (!json_object_get(root, "transmission")) wv_params_transmission_default(p);
+  /* a file without a key (every version 1 file; versions 1 and 2 for k_st): its default, from
+   * the albedos read above */
+  if (!json_object_get(root, "transmission"))
+    for (int y = 0; y < 2; y++)
+      for (int c = 0; c < 3; c++) p->transmission[y][c] = 0.5 * p->diffuse[y][c];
+  if (!json_object_get(root, "transmission_specular")) wv_params_transmission_specular_default(p);
   return wv_params_validate(p, err);
 }
 
@@ -242,6 +256,8 @@ char *wv_params_to_json(const wv_params *p) {
                       json_pack("{s:o,s:o}", "warp", rgb(p->specular[0]), "weft", rgb(p->specular[1])));
   json_object_set_new(o, "transmission",
                       json_pack("{s:o,s:o}", "warp", rgb(p->transmission[0]), "weft", rgb(p->transmission[1])));
+  json_object_set_new(o, "transmission_specular", json_pack("{s:o,s:o}", "warp", rgb(p->transmission_specular[0]),
+                                                            "weft", rgb(p->transmission_specular[1])));
   json_object_set_new(o, "roughness", json_pack("{s:f,s:f}", "warp", p->roughness[0], "weft", p->roughness[1]));
   json_object_set_new(o, "twist_deg", json_real(p->twist_deg));
   json_object_set_new(o, "inclination_deg", json_real(p->inclination_deg));
@@ -282,7 +298,8 @@ static double *param_slot(wv_params *p, int id) {
   if (id == WV_P_UMAX_DEG) return &p->inclination_deg;
   if (id == WV_P_BLEND) return &p->diffuse_blend;
   if (id == WV_P_TWIST_DEG) return &p->twist_deg;
-  return &p->transmission[(id - WV_P_KT_WARP_R) / 3][(id - WV_P_KT_WARP_R) % 3];
+  if (id <= WV_P_KT_WEFT_B) return &p->transmission[(id - WV_P_KT_WARP_R) / 3][(id - WV_P_KT_WARP_R) % 3];
+  return &p->transmission_specular[(id - WV_P_KST_WARP_R) / 3][(id - WV_P_KST_WARP_R) % 3];
 }
 
 double wv_param_get(const wv_params *p, int id) { return *param_slot((wv_params *)p, id); }
@@ -300,7 +317,8 @@ void wv_param_range(int id, double *lo, double *hi) {
                    : id == WV_P_UMAX_DEG ? &R_UMAX
                    : id == WV_P_BLEND ? &R_BLEND
                    : id == WV_P_TWIST_DEG ? &R_TWIST
-                                          : &R_KT;
+                   : id <= WV_P_KT_WEFT_B ? &R_KT
+                                          : &R_KST;
   *lo = r->lo, *hi = r->hi;
 }
 
@@ -311,7 +329,9 @@ const char *wv_param_name(int id) {
       "specular.warp[2]", "specular.weft[0]", "specular.weft[1]", "specular.weft[2]", "roughness.warp",
       "roughness.weft",   "inclination_deg",  "diffuse_blend",   "twist_deg",       "transmission.warp[0]",
       "transmission.warp[1]", "transmission.warp[2]", "transmission.weft[0]", "transmission.weft[1]",
-      "transmission.weft[2]"};
+      "transmission.weft[2]", "transmission_specular.warp[0]", "transmission_specular.warp[1]",
+      "transmission_specular.warp[2]", "transmission_specular.weft[0]", "transmission_specular.weft[1]",
+      "transmission_specular.weft[2]"};
   return id >= 0 && id < WV_P_COUNT ? names[id] : "?";
 }
 
@@ -369,6 +389,13 @@ wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *
   for (int y = 0; y < 2; y++) {
     double f = uni(&rt, 0.1, 0.9);
     for (int c = 0; c < 3; c++) p->transmission[y][c] = f * p->diffuse[y][c];
+  }
+  /* Specular transmission: the specular colour times a factor uniform in 0.1..1 per yarn type,
+   * from a third stream (the draws above stay as they were). */
+  uint64_t rs = wv_mix64(seed ^ 0x7370656374ULL);
+  for (int y = 0; y < 2; y++) {
+    double f = uni(&rs, 0.1, 1.0);
+    for (int c = 0; c < 3; c++) p->transmission_specular[y][c] = f * p->specular[y][c];
   }
   return wv_params_validate(p, err);
 }

@@ -25,26 +25,30 @@
 #define DEG (3.14159265358979323846 / 180.0)
 
 /* The albedos the adjoint pass weighs the per-type sums with; with the light behind
- * the cloth (transmit) the diffuse sums are the diffuse transmission's, weighed by kt. */
+ * the cloth (transmit) the sums are the transmission's, weighed by kst and kt. */
 typedef struct {
-  double kd[2][3], ks[2][3], kt[2][3];
+  double kd[2][3], ks[2][3], kt[2][3], kst[2][3];
   int transmit;
 } wv_grad_model;
 
 /* In float mode the floats the forward renderer uses, widened exactly. */
 static void albedos_from_fabric(const wv_fabric *f, wv_grad_model *g) {
   for (int y = 0; y < 2; y++)
-    for (int c = 0; c < 3; c++) g->kd[y][c] = f->P.kd[y][c], g->ks[y][c] = f->P.ks[y][c], g->kt[y][c] = f->P.kt[y][c];
+    for (int c = 0; c < 3; c++)
+      g->kd[y][c] = f->P.kd[y][c], g->ks[y][c] = f->P.ks[y][c], g->kt[y][c] = f->P.kt[y][c],
+      g->kst[y][c] = f->P.kst[y][c];
 }
 static void albedos_from_double(const wv_shade_params_d *P, wv_grad_model *g) {
   for (int y = 0; y < 2; y++)
-    for (int c = 0; c < 3; c++) g->kd[y][c] = P->kd[y][c], g->ks[y][c] = P->ks[y][c], g->kt[y][c] = P->kt[y][c];
+    for (int c = 0; c < 3; c++)
+      g->kd[y][c] = P->kd[y][c], g->ks[y][c] = P->ks[y][c], g->kt[y][c] = P->kt[y][c], g->kst[y][c] = P->kst[y][c];
 }
 
 /* Gradient slots per type, for the linear parameters. */
 static const int KD_ID[2] = {WV_P_KD_WARP_R, WV_P_KD_WEFT_R};
 static const int KS_ID[2] = {WV_P_KS_WARP_R, WV_P_KS_WEFT_R};
 static const int KT_ID[2] = {WV_P_KT_WARP_R, WV_P_KT_WEFT_R};
+static const int KST_ID[2] = {WV_P_KST_WARP_R, WV_P_KST_WEFT_R};
 static const int BETA_ID[2] = {WV_P_BETA_WARP, WV_P_BETA_WEFT};
 static const int ALPHA_ID[2] = {WV_P_ALPHA_WARP, WV_P_ALPHA_WEFT};
 
@@ -53,15 +57,16 @@ enum { NG = WV_P_COUNT + 1 }; /* the gradient, then the dot */
 /* A row's partial sums of the gradient and the dot, as named locals (they stay in
  * registers over the row); written out into the gradient's slots by sums_out. */
 typedef struct {
-  double df[2][3], ks[2][3]; /* per type: the diffuse (k_d, or k_t with the light behind) and specular albedos */
+  double df[2][3], ks[2][3]; /* per type: the diffuse (k_d, or k_t with the light behind) and specular (k_s, or
+                              * k_st) albedos */
   double beta[2], alpha[2], umax, twist, blend, dot;
 } row_sums;
 
 static void sums_out(const wv_grad_model *gm, const row_sums *g, double out[NG]) {
-  const int *DF_ID = gm->transmit ? KT_ID : KD_ID;
+  const int *DF_ID = gm->transmit ? KT_ID : KD_ID, *S_ID = gm->transmit ? KST_ID : KS_ID;
   memset(out, 0, NG * sizeof *out);
   for (int y = 0; y < 2; y++) {
-    for (int c = 0; c < 3; c++) out[DF_ID[y] + c] = g->df[y][c], out[KS_ID[y] + c] = g->ks[y][c];
+    for (int c = 0; c < 3; c++) out[DF_ID[y] + c] = g->df[y][c], out[S_ID[y] + c] = g->ks[y][c];
     out[BETA_ID[y]] = g->beta[y], out[ALPHA_ID[y]] = g->alpha[y];
   }
   out[WV_P_UMAX_DEG] = g->umax, out[WV_P_TWIST_DEG] = g->twist, out[WV_P_BLEND] = g->blend;
@@ -70,13 +75,14 @@ static void sums_out(const wv_grad_model *gm, const row_sums *g, double out[NG])
 
 /* Add a pixel's contribution given gr[c] = dL/dradiance_c; J: its sums / spp, per type. */
 WV_INLINE void accumulate(const wv_grad_model *gm, const double *J, const double gr[3], row_sums *g) {
-  const double(*kdf)[3] = gm->transmit ? gm->kt : gm->kd; /* the diffuse sums' albedo */
+  const double(*kdf)[3] = gm->transmit ? gm->kt : gm->kd;  /* the diffuse sums' albedo */
+  const double(*ksf)[3] = gm->transmit ? gm->kst : gm->ks; /* the specular sums' */
   for (int y = 0; y < 2; y++, J += WV_J_COUNT) {
     double ws = 0, wd = 0; /* dL/dS and dL/dDF of this type */
     for (int c = 0; c < 3; c++) {
       g->df[y][c] += gr[c] * J[WV_J_DF];
       g->ks[y][c] += gr[c] * J[WV_J_S];
-      ws += gr[c] * gm->ks[y][c];
+      ws += gr[c] * ksf[y][c];
       wd += gr[c] * kdf[y][c];
     }
     g->beta[y] += ws * J[WV_J_S_BETA] + wd * J[WV_J_DF_BETA];

@@ -17,7 +17,7 @@
 //   4. the viewer's back-lit rig view (`?back=1`: the light behind the cloth,
 //      flat45-back; 16 frames of spp samples) against `woven render --scene
 //      flat45-back`: SSIM of 4-px blurs >= 0.999 and their MAE <= 0.002, on
-//      each pattern and on twill with open gaps (yarn width 0.75), where the
+//      each pattern and on twill with open gaps (yarn width 0.75) and specular transmission colours of its own, where the
 //      centre's mean (the gap glow, clipped) must also be within 5 % of woven's; woven's renders without the diffuse
 //      transmission, without the specular transmission and without the gap glow
 //      must each miss those bounds (so a viewer without them would fail); the
@@ -207,7 +207,7 @@ async function backLit(name, paramsFile) {
   if (open && !glowOk(cvm)) fail(`${name} back-lit: the centre's mean ${cvm.toFixed(4)} is not within ${GLOW_REL} of woven's ${cc.toFixed(4)}`);
   // woven's render without each part: the bounds must reject it
   const parts = { diffuse_transmission: { transmission: { warp: [0, 0, 0], weft: [0, 0, 0] } },
-                  specular_transmission: { specular: { warp: [0, 0, 0], weft: [0, 0, 0] } } };
+                  specular_transmission: { transmission_specular: { warp: [0, 0, 0], weft: [0, 0, 0] } } };
   const without = {};
   for (const [part, edit] of Object.entries(parts)) {
     const pf = `${base}_no_${part}.json`, pc = `${base}_no_${part}.png`;
@@ -340,8 +340,10 @@ for (const pat of patterns) {
   if (pat === (patterns.includes('twill') ? 'twill' : patterns[0])) await skewedRig(pat, params, c);
   backRows.push(await backLit(pat, params));
   if (pat === (patterns.includes('twill') ? 'twill' : patterns[0])) { // open gaps: the light seen through them
+    // (and a specular transmission colour of its own, unlike the specular reflection's)
     const pf = join(work, `${pat}_open.json`);
-    writeFileSync(pf, JSON.stringify({ ...JSON.parse(readFileSync(params, 'utf8')), yarn_width: 0.75 }));
+    writeFileSync(pf, JSON.stringify({ ...JSON.parse(readFileSync(params, 'utf8')), yarn_width: 0.75,
+                                       transmission_specular: { warp: [0.2, 0.9, 0.3], weft: [0.8, 0.3, 0.6] } }));
     backRows.push(await backLit(`${pat}_open`, pf));
   }
 }

@@ -66,7 +66,8 @@ uniform float uShadowInvFar, uShadowBias;
 uniform float uShadowTexel;     // a texel's width per unit distance from the light
 
 #ifdef WV_TRANSMIT
-uniform vec3 uKt[2];            // transmission colours k_t
+uniform vec3 uKt[2];            // transmission colours: diffuse k_t
+uniform vec3 uKst[2];           // and specular k_st
 uniform vec3 uBackPos;          // studio: a point light behind the cloth (uBackI 0: none)
 uniform float uBackI;
 #endif
@@ -272,7 +273,7 @@ vec3 shadeTrans(int ty, int tw, vec3 n, vec3 t, float us, float lv, float lh, ve
     float E = tl * expWv(-tl * min(pa, pb)) * phiWv(tl * abs(pa - pb));
     float q = 1.0 + (1.0 / (a * a) - 1.0) * th * th;
     float D = 1.0 / (PI_F * a * q * q);
-    spec = uKs[ty] * (us * Ah * D / (4.0 * mo) * E);
+    spec = uKst[ty] * (us * Ah * D / (4.0 * mo) * E);
     // the yarn's underside, where the light enters: the normal mirrored along the yarn and in z
     ni = dot(wi, ty == 0 ? vec3(n.x, -n.y, -n.z) : vec3(-n.x, n.y, -n.z));
   }
