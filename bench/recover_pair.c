@@ -12,7 +12,7 @@
  * pair model (default models/fabricnet-flat45+flat45-back.bin when it exists; none: the
  * prior's) when they score the lower pair loss (wv_capture_pair_start), the back-lit scene with the choice's lattice orientation, the joint fit.
  * Measured per target: the open area and the transmission colours against the truth (the
- * colour error of a yarn type is |fit - truth| / |truth| over its RGB vector; the larger of
+ * colour error of a yarn type is |fit - truth| / |truth| over its RGB vector, for k_t and k_st; the larger of
  * the two types is reported), and for each photo the SSIM (per RGB channel) of the re-render
  * against the target over the ceiling, the truth rendered with the fit's noise seed. Prints
  * a line per target, then one JSON object on the last line: per target, per family, overall.
@@ -47,14 +47,15 @@ static const char *const FAMILIES[NFAM] = {"plain", "basket", "twill", "satin"};
 
 static double open_area(const wv_params *p) { return (1 - p->yarn_width) * (1 - p->yarn_width); }
 
-/* The larger relative error of the two yarn types' transmission colours. */
-static double kt_error(const wv_params *fit, const wv_params *truth) {
+/* The larger relative error of the two yarn types' transmission colours: from parameter id
+ * first (WV_P_KT_WARP_R: k_t; WV_P_KST_WARP_R: k_st), six in a row. */
+static double kt_error(const wv_params *fit, const wv_params *truth, int first) {
   double worst = 0;
   for (int y = 0; y < 2; y++) {
     double d = 0, n = 0;
     for (int c = 0; c < 3; c++) {
-      d += (fit->transmission[y][c] - truth->transmission[y][c]) * (fit->transmission[y][c] - truth->transmission[y][c]);
-      n += truth->transmission[y][c] * truth->transmission[y][c];
+      double f = wv_param_get(fit, first + 3 * y + c), t = wv_param_get(truth, first + 3 * y + c);
+      d += (f - t) * (f - t), n += t * t;
     }
     double e = n > 0 ? sqrt(d / n) : sqrt(d);
     worst = e > worst ? e : worst;
@@ -125,7 +126,7 @@ int main(int argc, char **argv) {
   fo.threads = threads;
   if (iters > 0) fo.iters = iters;
   json_t *targets = json_array();
-  double fam_sum[NFAM][4] = {{0}}; /* ratio R, ratio T, open-area error, k_t error */
+  double fam_sum[NFAM][5] = {{0}}; /* ratio R, ratio T, open-area error, k_t error, k_st error */
   int fam_n[NFAM] = {0}, fam_ok[NFAM] = {0};
   double t_all = bench_now();
   for (int f = 0; f < NFAM; f++) {
@@ -191,21 +192,23 @@ int main(int argc, char **argv) {
       double cr = ssim_of(&photo, &ceil_r), ct = ssim_of(&photo_t, &ceil_t);
       double oa_t = open_area(&truth), oa_f = open_area(&fs.params);
       double oa_err = oa_t > 0 ? fabs(oa_f - oa_t) / oa_t : fabs(oa_f - oa_t);
-      double kt_e = kt_error(&fs.params, &truth), kt_s = kt_error(&start, &truth);
+      double kt_e = kt_error(&fs.params, &truth, WV_P_KT_WARP_R), kt_s = kt_error(&start, &truth, WV_P_KT_WARP_R);
+      double kst_e = kt_error(&fs.params, &truth, WV_P_KST_WARP_R), kst_s = kt_error(&start, &truth, WV_P_KST_WARP_R);
       int fam_right = !strcmp(wv_weave_family(fs.params.pattern), FAMILIES[f]);
       printf("%s %d %s -> %s: R %.3f/%.3f = %.3f, T %.3f/%.3f = %.3f, open area %.4f -> %.4f (%.2f), k_t error "
-             "%.3f (start %.3f, %s), %d it, %.0f s\n",
+             "%.3f (start %.3f, %s), k_st error %.3f (start %.3f), %d it, %.0f s\n",
              FAMILIES[f], i, pattern, fs.params.pattern, sr, cr, sr / cr, st_, ct, st_ / ct, oa_t, oa_f, oa_err, kt_e,
-             kt_s, kt_model == 1 ? "pair model" : "prior", fs.iter, secs);
+             kt_s, kt_model == 1 ? "pair model" : "prior", kst_e, kst_s, fs.iter, secs);
       fflush(stdout);
       json_array_append_new(
-          targets, json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:i,s:f}", "family",
+          targets, json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:i,s:f}", "family",
                              FAMILIES[f], "draw", i, "pattern", pattern, "chosen", fs.params.pattern, "family_right",
                              fam_right, "ssim_r", sr, "ceiling_r", cr, "ratio_r", sr / cr, "ssim_t", st_, "ceiling_t",
                              ct, "ratio_t", st_ / ct, "open_area", oa_t, "open_area_fit", oa_f, "open_area_error",
-                             oa_err, "kt_error", kt_e, "kt_error_start", kt_s, "iterations", fs.iter, "seconds",
+                             oa_err, "kt_error", kt_e, "kt_error_start", kt_s, "kst_error", kst_e, "kst_error_start",
+                             kst_s, "iterations", fs.iter, "seconds",
                              secs));
-      fam_sum[f][0] += sr / cr, fam_sum[f][1] += st_ / ct, fam_sum[f][2] += oa_err, fam_sum[f][3] += kt_e;
+      fam_sum[f][0] += sr / cr, fam_sum[f][1] += st_ / ct, fam_sum[f][2] += oa_err, fam_sum[f][3] += kt_e, fam_sum[f][4] += kst_e;
       fam_n[f]++, fam_ok[f] += fam_right;
       wv_fit_state_free(&fs);
       free(pc);
@@ -214,23 +217,23 @@ int main(int argc, char **argv) {
     }
   }
   json_t *fams = json_object();
-  double all[4] = {0};
+  double all[5] = {0};
   int n = 0, ok = 0;
   for (int f = 0; f < NFAM; f++) {
     if (!fam_n[f]) continue;
     json_object_set_new(fams, FAMILIES[f],
-                        json_pack("{s:i,s:i,s:f,s:f,s:f,s:f}", "targets", fam_n[f], "family_right", fam_ok[f],
+                        json_pack("{s:i,s:i,s:f,s:f,s:f,s:f,s:f}", "targets", fam_n[f], "family_right", fam_ok[f],
                                   "mean_ratio_r", fam_sum[f][0] / fam_n[f], "mean_ratio_t", fam_sum[f][1] / fam_n[f],
                                   "mean_open_area_error", fam_sum[f][2] / fam_n[f], "mean_kt_error",
-                                  fam_sum[f][3] / fam_n[f]));
-    for (int k = 0; k < 4; k++) all[k] += fam_sum[f][k];
+                                  fam_sum[f][3] / fam_n[f], "mean_kst_error", fam_sum[f][4] / fam_n[f]));
+    for (int k = 0; k < 5; k++) all[k] += fam_sum[f][k];
     n += fam_n[f], ok += fam_ok[f];
   }
-  json_t *out = json_pack("{s:s,s:s,s:o,s:o,s:{s:i,s:i,s:f,s:f,s:f,s:f},s:f}", "model", mpath, "pair_model",
+  json_t *out = json_pack("{s:s,s:s,s:o,s:o,s:{s:i,s:i,s:f,s:f,s:f,s:f,s:f},s:f}", "model", mpath, "pair_model",
                           found ? ppath : "none (the prior's k_t)", "targets", targets, "families", fams, "all",
                           "targets", n, "family_right", ok, "mean_ratio_r", n ? all[0] / n : 0, "mean_ratio_t",
                           n ? all[1] / n : 0, "mean_open_area_error", n ? all[2] / n : 0, "mean_kt_error",
-                          n ? all[3] / n : 0, "seconds", bench_now() - t_all);
+                          n ? all[3] / n : 0, "mean_kst_error", n ? all[4] / n : 0, "seconds", bench_now() - t_all);
   char *text = json_dumps(out, JSON_COMPACT | JSON_REAL_PRECISION(6));
   printf("%s\n", text);
   free(text);
