@@ -328,11 +328,12 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
       sb_printf(&b, "<tr><td>open area, measured on the back-lit photo's gap glow (the yarn width set to "
                     "match)</td><td>%.2f%%</td></tr>\n", 100 * (r->open_area > 0 ? r->open_area : 0));
     if (r->kt_start)
-      sb_printf(&b, "<tr><td colspan=\"2\">The transmission colours started from the pair model %s (the photo "
-                    "pair through FabricNet).</td></tr>\n", r->kt_start);
+      sb_printf(&b, "<tr><td colspan=\"2\">The diffuse transmission colours started from the pair model %s (the "
+                    "photo pair through FabricNet), the specular ones from the specular colours.</td></tr>\n",
+                r->kt_start);
     else
       sb_printf(&b, "<tr><td colspan=\"2\">The transmission colours started from the prior (half the start's "
-                    "diffuse colour): %s.</td></tr>\n",
+                    "diffuse colour, and its specular colour): %s.</td></tr>\n",
                 r->kt_tried ? "the pair model's estimate scored a higher loss on the two photos"
                             : "there is no pair model for these scenes");
   }
@@ -344,9 +345,9 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                 "radiance (%s; docs/fit.md).</p>\n",
             r->camera_blur, how);
   if (!r->photo_t_png && !r->kt_fitted)
-    sb_printf(&b, "<p>One photo, front-lit: the transmission colours (k_t) were not fitted; they are the start's, "
-                  "from the prior (half the start's diffuse colour). <code>--transmission T.png</code> fits them to a "
-                  "back-lit photo.</p>\n");
+    sb_printf(&b, "<p>One photo, front-lit: the transmission colours (k_t, k_st) were not fitted; they are the "
+                  "start's, from the prior (half the start's diffuse colour, and its specular colour). "
+                  "<code>--transmission T.png</code> fits them to a back-lit photo.</p>\n");
   sb_printf(&b, "<p>SSIM: Wang et al. 2004, 11x11 Gaussian window. WSC: Pearson correlation of the log "
                 "power spectra of the luminance detail of the centre 256 x 256 pixels, DC left out; 1 for the same "
                 "periodic structure, about 0 for none in common. Whitened WSC: the same after each ring of the spectrum is "
