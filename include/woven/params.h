@@ -46,8 +46,6 @@ wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *
  * mean: light through a yarn takes the yarn's colour) and k_st = k_s (the fibres that
  * reflect the light are the ones that scatter it through). */
 void wv_params_transmission_default(wv_params *p);
-/* Only k_st's default, k_st = k_s. */
-void wv_params_transmission_specular_default(wv_params *p);
 
 /* Every value in range, pattern known; the message names the key. */
 wv_status wv_params_validate(const wv_params *p, wv_error *err);

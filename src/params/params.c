@@ -78,15 +78,10 @@ wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err) {
   return WV_OK;
 }
 
-void wv_params_transmission_specular_default(wv_params *p) {
-  for (int y = 0; y < 2; y++)
-    for (int c = 0; c < 3; c++) p->transmission_specular[y][c] = p->specular[y][c];
-}
-
 void wv_params_transmission_default(wv_params *p) {
   for (int y = 0; y < 2; y++)
-    for (int c = 0; c < 3; c++) p->transmission[y][c] = 0.5 * p->diffuse[y][c];
-  wv_params_transmission_specular_default(p);
+    for (int c = 0; c < 3; c++)
+      p->transmission[y][c] = 0.5 * p->diffuse[y][c], p->transmission_specular[y][c] = p->specular[y][c];
 }
 
 static wv_status check(const range *r, const char *sub, double v, wv_error *err) {
@@ -152,9 +147,10 @@ static wv_status get_pair(json_t *root, const char *key, int n, double *warp, do
 }
 
 static const char *const KNOWN_KEYS[] = {
-    "version",   "pattern",     "weave",          "density",         "heightfield",   "diffuse",
-    "specular",  "transmission", "transmission_specular", "roughness",     "twist_deg",       "inclination_deg", "diffuse_blend",
-    "noise_level", "thickness", "yarn_width",     "seed",            "specular_noise",  "comment", NULL};
+    "version",   "pattern",      "weave",         "density",         "heightfield",     "diffuse",
+    "specular",  "transmission", "transmission_specular", "roughness", "twist_deg",     "inclination_deg",
+    "diffuse_blend", "noise_level", "thickness",  "yarn_width",      "seed",            "specular_noise",
+    "comment",   NULL};
 
 static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
   const char *name = NULL;
@@ -207,11 +203,15 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
     return st;
   p->seed = (int64_t)seed;
   /* a file without a key (every version 1 file; versions 1 and 2 for k_st): its default, from
-   * the albedos read above */
-  if (!json_object_get(root, "transmission"))
-    for (int y = 0; y < 2; y++)
-      for (int c = 0; c < 3; c++) p->transmission[y][c] = 0.5 * p->diffuse[y][c];
-  if (!json_object_get(root, "transmission_specular")) wv_params_transmission_specular_default(p);
+   * the albedos read above; a colour the file gives is kept */
+  int has_kt = json_object_get(root, "transmission") != NULL;
+  int has_kst = json_object_get(root, "transmission_specular") != NULL;
+  if (!has_kt || !has_kst) {
+    wv_params given = *p;
+    wv_params_transmission_default(p);
+    if (has_kt) memcpy(p->transmission, given.transmission, sizeof p->transmission);
+    if (has_kst) memcpy(p->transmission_specular, given.transmission_specular, sizeof p->transmission_specular);
+  }
   return wv_params_validate(p, err);
 }
 

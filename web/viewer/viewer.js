@@ -84,7 +84,7 @@ function prepareFabric(p, seedWords) {
     uKs: [new THREE.Vector3(...p.specular.warp), new THREE.Vector3(...p.specular.weft)],
     // k_t (woven view writes it; a file without it has k_d / 2, as wv_params_transmission_default)
     uKt: ['warp', 'weft'].map((y) => new THREE.Vector3(...(p.transmission ? p.transmission[y] : p.diffuse[y].map((x) => x / 2)))),
-    // k_st (a file without it has k_s, as wv_params_transmission_specular_default)
+    // k_st (a file without it has k_s, as wv_params_transmission_default)
     uKst: ['warp', 'weft'].map((y) => new THREE.Vector3(...(p.transmission_specular || p.specular)[y])),
     uAlpha: [p.roughness.warp, p.roughness.weft], uBlend: p.diffuse_blend, uThickness: p.thickness,
     uGlints: p.specular_noise !== false, uInvGlintCell: sp.map((s) => f(1 / f(s / 8))),
