@@ -201,14 +201,15 @@ int main(int argc, char **argv) {
              kt_s, kt_model == 1 ? "pair model" : "prior", kst_e, kst_s, fs.iter, secs);
       fflush(stdout);
       json_array_append_new(
-          targets, json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:i,s:f}", "family",
-                             FAMILIES[f], "draw", i, "pattern", pattern, "chosen", fs.params.pattern, "family_right",
+          targets, json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:i,s:f}",
+                             "family", FAMILIES[f], "draw", i, "pattern", pattern, "chosen", fs.params.pattern, "family_right",
                              fam_right, "ssim_r", sr, "ceiling_r", cr, "ratio_r", sr / cr, "ssim_t", st_, "ceiling_t",
                              ct, "ratio_t", st_ / ct, "open_area", oa_t, "open_area_fit", oa_f, "open_area_error",
                              oa_err, "kt_error", kt_e, "kt_error_start", kt_s, "kst_error", kst_e, "kst_error_start",
                              kst_s, "iterations", fs.iter, "seconds",
                              secs));
-      fam_sum[f][0] += sr / cr, fam_sum[f][1] += st_ / ct, fam_sum[f][2] += oa_err, fam_sum[f][3] += kt_e, fam_sum[f][4] += kst_e;
+      fam_sum[f][0] += sr / cr, fam_sum[f][1] += st_ / ct, fam_sum[f][2] += oa_err;
+      fam_sum[f][3] += kt_e, fam_sum[f][4] += kst_e;
       fam_n[f]++, fam_ok[f] += fam_right;
       wv_fit_state_free(&fs);
       free(pc);

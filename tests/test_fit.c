@@ -671,7 +671,8 @@ static void test_fit_pair(void **state) {
   for (int i = 0; i < WV_P_COUNT; i++) {
     double lo, hi;
     wv_param_range(i, &lo, &hi);
-    double z = (wv_param_get(&one.params, i) - lo) / (hi - lo), dz = fabs(z - (wv_param_get(&start, i) - lo) / (hi - lo));
+    double z = (wv_param_get(&one.params, i) - lo) / (hi - lo);
+    double dz = fabs(z - (wv_param_get(&start, i) - lo) / (hi - lo));
     int trans = i >= WV_P_REFLECT_COUNT;
     if (!(z > 1e-6 && z < 1 - 1e-6) || dz < 0.5 * o.lr) continue; /* clamped, or a vanishing gradient */
     double want = trans ? o.lr * WV_FIT_LR_T_SCALE : o.lr;

@@ -674,8 +674,8 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
     wv_nn_adam_step_box(&adam, z, gz, 0.0f, 1.0f);
     /* The transmission colours take larger steps (WV_FIT_LR_T_SCALE): Adam moves each
      * normalised parameter about lr an iteration, so a colour that starts far off (k_st starts
-     * at k_s) would keep the back-lit photo's loss falling, and the fit going, for a hundred
-     * iterations; the image is linear in them, so larger steps do not overshoot for long. */
+     * at k_s) kept the back-lit photo's loss falling, and the fit going, for about twice the
+     * iterations (docs/measurements.md, "The specular transmission's own colour"). */
     wv_nn_adam adam_t = adam;
     adam_t.t = st->iter; /* the same step count as the other parameters' */
     adam_t.n = WV_P_COUNT - WV_P_REFLECT_COUNT, adam_t.lr = (float)(o->lr * WV_FIT_LR_T_SCALE);
