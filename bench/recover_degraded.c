@@ -15,7 +15,9 @@
  * Degradations (--degrade on, the default), each with its own strength drawn from the
  * target's seed, applied in a camera's order to the render's linear radiance: a small
  * rotation (+-2 degrees) and a mild radial lens distortion (+-2% at the corners) in one
- * bilinear resampling, a camera blur (Gaussian, sigma 0.5..1.5 px), sensor noise (variance
+ * bilinear resampling (the view enlarged by a few percent so that no pixel samples outside
+ * the render: the photo's densities are the drawn ones times the zoom, which the line and the
+ * JSON compare the fit's with), a camera blur (Gaussian, sigma 0.5..1.5 px), sensor noise (variance
  * a x + b on the exposed signal x), then the scene's response, 8 bits and a JPEG round trip
  * (libjpeg-turbo, quality 75..95). --degrade off: the render quantised to 8 bits.
  * Each target is captured as `woven capture` captures a photo (the network's estimate, the
@@ -63,6 +65,8 @@ static const char *const FAMILIES[NFAM] = {"plain", "basket", "twill", "satin"};
 
 typedef struct {
   double rotation_deg, lens_k, blur_px, noise_a, noise_b;
+  double zoom; /* the view's enlargement (degrade_geometry): the photo's yarns lie 1 / zoom times
+                * further apart than the drawn spacing, its densities zoom times the drawn ones */
   int jpeg_quality;
 } degradation;
 
@@ -112,8 +116,7 @@ static void geometry_map(double x, double y, int w, int h, double c, double s, d
 /* A small rotation and a radial lens distortion in one bilinear resampling (two would blur
  * yarns a pixel apart twice); the view is enlarged just enough (a few percent) that every
  * pixel samples inside the input, so no edge is smeared or invented. */
-static wv_status degrade_geometry(const wv_image *in, double rotation_deg, double k, wv_image *out, wv_error *err) {
-  int w = in->w, h = in->h, nc = in->c;
+static double geometry_zoom(int w, int h, double rotation_deg, double k) {
   double c = cos(rotation_deg * M_PI / 180), s = sin(rotation_deg * M_PI / 180), zoom = 1, u, v;
   for (int t = 0; t < 2 * (w + h); t++) { /* the border's pixels; the map keeps the inside within them */
     int x = t < w ? t : t < 2 * w ? t - w : t < 2 * w + h ? 0 : w - 1;
@@ -123,6 +126,13 @@ static wv_status degrade_geometry(const wv_image *in, double rotation_deg, doubl
     if (du > 1e-9 && 0.5 * (w - 1) / du < zoom) zoom = 0.5 * (w - 1) / du;
     if (dv > 1e-9 && 0.5 * (h - 1) / dv < zoom) zoom = 0.5 * (h - 1) / dv;
   }
+  return zoom;
+}
+
+static wv_status degrade_geometry(const wv_image *in, double rotation_deg, double k, wv_image *out, wv_error *err) {
+  int w = in->w, h = in->h, nc = in->c;
+  double c = cos(rotation_deg * M_PI / 180), s = sin(rotation_deg * M_PI / 180), u, v;
+  double zoom = geometry_zoom(w, h, rotation_deg, k);
   wv_status st = wv_image_alloc(out, w, h, nc, err);
   if (st) return st;
   for (int y = 0; y < h; y++)
@@ -219,6 +229,7 @@ static void run_target(const study *st, const plan *pl, int index, int fam, int 
   if (r->two_colour) two_colour(&target, ts);
   if (wv_params_validate(&target, &err)) die(&err);
   draw_degradation(wv_hash2(ts, 13, 0x646567), &r->deg);
+  r->deg.zoom = pl->degrade ? geometry_zoom(st->s->width, st->s->height, r->deg.rotation_deg, r->deg.lens_k) : 1;
   wv_image photo, ceiling;
   shoot(st, pl, &target, &r->deg, wv_hash2(ts, 14, 0x646567), 1, &photo);
   if (pl->save) {
@@ -252,11 +263,12 @@ static void run_target(const study *st, const plan *pl, int index, int fam, int 
 
 static void print_line(const plan *pl, const result *r) {
   printf("%-7s %d %-12s%s -> %-12s %-5s SSIM fit %.4f ceiling %.4f (%.3f)  blurred copy %.4f%s  "
-         "spacing %.2f/%.2f px Q %d -> %d",
+         "spacing %.2f/%.2f px density fit / photo %.3f/%.3f Q %d -> %d",
          FAMILIES[r->fam], r->draw, r->pattern, r->two_colour ? " two-colour" : "", r->chosen,
          r->family_right ? "ok" : "WRONG", r->ssim_fit, r->ssim_ceiling, r->ratio, r->ssim_blurred_copy,
-         r->below_blurred_copy ? " (fit below)" : "", r->spacing_px[0], r->spacing_px[1], r->noise_level,
-         r->fit_noise_level);
+         r->below_blurred_copy ? " (fit below)" : "", r->spacing_px[0], r->spacing_px[1],
+         r->fit_density[0] / (r->density[0] * r->deg.zoom), r->fit_density[1] / (r->density[1] * r->deg.zoom),
+         r->noise_level, r->fit_noise_level);
   if (pl->degrade)
     printf("  rot %+.2f lens %+.3f blur %.2f noise %.1e/%.1e jpeg %d", r->deg.rotation_deg, r->deg.lens_k,
            r->deg.blur_px, r->deg.noise_a, r->deg.noise_b, r->deg.jpeg_quality);
@@ -279,13 +291,15 @@ static json_t *target_json(const plan *pl, const result *r) {
                         "wsc_fit", r->wsc_fit, "wsc_ceiling", r->wsc_ceiling, "ssim_blurred_copy", r->ssim_blurred_copy,
                         "below_blurred_copy", r->below_blurred_copy, "family_scores", fs, "family_score_kind",
                         r->family_kind);
-  json_object_set_new(o, "truth", json_pack("{s:[f,f],s:[f,f],s:i}", "density", r->density[0], r->density[1],
-                                            "spacing_px", r->spacing_px[0], r->spacing_px[1], "noise_level",
-                                            r->noise_level));
+  json_object_set_new(o, "truth", json_pack("{s:[f,f],s:[f,f],s:[f,f],s:i}", "density", r->density[0],
+                                            r->density[1], "density_in_photo", r->density[0] * r->deg.zoom,
+                                            r->density[1] * r->deg.zoom, "spacing_px", r->spacing_px[0],
+                                            r->spacing_px[1], "noise_level", r->noise_level));
   json_object_set_new(o, "fit_density", json_pack("[f,f]", r->fit_density[0], r->fit_density[1]));
   json_object_set_new(o, "fit_noise_level", json_integer(r->fit_noise_level));
   json_object_set_new(o, "degradation",
-                      pl->degrade ? json_pack("{s:f,s:f,s:f,s:f,s:f,s:i}", "rotation_deg", r->deg.rotation_deg,
+                      pl->degrade ? json_pack("{s:f,s:f,s:f,s:f,s:f,s:f,s:i}", "rotation_deg", r->deg.rotation_deg,
+                                              "zoom", r->deg.zoom,
                                               "lens_k", r->deg.lens_k, "blur_px", r->deg.blur_px, "noise_a",
                                               r->deg.noise_a, "noise_b", r->deg.noise_b, "jpeg_quality",
                                               r->deg.jpeg_quality)

@@ -13,7 +13,9 @@
  * prior's) when they score the lower pair loss (wv_capture_pair_start), the back-lit scene with the choice's lattice orientation, the joint fit.
  * Measured per target: the open area and the transmission colours against the truth (the
  * colour error of a yarn type is |fit - truth| / |truth| over its RGB vector, for k_t and k_st; the larger of
- * the two types is reported), and for each photo the SSIM (per RGB channel) of the re-render
+ * the two types is reported), the transmitted colour (the mean linear radiance of the back-lit
+ * re-render against the ceiling's, RGB, as above: the colour the back-lit photo shows, which
+ * it determines where it does not tell k_t and k_st apart), and for each photo the SSIM (per RGB channel) of the re-render
  * against the target over the ceiling, the truth rendered with the fit's noise seed. Prints
  * a line per target, then one JSON object on the last line: per target, per family, overall.
  * --save DIR (an existing directory) writes each pair and its re-renders as PNGs. */
@@ -63,12 +65,29 @@ static double kt_error(const wv_params *fit, const wv_params *truth, int first) 
   return worst;
 }
 
-/* A render at the scene's spp; photo: quantised to 8 bits as a photo arrives. */
-static void render(const wv_scene *s, const wv_params *p, int threads, int photo, wv_image *out) {
+/* A render at the scene's spp; photo: quantised to 8 bits as a photo arrives; mean (may be
+ * NULL): the mean linear radiance of each channel, before the camera's response. */
+static void render(const wv_scene *s, const wv_params *p, int threads, int photo, wv_image *out, double mean[3]) {
   wv_render_opts ro = {.threads = threads};
   wv_error err = {0};
-  if (wv_render(s, p, &ro, out, NULL, &err)) die(&err);
+  wv_image rad = {0};
+  if (wv_render(s, p, &ro, out, mean ? &rad : NULL, &err)) die(&err);
   if (photo) wv_image_quantise8(out);
+  if (!mean) return;
+  size_t n = (size_t)rad.w * rad.h;
+  for (int c = 0; c < 3; c++) {
+    double sum = 0;
+    for (size_t i = 0; i < n; i++) sum += rad.data[i * rad.c + c];
+    mean[c] = n ? sum / n : 0;
+  }
+  wv_image_free(&rad);
+}
+
+/* |fit - truth| / |truth| of two RGB vectors. */
+static double colour_error(const double fit[3], const double truth[3]) {
+  double d = 0, n = 0;
+  for (int c = 0; c < 3; c++) d += (fit[c] - truth[c]) * (fit[c] - truth[c]), n += truth[c] * truth[c];
+  return n > 0 ? sqrt(d / n) : sqrt(d);
 }
 
 static double ssim_of(const wv_image *a, const wv_image *b) {
@@ -126,7 +145,7 @@ int main(int argc, char **argv) {
   fo.threads = threads;
   if (iters > 0) fo.iters = iters;
   json_t *targets = json_array();
-  double fam_sum[NFAM][5] = {{0}}; /* ratio R, ratio T, open-area error, k_t error, k_st error */
+  double fam_sum[NFAM][6] = {{0}}; /* ratio R, ratio T, open-area error, k_t error, k_st error, transmitted colour error */
   int fam_n[NFAM] = {0}, fam_ok[NFAM] = {0};
   double t_all = bench_now();
   for (int f = 0; f < NFAM; f++) {
@@ -141,8 +160,8 @@ int main(int argc, char **argv) {
         die(&err);
       truth.yarn_width = WIDTH_LO + (1 - WIDTH_LO) * wv_u01d(wv_hash4(seed, (uint64_t)f, (uint64_t)i, 0x77696474ULL));
       wv_image photo, photo_t, ceil_r, ceil_t;
-      render(&s, &truth, threads, 1, &photo);
-      render(&st, &truth, threads, 1, &photo_t);
+      render(&s, &truth, threads, 1, &photo, NULL);
+      render(&st, &truth, threads, 1, &photo_t, NULL);
       /* the capture: the network and the pattern choice on the reflection photo */
       double t0 = bench_now();
       wv_pattern_choice *pc = malloc(sizeof *pc);
@@ -172,13 +191,14 @@ int main(int argc, char **argv) {
       wv_fit_scene(&fs, &e.scene, &fr);
       wv_fit_scene(&fs, &scene_t, &ft);
       wv_image rr, rt;
-      render(&fr, &fs.params, threads, 0, &rr);
-      render(&ft, &fs.params, threads, 0, &rt);
+      double mean_fit[3], mean_truth[3];
+      render(&fr, &fs.params, threads, 0, &rr, NULL);
+      render(&ft, &fs.params, threads, 0, &rt, mean_fit);
       /* the ceiling: the truth with the fit's noise seed */
       ceil_p = truth;
       ceil_p.seed = fs.params.seed != truth.seed ? fs.params.seed : truth.seed + 1;
-      render(&s, &ceil_p, threads, 0, &ceil_r);
-      render(&st, &ceil_p, threads, 0, &ceil_t);
+      render(&s, &ceil_p, threads, 0, &ceil_r, NULL);
+      render(&st, &ceil_p, threads, 0, &ceil_t, mean_truth);
       if (save) { /* the pair and its re-renders, for a look */
         const wv_image *im[4] = {&photo, &photo_t, &rr, &rt};
         static const char *const tag[4] = {"R", "T", "fit_R", "fit_T"};
@@ -194,22 +214,25 @@ int main(int argc, char **argv) {
       double oa_err = oa_t > 0 ? fabs(oa_f - oa_t) / oa_t : fabs(oa_f - oa_t);
       double kt_e = kt_error(&fs.params, &truth, WV_P_KT_WARP_R), kt_s = kt_error(&start, &truth, WV_P_KT_WARP_R);
       double kst_e = kt_error(&fs.params, &truth, WV_P_KST_WARP_R), kst_s = kt_error(&start, &truth, WV_P_KST_WARP_R);
+      double tc_e = colour_error(mean_fit, mean_truth);
       int fam_right = !strcmp(wv_weave_family(fs.params.pattern), FAMILIES[f]);
-      printf("%s %d %s -> %s: R %.3f/%.3f = %.3f, T %.3f/%.3f = %.3f, open area %.4f -> %.4f (%.2f), k_t error "
-             "%.3f (start %.3f, %s), k_st error %.3f (start %.3f), %d it, %.0f s\n",
-             FAMILIES[f], i, pattern, fs.params.pattern, sr, cr, sr / cr, st_, ct, st_ / ct, oa_t, oa_f, oa_err, kt_e,
-             kt_s, kt_model == 1 ? "pair model" : "prior", kst_e, kst_s, fs.iter, secs);
+      printf("%s %d %s -> %s: density %.1f/%.1f -> %.1f/%.1f, R %.3f/%.3f = %.3f, T %.3f/%.3f = %.3f, open area %.4f -> "
+             "%.4f (%.2f), k_t error "
+             "%.3f (start %.3f, %s), k_st error %.3f (start %.3f), transmitted colour error %.3f, %d it, %.0f s\n",
+             FAMILIES[f], i, pattern, fs.params.pattern, truth.density[0], truth.density[1], fs.params.density[0],
+             fs.params.density[1], sr, cr, sr / cr, st_, ct, st_ / ct, oa_t, oa_f, oa_err, kt_e,
+             kt_s, kt_model == 1 ? "pair model" : "prior", kst_e, kst_s, tc_e, fs.iter, secs);
       fflush(stdout);
       json_array_append_new(
-          targets, json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:i,s:f}",
+          targets, json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:i,s:f}",
                              "family", FAMILIES[f], "draw", i, "pattern", pattern, "chosen", fs.params.pattern, "family_right",
                              fam_right, "ssim_r", sr, "ceiling_r", cr, "ratio_r", sr / cr, "ssim_t", st_, "ceiling_t",
                              ct, "ratio_t", st_ / ct, "open_area", oa_t, "open_area_fit", oa_f, "open_area_error",
                              oa_err, "kt_error", kt_e, "kt_error_start", kt_s, "kst_error", kst_e, "kst_error_start",
-                             kst_s, "iterations", fs.iter, "seconds",
+                             kst_s, "transmitted_colour_error", tc_e, "iterations", fs.iter, "seconds",
                              secs));
       fam_sum[f][0] += sr / cr, fam_sum[f][1] += st_ / ct, fam_sum[f][2] += oa_err;
-      fam_sum[f][3] += kt_e, fam_sum[f][4] += kst_e;
+      fam_sum[f][3] += kt_e, fam_sum[f][4] += kst_e, fam_sum[f][5] += tc_e;
       fam_n[f]++, fam_ok[f] += fam_right;
       wv_fit_state_free(&fs);
       free(pc);
@@ -218,23 +241,25 @@ int main(int argc, char **argv) {
     }
   }
   json_t *fams = json_object();
-  double all[5] = {0};
+  double all[6] = {0};
   int n = 0, ok = 0;
   for (int f = 0; f < NFAM; f++) {
     if (!fam_n[f]) continue;
     json_object_set_new(fams, FAMILIES[f],
-                        json_pack("{s:i,s:i,s:f,s:f,s:f,s:f,s:f}", "targets", fam_n[f], "family_right", fam_ok[f],
+                        json_pack("{s:i,s:i,s:f,s:f,s:f,s:f,s:f,s:f}", "targets", fam_n[f], "family_right", fam_ok[f],
                                   "mean_ratio_r", fam_sum[f][0] / fam_n[f], "mean_ratio_t", fam_sum[f][1] / fam_n[f],
                                   "mean_open_area_error", fam_sum[f][2] / fam_n[f], "mean_kt_error",
-                                  fam_sum[f][3] / fam_n[f], "mean_kst_error", fam_sum[f][4] / fam_n[f]));
-    for (int k = 0; k < 5; k++) all[k] += fam_sum[f][k];
+                                  fam_sum[f][3] / fam_n[f], "mean_kst_error", fam_sum[f][4] / fam_n[f],
+                                  "mean_transmitted_colour_error", fam_sum[f][5] / fam_n[f]));
+    for (int k = 0; k < 6; k++) all[k] += fam_sum[f][k];
     n += fam_n[f], ok += fam_ok[f];
   }
-  json_t *out = json_pack("{s:s,s:s,s:o,s:o,s:{s:i,s:i,s:f,s:f,s:f,s:f,s:f},s:f}", "model", mpath, "pair_model",
+  json_t *out = json_pack("{s:s,s:s,s:o,s:o,s:{s:i,s:i,s:f,s:f,s:f,s:f,s:f,s:f},s:f}", "model", mpath, "pair_model",
                           found ? ppath : "none (the prior's k_t)", "targets", targets, "families", fams, "all",
                           "targets", n, "family_right", ok, "mean_ratio_r", n ? all[0] / n : 0, "mean_ratio_t",
                           n ? all[1] / n : 0, "mean_open_area_error", n ? all[2] / n : 0, "mean_kt_error",
-                          n ? all[3] / n : 0, "mean_kst_error", n ? all[4] / n : 0, "seconds", bench_now() - t_all);
+                          n ? all[3] / n : 0, "mean_kst_error", n ? all[4] / n : 0, "mean_transmitted_colour_error",
+                          n ? all[5] / n : 0, "seconds", bench_now() - t_all);
   char *text = json_dumps(out, JSON_COMPACT | JSON_REAL_PRECISION(6));
   printf("%s\n", text);
   free(text);
