@@ -18,7 +18,8 @@
  * it determines where it does not tell k_t and k_st apart), and for each photo the SSIM (per RGB channel) of the re-render
  * against the target over the ceiling, the truth rendered with the fit's noise seed. Prints
  * a line per target, then one JSON object on the last line: per target, per family, overall.
- * --save DIR (an existing directory) writes each pair and its re-renders as PNGs. */
+ * --save DIR (an existing directory) writes each pair and its re-renders as PNGs, and the true
+ * and fitted parameters (<family>_<draw>_truth.json, _fit.json). */
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -206,6 +207,13 @@ int main(int argc, char **argv) {
           char path[4096];
           snprintf(path, sizeof path, "%s/%s_%d_%s.png", save, FAMILIES[f], i, tag[k]);
           if (wv_image_write_png(path, im[k], 8, &err)) die(&err);
+        }
+        const wv_params *pp[2] = {&truth, &fs.params};
+        static const char *const ptag[2] = {"truth", "fit"};
+        for (int k = 0; k < 2; k++) {
+          char path[4096];
+          snprintf(path, sizeof path, "%s/%s_%d_%s.json", save, FAMILIES[f], i, ptag[k]);
+          if (wv_params_write(path, pp[k], &err)) die(&err);
         }
       }
       double sr = ssim_of(&photo, &rr), st_ = ssim_of(&photo_t, &rt);

@@ -11,6 +11,7 @@
 #include "woven/descriptor.h"
 #include "woven/capture.h"
 #include "woven/fit.h"
+#include "woven/imgops.h"
 #include "woven/io.h"
 #include "woven/metrics.h"
 #include "woven/photo.h"
@@ -686,6 +687,65 @@ static void test_fit_pair(void **state) {
   wv_descriptor_free(d);
 }
 
+/* A pair's colour split comes after its open area. The target: a 2/2 twill whose densities
+ * differ (177 and 113 yarns/inch), a green warp and an orange weft, open gaps (yarn width
+ * 0.784); the start: the target without gaps and with one colour, the two's mean. The split
+ * (by the reflection photo's loss) then renders its candidates with the gaps the back-lit
+ * photo's glow measures and gives the warp the green; before the open area was measured it
+ * gave the warp the orange, and the fit kept it (a swap of colours is no shift of the weave
+ * when the densities differ). */
+static void test_split_after_open_area(void **state) {
+  (void)state;
+  wv_error err = {0};
+  wv_scene s, sb;
+  assert_int_equal(wv_scene_preset("flat45", &s, &err), WV_OK);
+  assert_int_equal(wv_scene_preset("flat45-back", &sb, &err), WV_OK);
+  wv_params tp;
+  assert_int_equal(wv_params_default("twill22z", &tp, &err), WV_OK);
+  const double kd[2][3] = {{0.493, 0.898, 0.152}, {0.913, 0.433, 0.089}};
+  const double ks[2][3] = {{0.753, 0.958, 0.470}, {0.913, 0.435, 0.091}};
+  const double kt[2][3] = {{0.320, 0.582, 0.098}, {0.787, 0.373, 0.077}};
+  const double kst[2][3] = {{0.396, 0.504, 0.247}, {0.225, 0.107, 0.022}};
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++)
+      tp.diffuse[y][c] = kd[y][c], tp.specular[y][c] = ks[y][c], tp.transmission[y][c] = kt[y][c],
+      tp.transmission_specular[y][c] = kst[y][c];
+  tp.density[WV_WARP] = 177, tp.density[WV_WEFT] = 113;
+  tp.heightfield[WV_WARP] = 1.5, tp.heightfield[WV_WEFT] = 1.8;
+  tp.roughness[WV_WARP] = 0.861, tp.roughness[WV_WEFT] = 0.743;
+  tp.twist_deg = 30, tp.inclination_deg = 25.7, tp.diffuse_blend = 0.052, tp.noise_level = 3;
+  tp.yarn_width = 0.784, tp.seed = 1177607123;
+  wv_image photo, photo_t;
+  pair_photos(&s, &sb, &tp, &photo, &photo_t);
+  wv_image_quantise8(&photo), wv_image_quantise8(&photo_t);
+  wv_params start = tp;
+  start.yarn_width = 1, start.seed = 1;
+  for (int c = 0; c < 3; c++) start.diffuse[0][c] = start.diffuse[1][c] = 0.5 * (kd[0][c] + kd[1][c]);
+  wv_descriptor *d;
+  assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
+  wv_fit_opts o;
+  opts(&o, 1);
+  o.lr = 0.01, o.discrete_every = 0, o.noise_sweep = 0, o.patience = 0;
+  o.align_radius = 0, o.register_radius = 0, o.distort_degree = 0, o.psf_sigma = 0;
+  wv_fit_state st;
+  assert_int_equal(wv_fit_state_init(&st, &start, &o, &err), WV_OK);
+  if (wv_fit_run_pair(&st, &s, &photo, &sb, &photo_t, d, &o, NULL, NULL, &err)) fail_msg("%s", err.msg);
+  double right = 0, swapped = 0;
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++)
+      right += fabs(st.params.diffuse[y][c] - kd[y][c]), swapped += fabs(st.params.diffuse[y][c] - kd[1 - y][c]);
+  print_message("open area measured %d (width %.3f), split candidate %d: warp (%.2f %.2f %.2f) weft (%.2f %.2f %.2f); "
+                "off the target's colours by %.3f, by the swapped ones %.3f\n",
+                st.open_measured, st.params.yarn_width, st.colour_split, st.params.diffuse[0][0],
+                st.params.diffuse[0][1], st.params.diffuse[0][2], st.params.diffuse[1][0], st.params.diffuse[1][1],
+                st.params.diffuse[1][2], right, swapped);
+  assert_true(st.open_measured && st.colour_split > 0);
+  assert_true(right < swapped);
+  wv_fit_state_free(&st);
+  wv_image_free(&photo), wv_image_free(&photo_t);
+  wv_descriptor_free(d);
+}
+
 /* A photo pair's open gaps: from a start without gaps (yarn width 1), the width sweep finds
  * the target's 0.75 (open area 6.25%) on the pair's loss; without it the width stays, and a
  * fit of the reflection photo alone does not search it. */
@@ -773,7 +833,8 @@ int main(void) {
                                      cmocka_unit_test(test_colour_split_matches_hues),
                                      cmocka_unit_test(test_limits), cmocka_unit_test(test_noise_sweep),
                                      cmocka_unit_test(test_align_keeps_spectrum),
-                                     cmocka_unit_test(test_fit_pair), cmocka_unit_test(test_width_sweep),
+                                     cmocka_unit_test(test_fit_pair), cmocka_unit_test(test_split_after_open_area),
+                                     cmocka_unit_test(test_width_sweep),
                                      cmocka_unit_test(test_pair_start)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

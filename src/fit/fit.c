@@ -381,7 +381,8 @@ static int colour_clusters(const wv_scene *s, const wv_image *ph, double r[2][3]
  * render has a share of dark pixels nearer the photo's is kept (the renders carry the
  * yarns' shading, which moves that share away from the weave's coverage), and a start
  * with the colours the other way round is not. Where both cover half (plain, basket, 2/2
- * twills), the swap is a shift of the weave, which the registration after the fit finds. */
+ * twills), the swap is a shift of the weave when the two densities are equal, which the
+ * registration after the fit finds; with other densities it is not, and the loss decides. */
 static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
   double r[2][3], dark_share = 0.5;
   wv_fit_record base = {0};
@@ -586,18 +587,6 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
   }
   wv_scene sb; /* the scene with the fit's camera blur */
   wv_fit_scene(st, s, &sb);
-  if (!rc && st->iter == 0 && o->colour_split && o->iters > 0) {
-    /* at the full iteration scale: the split reads the colours of single yarns */
-    double td = omp_get_wtime();
-    wv_fit_timing saved = st->timing;
-    if (!(rc = stage_ctx(&cx[1], 1, s, photo, d, o, &st->timing, err))) {
-      made[1] = 1;
-      cx[1].scene.psf_sigma = sb.psf_sigma / scale;
-      rc = colour_split(&cx[1], st, err);
-    }
-    st->timing.render = saved.render, st->timing.descriptor = saved.descriptor; /* counted as a discrete step */
-    st->timing.discrete += omp_get_wtime() - td;
-  }
   if (!rc && st->iter == 0 && pair && o->width_sweep && o->iters > 0 && s_t->glow_radiance > 0) {
     /* the open area as the back-lit photo's gap glow shows it: its loss alone rejects the gaps
      * while the rest of the fit is off (docs/fit.md, "Photo pairs") */
@@ -610,6 +599,20 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
       st->params.yarn_width = w < lo ? lo : w > hi ? hi : w;
       st->open_measured = 1, st->open_photo = oa.open_area;
     }
+    st->timing.discrete += omp_get_wtime() - td;
+  }
+  if (!rc && st->iter == 0 && o->colour_split && o->iters > 0) {
+    /* at the full iteration scale: the split reads the colours of single yarns. After a pair's
+     * open area: the gaps change which way round the colours render closer to the photo
+     * (docs/measurements.md, "The colour split after the open area") */
+    double td = omp_get_wtime();
+    wv_fit_timing saved = st->timing;
+    if (!(rc = stage_ctx(&cx[1], 1, s, photo, d, o, &st->timing, err))) {
+      made[1] = 1;
+      cx[1].scene.psf_sigma = sb.psf_sigma / scale;
+      rc = colour_split(&cx[1], st, err);
+    }
+    st->timing.render = saved.render, st->timing.descriptor = saved.descriptor; /* counted as a discrete step */
     st->timing.discrete += omp_get_wtime() - td;
   }
   while (!rc && stage < 2) {
