@@ -7,10 +7,16 @@
 # JSON: SSIM per RGB channel, WSC and mean absolute difference of each against the truth.
 # Usage: bench/transmission_ambiguity.sh WOVEN [K...] (default K: 0.5 2)
 set -euo pipefail
+usage() { echo "usage: bench/transmission_ambiguity.sh WOVEN [K...] (0 < K <= 2)" >&2; exit 2; }
+[ $# -ge 1 ] && [ -x "$1" ] || usage
 WOVEN=$1
 shift
 FACTORS=("$@")
 [ ${#FACTORS[@]} -gt 0 ] || FACTORS=(0.5 2)
+for k in "${FACTORS[@]}"; do # k_st = 0.5 K must stay within its range 0..1
+  python3 -c "import sys; k = float(sys.argv[1]); sys.exit(0 if 0 < k <= 2 else 1)" "$k" 2>/dev/null ||
+    { echo "transmission_ambiguity: K = '$k' is not a number in (0, 2]" >&2; exit 2; }
+done
 HERE=$(cd "$(dirname "$0")/.." && pwd)
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
