@@ -284,6 +284,18 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
         json_object_set_new(o_json, "open_area_photo", st->open_measured ? cli_real(st->open_photo, 6) : json_null());
         json_object_set_new(o_json, "open_area_fit",
                             cli_real((1 - st->params.yarn_width) * (1 - st->params.yarn_width), 6));
+        /* the back-lit photo's own view of the cloth (null: not measured) */
+        json_object_set_new(
+            o_json, "view_t",
+            !st->t_related
+                ? json_null()
+                : json_pack("{s:b,s:o,s:o,s:[o,o],s:[o,o],s:{s:o,s:o},s:{s:o,s:o}}", "related", st->t_found, "scale",
+                            cli_real(st->t_scale, 4), "rotation_deg", cli_real(st->t_rotation_deg, 3), "density_ratio",
+                            cli_real(st->t_density_ratio[0], 4), cli_real(st->t_density_ratio[1], 4), "offset_mm",
+                            cli_real(st->t_offset_mm[0], 4), cli_real(st->t_offset_mm[1], 4), "registration_ssim", "before",
+                            cli_real(st->t_reg_ssim_before, 4), "after", cli_real(st->t_reg_ssim_after, 4),
+                            "distortion_ssim", "before", cli_real(st->t_dist_ssim_before, 4), "after",
+                            cli_real(st->t_dist_ssim_after, 4)));
         json_object_set_new(o_json, "mean_t",
                             json_pack("{s:{s:o,s:o},s:{s:o,s:o}}", "photo", "centre", cli_real(r->mean_t[0][0], 6),
                                       "whole", cli_real(r->mean_t[0][1], 6), "render", "centre",

@@ -9,6 +9,7 @@
 #include "testutil.h"
 #include "util/hash.h"
 #include "woven/analysis.h"
+#include "woven/fit.h"
 #include "woven/metrics.h"
 #include "woven/render.h"
 
@@ -382,10 +383,68 @@ static void test_open_area(void **state) {
     }
 }
 
+/* Two views of one cloth: the second taken from 10% closer with the cloth turned by 1.5
+ * degrees. wv_weave_relate finds that scale and rotation, the fit's back-lit scene made from
+ * them (wv_fit_scene_t) renders the second view, and images that are not two views of one
+ * weave do not relate. */
+static void test_weave_relate(void **state) {
+  (void)state;
+  wv_params p, q;
+  wv_error e = {0};
+  assert_int_equal(wv_params_sample_prior("twill31s", 11, &p, &e), WV_OK);
+  p.density[WV_WARP] = 120, p.density[WV_WEFT] = 90;
+  wv_scene sa, sb, sc;
+  tu_centre_window(&sa, "flat45", SIDE, SIDE, 8);
+  sb = sa;
+  for (int k = 0; k < 3; k++) sb.cam_pos[k] *= 0.9; /* closer along the line of sight: yarns 1/0.9 as far apart */
+  sb.rotation_deg = 1.5;
+  wv_render_opts ro = {0};
+  wv_image a, b, c, n, o;
+  assert_int_equal(wv_render(&sa, &p, &ro, &a, NULL, &e), WV_OK);
+  assert_int_equal(wv_render(&sb, &p, &ro, &b, NULL, &e), WV_OK);
+  wv_weave_relation r;
+  assert_int_equal(wv_weave_relate(&a, &b, &r, &e), WV_OK);
+  print_message("closer and turned: found %d, scale %.4f, rotation %.3f, score %.3f, %d peaks\n", r.found, r.scale,
+                r.rotation_deg, r.score, r.matched);
+  assert_true(r.found);
+  assert_true(fabs(r.scale - 0.9) < 0.01);
+  assert_true(fabs(r.rotation_deg - 1.5) < 0.3);
+  wv_fit_state st = {.t_found = 1, .t_scale = r.scale, .t_rotation_deg = r.rotation_deg,
+                     .t_density_ratio = {1, 1}};
+  wv_fit_scene_t(&st, &sa, &sc);
+  assert_int_equal(wv_render(&sc, &p, &ro, &c, NULL, &e), WV_OK);
+  double same, before;
+  assert_int_equal(wv_ssim(&b, &c, WV_SSIM_RGB, &same, &e), WV_OK);
+  assert_int_equal(wv_ssim(&b, &a, WV_SSIM_RGB, &before, &e), WV_OK);
+  print_message("SSIM against the second view: the first %.3f, the first's scene moved by the relation %.3f\n",
+                before, same);
+  assert_true(same > 0.9 && same > before + 0.3);
+  /* one image: itself, exactly */
+  assert_int_equal(wv_weave_relate(&a, &a, &r, &e), WV_OK);
+  assert_true(r.found && r.scale == 1 && r.rotation_deg == 0);
+  /* no weave, or another weave: no relation, one camera's view */
+  noise_image(&n, SIDE, SIDE, 5);
+  assert_int_equal(wv_weave_relate(&a, &n, &r, &e), WV_OK);
+  print_message("against noise: found %d, score %.3f, %d peaks\n", r.found, r.score, r.matched);
+  assert_true(!r.found && r.scale == 1 && r.rotation_deg == 0);
+  assert_int_equal(wv_params_sample_prior("plain", 12, &q, &e), WV_OK);
+  q.density[WV_WARP] = 170, q.density[WV_WEFT] = 150;
+  assert_int_equal(wv_render(&sa, &q, &ro, &o, NULL, &e), WV_OK);
+  assert_int_equal(wv_weave_relate(&a, &o, &r, &e), WV_OK);
+  print_message("against another weave: found %d, score %.3f, %d peaks\n", r.found, r.score, r.matched);
+  assert_false(r.found);
+  wv_image small;
+  crop(&a, 0, 0, 32, 32, &small);
+  assert_int_equal(wv_weave_relate(&small, &a, &r, &e), WV_ERR_INVALID);
+  assert_non_null(strstr(e.msg, "too small"));
+  wv_image_free(&a), wv_image_free(&b), wv_image_free(&c), wv_image_free(&n), wv_image_free(&o), wv_image_free(&small);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_wsc),         cmocka_unit_test(test_wsc_whitened), cmocka_unit_test(test_gaussian), cmocka_unit_test(test_lattice_recovers),
       cmocka_unit_test(test_lattice_refine), cmocka_unit_test(test_no_lattice),  cmocka_unit_test(test_rank), cmocka_unit_test(test_open_area),
+      cmocka_unit_test(test_weave_relate),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

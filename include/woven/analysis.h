@@ -140,4 +140,36 @@ typedef struct {
 } wv_open_area;
 wv_status wv_open_area_measure(const wv_scene *s, const wv_image *photo, wv_open_area *out, wv_error *err);
 
+/* How a second photo of the same cloth sees its weave against a first: the two photos of a
+ * pair are seldom taken at exactly the same distance and angle (the cloth is moved to put the
+ * light behind it, the lens refocused). The weave spectra (wv_weave_spectrum) of both photos'
+ * centre windows (the largest even square up to WV_LATTICE_REFINE_WINDOW both hold) give
+ * their WV_RELATE_PEAKS strongest peaks (wv_spectrum_peaks, prominence at least WV_RELATE_MIN_Z:
+ * the weaker ones are mostly folded harmonics and noise, which no scale carries over); the scale s and the
+ * rotation r that carry the first's peaks onto the second's (s R(r) f, within
+ * WV_RELATE_TOL bins) are searched over WV_RELATE_SCALE_MIN..MAX and +-WV_RELATE_MAX_ROT
+ * degrees, each match weighted by the smaller prominence of its two peaks. found = 0 (and
+ * scale 1, rotation 0) when fewer than WV_RELATE_MIN_MATCH peaks match or the matched weight
+ * is under WV_RELATE_MIN_SCORE of the smaller photo's total: a photo without a clear weave
+ * lattice (a satin's back-lit streak) tells nothing, and the pair is then taken as one
+ * camera's. docs/analysis.md. */
+#define WV_RELATE_PEAKS 8
+#define WV_RELATE_MIN_Z 3.0
+#define WV_RELATE_TOL 2.0
+#define WV_RELATE_SCALE_MIN 0.75
+#define WV_RELATE_SCALE_MAX 1.33
+#define WV_RELATE_MAX_ROT 5.0
+#define WV_RELATE_MIN_MATCH 5
+#define WV_RELATE_MIN_SCORE 0.2
+typedef struct {
+  int found;
+  double scale;        /* the second photo's spatial frequencies over the first's: its yarns lie
+                        * 1 / scale times as many pixels apart */
+  double rotation_deg; /* the second photo's weave turned counter-clockwise (as seen, y up) */
+  double score;        /* the matched share of the peaks' prominence, 0..1 */
+  int matched;         /* peaks matched */
+  int window;          /* the windows' side, pixels */
+} wv_weave_relation;
+wv_status wv_weave_relate(const wv_image *a, const wv_image *b, wv_weave_relation *out, wv_error *err);
+
 #endif

@@ -140,6 +140,20 @@ typedef struct {
   double dist_ssim_before, dist_ssim_after; /* SSIM of the whole image (RGB, 16 spp) */
   int open_measured;   /* a pair: the open area was measured on the back-lit photo's gap glow ... */
   double open_photo;   /* ... as this (wv_open_area_measure), and the yarn width set to match it */
+  /* A pair's back-lit photo as its own view of the cloth (docs/fit.md, "Photo pairs"): taken
+   * after the cloth was turned to the light, it is seldom at the front-lit photo's distance
+   * and angle, laid the same way or at the same phase. */
+  int t_related;       /* its own view was measured: its weave compared with the front-lit photo's
+                        * (wv_weave_relate), */
+  int t_found;         /* ... the two weaves relate, by */
+  double t_scale, t_rotation_deg; /* ... this scale and rotation (1, 0: one camera's view) */
+  int t_registered, t_distorted;  /* its own registration and distortion are done: */
+  double t_density_ratio[2];      /* the densities it shows over the parameters' (1: the same), */
+  double t_offset_mm[2];          /* its fabric offset, */
+  double t_distort_extent_mm, t_distort[2][WV_DISTORT_TERMS]; /* its distortion (from the front-lit
+                                   * photo's when the weaves do not relate: one camera's view then) */
+  double t_reg_ssim_before, t_reg_ssim_after, t_dist_ssim_before, t_dist_ssim_after; /* its SSIM per RGB
+                                   * channel before and after each (the registration's at the iteration spp) */
   float adam_m[WV_P_COUNT], adam_v[WV_P_COUNT]; /* wv_nn_adam's moments */
   uint64_t rng;
   wv_fit_record *log; /* iter entries */
@@ -224,6 +238,14 @@ wv_status wv_psf_estimate(const wv_scene *s, const wv_image *photo, const wv_par
 /* The scene the fit's parameters are meant for: s with the registration's offset and
  * the camera blur the fit settled on. */
 void wv_fit_scene(const wv_fit_state *st, const wv_scene *s, wv_scene *out);
+
+/* A pair's back-lit scene and parameters as the fit settled them: s_t with the back-lit
+ * photo's own view and the camera blur (when the two photos' weaves relate, t_found, its scale
+ * as a narrower or wider field of view and its rotation added to the sample's; its offset and
+ * distortion), and p with the densities that photo shows (t_density_ratio). Before that view
+ * is measured (t_related 0): wv_fit_scene's, the front-lit photo's offset and distortion. */
+void wv_fit_scene_t(const wv_fit_state *st, const wv_scene *s_t, wv_scene *out);
+void wv_fit_params_t(const wv_fit_state *st, const wv_params *p, wv_params *out);
 
 /* Loss terms of params against photo at the scene's own resolution and spp. */
 wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p,

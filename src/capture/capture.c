@@ -25,7 +25,7 @@
 static const char *const FIT_FILES[] = {
     "fit.json",    "checkpoint.json", "params.json", "render.png",  "start.png", "photo.png",
     "compare.png", "loss.svg",        "report.html", "viewer.html", "drape.png", "maps",
-    "scene.json",  "network.json",    "zoom.png",    "spectra.png", "photo_t.png", "render_t.png", NULL};
+    "scene.json",  "network.json",    "zoom.png",    "spectra.png", "photo_t.png", "render_t.png", "scene_t.json", NULL};
 
 typedef enum { FIT_DIR_NONE, FIT_DIR_UNFINISHED, FIT_DIR_FINISHED } fit_dir_state;
 
@@ -152,16 +152,19 @@ static wv_status centre_whole_mean(const wv_image *im, double m[2], wv_error *er
   return rc;
 }
 
-/* A photo pair's transmission side: the fit re-rendered in the back-lit scene with the fit's
- * offset, distortion and blur (same camera, same cloth), photo_t.png and render_t.png, and
- * the figures against the transmission photo. */
+/* A photo pair's transmission side: the fit re-rendered in the back-lit scene as the back-lit
+ * photo sees the cloth (wv_fit_scene_t: its own scale, rotation, offset and distortion, the
+ * fit's blur; the densities it shows), photo_t.png and render_t.png, and the figures against
+ * the transmission photo. */
 static wv_status write_transmission(const wv_fit_job *job, const char *dir, const wv_fit_state *st, int threads,
                                     wv_fit_outcome *out, char *pphoto, char *pfit, size_t cap, wv_error *err) {
   wv_scene fs;
-  wv_fit_scene(st, job->scene_t, &fs);
+  wv_params pt;
+  wv_fit_scene_t(st, job->scene_t, &fs);
+  wv_fit_params_t(st, &st->params, &pt);
   wv_render_opts ro = {.threads = threads};
   wv_image r = {0};
-  wv_status rc = wv_render(&fs, &st->params, &ro, &r, NULL, err);
+  wv_status rc = wv_render(&fs, &pt, &ro, &r, NULL, err);
   out->pair = 1, out->wsc_t = -2, out->ssim_rgb_blurred_t = -2;
   if (!rc) rc = wv_ssim(job->photo_t, &r, WV_SSIM_RGB, &out->ssim_rgb_t, err);
   if (!rc && wv_wsc(job->photo_t, &r, &out->wsc_t, NULL)) out->wsc_t = -2; /* too small an image: not measured */
@@ -255,6 +258,15 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
   char *scene_text = rc ? NULL : wv_scene_to_json(fit_scene);
   if (!rc) rc = write_text(dir, "scene.json", scene_text, err);
   free(scene_text);
+  if (!rc && job->photo_t) {
+    /* scene_t.json: the back-lit scene as the back-lit photo sees the cloth (render_t.png with
+     * params.json, the densities times view_t.density_ratio) */
+    wv_scene fs_t;
+    wv_fit_scene_t(st, job->scene_t, &fs_t);
+    scene_text = wv_scene_to_json(&fs_t);
+    rc = scene_text ? write_text(dir, "scene_t.json", scene_text, err) : wv_fail(err, WV_ERR_NOMEM, "out of memory");
+    free(scene_text);
+  }
   /* params.json last: its presence marks a finished fit */
   snprintf(path, sizeof path, "%s/params.json", dir);
   if (!rc) rc = wv_params_write(path, &st->params, err);

@@ -1,5 +1,6 @@
 /* The fit's checkpoints (include/woven/fit.h): the state and the options as JSON, written
  * atomically and read back with every value checked, so a resumed fit continues exactly. */
+#include "woven/analysis.h"
 #include "woven/fit.h"
 #include "fit/fit_internal.h"
 
@@ -58,6 +59,17 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_object_set_new(root, "opts", wv_fit_opts_json(o));
   json_object_set_new(root, "colour_split", json_integer(st->colour_split));
   if (st->open_measured) json_object_set_new(root, "open_area_photo", json_real(st->open_photo));
+  if (st->t_related) { /* a pair's back-lit photo as its own view of the cloth */
+    json_t *v = json_pack("{s:b,s:f,s:f,s:b,s:b,s:[f,f],s:[f,f],s:f,s:f,s:f,s:f,s:f}", "found", st->t_found, "scale",
+                          st->t_scale, "rotation_deg", st->t_rotation_deg, "registered", st->t_registered, "distorted",
+                          st->t_distorted, "density_ratio", st->t_density_ratio[0], st->t_density_ratio[1], "offset_mm",
+                          st->t_offset_mm[0], st->t_offset_mm[1], "extent_mm", st->t_distort_extent_mm,
+                          "reg_ssim_before", st->t_reg_ssim_before, "reg_ssim_after", st->t_reg_ssim_after,
+                          "dist_ssim_before", st->t_dist_ssim_before, "dist_ssim_after", st->t_dist_ssim_after);
+    json_object_set_new(v, "x", darray(st->t_distort[0], WV_DISTORT_TERMS));
+    json_object_set_new(v, "y", darray(st->t_distort[1], WV_DISTORT_TERMS));
+    json_object_set_new(root, "view_t", v);
+  }
   json_object_set_new(root, "camera_blur",
                       json_pack("{s:b,s:f,s:f,s:b,s:f,s:f}", "done", st->psf_done, "sigma_px", st->psf_sigma, "measured_px",
                                 st->psf_start, "fitted", st->psf_fit, "adam_m", (double)st->psf_m, "adam_v",
@@ -98,6 +110,36 @@ static wv_status read_darray(json_t *o, const char *key, double *v, int n, doubl
     wv_status st = wv_json_number_value(json_array_get(a, i), name, lo, hi, &v[i], err);
     if (st) return st;
   }
+  return WV_OK;
+}
+
+/* The back-lit photo's own view (wv_fit_state.t_*), every value checked. */
+static wv_status read_view_t(json_t *v, wv_fit_state *st, wv_error *err) {
+  const char *flags[3] = {"found", "registered", "distorted"};
+  int *fv[3] = {&st->t_found, &st->t_registered, &st->t_distorted};
+  for (int i = 0; i < 3; i++) {
+    json_t *b = json_object_get(v, flags[i]);
+    if (!json_is_boolean(b)) return wv_fail(err, WV_ERR_INVALID, "'view_t.%s' must be true or false", flags[i]);
+    *fv[i] = json_is_true(b);
+  }
+  st->t_related = 1;
+  wv_status rc;
+  if ((rc = wv_json_number(v, "view_t", "scale", WV_RELATE_SCALE_MIN, WV_RELATE_SCALE_MAX, 1, &st->t_scale, err)) ||
+      (rc = wv_json_number(v, "view_t", "rotation_deg", -WV_RELATE_MAX_ROT, WV_RELATE_MAX_ROT, 1, &st->t_rotation_deg,
+                           err)) ||
+      (rc = wv_json_number(v, "view_t", "extent_mm", 0, WV_SCENE_MAX_MM, 1, &st->t_distort_extent_mm, err)) ||
+      (rc = wv_json_number(v, "view_t", "reg_ssim_before", -2, 2, 1, &st->t_reg_ssim_before, err)) ||
+      (rc = wv_json_number(v, "view_t", "reg_ssim_after", -2, 2, 1, &st->t_reg_ssim_after, err)) ||
+      (rc = wv_json_number(v, "view_t", "dist_ssim_before", -2, 2, 1, &st->t_dist_ssim_before, err)) ||
+      (rc = wv_json_number(v, "view_t", "dist_ssim_after", -2, 2, 1, &st->t_dist_ssim_after, err)) ||
+      (rc = read_darray(v, "density_ratio", st->t_density_ratio, 2, WV_DENSITY_MIN / WV_DENSITY_MAX,
+                        WV_DENSITY_MAX / WV_DENSITY_MIN, err)) ||
+      (rc = read_darray(v, "offset_mm", st->t_offset_mm, 2, -WV_SCENE_MAX_OFFSET_MM, WV_SCENE_MAX_OFFSET_MM, err)) ||
+      (rc = read_darray(v, "x", st->t_distort[0], WV_DISTORT_TERMS, -WV_SCENE_MAX_OFFSET_MM, WV_SCENE_MAX_OFFSET_MM,
+                        err)) ||
+      (rc = read_darray(v, "y", st->t_distort[1], WV_DISTORT_TERMS, -WV_SCENE_MAX_OFFSET_MM, WV_SCENE_MAX_OFFSET_MM,
+                        err)))
+    return rc;
   return WV_OK;
 }
 
@@ -177,6 +219,8 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   st->open_measured = json_object_get(root, "open_area_photo") != NULL;
   if (st->open_measured && (rc = wv_json_number(root, NULL, "open_area_photo", -1, 1, 1, &st->open_photo, err)))
     return rc;
+  json_t *vt = json_object_get(root, "view_t"); /* a pair's back-lit view; absent: not measured yet */
+  if (vt && (rc = read_view_t(vt, st, err))) return rc;
   json_t *reg = json_object_get(root, "registration"); /* absent in checkpoints before it existed */
   if (reg) {
     json_t *done = json_object_get(reg, "done"), *off = json_object_get(reg, "offset_mm");

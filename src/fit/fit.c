@@ -10,6 +10,7 @@
 
 #include "util/colour.h"
 #include "util/hash.h"
+#include "fit/fit_internal.h"
 #include "woven/analysis.h"
 #include "woven/grad.h"
 #include "woven/imgops.h"
@@ -536,6 +537,63 @@ static wv_status stage_ctx(fit_ctx *c, int stage, const wv_scene *s, const wv_im
   return rc;
 }
 
+/* A pair's back-lit photo as its own view of the cloth, after the iterations (which compare
+ * the two photos' textures, not where their yarns lie): its scale and rotation against the
+ * front-lit photo from their weaves (wv_weave_relate), then its own registration (the
+ * densities it shows, near the fit's, and its phase) and distortion, on a copy of the state
+ * whose offset and distortion are the back-lit photo's: from none when the weaves relate (another
+ * view), from the front-lit photo's when they do not (taken as one camera's view). The
+ * parameters do not change. Measured after the iterations rather than before them: with the
+ * scale in the back-lit scene from the start, the transmission colours of a pair came out 17%
+ * too bright (docs/measurements.md, "The back-lit photo's own view"). */
+static wv_status own_view_t(wv_fit_state *st, const wv_scene *s_t, const wv_image *photo, const wv_image *photo_t,
+                            const wv_fit_opts *o, wv_error *err) {
+  wv_status rc = WV_OK;
+  double ta = omp_get_wtime();
+  if (!st->t_related) {
+    wv_weave_relation rel;
+    if ((rc = wv_weave_relate(photo, photo_t, &rel, err))) return rc;
+    st->t_found = rel.found;
+    st->t_scale = rel.scale, st->t_rotation_deg = rel.rotation_deg;
+    if (!rel.found) {
+      st->t_offset_mm[0] = st->offset_mm[0], st->t_offset_mm[1] = st->offset_mm[1];
+      st->t_distort_extent_mm = st->distort_extent_mm;
+      memcpy(st->t_distort, st->distort, sizeof st->t_distort);
+    }
+    st->t_related = 1;
+  }
+  wv_fit_state v = *st; /* shares st's log, which neither step reads */
+  wv_scene base = *s_t; /* the scale and rotation go in the scene; the offset and distortion in v */
+  wv_fit_state sr = {.t_related = 1, .t_found = st->t_found, .t_scale = st->t_scale, .t_rotation_deg = st->t_rotation_deg};
+  wv_fit_scene_t(&sr, s_t, &base);
+  wv_fit_params_t(st, &st->params, &v.params);
+  v.offset_mm[0] = st->t_offset_mm[0], v.offset_mm[1] = st->t_offset_mm[1];
+  v.distort_extent_mm = st->t_distort_extent_mm;
+  memcpy(v.distort, st->t_distort, sizeof v.distort);
+  if (!st->t_registered && o->register_radius == 0) st->t_registered = 1; /* off, as for the front-lit photo */
+  if (!st->t_distorted && o->distort_degree == 0) st->t_distorted = 1;
+  /* near the fit's densities: the scale already carries the front-lit photo's to the back-lit one's */
+  if (!st->t_registered && !(rc = wv_fit_register_near(&v, &base, photo_t, o, err))) {
+    st->t_registered = 1;
+    for (int k = 0; k < 2; k++) st->t_density_ratio[k] = v.params.density[k] / st->params.density[k];
+    st->t_offset_mm[0] = v.offset_mm[0], st->t_offset_mm[1] = v.offset_mm[1];
+    st->t_reg_ssim_before = v.reg_ssim_before, st->t_reg_ssim_after = v.reg_ssim_after;
+  }
+  st->timing.registration += omp_get_wtime() - ta;
+  st->timing.total += omp_get_wtime() - ta;
+  ta = omp_get_wtime();
+  if (!rc && !st->t_distorted && !(rc = wv_fit_distort(&v, &base, photo_t, o, err))) {
+    st->t_distorted = 1;
+    st->t_offset_mm[0] = v.offset_mm[0], st->t_offset_mm[1] = v.offset_mm[1];
+    st->t_distort_extent_mm = v.distort_extent_mm;
+    memcpy(st->t_distort, v.distort, sizeof st->t_distort);
+    st->t_dist_ssim_before = v.dist_ssim_before, st->t_dist_ssim_after = v.dist_ssim_after;
+  }
+  st->timing.distortion += omp_get_wtime() - ta;
+  st->timing.total += omp_get_wtime() - ta;
+  return rc;
+}
+
 wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
                      const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err) {
   return wv_fit_run_pair(st, s, photo, NULL, NULL, d, o, cb, user, err);
@@ -553,7 +611,8 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
     st->log = nl, st->log_cap = o->iters;
   }
   int from = 0, stage = wv_fit_stage(st, o, &from);
-  if (stage < 2) st->aligned = st->registered = st->distorted = 0; /* more iterations: align again after them */
+  if (stage < 2) /* more iterations: align again after them */
+    st->aligned = st->registered = st->distorted = st->t_registered = st->t_distorted = 0;
   /* One context per stage (the coarse one and the full one), each made once: the photo's
    * side of the loss and the camera geometry do not change between iterations. */
   fit_ctx cx[2], ct[2]; /* ct: the transmission photo's, for a pair */
@@ -745,5 +804,7 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
     st->timing.distortion += omp_get_wtime() - ta;
     st->timing.total += omp_get_wtime() - ta;
   }
+  if (!rc && over && pair && (!st->t_related || !st->t_registered || !st->t_distorted))
+    rc = own_view_t(st, s_t, photo, photo_t, o, err);
   return rc;
 }

@@ -21,4 +21,10 @@ wv_status wv_fit_register_candidates(const wv_fit_state *st, const wv_scene *s, 
                                      const wv_fit_opts *o, int whole, double cand[4][2], int *nc, int *renders,
                                      wv_error *err);
 
+/* wv_fit_register without its first step: the densities are searched near st's only (the
+ * grid of whole yarns/inch +-register_radius, then the climbs), for a photo whose densities are
+ * known to be close (a pair's back-lit photo in its own view). */
+wv_status wv_fit_register_near(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
+                               wv_error *err);
+
 #endif

@@ -443,8 +443,21 @@ wv_status wv_fit_register_candidates(const wv_fit_state *st, const wv_scene *s, 
   return rc;
 }
 
+static wv_status register_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
+                              int global, wv_error *err);
+
 wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                           wv_error *err) {
+  return register_run(st, s, photo, o, 1, err);
+}
+
+wv_status wv_fit_register_near(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
+                               wv_error *err) {
+  return register_run(st, s, photo, o, 0, err);
+}
+
+static wv_status register_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
+                              int global, wv_error *err) {
   if (o->register_radius < 0 || o->register_radius > WV_FIT_MAX_REGISTER_RADIUS)
     return wv_fail(err, WV_ERR_INVALID, "fit option 'register_radius' = %d is outside 0..%d", o->register_radius,
                    WV_FIT_MAX_REGISTER_RADIUS);
@@ -473,7 +486,7 @@ wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *p
   double cand[N_CAND + 1][2];
   int nc = 0;
   int renders = 0;
-  if (!rc) rc = global_candidates(&S[0], base, 0, cand, &nc, &renders, err);
+  if (!rc && global) rc = global_candidates(&S[0], base, 0, cand, &nc, &renders, err);
   /* 2. In the middle window: the grid of whole yarns/inch +-register_radius around
    * the fitted densities (the peak is narrow: a one-at-a-time search walks off
    * it) gives one more candidate; each climbs with steps of 2, 1, 0.5. */
