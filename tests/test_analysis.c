@@ -409,7 +409,7 @@ static void test_weave_relate(void **state) {
   assert_true(r.found);
   assert_true(fabs(r.scale - 0.9) < 0.01);
   assert_true(fabs(r.rotation_deg - 1.5) < 0.3);
-  wv_fit_state st = {.t_found = 1, .t_scale = r.scale, .t_rotation_deg = r.rotation_deg,
+  wv_fit_state st = {.t_related = 1, .t_found = 1, .t_scale = r.scale, .t_rotation_deg = r.rotation_deg,
                      .t_density_ratio = {1, 1}};
   wv_fit_scene_t(&st, &sa, &sc);
   assert_int_equal(wv_render(&sc, &p, &ro, &c, NULL, &e), WV_OK);
