@@ -182,8 +182,9 @@ static const cli_cmd CMD = {
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), zoom.png (their\n"
     "centre crop enlarged 4x), spectra.png (their weave spectra), loss.svg, report.html (with\n"
     "SSIM and WSC, the weave-spectrum correlation, of start and fit), viewer.html (woven view),\n"
-    "drape.png (the fit on a draped cloth), maps/, with --transmission photo_t.png and render_t.png\n"
-    "(the back-lit photo and the fit in the back-lit scene), and fit.json +\n"
+    "drape.png (the fit on a draped cloth), maps/, with --transmission photo_t.png, render_t.png\n"
+    "and scene_t.json (the back-lit photo, the fit in the back-lit scene as that photo sees the\n"
+    "cloth, and that scene), and fit.json +\n"
     "checkpoint.json (for --resume). DIR is replaced whole at the end; it may not hold other\n"
     "files, nor any input; --force replaces an earlier fit in DIR (it stays whole until the new\n"
     "one is done).\n",

@@ -40,7 +40,8 @@ static const cli_cmd CAPTURE_CMD = {
     "(the network's estimate rendered), compare.png (photo | network | fit), loss.svg,\n"
     "report.html, viewer.html, drape.png (the fit on the bundled draped cloth, --drape), maps/,\n"
     "fit.json and checkpoint.json ('woven fit --resume DIR' continues); with --transmission also\n"
-    "photo_t.png and render_t.png (the back-lit photo and the fit in the back-lit scene).\n",
+    "photo_t.png, render_t.png and scene_t.json (the back-lit photo, the fit in the back-lit scene\n"
+    "as that photo sees the cloth, and that scene).\n",
     {{CLI_PHOTO_OPTS, 0}, {CLI_MODEL_OPTS, 0}, {CLI_PAIR_OPTS, 0}, {CLI_PAIR_MODEL_OPTS, 0}, {CLI_FIT_OPTS, 0}},
     1,
     {offsetof(capture_args, photo)}};
