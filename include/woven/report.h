@@ -76,6 +76,9 @@ typedef struct {
   int kt_tried;         /* ... the prior after the pair model's start scored worse */
   int open_measured;    /* a pair's open area was measured on the back-lit photo's gap glow ... */
   double open_area;     /* ... as this (the yarn width set to match it) */
+  int view_t;           /* a pair's back-lit photo has its own view (wv_fit_state.t_related): ... */
+  int view_t_related;   /* ... its weave relates to the reflection photo's, by */
+  double view_t_scale, view_t_rotation_deg; /* ... this scale and rotation */
 } wv_report;
 
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err);

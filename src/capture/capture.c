@@ -241,7 +241,11 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
                    .kt_start = job->kt_start,
                    .kt_tried = job->kt_tried,
                    .open_measured = st->open_measured,
-                   .open_area = st->open_photo};
+                   .open_area = st->open_photo,
+                   .view_t = out->pair && st->t_related,
+                   .view_t_related = st->t_found,
+                   .view_t_scale = st->t_scale,
+                   .view_t_rotation_deg = st->t_rotation_deg};
   /* the viewer of the fit in its registered scene, with the photo (the report embeds it) */
   wv_view_opts vo = {.params = &st->params, .scene = fit_scene, .photo = pphoto, .title = job->title};
   snprintf(path, sizeof path, "%s/viewer.html", dir);

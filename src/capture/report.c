@@ -322,8 +322,18 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                 WV_BLURRED_COPY_SIGMA, r->ssim_rgb_blurred_t);
     if (r->wsc_t > -2) sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td></tr>\n", r->wsc_t);
     sb_printf(&b, "<tr><td colspan=\"2\">One set of parameters for both photos (docs/fit.md, \"Photo pairs\"): "
-                  "the back-lit photo fitted the transmission colours, the reflection photo the rest; the back-lit "
-                  "render uses the reflection photo's registration.</td></tr>\n");
+                  "the back-lit photo fitted the transmission colours, the reflection photo the rest.</td></tr>\n");
+    if (r->view_t && r->view_t_related)
+      sb_printf(&b, "<tr><td colspan=\"2\">The back-lit photo sees the weave %.3f times as large and turned by %+.2f "
+                    "degrees against the reflection photo; the back-lit render is in that view, with its own "
+                    "registration and distortion.</td></tr>\n",
+                1 / r->view_t_scale, r->view_t_rotation_deg);
+    else if (r->view_t)
+      sb_printf(&b, "<tr><td colspan=\"2\">The back-lit photo's weave does not relate to the reflection photo's: "
+                    "the back-lit render starts from the reflection photo's view, with its own registration and "
+                    "distortion.</td></tr>\n");
+    else
+      sb_printf(&b, "<tr><td colspan=\"2\">The back-lit render uses the reflection photo's view.</td></tr>\n");
     if (r->open_measured)
       sb_printf(&b, "<tr><td>open area, measured on the back-lit photo's gap glow (the yarn width set to "
                     "match)</td><td>%.2f%%</td></tr>\n", 100 * (r->open_area > 0 ? r->open_area : 0));
