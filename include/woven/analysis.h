@@ -146,13 +146,13 @@ wv_status wv_open_area_measure(const wv_scene *s, const wv_image *photo, wv_open
  * centre windows (the largest even square up to WV_LATTICE_REFINE_WINDOW both hold) give
  * their WV_RELATE_PEAKS strongest peaks (wv_spectrum_peaks, prominence at least WV_RELATE_MIN_Z:
  * the weaker ones are mostly folded harmonics and noise, which no scale carries over); the scale s and the
- * rotation r that carry the first's peaks onto the second's (s R(r) f, within
- * WV_RELATE_TOL bins) are searched over WV_RELATE_SCALE_MIN..MAX and +-WV_RELATE_MAX_ROT
- * degrees, each match weighted by the smaller prominence of its two peaks. found = 0 (and
- * scale 1, rotation 0) when fewer than WV_RELATE_MIN_MATCH peaks match or the matched weight
- * is under WV_RELATE_MIN_SCORE of the smaller photo's total: a photo without a clear weave
- * lattice (a satin's back-lit streak) tells nothing, and the pair is then taken as one
- * camera's. docs/analysis.md. */
+ * rotation r that carry the first's peaks onto the second's (s R(r) f) and the second's back
+ * onto the first's (within WV_RELATE_TOL bins of any peak of the other) are searched over
+ * WV_RELATE_SCALE_MIN..MAX and +-WV_RELATE_MAX_ROT degrees, each match weighted by the smaller
+ * prominence of its two peaks. found = 0 (and scale 1, rotation 0) when fewer than
+ * WV_RELATE_MIN_MATCH of the 2 WV_RELATE_PEAKS peaks match or the matched weight is under
+ * WV_RELATE_MIN_SCORE of their total: a photo without a clear weave lattice (a satin's back-lit
+ * streak) tells nothing, and the pair is then taken as one camera's. docs/analysis.md. */
 #define WV_RELATE_PEAKS 8
 #define WV_RELATE_MIN_Z 3.0
 #define WV_RELATE_TOL 2.0

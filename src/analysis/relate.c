@@ -38,10 +38,10 @@ static double nearest(const peak_sets *ps, int from, int side, double u, double 
 /* The soft score of (scale, rotation), both ways: each of the WV_RELATE_PEAKS strongest peaks
  * of either photo, carried to the other (the inverse map from b), counts the smaller
  * prominence of it and the nearest peak there, times 1 - distance / tolerance. *matched:
- * those within the tolerance; *top: whether each photo's strongest peak is among them. */
-static double score_at(const peak_sets *ps, int side, double scale, double rot_deg, int *matched, int *top) {
+ * those within the tolerance. */
+static double score_at(const peak_sets *ps, int side, double scale, double rot_deg, int *matched) {
   double sum = 0;
-  int m = 0, t = 1;
+  int m = 0;
   for (int from = 0; from < 2; from++) {
     double sc = from ? 1 / scale : scale, r = (from ? -rot_deg : rot_deg) * DEG, c = cos(r), s = sin(r);
     int k = ps->n[from] < WV_RELATE_PEAKS ? ps->n[from] : WV_RELATE_PEAKS;
@@ -52,13 +52,10 @@ static double score_at(const peak_sets *ps, int side, double scale, double rot_d
       if (d < WV_RELATE_TOL) {
         sum += (a->z < zb ? a->z : zb) * (1 - d / WV_RELATE_TOL);
         m++;
-      } else if (i == 0) {
-        t = 0;
       }
     }
   }
   if (matched) *matched = m;
-  if (top) *top = t;
   return sum;
 }
 
@@ -92,15 +89,15 @@ wv_status wv_weave_relate(const wv_image *a, const wv_image *b, wv_weave_relatio
     free(ps);
     return rc;
   }
-  double best = -1, bs = 1, br = 0;
+  double bs = 1, br = 0;
   int ns = (int)floor((WV_RELATE_SCALE_MAX - WV_RELATE_SCALE_MIN) / COARSE_SCALE + 0.5);
   int nr = (int)floor(WV_RELATE_MAX_ROT / COARSE_ROT + 0.5);
   /* identity first: a tie keeps the photos as one camera's */
-  best = score_at(ps, side, 1, 0, NULL, NULL);
+  double best = score_at(ps, side, 1, 0, NULL);
   for (int i = 0; i <= ns; i++)
     for (int j = -nr; j <= nr; j++) {
       double sc = WV_RELATE_SCALE_MIN + i * COARSE_SCALE, r = j * COARSE_ROT;
-      double v = score_at(ps, side, sc, r, NULL, NULL);
+      double v = score_at(ps, side, sc, r, NULL);
       if (v > best) best = v, bs = sc, br = r;
     }
   double cs = bs, cr = br;
@@ -108,11 +105,11 @@ wv_status wv_weave_relate(const wv_image *a, const wv_image *b, wv_weave_relatio
     for (int j = -FINE_STEPS; j <= FINE_STEPS; j++) {
       double sc = cs + i * COARSE_SCALE / FINE_STEPS, r = cr + j * COARSE_ROT / FINE_STEPS;
       if (sc < WV_RELATE_SCALE_MIN || sc > WV_RELATE_SCALE_MAX || fabs(r) > WV_RELATE_MAX_ROT) continue;
-      double v = score_at(ps, side, sc, r, NULL, NULL);
+      double v = score_at(ps, side, sc, r, NULL);
       if (v > best) best = v, bs = sc, br = r;
     }
-  int matched = 0, top = 0;
-  double v = score_at(ps, side, bs, br, &matched, &top);
+  int matched = 0;
+  double v = score_at(ps, side, bs, br, &matched);
   out->score = ps->total[0] + ps->total[1] > 0 ? v / (ps->total[0] + ps->total[1]) : 0;
   out->matched = matched;
   out->found = matched >= WV_RELATE_MIN_MATCH && out->score >= WV_RELATE_MIN_SCORE;
