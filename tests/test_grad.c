@@ -736,6 +736,72 @@ static void test_errors(void **state) {
   wv_image_free(&dc);
 }
 
+/* The back-lit capture as a linear function of the transmission colours (wv_trans_basis):
+ * with a camera blur, its capture at other colours is wv_render's within float rounding, its
+ * gradient the gradient renderer's; its match brings a capture of other colours close to a
+ * photo of the target's; a front-lit scene and a wrongly sized adjoint are refused. */
+static void test_trans_basis(void **state) {
+  (void)state;
+  tu_rng r = {31};
+  wv_scene s = small_scene("flat45-back", 48, 40, 4);
+  s.psf_sigma = 0.8;
+  wv_params p;
+  random_params("twill", &r, &p);
+  wv_error err;
+  wv_render_opts ro = {0};
+  wv_trans_basis *b;
+  assert_int_equal(wv_trans_basis_create(&s, &p, &ro, &b, &err), WV_OK);
+  wv_image dc;
+  assert_int_equal(wv_image_alloc(&dc, 48, 40, 3, &err), WV_OK);
+  for (int k = 0; k < 3; k++) {
+    wv_params q = p;
+    for (int i = WV_P_REFLECT_COUNT; i < WV_P_COUNT; i++) wv_param_set(&q, i, 0.6 * tu_rnd(&r));
+    wv_image want, got;
+    assert_int_equal(wv_render(&s, &q, &ro, &want, NULL, &err), WV_OK);
+    assert_int_equal(wv_trans_basis_capture(b, &q, &got, &err), WV_OK);
+    double worst = 0;
+    for (int i = 0; i < 48 * 40 * 3; i++) worst = fmax(worst, fabs(want.data[i] - got.data[i]));
+    fill_random(&dc, &r);
+    double g1[WV_P_COUNT] = {0}, g2[WV_P_COUNT];
+    assert_int_equal(wv_trans_basis_grad(b, &dc, g1, &err), WV_OK);
+    assert_int_equal(wv_render_grad(&s, &q, &ro, &dc, g2, NULL, &err), WV_OK);
+    double gerr = 0, gmax = 0;
+    for (int i = WV_P_REFLECT_COUNT; i < WV_P_COUNT; i++) gerr = fmax(gerr, fabs(g1[i] - g2[i])), gmax = fmax(gmax, fabs(g2[i]));
+    for (int i = 0; i < WV_P_REFLECT_COUNT; i++) assert_true(g1[i] == 0); /* untouched */
+    print_message("colours %d: capture off by %.2g at most, gradient by %.2g of %.3g\n", k, worst, gerr, gmax);
+    assert_true(worst < 1e-4);
+    assert_true(gmax > 0 && gerr < 1e-4 * gmax);
+    wv_image_free(&want), wv_image_free(&got);
+  }
+  /* the match: a photo of the target's colours, the basis made at other colours */
+  wv_params tq = p;
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) tq.transmission[y][c] = 0.3 + 0.1 * c, tq.transmission_specular[y][c] = 0.05;
+  wv_image photo, before, after;
+  assert_int_equal(wv_render(&s, &tq, &ro, &photo, NULL, &err), WV_OK);
+  wv_params m = p;
+  assert_int_equal(wv_trans_basis_capture(b, &m, &before, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_match(b, &photo, 8, 5, &m, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_capture(b, &m, &after, &err), WV_OK);
+  double d0 = 0, d1 = 0;
+  for (int i = 0; i < 48 * 40 * 3; i++) d0 += fabs(before.data[i] - photo.data[i]), d1 += fabs(after.data[i] - photo.data[i]);
+  print_message("match: mean difference to the photo %.4f before, %.4f after\n", d0 / (48 * 40 * 3), d1 / (48 * 40 * 3));
+  assert_true(d1 < 0.2 * d0);
+  for (int i = 0; i < WV_P_REFLECT_COUNT; i++) assert_true(wv_param_get(&m, i) == wv_param_get(&p, i));
+  assert_int_equal(wv_trans_basis_match(b, &photo, 100, 5, &m, &err), WV_ERR_INVALID);
+  wv_image small;
+  assert_int_equal(wv_image_alloc(&small, 40, 48, 3, &err), WV_OK);
+  double gs[WV_P_COUNT];
+  assert_int_equal(wv_trans_basis_grad(b, &small, gs, &err), WV_ERR_INVALID);
+  assert_int_equal(wv_trans_basis_match(b, &small, 8, 5, &m, &err), WV_ERR_INVALID);
+  wv_image_free(&small), wv_image_free(&photo), wv_image_free(&before), wv_image_free(&after), wv_image_free(&dc);
+  wv_trans_basis_free(b);
+  wv_trans_basis *none;
+  wv_scene front = small_scene("flat45", 48, 40, 4);
+  assert_int_equal(wv_trans_basis_create(&front, &p, &ro, &none, &err), WV_ERR_INVALID);
+  assert_null(none);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_finite_differences), cmocka_unit_test(test_float_matches_double),
@@ -745,7 +811,7 @@ int main(void) {
       cmocka_unit_test(test_chain_with_downsampling), cmocka_unit_test(test_record),
       cmocka_unit_test(test_camera_blur),        cmocka_unit_test(test_camera_blur_sigma),
       cmocka_unit_test(test_record_reuse),       cmocka_unit_test(test_camera_blur_passes),
-      cmocka_unit_test(test_camera_blur_sigma_sum),
+      cmocka_unit_test(test_camera_blur_sigma_sum), cmocka_unit_test(test_trans_basis),
       cmocka_unit_test(test_errors)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -73,6 +73,8 @@ void wv_fit_opts_default(wv_fit_opts *o);
 #define WV_FIT_MIN_GAIN 0.01     /* a relative fall of the smoothed loss that counts as progress */
 #define WV_FIT_PATIENCE 10       /* the default patience (0: every iteration runs; docs/measurements.md) */
 #define WV_FIT_LR_T_SCALE 3      /* the transmission colours' learning rate: this times lr (docs/fit.md) */
+#define WV_FIT_T_SHARE 0.25      /* a pair: at least this share of the iterations is left to the
+                                  * transmission colours (docs/fit.md, "Photo pairs") */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000
@@ -99,6 +101,8 @@ typedef struct {
   double loss, gram, prior, pixel, structure, colour;
   int discrete_tried, discrete_kept;
   double loss_t; /* a pair: the transmission photo's part of loss (0 for one photo) */
+  int t_alone;   /* a pair's iteration on the transmission photo alone (loss = loss_t): its colours
+                  * the only parameters stepped */
 } wv_fit_record;
 
 /* Time spent, seconds. */
@@ -109,11 +113,11 @@ typedef struct {
 /* The stopping rule on the iterations from .. to - 1 of log (one stage): S_j, the mean of
  * the WV_FIT_SMOOTH losses ending at j (all within the stage), has not fallen in the last
  * `patience` iterations: the least S_j there is not below (1 - WV_FIT_MIN_GAIN) times the
- * least S_j before them. A pair's two photos are judged apart (loss - loss_t and loss_t):
- * both must have stopped falling, so that one photo's larger loss does not hide the
- * other's progress. Needs at least patience + WV_FIT_SMOOTH iterations; 0 when
- * patience <= 0. It reads the losses alone, so a resumed fit stops where a straight one
- * does. */
+ * least S_j before them. Once the range holds a pair's iterations on the transmission photo
+ * alone (t_alone), the rule reads those alone, on loss_t; otherwise a log that holds both
+ * photos' losses judges them apart (loss - loss_t and loss_t): both must have stopped
+ * falling. Needs at least patience + WV_FIT_SMOOTH iterations; 0 when patience <= 0. It
+ * reads the losses alone, so a resumed fit stops where a straight one does. */
 int wv_fit_converged(const wv_fit_record *log, int from, int to, int patience);
 
 /* Everything needed to continue a fit: parameters, Adam moments, RNG, history. */
@@ -159,13 +163,16 @@ typedef struct {
   wv_fit_record *log; /* iter entries */
   int log_cap;
   wv_fit_timing timing;
+  int pair; /* the fit is a pair's (wv_fit_run_pair with a transmission photo): its iterations on
+             * the reflection photo are followed by those on the transmission colours */
 } wv_fit_state;
 
 wv_status wv_fit_state_init(wv_fit_state *st, const wv_params *start, const wv_fit_opts *o, wv_error *err);
 
 /* The schedule's stage after st->iter iterations, replayed from the log (wv_fit_converged
  * on each stage): 0 the window's stage, 1 the whole image's (with o->schedule 0 the only one is
- * 1), 2 the iterations are over (o->iters reached, or the last stage converged). *from
+ * 1), 2 the iterations are over (o->iters reached, or the last stage converged; a pair's
+ * last stage is over when its iterations on the transmission photo have converged). *from
  * (may be NULL): the first iteration of the stage (when over, of the last one). */
 int wv_fit_stage(const wv_fit_state *st, const wv_fit_opts *o, int *from);
 /* The iterations are over: wv_fit_stage is 2. */
@@ -186,11 +193,13 @@ typedef int (*wv_fit_callback)(void *user, const wv_fit_state *st, const wv_fit_
 wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, wv_descriptor *d,
                      const wv_fit_opts *o, wv_fit_callback cb, void *user, wv_error *err);
 /* wv_fit_run on a photo pair (docs/fit.md, "Photo pairs"): the reflection photo in s and the
- * transmission photo photo_t in s_t, its back-lit counterpart (same camera, same cloth). Each
- * iteration's loss is the sum of the two photos' image losses (the prior counted once) and
- * the Adam step takes the summed gradient over all WV_P_COUNT parameters; the discrete steps
- * are judged on the sum too. The colour split, noise sweep, alignment, registration and
- * distortion read the reflection photo alone. s_t or photo_t NULL: wv_fit_run. */
+ * transmission photo photo_t in s_t, its back-lit counterpart (same camera, same cloth). The
+ * iterations fit the reflection photo alone, as wv_fit_run does, until its stopping rule or
+ * (1 - WV_FIT_T_SHARE) of the iterations; then the transmission photo alone, stepping only the
+ * transmission colours (which the reflection photo does not see), until its own rule or the
+ * iteration limit. The colour split, noise sweep, alignment, registration and distortion read
+ * the reflection photo alone; the back-lit photo then gets its own view. s_t or photo_t NULL:
+ * wv_fit_run. */
 wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_scene *s_t,
                           const wv_image *photo_t, wv_descriptor *d, const wv_fit_opts *o, wv_fit_callback cb,
                           void *user, wv_error *err);

@@ -63,6 +63,31 @@ wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcapture, do
 wv_status wv_record_grad_psf(const wv_grad_record *rec, const wv_image *dcapture, double *dsigma, wv_error *err);
 void wv_record_free(wv_grad_record *rec);
 
+/* A back-lit scene's radiance is linear in the transmission colours (k_t and k_st, each
+ * channel of each yarn type) while the rest of the parameters stays: radiance = base +
+ * sum_j c_j basis_j, with the same samples as wv_render. Made from five renders (all four
+ * colours 0, then each yarn type's k_t or k_st 1), it gives the capture and the colours'
+ * gradient for any colours without rendering: what a fit of the colours alone iterates
+ * on (docs/fit.md, "Photo pairs"). */
+typedef struct wv_trans_basis wv_trans_basis;
+wv_status wv_trans_basis_create(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
+                                wv_trans_basis **out, wv_error *err);
+/* The capture of p's transmission colours (its other parameters: the basis's), allocated
+ * here; equal to wv_render's up to float rounding. */
+wv_status wv_trans_basis_capture(wv_trans_basis *b, const wv_params *p, wv_image *capture, wv_error *err);
+/* dL/d(transmission colours) at the last capture's colours, into grad[WV_P_KT_WARP_R ..
+ * WV_P_COUNT - 1] (the others untouched), from dL/dcapture. */
+wv_status wv_trans_basis_grad(const wv_trans_basis *b, const wv_image *dcapture, double grad[WV_P_COUNT],
+                              wv_error *err);
+/* p's transmission colours set to those whose capture comes closest to photo (the basis's
+ * size) over cells_w x cells_h cells: least squares on the cells' mean linear radiance (the
+ * photo's decoded, its clipped or falloff-dark pixels left out), each channel on its own,
+ * each colour within its range and pulled weakly toward its value in p (the cells' means
+ * barely tell the yarn types apart). A start for a fit of the colours. */
+wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, int cells_w, int cells_h, wv_params *p,
+                               wv_error *err);
+void wv_trans_basis_free(wv_trans_basis *b);
+
 /* Gradient check: analytic gradient of L = sum(dcapture * capture) against
  * central finite differences, (L(theta + h) - L(theta - h)) / 2h with
  * h = rel_step * (range of the parameter), stepping inward at a range edge

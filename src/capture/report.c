@@ -199,6 +199,14 @@ char *wv_loss_svg(const wv_fit_record *log, int n, const wv_fit_opts *o) {
               L + pw + 10, L + pw + 30, T + 15 + 18 * k, T + 15 + 18 * k, colours[k], L + pw + 35, T + 19 + 18 * k,
               names[k]);
   }
+  for (int i = 0; i < n; i++)
+    if (log[i].t_alone) { /* a pair: from here the losses are the back-lit photo's */
+      double x = L + pw * (n > 1 ? (double)i / (n - 1) : 0.5);
+      sb_printf(&b, "<line x1=\"%.1f\" x2=\"%.1f\" y1=\"%d\" y2=\"%g\" stroke=\"#888\" stroke-dasharray=\"4 3\"/>"
+                    "<text x=\"%.1f\" y=\"%d\" font-size=\"10\">back-lit photo: its colours</text>\n",
+                x, x, T, T + ph, x + 3, T + 12);
+      break;
+    }
   sb_printf(&b, "</svg>\n");
   if (b.failed) {
     free(b.s);

@@ -34,6 +34,7 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_object_set_new(root, "descriptor", json_string(descriptor_name));
   json_object_set_new(root, "iter", json_integer(st->iter));
   json_object_set_new(root, "aligned", json_boolean(st->aligned));
+  json_object_set_new(root, "pair", json_boolean(st->pair));
   json_object_set_new(root, "registration",
                       json_pack("{s:b,s:[f,f],s:f,s:f,s:f,s:f}", "done", st->registered, "offset_mm",
                                 st->offset_mm[0], st->offset_mm[1], "ncc_before", st->reg_ncc_before, "ncc_after",
@@ -77,8 +78,9 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_t *log = json_array();
   for (int i = 0; i < st->iter; i++) {
     const wv_fit_record *r = &st->log[i];
-    json_array_append_new(log, json_pack("[i,f,f,f,f,i,i,f,f,f]", r->iter, r->loss, r->gram, r->prior, r->pixel,
-                                         r->discrete_tried, r->discrete_kept, r->structure, r->colour, r->loss_t));
+    json_array_append_new(log, json_pack("[i,f,f,f,f,i,i,f,f,f,i]", r->iter, r->loss, r->gram, r->prior, r->pixel,
+                                         r->discrete_tried, r->discrete_kept, r->structure, r->colour, r->loss_t,
+                                         r->t_alone));
   }
   json_object_set_new(root, "log", log);
   char *text = json_dumps(root, JSON_COMPACT | JSON_REAL_PRECISION(17));
@@ -192,6 +194,9 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   json_t *al = json_object_get(root, "aligned");
   if (!json_is_boolean(al)) return wv_fail(err, WV_ERR_INVALID, "'aligned' must be true or false");
   st->aligned = json_is_true(al);
+  json_t *pr = json_object_get(root, "pair"); /* absent before it existed: one photo */
+  if (pr && !json_is_boolean(pr)) return wv_fail(err, WV_ERR_INVALID, "'pair' must be true or false");
+  st->pair = json_is_true(pr);
   json_t *cb = json_object_get(root, "camera_blur"); /* absent before it existed: none, settled */
   st->psf_done = 1, st->psf_sigma = 0;
   if (cb) {
@@ -265,8 +270,8 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
     json_t *e = json_array_get(log, i);
     /* the 8th value, the structure term, and the 9th, the detail-colour term, are absent in
      * fits made before they existed */
-    if (!json_is_array(e) || json_array_size(e) < 7 || json_array_size(e) > 10)
-      return wv_fail(err, WV_ERR_INVALID, "'log[%d]' must be an array of 7 to 10 values", i);
+    if (!json_is_array(e) || json_array_size(e) < 7 || json_array_size(e) > 11)
+      return wv_fail(err, WV_ERR_INVALID, "'log[%d]' must be an array of 7 to 11 values", i);
     double *v[4] = {&r->loss, &r->gram, &r->prior, &r->pixel};
     long long x;
     char name[40];
@@ -283,10 +288,16 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
       *(k ? &r->discrete_kept : &r->discrete_tried) = (int)x;
     }
     r->structure = r->colour = r->loss_t = 0; /* absent in older checkpoints */
+    r->t_alone = 0;
     double *extra[3] = {&r->structure, &r->colour, &r->loss_t};
-    for (int k = 7; k < (int)json_array_size(e); k++) {
+    for (int k = 7; k < (int)json_array_size(e) && k < 10; k++) {
       snprintf(name, sizeof name, "log[%d][%d]", i, k);
       if ((rc = wv_json_number_value(json_array_get(e, (size_t)k), name, -1e30, 1e30, extra[k - 7], err))) return rc;
+    }
+    if (json_array_size(e) > 10) { /* the 11th: the transmission photo alone (absent before) */
+      snprintf(name, sizeof name, "log[%d][10]", i);
+      if ((rc = wv_json_integer_value(json_array_get(e, 10), name, 0, 1, &x, err))) return rc;
+      r->t_alone = (int)x;
     }
   }
   json_t *tm = json_object_get(root, "timing"); /* informative: absent or odd values are not fatal */

@@ -65,9 +65,19 @@ static int stalled(const wv_fit_record *log, int first, int to, int patience, in
   return !(recent < (1 - WV_FIT_MIN_GAIN) * before);
 }
 
+/* A pair's first iteration on the transmission photo alone in from .. to - 1, else to. */
+static int t_phase(const wv_fit_record *log, int from, int to) {
+  for (int j = from; j < to; j++)
+    if (log[j].t_alone) return j;
+  return to;
+}
+
 int wv_fit_converged(const wv_fit_record *log, int from, int to, int patience) {
+  int tf = t_phase(log, from, to);
+  if (tf < to) from = tf; /* the transmission colours' iterations: their own loss, from their first */
   int first = from + WV_FIT_SMOOTH - 1; /* the first iteration with a whole window in the stage */
   if (patience <= 0 || to - patience <= first) return 0;
+  if (tf < to) return stalled(log, first, to, patience, 1);
   return stalled(log, first, to, patience, 0) && stalled(log, first, to, patience, 1);
 }
 
@@ -76,17 +86,28 @@ static int stage_limit(const wv_fit_opts *o, int stage) {
   return stage == 0 ? (int)(o->iters * WV_FIT_WINDOW_SHARE) : o->iters;
 }
 
+/* A pair's iteration `done` (the stage's from `from`) is on the transmission photo alone: its
+ * iterations have begun, or the reflection photo's have converged or reached their share. */
+static int t_next(const wv_fit_record *log, const wv_fit_opts *o, int pair, int stage, int from, int done) {
+  if (!pair || stage != 1) return 0;
+  return t_phase(log, from, done) < done || done >= (int)(o->iters * (1 - WV_FIT_T_SHARE)) ||
+         wv_fit_converged(log, from, done, o->patience);
+}
+
 /* The stage after iteration `done` (iterations from .. done - 1 in the stage so far): the
- * next one when the stage reached its limit or converged. */
-static int stage_after(const wv_fit_record *log, const wv_fit_opts *o, int stage, int *from, int done) {
-  while (stage < 2 && (done >= stage_limit(o, stage) || wv_fit_converged(log, *from, done, o->patience)))
+ * next one when the stage reached its limit or converged (a pair's last stage: its
+ * iterations on the transmission photo converged). */
+static int stage_after(const wv_fit_record *log, const wv_fit_opts *o, int pair, int stage, int *from, int done) {
+  while (stage < 2 && (done >= stage_limit(o, stage) ||
+                       ((!pair || stage == 0 || t_phase(log, *from, done) < done) &&
+                        wv_fit_converged(log, *from, done, o->patience))))
     if (++stage < 2) *from = done;
   return stage;
 }
 
 int wv_fit_stage(const wv_fit_state *st, const wv_fit_opts *o, int *from) {
-  int f = 0, stage = stage_after(st->log, o, o->schedule ? 0 : 1, &f, 0);
-  for (int i = 1; i <= st->iter && stage < 2; i++) stage = stage_after(st->log, o, stage, &f, i);
+  int f = 0, stage = stage_after(st->log, o, st->pair, o->schedule ? 0 : 1, &f, 0);
+  for (int i = 1; i <= st->iter && stage < 2; i++) stage = stage_after(st->log, o, st->pair, stage, &f, i);
   if (from) *from = f;
   return stage;
 }
@@ -180,6 +201,35 @@ static wv_status evaluate(fit_ctx *c, const wv_params *p, wv_fit_record *rec, do
   return WV_OK;
 }
 
+/* The loss of p on a pair's transmission photo and, with grad, its transmission colours'
+ * gradient, from the back-lit radiance as a linear function of them (wv_trans_basis, made
+ * here at the first call: the rest of the parameters stays while the colours are fitted). */
+static wv_status evaluate_t(fit_ctx *c, wv_trans_basis **tb, const wv_params *p, wv_fit_record *rec,
+                            double grad[WV_P_COUNT], wv_error *err) {
+  double t0 = omp_get_wtime();
+  wv_status st = WV_OK;
+  if (!*tb) {
+    wv_render_opts ro = {.spp = c->scene.spp, .threads = c->o->threads, .footprints = c->fp};
+    st = wv_trans_basis_create(&c->scene, p, &ro, tb, err);
+    c->timing->render += omp_get_wtime() - t0;
+    if (st) return st;
+    t0 = omp_get_wtime();
+  }
+  wv_image_free(&c->render);
+  wv_loss_terms lt;
+  if ((st = wv_trans_basis_capture(*tb, p, &c->render, err)) ||
+      (st = wv_image_loss_eval(c->loss, &c->render, &lt, grad ? &c->dcap : NULL, err)))
+    return st;
+  rec->gram = lt.gram, rec->pixel = lt.pixel, rec->prior = 0, rec->structure = lt.structure, rec->colour = lt.colour;
+  rec->loss = lt.total;
+  double t1 = omp_get_wtime();
+  c->timing->descriptor += t1 - t0;
+  if (!grad) return WV_OK;
+  st = wv_trans_basis_grad(*tb, &c->dcap, grad, err);
+  c->timing->gradient += omp_get_wtime() - t1;
+  return st;
+}
+
 wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p,
                       const wv_fit_opts *o, wv_fit_record *out, wv_error *err) {
   fit_ctx c;
@@ -190,25 +240,34 @@ wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d
   return st;
 }
 
-/* The loss of p on the reflection photo (c) and, for a pair, the transmission photo (ct):
- * rec sums both, loss_r (may be NULL) receives the reflection photo's alone. The gradient
- * takes the transmission photo's on the transmission colours only: the geometry, the
- * reflection colours and the camera blur follow the reflection photo, as a fit of it alone
- * does (a back-lit photo pulls them elsewhere: docs/fit.md, "Photo pairs"). */
-static wv_status evaluate_pair(fit_ctx *c, fit_ctx *ct, const wv_params *p, wv_fit_record *rec, double grad[WV_P_COUNT],
-                               double *dpsf, double *loss_r, wv_error *err) {
-  wv_status rc = evaluate(c, p, rec, grad, dpsf, err);
-  if (loss_r) *loss_r = rec->loss;
-  if (rc || !ct) return rc;
-  wv_fit_record rt = {0};
-  double gt[WV_P_COUNT] = {0};
-  if ((rc = evaluate(ct, p, &rt, grad ? gt : NULL, NULL, err))) return rc;
-  rec->loss += rt.loss, rec->gram += rt.gram, rec->pixel += rt.pixel, rec->structure += rt.structure;
-  rec->loss_t = rt.loss;
-  rec->colour += rt.colour;
-  if (grad)
-    for (int i = WV_P_REFLECT_COUNT; i < WV_P_COUNT; i++) grad[i] += gt[i];
-  return WV_OK;
+/* The parameters and their gradient in normalised coordinates z = (theta - lo) / (hi - lo). */
+static void param_z(const wv_params *p, const double g[WV_P_COUNT], float z[WV_P_COUNT], float gz[WV_P_COUNT]) {
+  for (int i = 0; i < WV_P_COUNT; i++) {
+    double lo, hi;
+    wv_param_range(i, &lo, &hi);
+    double gi = g[i] * (hi - lo);
+    gz[i] = isfinite(gi) ? (float)gi : 0.0f;
+    z[i] = (float)((wv_param_get(p, i) - lo) / (hi - lo));
+  }
+}
+
+/* Parameters from .. to - 1 from z; the others keep their values exactly. */
+static void param_set_z(wv_params *p, const float z[WV_P_COUNT], int from, int to) {
+  for (int i = from; i < to; i++) {
+    double lo, hi;
+    wv_param_range(i, &lo, &hi);
+    wv_param_set(p, i, lo + z[i] * (hi - lo));
+  }
+}
+
+/* The loss of p on both photos of a pair: the reflection photo's (c) and the transmission
+ * photo's (ct), the prior counted once. */
+static wv_status pair_loss(fit_ctx *c, fit_ctx *ct, const wv_params *p, double *loss, wv_error *err) {
+  wv_fit_record r = {0}, rt = {0};
+  wv_status rc = evaluate(c, p, &r, NULL, NULL, err);
+  if (!rc) rc = evaluate(ct, p, &rt, NULL, NULL, err);
+  *loss = r.loss + rt.loss;
+  return rc;
 }
 
 static uint64_t next_rand(uint64_t *state) {
@@ -494,10 +553,10 @@ static wv_status width_sweep(fit_ctx *c, fit_ctx *ct, wv_fit_state *st, wv_error
     if (w < lo || w > hi || (k >= 0 && w == st->params.yarn_width)) continue;
     wv_params trial = st->params;
     trial.yarn_width = w;
-    wv_fit_record rec = {0};
-    wv_status rc = evaluate_pair(c, ct, &trial, &rec, NULL, NULL, NULL, err);
+    double loss;
+    wv_status rc = pair_loss(c, ct, &trial, &loss, err);
     if (rc) return rc;
-    if (rec.loss < best) best = rec.loss, best_w = w;
+    if (loss < best) best = loss, best_w = w;
   }
   st->params.yarn_width = best_w;
   return WV_OK;
@@ -603,6 +662,7 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
                           const wv_image *photo_t, wv_descriptor *d, const wv_fit_opts *o, wv_fit_callback cb,
                           void *user, wv_error *err) {
   int pair = s_t && photo_t;
+  st->pair = pair;
   wv_status vs = wv_fit_opts_validate(o, err);
   if (vs) return vs;
   if (o->iters > st->log_cap) {
@@ -616,6 +676,7 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
   /* One context per stage (the coarse one and the full one), each made once: the photo's
    * side of the loss and the camera geometry do not change between iterations. */
   fit_ctx cx[2], ct[2]; /* ct: the transmission photo's, for a pair */
+  wv_trans_basis *tb = NULL; /* the transmission colours' iterations: the back-lit capture as their function */
   int made[2] = {0, 0}, made_t[2] = {0, 0};
   double scale = o->iter_scale;
   memset(cx, 0, sizeof cx);
@@ -691,87 +752,103 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
       }
       tc->scene.psf_sigma = c->scene.psf_sigma;
     }
+    int t_alone = t_next(st->log, o, pair, stage, from, st->iter);
     wv_fit_record rec = {0};
     rec.iter = st->iter;
     double g[WV_P_COUNT] = {0};
     double dpsf = 0;
-    double loss_r;
-    if ((rc = evaluate_pair(c, tc, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, &loss_r, err))) break;
-    int t = st->iter + 1;
-    /* Discrete search: a random step is kept only if it lowers the loss. It is compared with
-     * this iteration's render (the parameters the gradient was taken at), so it costs one
-     * forward render; the continuous parameters then take their Adam step from there (the
-     * discrete ones are not among them). */
-    if (o->discrete_every > 0 && t % o->discrete_every == 0) {
-      double td = omp_get_wtime();
-      wv_fit_timing saved = st->timing;
-      wv_params trial = st->params;
-      if (discrete_step(&trial, &st->rng, st->iter, o->iters, o->density_steps)) {
-        wv_fit_record alt = {0};
-        /* the densities and the noise level: the geometry, the reflection photo's */
-        if ((rc = evaluate(c, &trial, &alt, NULL, NULL, err))) break;
-        rec.discrete_tried = 1;
-        if (alt.loss < loss_r) {
-          st->params = trial;
-          rec.discrete_kept = 1;
-        }
-      }
-      /* account the search as its own item, not as render/descriptor time */
-      double spent = omp_get_wtime() - td;
-      st->timing.render = saved.render, st->timing.descriptor = saved.descriptor;
-      st->timing.discrete += spent;
-    }
-    /* Adam in normalised coordinates z = (theta - lo) / (hi - lo), projected onto [0, 1];
-     * z is remade from the parameters every step, so a resumed fit repeats this exactly. */
     float z[WV_P_COUNT], gz[WV_P_COUNT];
-    for (int i = 0; i < WV_P_COUNT; i++) {
-      double lo, hi;
-      wv_param_range(i, &lo, &hi);
-      double gi = g[i] * (hi - lo);
-      gz[i] = isfinite(gi) ? (float)gi : 0.0f;
-      z[i] = (float)((wv_param_get(&st->params, i) - lo) / (hi - lo));
-    }
-    wv_nn_adam adam = {.n = WV_P_REFLECT_COUNT, .lr = (float)o->lr, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f,
-                       .weight_decay = 0.0f, .t = st->iter, .m = st->adam_m, .v = st->adam_v};
-    wv_nn_adam_step_box(&adam, z, gz, 0.0f, 1.0f);
-    /* The transmission colours take larger steps (WV_FIT_LR_T_SCALE): Adam moves each
-     * normalised parameter about lr an iteration, so a colour that starts far off (k_st starts
-     * at k_s) kept the back-lit photo's loss falling, and the fit going, for about twice the
-     * iterations (docs/measurements.md, "The specular transmission's own colour"). */
-    wv_nn_adam adam_t = adam;
-    adam_t.t = st->iter; /* the same step count as the other parameters' */
-    adam_t.n = WV_P_COUNT - WV_P_REFLECT_COUNT, adam_t.lr = (float)(o->lr * WV_FIT_LR_T_SCALE);
-    adam_t.m = st->adam_m + WV_P_REFLECT_COUNT, adam_t.v = st->adam_v + WV_P_REFLECT_COUNT;
-    wv_nn_adam_step_box(&adam_t, z + WV_P_REFLECT_COUNT, gz + WV_P_REFLECT_COUNT, 0.0f, 1.0f);
-    /* a front-lit scene shows nothing of the transmission colours: they keep their values exactly
-     * (a pair's transmission photo shows them) */
-    int np = wv_scene_transmits(s) || pair ? WV_P_COUNT : WV_P_REFLECT_COUNT;
-    for (int i = 0; i < np; i++) {
-      double lo, hi;
-      wv_param_range(i, &lo, &hi);
-      wv_param_set(&st->params, i, lo + z[i] * (hi - lo));
-    }
-    if (st->psf_fit) {
-      /* the camera blur, by the same Adam on z = sigma / WV_PSF_RANGE: a measured blur
-       * and the parameters trade contrast, so they settle together */
-      float zs = (float)(st->psf_sigma / WV_PSF_RANGE), gs = (float)(dpsf / scale * WV_PSF_RANGE);
-      if (!isfinite(gs)) gs = 0.0f;
-      wv_nn_adam a1 = {.n = 1, .lr = (float)o->lr, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f,
-                       .weight_decay = 0.0f, .t = st->iter, .m = &st->psf_m, .v = &st->psf_v};
-      wv_nn_adam_step_box(&a1, &zs, &gs, 0.0f, 1.0f);
-      st->psf_sigma = zs * WV_PSF_RANGE;
+    if (t_alone) {
+      /* the transmission colours on the transmission photo: nothing else is stepped, so the
+       * reflection photo, which does not see them, is not rendered */
+      if (t_phase(st->log, from, st->iter) == st->iter) {
+        /* the phase's first iteration: the colours start where the cells' mean brightness matches
+         * the photo's (a fit of them by steps took 50 iterations to get there) */
+        if (!tb) {
+          wv_render_opts ro = {.spp = tc->scene.spp, .threads = o->threads, .footprints = tc->fp};
+          double t0 = omp_get_wtime();
+          rc = wv_trans_basis_create(&tc->scene, &st->params, &ro, &tb, err);
+          st->timing.render += omp_get_wtime() - t0;
+          if (rc) break;
+        }
+        if ((rc = wv_trans_basis_match(tb, &tc->photo, tc->o->down_w, tc->o->down_h, &st->params, err))) break;
+      }
+      if ((rc = evaluate_t(tc, &tb, &st->params, &rec, g, err))) break;
+      rec.loss_t = rec.loss, rec.t_alone = 1;
+      param_z(&st->params, g, z, gz);
+      /* the step count is this phase's own */
+      wv_nn_adam adam_t = {.n = WV_P_COUNT - WV_P_REFLECT_COUNT, .lr = (float)o->lr,
+                           .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f, .weight_decay = 0.0f,
+                           .t = st->iter - t_phase(st->log, from, st->iter),
+                           .m = st->adam_m + WV_P_REFLECT_COUNT, .v = st->adam_v + WV_P_REFLECT_COUNT};
+      wv_nn_adam_step_box(&adam_t, z + WV_P_REFLECT_COUNT, gz + WV_P_REFLECT_COUNT, 0.0f, 1.0f);
+      param_set_z(&st->params, z, WV_P_REFLECT_COUNT, WV_P_COUNT);
+    } else {
+      if ((rc = evaluate(c, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, err))) break;
+      int t = st->iter + 1;
+      /* Discrete search: a random step is kept only if it lowers the loss. It is compared with
+       * this iteration's render (the parameters the gradient was taken at), so it costs one
+       * forward render; the continuous parameters then take their Adam step from there (the
+       * discrete ones are not among them). */
+      if (o->discrete_every > 0 && t % o->discrete_every == 0) {
+        double td = omp_get_wtime();
+        wv_fit_timing saved = st->timing;
+        wv_params trial = st->params;
+        if (discrete_step(&trial, &st->rng, st->iter, o->iters, o->density_steps)) {
+          wv_fit_record alt = {0};
+          if ((rc = evaluate(c, &trial, &alt, NULL, NULL, err))) break;
+          rec.discrete_tried = 1;
+          if (alt.loss < rec.loss) {
+            st->params = trial;
+            rec.discrete_kept = 1;
+          }
+        }
+        /* account the search as its own item, not as render/descriptor time */
+        double spent = omp_get_wtime() - td;
+        st->timing.render = saved.render, st->timing.descriptor = saved.descriptor;
+        st->timing.discrete += spent;
+      }
+      /* Adam in normalised coordinates z = (theta - lo) / (hi - lo), projected onto [0, 1];
+       * z is remade from the parameters every step, so a resumed fit repeats this exactly. */
+      param_z(&st->params, g, z, gz);
+      wv_nn_adam adam = {.n = WV_P_REFLECT_COUNT, .lr = (float)o->lr, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f,
+                         .weight_decay = 0.0f, .t = st->iter, .m = st->adam_m, .v = st->adam_v};
+      wv_nn_adam_step_box(&adam, z, gz, 0.0f, 1.0f);
+      /* a back-lit scene fitted alone shows the transmission colours too (their larger steps:
+       * below) */
+      if (wv_scene_transmits(s)) {
+        wv_nn_adam adam_t = adam;
+        adam_t.t = st->iter;
+        adam_t.n = WV_P_COUNT - WV_P_REFLECT_COUNT, adam_t.lr = (float)(o->lr * WV_FIT_LR_T_SCALE);
+        adam_t.m = st->adam_m + WV_P_REFLECT_COUNT, adam_t.v = st->adam_v + WV_P_REFLECT_COUNT;
+        wv_nn_adam_step_box(&adam_t, z + WV_P_REFLECT_COUNT, gz + WV_P_REFLECT_COUNT, 0.0f, 1.0f);
+      }
+      param_set_z(&st->params, z, 0, wv_scene_transmits(s) ? WV_P_COUNT : WV_P_REFLECT_COUNT);
+      if (st->psf_fit) {
+        /* the camera blur, by the same Adam on z = sigma / WV_PSF_RANGE: a measured blur
+         * and the parameters trade contrast, so they settle together */
+        float zs = (float)(st->psf_sigma / WV_PSF_RANGE), gs = (float)(dpsf / scale * WV_PSF_RANGE);
+        if (!isfinite(gs)) gs = 0.0f;
+        wv_nn_adam a1 = {.n = 1, .lr = (float)o->lr, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f,
+                         .weight_decay = 0.0f, .t = st->iter, .m = &st->psf_m, .v = &st->psf_v};
+        wv_nn_adam_step_box(&a1, &zs, &gs, 0.0f, 1.0f);
+        st->psf_sigma = zs * WV_PSF_RANGE;
+      }
     }
     st->log[st->iter] = rec;
     st->iter++;
-    stage = stage_after(st->log, o, stage, &from, st->iter);
-    if (stage == 2 && (o->noise_sweep || (pair && o->width_sweep))) {
-      /* the iterations' end: before the checkpoint that records it */
+    stage = stage_after(st->log, o, pair, stage, &from, st->iter);
+    int r_over = stage == 2 ? !t_alone : t_next(st->log, o, pair, stage, from, st->iter) && !t_alone;
+    if (r_over || (stage == 2 && pair)) {
+      /* the reflection photo's iterations are over: the noise level, before the transmission
+       * colours' iterations fit what it renders; a pair's yarn width when they are over. Before
+       * the checkpoint that records it. */
       double td = omp_get_wtime();
       wv_fit_timing saved = st->timing;
       c->scene.psf_sigma = (st->psf_done ? st->psf_sigma : s->psf_sigma) / scale;
       if (tc) tc->scene.psf_sigma = c->scene.psf_sigma;
-      if (pair && o->width_sweep && !st->open_measured && (rc = width_sweep(c, tc, st, err))) break;
-      if (o->noise_sweep && (rc = noise_sweep(c, st, err))) break;
+      if (r_over && o->noise_sweep && (rc = noise_sweep(c, st, err))) break;
+      if (stage == 2 && pair && o->width_sweep && !st->open_measured && (rc = width_sweep(c, tc, st, err))) break;
       st->timing.render = saved.render, st->timing.descriptor = saved.descriptor;
       st->timing.discrete += omp_get_wtime() - td;
     }
@@ -779,6 +856,7 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
     t_start = omp_get_wtime();
     if (cb && cb(user, st, o)) break;
   }
+  wv_trans_basis_free(tb);
   for (int k = 0; k < 2; k++) {
     if (made[k]) ctx_free(&cx[k]);
     if (made_t[k]) ctx_free(&ct[k]);

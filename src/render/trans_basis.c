@@ -1,0 +1,191 @@
+/* The back-lit capture as a linear function of the transmission colours: the radiance of a
+ * back-lit scene is k_st S_t + k_t F_t on each yarn plus the light through the gaps
+ * (kernel/kernel_impl.h, wv_shade_trans), so with the geometry fixed it is an affine map of
+ * the twelve colours, and so is its camera blur. The blurred basis is kept; each capture is
+ * then the response of a weighted sum (wv_scene_capture: the blur, then the response). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/render_internal.h"
+#include "woven/grad.h"
+
+#define TB_TYPES 4 /* k_t warp, k_t weft, k_st warp, k_st weft: WV_P_KT_WARP_R + 3 type + channel */
+#define WV_TRANS_MATCH_RIDGE 1e-3 /* the match's pull toward the start, relative to the cells' evidence */
+
+struct wv_trans_basis {
+  wv_scene scene;
+  int w, h;
+  float *base, *basis[TB_TYPES]; /* blurred radiance: all colours 0; each type's colour 1, minus base */
+  float *mask;                   /* the response's falloff at each pixel */
+  double *slope;                 /* d capture / d blurred radiance at the last capture */
+};
+
+static double *colour_of(wv_params *p, int type) {
+  return type < 2 ? p->transmission[type] : p->transmission_specular[type - 2];
+}
+
+void wv_trans_basis_free(wv_trans_basis *b) {
+  if (!b) return;
+  free(b->base), free(b->mask), free(b->slope);
+  for (int t = 0; t < TB_TYPES; t++) free(b->basis[t]);
+  free(b);
+}
+
+/* The radiance of q, blurred as the camera blurs it, into out (w * h * 3). */
+static wv_status blurred(const wv_scene *s, const wv_params *q, const wv_render_opts *opt, double *tmp, float *out,
+                         wv_error *err) {
+  wv_image cap = {0}, rad = {0};
+  wv_status st = wv_render(s, q, opt, &cap, &rad, err);
+  wv_image_free(&cap);
+  if (st) return st;
+  size_t n = (size_t)s->width * s->height * 3;
+  double *in = tmp + n;
+  for (size_t i = 0; i < n; i++) in[i] = rad.data[i];
+  wv_image_free(&rad);
+  if ((st = wv_psf_apply(s->psf_sigma, s->width, s->height, 3, in, tmp, 0, err))) return st;
+  for (size_t i = 0; i < n; i++) out[i] = (float)tmp[i];
+  return WV_OK;
+}
+
+wv_status wv_trans_basis_create(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
+                                wv_trans_basis **out, wv_error *err) {
+  *out = NULL;
+  if (!wv_scene_transmits(s)) return wv_fail(err, WV_ERR_INVALID, "the scene is not back-lit: no light through the cloth");
+  wv_trans_basis *b = calloc(1, sizeof *b);
+  size_t n = (size_t)s->width * s->height * 3;
+  double *tmp = malloc(sizeof *tmp * 2 * n);
+  int ok = b && tmp;
+  if (b) {
+    b->scene = *s, b->w = s->width, b->h = s->height;
+    ok = ok && (b->base = malloc(sizeof(float) * n)) && (b->mask = malloc(sizeof(float) * n / 3)) &&
+         (b->slope = malloc(sizeof(double) * n));
+    for (int t = 0; t < TB_TYPES; t++) ok = ok && (b->basis[t] = malloc(sizeof(float) * n));
+  }
+  wv_status st = ok ? WV_OK : wv_fail(err, WV_ERR_NOMEM, "out of memory for the transmission basis");
+  wv_params q = *p;
+  for (int t = 0; t < TB_TYPES; t++) memset(colour_of(&q, t), 0, sizeof(double) * 3);
+  if (!st) st = blurred(s, &q, opt, tmp, b->base, err);
+  for (int t = 0; t < TB_TYPES && !st; t++) {
+    wv_params u = q;
+    for (int c = 0; c < 3; c++) colour_of(&u, t)[c] = 1.0;
+    if (!(st = blurred(s, &u, opt, tmp, b->basis[t], err)))
+      for (size_t i = 0; i < n; i++) b->basis[t][i] -= b->base[i];
+  }
+  if (!st)
+    for (int y = 0; y < b->h; y++)
+      for (int x = 0; x < b->w; x++) b->mask[(size_t)y * b->w + x] = (float)wv_response_mask(s, x, y);
+  free(tmp);
+  if (st) {
+    wv_trans_basis_free(b);
+    return st;
+  }
+  *out = b;
+  return WV_OK;
+}
+
+wv_status wv_trans_basis_capture(wv_trans_basis *b, const wv_params *p, wv_image *capture, wv_error *err) {
+  float k[TB_TYPES][3];
+  wv_params q = *p;
+  for (int t = 0; t < TB_TYPES; t++)
+    for (int c = 0; c < 3; c++) k[t][c] = (float)colour_of(&q, t)[c];
+  wv_status st = wv_image_alloc(capture, b->w, b->h, 3, err);
+  if (st) return st;
+  size_t n = (size_t)b->w * b->h;
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < n; i++)
+    for (int c = 0; c < 3; c++) {
+      float v = b->base[3 * i + c];
+      for (int t = 0; t < TB_TYPES; t++) v += k[t][c] * b->basis[t][3 * i + c];
+      capture->data[3 * i + c] = wv_respond_f(&b->scene, b->mask[i], v, &b->slope[3 * i + c]);
+    }
+  return WV_OK;
+}
+
+wv_status wv_trans_basis_grad(const wv_trans_basis *b, const wv_image *dcapture, double grad[WV_P_COUNT],
+                              wv_error *err) {
+  if (dcapture->w != b->w || dcapture->h != b->h || dcapture->c != 3)
+    return wv_fail(err, WV_ERR_INVALID, "the adjoint is %d x %d x %d but the capture %d x %d x 3", dcapture->w,
+                   dcapture->h, dcapture->c, b->w, b->h);
+  double *rows = calloc((size_t)b->h * TB_TYPES * 3, sizeof *rows);
+  if (!rows) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the transmission colours' gradient");
+  /* each row's sums, then the rows in order: the same sum on any number of threads */
+#pragma omp parallel for schedule(static)
+  for (int y = 0; y < b->h; y++) {
+    double *r = rows + (size_t)y * TB_TYPES * 3;
+    for (int x = 0; x < b->w; x++)
+      for (int c = 0; c < 3; c++) {
+        size_t i = ((size_t)y * b->w + x) * 3 + c;
+        double a = b->slope[i] * dcapture->data[i];
+        for (int t = 0; t < TB_TYPES; t++) r[t * 3 + c] += a * b->basis[t][i];
+      }
+  }
+  for (int k = 0; k < TB_TYPES * 3; k++) grad[WV_P_KT_WARP_R + k] = 0;
+  for (int y = 0; y < b->h; y++)
+    for (int k = 0; k < TB_TYPES * 3; k++) grad[WV_P_KT_WARP_R + k] += rows[(size_t)y * TB_TYPES * 3 + k];
+  free(rows);
+  return WV_OK;
+}
+
+wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, int cells_w, int cells_h, wv_params *p,
+                               wv_error *err) {
+  if (photo->w != b->w || photo->h != b->h || photo->c != 3)
+    return wv_fail(err, WV_ERR_INVALID, "the photo is %d x %d but the transmission basis %d x %d", photo->w, photo->h,
+                   b->w, b->h);
+  if (cells_w < 1 || cells_h < 1 || cells_w > b->w || cells_h > b->h)
+    return wv_fail(err, WV_ERR_INVALID, "%d x %d cells do not fit a %d x %d image", cells_w, cells_h, b->w, b->h);
+  int nc = cells_w * cells_h;
+  /* per cell and channel: the valid pixels' count, the photo's mean radiance, the base's and each basis's */
+  double *acc = calloc((size_t)nc * 3 * (3 + TB_TYPES), sizeof *acc);
+  if (!acc) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the transmission colours' match");
+  const wv_scene *s = &b->scene;
+  double top = s->clip > 0 ? s->clip : INFINITY;
+  for (int y = 0; y < b->h; y++)
+    for (int x = 0; x < b->w; x++) {
+      size_t i = (size_t)y * b->w + x;
+      double m = b->mask[i];
+      if (m < 0.1) continue; /* the falloff's dark edge: the decoding divides by it */
+      int cell = (y * cells_h / b->h) * cells_w + x * cells_w / b->w;
+      for (int c = 0; c < 3; c++) {
+        double v = wv_decode(s, (float)(photo->data[3 * i + c] / m)) / s->exposure;
+        if (!(v * s->exposure < 0.999 * top)) continue; /* clipped: its radiance is unknown */
+        double *a = acc + ((size_t)cell * 3 + c) * (3 + TB_TYPES);
+        a[0] += 1, a[1] += v, a[2] += b->base[3 * i + c];
+        for (int t = 0; t < TB_TYPES; t++) a[3 + t] += b->basis[t][3 * i + c];
+      }
+    }
+  wv_params q = *p;
+  for (int c = 0; c < 3; c++) {
+    /* the normal equations of sum over cells (base + sum_t k_t B_t - photo)^2, each cell its mean */
+    double A[TB_TYPES][TB_TYPES] = {{0}}, r[TB_TYPES] = {0};
+    for (int cell = 0; cell < nc; cell++) {
+      const double *a = acc + ((size_t)cell * 3 + c) * (3 + TB_TYPES);
+      if (a[0] < 1) continue;
+      double e = (a[1] - a[2]) / a[0];
+      for (int t = 0; t < TB_TYPES; t++) {
+        r[t] += a[3 + t] / a[0] * e;
+        for (int u = 0; u < TB_TYPES; u++) A[t][u] += a[3 + t] / a[0] * a[3 + u] / a[0];
+      }
+    }
+    double trace = 0, k[TB_TYPES], lo[TB_TYPES], hi[TB_TYPES];
+    for (int t = 0; t < TB_TYPES; t++) trace += A[t][t];
+    double ridge = WV_TRANS_MATCH_RIDGE * trace / TB_TYPES + 1e-30;
+    for (int t = 0; t < TB_TYPES; t++) {
+      k[t] = colour_of(&q, t)[c];
+      A[t][t] += ridge, r[t] += ridge * k[t];
+      wv_param_range(WV_P_KT_WARP_R + 3 * t + c, &lo[t], &hi[t]);
+    }
+    /* the box-constrained minimum by coordinate descent: a convex quadratic of four unknowns */
+    for (int sweep = 0; sweep < 200; sweep++)
+      for (int t = 0; t < TB_TYPES; t++) {
+        double g = r[t];
+        for (int u = 0; u < TB_TYPES; u++)
+          if (u != t) g -= A[t][u] * k[u];
+        double v = g / A[t][t];
+        k[t] = v < lo[t] ? lo[t] : v > hi[t] ? hi[t] : v;
+      }
+    for (int t = 0; t < TB_TYPES; t++) colour_of(p, t)[c] = k[t];
+  }
+  free(acc);
+  return WV_OK;
+}
