@@ -781,19 +781,34 @@ static void test_trans_basis(void **state) {
   assert_int_equal(wv_render(&s, &tq, &ro, &photo, NULL, &err), WV_OK);
   wv_params m = p;
   assert_int_equal(wv_trans_basis_capture(b, &m, &before, &err), WV_OK);
-  assert_int_equal(wv_trans_basis_match(b, &photo, 8, 5, &m, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_match(b, &photo, 8, 5, WV_TRANS_MATCH_FREE, &m, &err), WV_OK);
   assert_int_equal(wv_trans_basis_capture(b, &m, &after, &err), WV_OK);
   double d0 = 0, d1 = 0;
   for (int i = 0; i < 48 * 40 * 3; i++) d0 += fabs(before.data[i] - photo.data[i]), d1 += fabs(after.data[i] - photo.data[i]);
   print_message("match: mean difference to the photo %.4f before, %.4f after\n", d0 / (48 * 40 * 3), d1 / (48 * 40 * 3));
   assert_true(d1 < 0.2 * d0);
   for (int i = 0; i < WV_P_REFLECT_COUNT; i++) assert_true(wv_param_get(&m, i) == wv_param_get(&p, i));
-  assert_int_equal(wv_trans_basis_match(b, &photo, 100, 5, &m, &err), WV_ERR_INVALID);
+  /* the split kept: each channel's k_t of the two yarn types, and their k_st, scaled alike */
+  wv_params sp = p;
+  wv_image split;
+  assert_int_equal(wv_trans_basis_match(b, &photo, 8, 5, WV_TRANS_MATCH_SPLIT, &sp, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_capture(b, &sp, &split, &err), WV_OK);
+  double d2 = 0;
+  for (int i = 0; i < 48 * 40 * 3; i++) d2 += fabs(split.data[i] - photo.data[i]);
+  print_message("match, the split kept: mean difference %.4f\n", d2 / (48 * 40 * 3));
+  assert_true(d2 < 0.5 * d0);
+  for (int c = 0; c < 3; c++) {
+    double f = sp.transmission[0][c] / p.transmission[0][c], g = sp.transmission_specular[0][c] / p.transmission_specular[0][c];
+    assert_true(fabs(sp.transmission[1][c] - f * p.transmission[1][c]) < 1e-9);
+    assert_true(fabs(sp.transmission_specular[1][c] - g * p.transmission_specular[1][c]) < 1e-9);
+  }
+  wv_image_free(&split);
+  assert_int_equal(wv_trans_basis_match(b, &photo, 100, 5, WV_TRANS_MATCH_FREE, &m, &err), WV_ERR_INVALID);
   wv_image small;
   assert_int_equal(wv_image_alloc(&small, 40, 48, 3, &err), WV_OK);
   double gs[WV_P_COUNT];
   assert_int_equal(wv_trans_basis_grad(b, &small, gs, &err), WV_ERR_INVALID);
-  assert_int_equal(wv_trans_basis_match(b, &small, 8, 5, &m, &err), WV_ERR_INVALID);
+  assert_int_equal(wv_trans_basis_match(b, &small, 8, 5, WV_TRANS_MATCH_SPLIT, &m, &err), WV_ERR_INVALID);
   wv_image_free(&small), wv_image_free(&photo), wv_image_free(&before), wv_image_free(&after), wv_image_free(&dc);
   wv_trans_basis_free(b);
   wv_trans_basis *none;

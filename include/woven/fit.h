@@ -55,7 +55,7 @@ typedef struct {
   int width_sweep;    /* a photo pair: 1: the yarn width (the open gaps) is set before the first iteration to
                        * the open area the back-lit photo's gap glow measures (wv_open_area_measure), or, in a
                        * back-lit scene without a glow, searched on the pair's loss when the iterations end,
-                       * before the noise sweep (1); 0: it stays at its start */
+                       * after the noise sweep (1); 0: it stays at its start */
   int patience;       /* the stopping rule (wv_fit_converged): a stage ends when its smoothed loss has not
                        * fallen by WV_FIT_MIN_GAIN in this many iterations, and the last stage ends the
                        * iterations (WV_FIT_PATIENCE; 0: every stage runs to its limit, `iters` in all) */
@@ -72,7 +72,8 @@ void wv_fit_opts_default(wv_fit_opts *o);
 #define WV_FIT_SMOOTH 5          /* the smoothed loss: the mean of this many consecutive losses */
 #define WV_FIT_MIN_GAIN 0.01     /* a relative fall of the smoothed loss that counts as progress */
 #define WV_FIT_PATIENCE 10       /* the default patience (0: every iteration runs; docs/measurements.md) */
-#define WV_FIT_LR_T_SCALE 3      /* the transmission colours' learning rate: this times lr (docs/fit.md) */
+#define WV_FIT_LR_T_SCALE 3      /* a back-lit photo fitted alone: the transmission colours' learning
+                                  * rate, this times lr (docs/fit.md) */
 #define WV_FIT_T_SHARE 0.25      /* a pair: at least this share of the iterations is left to the
                                   * transmission colours (docs/fit.md, "Photo pairs") */
 

@@ -82,10 +82,14 @@ wv_status wv_trans_basis_grad(const wv_trans_basis *b, const wv_image *dcapture,
 /* p's transmission colours set to those whose capture comes closest to photo (the basis's
  * size) over cells_w x cells_h cells: least squares on the cells' mean linear radiance (the
  * photo's decoded, its clipped or falloff-dark pixels left out), each channel on its own,
- * each colour within its range and pulled weakly toward its value in p (the cells' means
- * barely tell the yarn types apart). A start for a fit of the colours. */
-wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, int cells_w, int cells_h, wv_params *p,
-                               wv_error *err);
+ * pulled weakly toward p's colours, each colour within its range. The cells' means barely
+ * tell the yarn types apart, so two ways: */
+typedef enum {
+  WV_TRANS_MATCH_FREE,  /* the four colours of a channel free */
+  WV_TRANS_MATCH_SPLIT  /* two factors, one on both yarn types' k_t, one on their k_st: p's split kept */
+} wv_trans_match;
+wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, int cells_w, int cells_h,
+                               wv_trans_match mode, wv_params *p, wv_error *err);
 void wv_trans_basis_free(wv_trans_basis *b);
 
 /* Gradient check: analytic gradient of L = sum(dcapture * capture) against

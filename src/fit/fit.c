@@ -230,6 +230,28 @@ static wv_status evaluate_t(fit_ctx *c, wv_trans_basis **tb, const wv_params *p,
   return st;
 }
 
+/* The transmission colours' start, before their first iteration: of the colours as they are
+ * and those matched to the back-lit photo's brightness (wv_trans_basis_match, the start's
+ * split of the light kept or free), the lowest back-lit loss. Adam's steps from the start
+ * took about 50 iterations to reach that brightness; the match alone, free, can split the
+ * light wrongly, and the split kept can leave it too bright (docs/measurements.md, "The
+ * back-lit photo's colours alone"). */
+static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st, wv_error *err) {
+  wv_params best = st->params;
+  wv_fit_record rec = {0};
+  wv_status rc = evaluate_t(c, tb, &best, &rec, NULL, err);
+  double least = rec.loss;
+  for (int mode = WV_TRANS_MATCH_FREE; !rc && mode <= WV_TRANS_MATCH_SPLIT; mode++) {
+    wv_params m = st->params;
+    if ((rc = wv_trans_basis_match(*tb, &c->photo, c->o->down_w, c->o->down_h, (wv_trans_match)mode, &m, err)) ||
+        (rc = evaluate_t(c, tb, &m, &rec, NULL, err)))
+      break;
+    if (rec.loss < least) least = rec.loss, best = m;
+  }
+  if (!rc) st->params = best;
+  return rc;
+}
+
 wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p,
                       const wv_fit_opts *o, wv_fit_record *out, wv_error *err) {
   fit_ctx c;
@@ -761,18 +783,7 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
     if (t_alone) {
       /* the transmission colours on the transmission photo: nothing else is stepped, so the
        * reflection photo, which does not see them, is not rendered */
-      if (t_phase(st->log, from, st->iter) == st->iter) {
-        /* the phase's first iteration: the colours start where the cells' mean brightness matches
-         * the photo's (a fit of them by steps took 50 iterations to get there) */
-        if (!tb) {
-          wv_render_opts ro = {.spp = tc->scene.spp, .threads = o->threads, .footprints = tc->fp};
-          double t0 = omp_get_wtime();
-          rc = wv_trans_basis_create(&tc->scene, &st->params, &ro, &tb, err);
-          st->timing.render += omp_get_wtime() - t0;
-          if (rc) break;
-        }
-        if ((rc = wv_trans_basis_match(tb, &tc->photo, tc->o->down_w, tc->o->down_h, &st->params, err))) break;
-      }
+      if (t_phase(st->log, from, st->iter) == st->iter && (rc = colours_start(tc, &tb, st, err))) break;
       if ((rc = evaluate_t(tc, &tb, &st->params, &rec, g, err))) break;
       rec.loss_t = rec.loss, rec.t_alone = 1;
       param_z(&st->params, g, z, gz);

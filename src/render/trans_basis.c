@@ -127,8 +127,8 @@ wv_status wv_trans_basis_grad(const wv_trans_basis *b, const wv_image *dcapture,
   return WV_OK;
 }
 
-wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, int cells_w, int cells_h, wv_params *p,
-                               wv_error *err) {
+wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, int cells_w, int cells_h,
+                               wv_trans_match mode, wv_params *p, wv_error *err) {
   if (photo->w != b->w || photo->h != b->h || photo->c != 3)
     return wv_fail(err, WV_ERR_INVALID, "the photo is %d x %d but the transmission basis %d x %d", photo->w, photo->h,
                    b->w, b->h);
@@ -156,35 +156,47 @@ wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, i
     }
   wv_params q = *p;
   for (int c = 0; c < 3; c++) {
-    /* the normal equations of sum over cells (base + sum_t k_t B_t - photo)^2, each cell its mean */
+    /* the unknowns x_u, each weighing the four colours (W): the colours are sum_u W[u][t] x_u */
+    int nu = mode == WV_TRANS_MATCH_SPLIT ? 2 : TB_TYPES;
+    double W[TB_TYPES][TB_TYPES] = {{0}}, x[TB_TYPES], lo[TB_TYPES], hi[TB_TYPES];
+    for (int t = 0; t < TB_TYPES; t++) {
+      double k0 = colour_of(&q, t)[c];
+      if (mode == WV_TRANS_MATCH_SPLIT) W[t / 2][t] = k0, x[t / 2] = 1, lo[t / 2] = 0, hi[t / 2] = INFINITY;
+      else W[t][t] = 1, x[t] = k0, wv_param_range(WV_P_KT_WARP_R + 3 * t + c, &lo[t], &hi[t]);
+    }
+    /* the normal equations of sum over cells (base + sum_u x_u f_u - photo)^2, each cell its mean,
+     * f_u = sum_t W[u][t] basis_t */
     double A[TB_TYPES][TB_TYPES] = {{0}}, r[TB_TYPES] = {0};
     for (int cell = 0; cell < nc; cell++) {
       const double *a = acc + ((size_t)cell * 3 + c) * (3 + TB_TYPES);
       if (a[0] < 1) continue;
-      double e = (a[1] - a[2]) / a[0];
-      for (int t = 0; t < TB_TYPES; t++) {
-        r[t] += a[3 + t] / a[0] * e;
-        for (int u = 0; u < TB_TYPES; u++) A[t][u] += a[3 + t] / a[0] * a[3 + u] / a[0];
+      double e = (a[1] - a[2]) / a[0], f[TB_TYPES] = {0};
+      for (int u = 0; u < nu; u++)
+        for (int t = 0; t < TB_TYPES; t++) f[u] += W[u][t] * a[3 + t] / a[0];
+      for (int u = 0; u < nu; u++) {
+        r[u] += f[u] * e;
+        for (int v = 0; v < nu; v++) A[u][v] += f[u] * f[v];
       }
     }
-    double trace = 0, k[TB_TYPES], lo[TB_TYPES], hi[TB_TYPES];
-    for (int t = 0; t < TB_TYPES; t++) trace += A[t][t];
-    double ridge = WV_TRANS_MATCH_RIDGE * trace / TB_TYPES + 1e-30;
-    for (int t = 0; t < TB_TYPES; t++) {
-      k[t] = colour_of(&q, t)[c];
-      A[t][t] += ridge, r[t] += ridge * k[t];
-      wv_param_range(WV_P_KT_WARP_R + 3 * t + c, &lo[t], &hi[t]);
-    }
-    /* the box-constrained minimum by coordinate descent: a convex quadratic of four unknowns */
+    double trace = 0;
+    for (int u = 0; u < nu; u++) trace += A[u][u];
+    double ridge = WV_TRANS_MATCH_RIDGE * trace / nu + 1e-30;
+    for (int u = 0; u < nu; u++) A[u][u] += ridge, r[u] += ridge * x[u];
+    /* the box-constrained minimum by coordinate descent: a convex quadratic of a few unknowns */
     for (int sweep = 0; sweep < 200; sweep++)
-      for (int t = 0; t < TB_TYPES; t++) {
-        double g = r[t];
-        for (int u = 0; u < TB_TYPES; u++)
-          if (u != t) g -= A[t][u] * k[u];
-        double v = g / A[t][t];
-        k[t] = v < lo[t] ? lo[t] : v > hi[t] ? hi[t] : v;
+      for (int u = 0; u < nu; u++) {
+        double g = r[u];
+        for (int v = 0; v < nu; v++)
+          if (v != u) g -= A[u][v] * x[v];
+        double y = g / A[u][u];
+        x[u] = y < lo[u] ? lo[u] : y > hi[u] ? hi[u] : y;
       }
-    for (int t = 0; t < TB_TYPES; t++) colour_of(p, t)[c] = k[t];
+    for (int t = 0; t < TB_TYPES; t++) {
+      double k = 0, klo, khi;
+      for (int u = 0; u < nu; u++) k += W[u][t] * x[u];
+      wv_param_range(WV_P_KT_WARP_R + 3 * t + c, &klo, &khi);
+      colour_of(p, t)[c] = k < klo ? klo : k > khi ? khi : k;
+    }
   }
   free(acc);
   return WV_OK;
