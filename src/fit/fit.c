@@ -825,8 +825,8 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
       wv_nn_adam adam = {.n = WV_P_REFLECT_COUNT, .lr = (float)o->lr, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f,
                          .weight_decay = 0.0f, .t = st->iter, .m = st->adam_m, .v = st->adam_v};
       wv_nn_adam_step_box(&adam, z, gz, 0.0f, 1.0f);
-      /* a back-lit scene fitted alone shows the transmission colours too (their larger steps:
-       * below) */
+      /* a back-lit scene fitted alone shows the transmission colours too: they step with the
+       * rest, WV_FIT_LR_T_SCALE times as far (docs/fit.md, "Photo pairs") */
       if (wv_scene_transmits(s)) {
         wv_nn_adam adam_t = adam;
         adam_t.t = st->iter;
