@@ -650,7 +650,7 @@ static void test_fit_pair(void **state) {
   wv_error err = {0};
   double e[3] = {0, 0, 0}, es[3] = {0, 0, 0}; /* k_t and k_st errors: start, pair fit, reflection-only fit */
   wv_params fitted[2];
-  double loss_t_last = 0, straight[16];
+  double loss_t_last = 0, loss_t_first = 0, straight[16];
   for (int run = 0; run < 2; run++) {
     wv_fit_state st;
     wv_fit_opts ro = o;
@@ -667,6 +667,7 @@ static void test_fit_pair(void **state) {
     }
     if (run == 0) {
       loss_t_last = st.log[st.iter - 1].loss_t;
+      loss_t_first = st.log[r_iters].loss_t; /* at the colours' chosen start, before their first step */
       for (int i = 0; i < st.iter; i++) straight[i] = st.log[i].loss;
     }
     for (int y = 0; y < 2; y++)
@@ -697,8 +698,10 @@ static void test_fit_pair(void **state) {
   memcpy(at_start.transmission_specular, start.transmission_specular, sizeof at_start.transmission_specular);
   wv_fit_record r0;
   assert_int_equal(wv_fit_loss(&sb, &photo_t, d, &at_start, &o, &r0, &err), WV_OK);
-  print_message("back-lit loss: the start's colours %.5f, the fit's last iteration %.5f\n", r0.loss - o.w_prior * r0.prior,
-                loss_t_last);
+  print_message("back-lit loss: the start's colours %.5f, the colours' chosen start %.5f, the fit's last iteration %.5f\n",
+                r0.loss - o.w_prior * r0.prior, loss_t_first, loss_t_last);
+  /* the chosen start (the lowest of the start and two brightness matches) is well below the start */
+  assert_true(loss_t_first < 0.8 * (r0.loss - o.w_prior * r0.prior));
   assert_true(loss_t_last < 0.5 * (r0.loss - o.w_prior * r0.prior));
   /* stopped in the colours' iterations, written, read and continued: the same fit (the
    * checkpoint says it is a pair's, and its log which iterations were the colours') */
