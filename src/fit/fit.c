@@ -241,9 +241,19 @@ static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st
   wv_fit_record rec = {0};
   wv_status rc = evaluate_t(c, tb, &best, &rec, NULL, err);
   double least = rec.loss;
-  for (int mode = WV_TRANS_MATCH_FREE; !rc && mode <= WV_TRANS_MATCH_SPLIT; mode++) {
+  /* the split kept, from the start and from its mirror (the yarn types' colours exchanged:
+   * the start's way round is the reflection colours' before the colour split, which may
+   * have turned them) */
+  for (int k = 0; !rc && k < 3; k++) {
+    wv_trans_match mode = k == 0 ? WV_TRANS_MATCH_FREE : WV_TRANS_MATCH_SPLIT;
     wv_params m = st->params;
-    if ((rc = wv_trans_basis_match(*tb, &c->photo, c->o->down_w, c->o->down_h, (wv_trans_match)mode, &m, err)) ||
+    if (k == 2)
+      for (int ch = 0; ch < 3; ch++) {
+        double t = m.transmission[0][ch], u = m.transmission_specular[0][ch];
+        m.transmission[0][ch] = m.transmission[1][ch], m.transmission[1][ch] = t;
+        m.transmission_specular[0][ch] = m.transmission_specular[1][ch], m.transmission_specular[1][ch] = u;
+      }
+    if ((rc = wv_trans_basis_match(*tb, &c->photo, c->o->down_w, c->o->down_h, mode, &m, err)) ||
         (rc = evaluate_t(c, tb, &m, &rec, NULL, err)))
       break;
     if (rec.loss < least) least = rec.loss, best = m;
@@ -465,7 +475,8 @@ static int colour_clusters(const wv_scene *s, const wv_image *ph, double r[2][3]
  * with the colours the other way round is not. Where both cover half (plain, basket, 2/2
  * twills), the swap is a shift of the weave when the two densities are equal, which the
  * registration after the fit finds; with other densities it is not, and the loss decides. */
-static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
+static wv_status colour_split(fit_ctx *c, wv_fit_state *st, const wv_scene *s, const wv_image *photo,
+                              const wv_fit_opts *o, wv_error *err) {
   double r[2][3], dark_share = 0.5;
   wv_fit_record base = {0};
   wv_status rc = evaluate(c, &st->params, &base, NULL, NULL, err);
@@ -534,6 +545,22 @@ static wv_status colour_split(fit_ctx *c, wv_fit_state *st, wv_error *err) {
       cand_loss[cand] = rec.loss;
     }
     if (cand_loss[cand] < best) best = cand_loss[cand], choice = cand, best_p = cand_p[cand];
+  }
+  if (!rc && fabs(warp_share - 0.5) < SPLIT_WEAVE_MIN && choice >= 1 && choice <= 4 && o->register_radius > 0) {
+    /* A split won and each yarn type covers half: the photo in register tells the way
+     * round. The loss's choice is registered (its densities near the start's and its phase,
+     * as after the fit), the other way round put in phase at those densities, and the
+     * higher SSIM per RGB channel kept (the loss's choice on a tie). */
+    int other = choice + ((choice & 1) ? 1 : -1);
+    wv_fit_state t = *st;
+    t.params = cand_p[choice];
+    double ssim_other = 0;
+    if (!(rc = wv_fit_register_near(&t, s, photo, o, err))) {
+      wv_params m = cand_p[other];
+      m.density[0] = t.params.density[0], m.density[1] = t.params.density[1];
+      rc = wv_fit_register_phase(&t, s, photo, &m, o, &ssim_other, err);
+    }
+    if (!rc && ssim_other > t.reg_ssim_after) choice = other, best_p = cand_p[other];
   }
   st->params = best_p;
   st->colour_split = choice;
@@ -752,7 +779,7 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
     if (!(rc = stage_ctx(&cx[1], 1, s, photo, d, o, &st->timing, err))) {
       made[1] = 1;
       cx[1].scene.psf_sigma = sb.psf_sigma / scale;
-      rc = colour_split(&cx[1], st, err);
+      rc = colour_split(&cx[1], st, s, photo, o, err);
     }
     st->timing.render = saved.render, st->timing.descriptor = saved.descriptor; /* counted as a discrete step */
     st->timing.discrete += omp_get_wtime() - td;

@@ -21,6 +21,12 @@ wv_status wv_fit_register_candidates(const wv_fit_state *st, const wv_scene *s, 
                                      const wv_fit_opts *o, int whole, double cand[4][2], int *nc, int *renders,
                                      wv_error *err);
 
+/* The whole image's SSIM per RGB channel of p in register at its own densities: the phase
+ * (a fabric offset on st's) by one phase correlation, kept if it raises the SSIM with the
+ * weave in step, as wv_fit_register keeps it. */
+wv_status wv_fit_register_phase(const wv_fit_state *st, const wv_scene *s, const wv_image *photo,
+                                const wv_params *p, const wv_fit_opts *o, double *ssim, wv_error *err);
+
 /* wv_fit_register without its first step: the densities are searched near st's only (the
  * grid of whole yarns/inch +-register_radius, then the climbs), for a photo whose densities are
  * known to be close (a pair's back-lit photo in its own view). */

@@ -161,6 +161,18 @@ static wv_status measure(level *l, const wv_scene *win, const wv_params *p, cons
   return rc;
 }
 
+/* The fabric offset that moves a render by shift pixels, through the local map pixel ->
+ * fabric at the centre: photo(x) ~ render(x - shift) means fabric(x) must become
+ * fabric(x - shift). {0, 0} where the centre misses the cloth. */
+static void shift_offset(const wv_scene *full, const double shift[2], double off[2]) {
+  double f0[2], fx[2], fy[2];
+  double cx = 0.5 * full->width, cy = 0.5 * full->height;
+  off[0] = off[1] = 0;
+  if (wv_render_fabric_at(full, cx, cy, f0) && wv_render_fabric_at(full, cx + 1, cy, fx) &&
+      wv_render_fabric_at(full, cx, cy + 1, fy))
+    for (int i = 0; i < 2; i++) off[i] = -((fx[i] - f0[i]) * shift[0] + (fy[i] - f0[i]) * shift[1]);
+}
+
 static int in_range(const double d[2]) {
   return d[0] >= WV_DENSITY_MIN && d[0] <= WV_DENSITY_MAX && d[1] >= WV_DENSITY_MIN && d[1] <= WV_DENSITY_MAX;
 }
@@ -520,15 +532,8 @@ static wv_status register_run(wv_fit_state *st, const wv_scene *s, const wv_imag
   if (!rc) rc = hill_climb(&S[3], base, fine_steps + 2, 1, cur, &best, err);
   const scored *at = rc ? NULL : seen_find(&S[3], cur); /* the best's shift, from its score */
   if (at) shift[0] = at->shift[0], shift[1] = at->shift[1], best = at->score;
-  /* The shift becomes a fabric offset through the local map pixel -> fabric at
-   * the centre: photo(x) ~ render(x - shift) means fabric(x) must become
-   * fabric(x - shift). */
-  double f0[2], fx[2], fy[2], off[2] = {0, 0};
-  double cx = 0.5 * full.width, cy = 0.5 * full.height;
-  if (!rc && wv_render_fabric_at(&full, cx, cy, f0) && wv_render_fabric_at(&full, cx + 1, cy, fx) &&
-      wv_render_fabric_at(&full, cx, cy + 1, fy)) {
-    for (int i = 0; i < 2; i++) off[i] = -((fx[i] - f0[i]) * shift[0] + (fy[i] - f0[i]) * shift[1]);
-  }
+  double off[2] = {0, 0};
+  if (!rc) shift_offset(&full, shift, off);
   if (!rc) { /* kept only if the whole image's SSIM rises */
     wv_params cand_p = *base;
     cand_p.density[0] = cur[0], cand_p.density[1] = cur[1];
@@ -551,5 +556,34 @@ static wv_status register_run(wv_fit_state *st, const wv_scene *s, const wv_imag
   }
   for (int i = 0; i < 4; i++) set_free(&S[i]);
   free(S);
+  return rc;
+}
+
+wv_status wv_fit_register_phase(const wv_fit_state *st, const wv_scene *s, const wv_image *photo,
+                                const wv_params *p, const wv_fit_opts *o, double *ssim, wv_error *err) {
+  wv_scene full;
+  wv_fit_scene(st, s, &full);
+  level l;
+  wv_status rc = level_init(&l, &full, photo, 1 << 30, o, err);
+  if (rc) return rc;
+  l.ro.threads = o->threads;
+  double ncc, before, shift[2], off[2];
+  wv_image img;
+  if (!(rc = measure(&l, &l.win, p, &l.ro, &ncc, &before, err)) &&
+      !(rc = wv_render(&l.win, p, &l.ro, &img, NULL, err))) {
+    rc = pc_best(&l.pc, &img, l.max_shift, shift, &ncc, err);
+    wv_image_free(&img);
+  }
+  *ssim = before;
+  if (!rc) {
+    shift_offset(&full, shift, off);
+    wv_scene moved = l.win;
+    moved.fabric_offset[0] += off[0], moved.fabric_offset[1] += off[1];
+    double after;
+    /* kept as wv_fit_register keeps a registration: a higher SSIM with the weave in step */
+    if (!(rc = measure(&l, &moved, p, &l.ro, &ncc, &after, err)) && after > before && ncc >= WV_REGISTER_MIN_NCC)
+      *ssim = after;
+  }
+  level_free(&l);
   return rc;
 }
