@@ -215,6 +215,20 @@ static void test_stopping_rule(void **state) {
   assert_true(wv_fit_converged(log, 0, 60, 10));
   for (int i = 40; i < 80; i++) log[i].loss = log[i].loss_t = 5 * pow(0.997, i - 40);
   assert_false(wv_fit_converged(log, 0, 60, 10));
+  /* ... which still falling end when they reach their share of the iterations
+   * (WV_FIT_T_SHARE of 100: 25), at iteration 65 of a pair's fit, not at the limit */
+  wv_fit_opts o;
+  opts(&o, 100);
+  wv_params p;
+  target(&p);
+  wv_fit_state st;
+  wv_error err = {0};
+  assert_int_equal(wv_fit_state_init(&st, &p, &o, &err), WV_OK);
+  st.pair = 1;
+  memcpy(st.log, log, sizeof log);
+  for (st.iter = 41; st.iter <= 80; st.iter++)
+    assert_int_equal(wv_fit_finished(&st, &o), st.iter >= 40 + (int)(100 * WV_FIT_T_SHARE));
+  wv_fit_state_free(&st);
 }
 
 /* A fit that starts at the target stops long before its 200 iterations (the rule ends

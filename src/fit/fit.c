@@ -94,11 +94,18 @@ static int t_next(const wv_fit_record *log, const wv_fit_opts *o, int pair, int 
          wv_fit_converged(log, from, done, o->patience);
 }
 
+/* A pair's iterations on the transmission photo alone in from .. done - 1 have reached
+ * their share of the iterations, WV_FIT_T_SHARE. */
+static int t_spent(const wv_fit_record *log, const wv_fit_opts *o, int pair, int stage, int from, int done) {
+  int tf = t_phase(log, from, done);
+  return pair && stage == 1 && tf < done && done - tf >= (int)(o->iters * WV_FIT_T_SHARE);
+}
+
 /* The stage after iteration `done` (iterations from .. done - 1 in the stage so far): the
  * next one when the stage reached its limit or converged (a pair's last stage: its
- * iterations on the transmission photo converged). */
+ * iterations on the transmission photo converged or reached their share). */
 static int stage_after(const wv_fit_record *log, const wv_fit_opts *o, int pair, int stage, int *from, int done) {
-  while (stage < 2 && (done >= stage_limit(o, stage) ||
+  while (stage < 2 && (done >= stage_limit(o, stage) || t_spent(log, o, pair, stage, *from, done) ||
                        ((!pair || stage == 0 || t_phase(log, *from, done) < done) &&
                         wv_fit_converged(log, *from, done, o->patience))))
     if (++stage < 2) *from = done;
@@ -231,8 +238,9 @@ static wv_status evaluate_t(fit_ctx *c, wv_trans_basis **tb, const wv_params *p,
 }
 
 /* The transmission colours' start, before their first iteration: of the colours as they are
- * and those matched to the back-lit photo's brightness (wv_trans_basis_match, the start's
- * split of the light kept or free), the lowest back-lit loss. Adam's steps from the start
+ * and those matched to the back-lit photo's brightness (wv_trans_basis_match: free, or with
+ * the split of the light between the yarn types kept, the start's or its mirror's), the
+ * lowest back-lit loss. Adam's steps from the start
  * took about 50 iterations to reach that brightness; the match alone, free, can split the
  * light wrongly, and the split kept can leave it too bright (docs/measurements.md, "The
  * back-lit photo's colours alone"). */
@@ -241,9 +249,9 @@ static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st
   wv_fit_record rec = {0};
   wv_status rc = evaluate_t(c, tb, &best, &rec, NULL, err);
   double least = rec.loss;
-  /* the split kept, from the start and from its mirror (the yarn types' colours exchanged:
-   * the start's way round is the reflection colours' before the colour split, which may
-   * have turned them) */
+  /* free; the split kept; the split of the mirror kept (the yarn types' colours exchanged:
+   * the start's way round is that of the reflection colours before the colour split, which
+   * may have turned them) */
   for (int k = 0; !rc && k < 3; k++) {
     wv_trans_match mode = k == 0 ? WV_TRANS_MATCH_FREE : WV_TRANS_MATCH_SPLIT;
     wv_params m = st->params;
@@ -474,7 +482,9 @@ static int colour_clusters(const wv_scene *s, const wv_image *ph, double r[2][3]
  * yarns' shading, which moves that share away from the weave's coverage), and a start
  * with the colours the other way round is not. Where both cover half (plain, basket, 2/2
  * twills), the swap is a shift of the weave when the two densities are equal, which the
- * registration after the fit finds; with other densities it is not, and the loss decides. */
+ * registration after the fit finds; with other densities it is not, and the photo in
+ * register decides: the way round whose render, in phase with the photo, has the higher
+ * SSIM (docs/fit.md). */
 static wv_status colour_split(fit_ctx *c, wv_fit_state *st, const wv_scene *s, const wv_image *photo,
                               const wv_fit_opts *o, wv_error *err) {
   double r[2][3], dark_share = 0.5;
