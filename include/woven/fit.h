@@ -74,8 +74,8 @@ void wv_fit_opts_default(wv_fit_opts *o);
 #define WV_FIT_PATIENCE 10       /* the default patience (0: every iteration runs; docs/measurements.md) */
 #define WV_FIT_LR_T_SCALE 3      /* a back-lit photo fitted alone: the transmission colours' learning
                                   * rate, this times lr (docs/fit.md) */
-#define WV_FIT_T_SHARE 0.25      /* a pair: the transmission colours' share of the iterations, left
-                                  * to them and their most (docs/fit.md, "Photo pairs") */
+#define WV_FIT_T_SHARE 0.25      /* a pair: the share of the iterations left to the transmission
+                                  * colours, and the most they take (docs/fit.md, "Photo pairs") */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000
@@ -198,9 +198,9 @@ wv_status wv_fit_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo,
  * iterations fit the reflection photo alone, as wv_fit_run does, until its stopping rule or
  * (1 - WV_FIT_T_SHARE) of the iterations; then the transmission photo alone, stepping only the
  * transmission colours (which the reflection photo does not see), until its own rule,
- * WV_FIT_T_SHARE of the iterations or the iteration limit. The colour split, noise sweep, alignment, registration and distortion read
- * the reflection photo alone; the back-lit photo then gets its own view. s_t or photo_t NULL:
- * wv_fit_run. */
+ * WV_FIT_T_SHARE of the iterations or the iteration limit. The colour split, noise sweep,
+ * alignment, registration and distortion read the reflection photo alone; the back-lit photo
+ * then gets its own view. s_t or photo_t NULL: wv_fit_run. */
 wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_scene *s_t,
                           const wv_image *photo_t, wv_descriptor *d, const wv_fit_opts *o, wv_fit_callback cb,
                           void *user, wv_error *err);

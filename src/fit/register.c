@@ -566,12 +566,11 @@ wv_status wv_fit_register_phase(const wv_fit_state *st, const wv_scene *s, const
   level l;
   wv_status rc = level_init(&l, &full, photo, 1 << 30, o, err);
   if (rc) return rc;
-  l.ro.threads = o->threads;
-  double ncc, before, shift[2], off[2];
+  double ncc, before = 0, shift[2], off[2];
   wv_image img;
-  if (!(rc = measure(&l, &l.win, p, &l.ro, &ncc, &before, err)) &&
-      !(rc = wv_render(&l.win, p, &l.ro, &img, NULL, err))) {
-    rc = pc_best(&l.pc, &img, l.max_shift, shift, &ncc, err);
+  if (!(rc = wv_render(&l.win, p, &l.ro, &img, NULL, err))) { /* one render: its SSIM and its shift */
+    rc = wv_ssim(&l.ref, &img, WV_SSIM_RGB, &before, err);
+    if (!rc) rc = pc_best(&l.pc, &img, l.max_shift, shift, &ncc, err);
     wv_image_free(&img);
   }
   *ssim = before;
