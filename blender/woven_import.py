@@ -8,7 +8,10 @@ and a sheen; an anisotropic Glossy BSDF carries woven's fibre specular (k_s from
 specular.png, which is an RGB colour the Principled specular cannot hold), with its
 roughness along the fibre tangent (tangent.png, turned into world space through the
 mesh's UV tangents) from woven's SGGX alpha and wide across it, as a fibre's highlight
-spreads across its length. Gaps between yarns (yarn_id.png) are black.
+spreads across its length. Light through the cloth: a Translucent BSDF carries woven's
+diffuse transmission (transmission.png: k_t times the cloth's diffuse transmittance), and the
+open gaps between yarns (open.png) are a Transparent BSDF: they reflect nothing and let the
+light behind the cloth straight through.
 Install: Edit > Preferences > Add-ons > Install... and pick this file; then
 File > Import > woven capture. See docs/blender.md."""
 
@@ -33,7 +36,7 @@ import bpy
 from bpy.props import FloatProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
-MAPS = ("normal", "tangent", "yarn_id", "diffuse", "specular", "roughness")
+MAPS = ("normal", "tangent", "yarn_id", "diffuse", "specular", "roughness", "transmission", "open")
 
 
 class WovenImportError(Exception):
@@ -139,7 +142,7 @@ def build_material(name, maps, meta, params, uv_mm, sheen=0.0):
         t.image.name = f"{name} {m}"
         t.image.pack()  # the material survives the maps' folder
         # albedos are sRGB-encoded in the PNGs; vectors, ids and alpha are data
-        t.image.colorspace_settings.name = "sRGB" if m in ("diffuse", "specular") else "Non-Color"
+        t.image.colorspace_settings.name = "sRGB" if m in ("diffuse", "specular", "transmission") else "Non-Color"
         L.new(mapping.outputs["Vector"], t.inputs["Vector"])
         tex[m] = t
 
@@ -210,8 +213,25 @@ def build_material(name, maps, meta, params, uv_mm, sheen=0.0):
     add = node("ShaderNodeAddShader", 500, 200)
     L.new(pr.outputs["BSDF"], add.inputs[0])
     L.new(gloss.outputs["BSDF"], add.inputs[1])
-    out = node("ShaderNodeOutputMaterial", 700, 200, target="CYCLES")
-    L.new(add.outputs["Shader"], out.inputs["Surface"])
+
+    # light through the yarns: woven's diffuse transmission k_t F_t, F_t = (w cos_b + (1 - w)
+    # |mu_i|) / pi times the cloth's diffuse transmittance (the map holds k_t times it), cos_b
+    # on the yarn's underside, the mirror of its top: a Translucent BSDF (cos / pi toward the
+    # far side) on the diffuse lobe's blended normal
+    trans = node("ShaderNodeBsdfTranslucent", 200, -300)
+    L.new(tex["transmission"].outputs["Color"], trans.inputs["Color"])
+    L.new(nmap_d.outputs["Normal"], trans.inputs["Normal"])
+    add_t = node("ShaderNodeAddShader", 700, 0)
+    L.new(add.outputs["Shader"], add_t.inputs[0])
+    L.new(trans.outputs["BSDF"], add_t.inputs[1])
+    # open gaps: no yarn, so nothing reflected and the light behind seen straight through
+    gap = node("ShaderNodeBsdfTransparent", 700, -250)
+    opening = node("ShaderNodeMixShader", 900, 0)
+    L.new(tex["open"].outputs["Color"], opening.inputs["Fac"])
+    L.new(add_t.outputs["Shader"], opening.inputs[1])
+    L.new(gap.outputs["BSDF"], opening.inputs[2])
+    out = node("ShaderNodeOutputMaterial", 1100, 0, target="CYCLES")
+    L.new(opening.outputs["Shader"], out.inputs["Surface"])
     mat["woven"] = {"tile_mm": list(tile), "uv_mm": uv_mm, "params": json.dumps(params)}
     return mat
 
