@@ -74,10 +74,11 @@ int wv_ffi_record_grad(const wv_ffi_record *rec, const float *dcapture, size_t n
 void wv_ffi_record_free(wv_ffi_record *rec);
 
 /* ---- texture maps (woven maps) ----
- * The seven maps of one weave repeat, size x size pixels each, RGB, in the order of
- * wv_ffi_map_name (normal, tangent, yarn_id, height, diffuse, specular, roughness):
- * out holds 7 * size * size * 3 floats. tile_mm: the tile's width and height in mm. */
-#define WV_FFI_MAP_COUNT 7
+ * The nine maps of one weave repeat, size x size pixels each, RGB, in the order of
+ * wv_ffi_map_name (normal, tangent, yarn_id, height, diffuse, specular, roughness,
+ * transmission, open: woven/maps.h): out holds 9 * size * size * 3 floats. tile_mm: the
+ * tile's width and height in mm. */
+#define WV_FFI_MAP_COUNT 9
 const char *wv_ffi_map_name(int i);
 int wv_ffi_maps(const char *params, int size, float *out, size_t n, double *tile_mm, double *height_max,
                 char *err, size_t err_len);

@@ -66,6 +66,17 @@ def test_maps_equal_cli(root, cli, tmp_path):
     assert (tmp_path / "m2" / "normal.png").exists()
 
 
+def test_maps_light_through(root):
+    """The transmission and open-area maps: a sheer cloth's gaps open, (1 - 0.85)^2 of it, with
+    no light through the yarns there; its yarns pass light."""
+    assert {"transmission", "open"} <= set(woven.MAP_NAMES)
+    m = woven.maps(root / "examples/voile.json", size=128)
+    gap = m["open"][..., 0] > 0.5
+    assert abs(gap.mean() - (1 - 0.85) ** 2) < 0.01
+    assert np.all(m["transmission"][gap] == 0)
+    assert m["transmission"][~gap].min() > 0
+
+
 def test_compare_equals_cli(root, cli, tmp_path):
     a = woven.render(root / TWILL, "flat45", spp=2)
     b = woven.render(root / "examples/satin.json", "flat45", spp=2)

@@ -19,7 +19,7 @@ __all__ = ["WovenError", "Params", "Render", "PARAM_NAMES", "MAP_NAMES", "param_
 
 PARAM_NAMES = tuple(lib.wv_ffi_param_name(i).decode() for i in range(lib.wv_ffi_param_count()))
 """The continuous parameters in the order of every parameter vector (woven/params.h wv_param_id)."""
-MAP_NAMES = tuple(lib.wv_ffi_map_name(i).decode() for i in range(7))
+MAP_NAMES = tuple(lib.wv_ffi_map_name(i).decode() for i in range(9))
 
 _JSON_MAX = 1 << 20  # a parameter file as JSON text is a few kB
 
@@ -159,12 +159,13 @@ def scene_capture(scene, radiance):
 
 def maps(params, size=1024):
     """The tileable maps of one weave repeat (as `woven maps`): a dict of size x size x 3
-    float arrays (normal, tangent, yarn_id, height, diffuse, specular, roughness; vectors
-    in [-1, 1], albedos linear), plus tile_mm (width, height of the tile) and height_max."""
+    float arrays (normal, tangent, yarn_id, height, diffuse, specular, roughness,
+    transmission, open; vectors in [-1, 1], albedos and the transmission linear, open 1 in
+    an open gap), plus tile_mm (width, height of the tile) and height_max."""
     size = _int(size, "size")
     if not 1 <= size <= 8192:
         raise ValueError(f"map size {size} is outside 1..8192")
-    out = np.empty((7, size, size, 3), np.float32)
+    out = np.empty((len(MAP_NAMES), size, size, 3), np.float32)
     tile, hmax = np.zeros(2), ctypes.c_double()
     call(lib.wv_ffi_maps, _text_or_path(params, "parameters"), size, fptr(out), out.size, dptr(tile),
          ctypes.byref(hmax))

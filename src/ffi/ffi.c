@@ -240,8 +240,8 @@ void wv_ffi_record_free(wv_ffi_record *rec) {
   free(rec);
 }
 
-static const char *const MAP_NAMES[WV_FFI_MAP_COUNT] = {"normal", "tangent", "yarn_id", "height",
-                                                        "diffuse", "specular", "roughness"};
+static const char *const MAP_NAMES[WV_FFI_MAP_COUNT] = {"normal",   "tangent",   "yarn_id",      "height", "diffuse",
+                                                        "specular", "roughness", "transmission", "open"};
 const char *wv_ffi_map_name(int i) { return i >= 0 && i < WV_FFI_MAP_COUNT ? MAP_NAMES[i] : NULL; }
 
 int wv_ffi_maps(const char *params, int size, float *out, size_t n, double *tile_mm, double *height_max,
@@ -256,8 +256,8 @@ int wv_ffi_maps(const char *params, int size, float *out, size_t n, double *tile
   if (st) return finish(st, &e, err, err_len);
   wv_maps m;
   if ((st = wv_maps_generate(&p, size, &m, &e))) return finish(st, &e, err, err_len);
-  const wv_image *all[WV_FFI_MAP_COUNT] = {&m.normal, &m.tangent, &m.yarn_id, &m.height,
-                                           &m.diffuse, &m.specular, &m.roughness};
+  const wv_image *all[WV_FFI_MAP_COUNT] = {&m.normal,   &m.tangent,   &m.yarn_id,      &m.height, &m.diffuse,
+                                           &m.specular, &m.roughness, &m.transmission, &m.open};
   for (int k = 0; k < WV_FFI_MAP_COUNT; k++) {
     const wv_image *im = all[k];
     float *dst = out + one * k;
