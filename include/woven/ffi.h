@@ -105,9 +105,11 @@ int wv_ffi_env_builtin(const char *name, int width, float *out, size_t n, char *
  * as `woven capture` writes it. options: JSON text (may be NULL or "{}") with any of
  * pattern, model, descriptor, weights, drape (strings), crop ([x, y, w, h]), iters,
  * iter_spp, iter_scale, seed, threads, align_radius, register_radius, distort_degree
- * (integers) and force (boolean), meaning what the command's options mean.
+ * (integers) and force (boolean), and for a photo pair transmission (the back-lit photo),
+ * transmission_scene and pair_model (strings), meaning what the command's options mean.
  * summary (may be NULL): JSON text with the chosen pattern, SSIM of the estimate and the
- * fit, the iterations and the parameters. */
+ * fit, the iterations and the parameters; for a pair also ssim_rgb_fit_t,
+ * ssim_rgb_blurred_photo_t and wsc_fit_t. */
 int wv_ffi_capture(const char *photo, const char *scene, const char *dir, const char *options, char *summary,
                    size_t summary_len, char *err, size_t err_len);
 

@@ -153,3 +153,19 @@ def test_capture(root, tmp_path):
     assert (out / "network.json").exists() and (out / "report.html").exists()
     with pytest.raises(woven.WovenError):  # an earlier capture is not replaced without force
         woven.capture(root / "examples/photo_twill_cylinder.png", "cylinder", out, pattern="twill", iters=1)
+
+
+def test_capture_pair(root, tmp_path):
+    """A photo pair through the library: a sheer cloth rendered lit from the front and from
+    behind, captured from both (cut short), its back-lit re-render and figures returned."""
+    sheer = root / "examples/voile.json"
+    for name, scene in (("r.png", "flat45"), ("t.png", "flat45-back")):
+        woven.write_image(tmp_path / name, woven.render(sheer, scene, spp=2, threads=2).capture)
+    with pytest.raises(woven.WovenError, match="need 'transmission'"):
+        woven.capture(tmp_path / "r.png", "flat45", tmp_path / "x", transmission_scene="flat45-back")
+    out = tmp_path / "pair"
+    r = woven.capture(tmp_path / "r.png", "flat45", out, transmission=tmp_path / "t.png", pattern="plain",
+                      iters=1, iter_spp=1, register_radius=0, distort_degree=0, drape="none", threads=2)
+    assert 0 < r["ssim_rgb_fit_t"] <= 1 and 0 < r["ssim_rgb_blurred_photo_t"] <= 1
+    assert r["render_t"].shape == (512, 512, 3) and (out / "photo_t.png").exists()
+    assert r["params"].json == woven.Params(out / "params.json").json

@@ -238,14 +238,22 @@ def capture(photo, scene, out, **opts):
     """`woven capture`: FabricNet's estimate of the photo, then the fit; every output in
     directory out. opts: pattern, model, descriptor, weights, drape, crop (x, y, w, h),
     iters, iter_spp, iter_scale, seed, threads, align_radius, register_radius,
-    distort_degree, force. Returns a dict: pattern, ssim_network, ssim_fit, iterations,
-    dir, params (a woven.Params) and render (the fit's render.png as an array)."""
+    distort_degree, force, and for a photo pair transmission (the back-lit photo),
+    transmission_scene, pair_model. Returns a dict: pattern, ssim_network, ssim_fit,
+    iterations, dir, params (a woven.Params) and render (the fit's render.png as an array);
+    for a pair also ssim_rgb_fit_t, ssim_rgb_blurred_photo_t, wsc_fit_t and render_t (the
+    back-lit re-render)."""
     if "crop" in opts:
         opts["crop"] = [int(v) for v in opts["crop"]]
+    for k in ("transmission", "transmission_scene", "pair_model"):
+        if opts.get(k) is not None:
+            opts[k] = os.fsdecode(os.fspath(opts[k]))
     buf = ctypes.create_string_buffer(_JSON_MAX)
     call(lib.wv_ffi_capture, os.fsencode(photo), _text_or_path(scene, "scene"), os.fsencode(out),
          json.dumps(opts).encode(), buf, len(buf))
     res = json.loads(buf.value.decode())
     res["params"] = Params(res["params"])
     res["render"] = read_image(os.path.join(os.fsdecode(out), "render.png"))
+    if "ssim_rgb_fit_t" in res:
+        res["render_t"] = read_image(os.path.join(os.fsdecode(out), "render_t.png"))
     return res

@@ -381,7 +381,8 @@ static wv_status opt_str(json_t *o, const char *key, const char **out, wv_error 
 
 static const char *const CAPTURE_KEYS[] = {"pattern", "model", "descriptor", "weights", "drape", "crop", "iters",
                                            "iter_spp", "iter_scale", "seed", "threads", "align_radius",
-                                           "register_radius", "distort_degree", "force", NULL};
+                                           "register_radius", "distort_degree", "force", "transmission",
+                                           "transmission_scene", "pair_model", NULL};
 
 static wv_status capture_opts(json_t *o, wv_capture_opts *co, wv_error *e) {
   const char *key;
@@ -398,6 +399,11 @@ static wv_status capture_opts(json_t *o, wv_capture_opts *co, wv_error *e) {
   if (!st) st = opt_str(o, "descriptor", &co->estimate.descriptor, e);
   if (!st) st = opt_str(o, "weights", &co->estimate.weights, e);
   if (!st) st = opt_str(o, "drape", &co->drape, e);
+  if (!st) st = opt_str(o, "transmission", &co->photo_t, e);
+  if (!st) st = opt_str(o, "transmission_scene", &co->scene_t, e);
+  if (!st) st = opt_str(o, "pair_model", &co->pair_model, e);
+  if (!st && !co->photo_t && (co->scene_t || co->pair_model))
+    st = wv_fail(e, WV_ERR_INVALID, "capture options 'transmission_scene' and 'pair_model' need 'transmission'");
   if (!st) st = opt_int(o, "iters", 0, WV_FIT_MAX_ITERS, &co->fit.iters, &co->iters_given, e);
   if (!st) st = opt_int(o, "iter_spp", 1, WV_SCENE_MAX_SPP, &co->fit.iter_spp, NULL, e);
   if (!st) st = opt_int(o, "iter_scale", 1, WV_FIT_MAX_ITER_SCALE, &co->fit.iter_scale, NULL, e);
@@ -457,6 +463,11 @@ int wv_ffi_capture(const char *photo, const char *scene, const char *dir, const 
   json_t *s = json_pack("{s:s,s:s,s:b,s:f,s:f,s:i,s:o}", "dir", dir, "pattern", out.state.params.pattern,
                         "pattern_chosen", est.chosen, "ssim_network", out.ssim_start, "ssim_fit", out.ssim_fit,
                         "iterations", out.state.iter, "params", params ? params : json_null());
+  if (s && out.pair) { /* the transmission photo against its re-render */
+    json_object_set_new(s, "ssim_rgb_fit_t", json_real(out.ssim_rgb_t));
+    json_object_set_new(s, "ssim_rgb_blurred_photo_t", json_real(out.ssim_rgb_blurred_t));
+    json_object_set_new(s, "wsc_fit_t", json_real(out.wsc_t));
+  }
   wv_fit_state_free(&out.state);
   wv_estimate_free(&est);
   if (summary && summary_len) {
