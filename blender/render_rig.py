@@ -1,7 +1,8 @@
 """Run inside Blender (blender -b --python blender/render_rig.py -- ARGS): rebuilds a woven
 scene in Blender, a capture rig (camera, point light, the flat sample) or a mesh scene
-(camera, environment, point and area lights, meshes, spheres, quads, their transforms), puts the woven_import add-on's
-material on the fabric, and renders linear radiance to an EXR with Cycles on the CPU.
+(camera, environment, point and area lights, meshes, spheres, quads, their transforms),
+puts the woven_import add-on's material on the fabric, and renders linear radiance to an
+EXR with Cycles on the CPU.
 Blender keeps woven's coordinates as they are (y up); the environment lookup is turned
 to match woven's equirectangular convention."""
 import argparse
