@@ -34,6 +34,11 @@ def args():
     return ap.parse_args(argv)
 
 
+def frame(x, y, z, p):
+    """The object matrix of axes x, y, z (its local axes in the world) at position p."""
+    return Matrix(((x[0], y[0], z[0], p[0]), (x[1], y[1], z[1], p[1]), (x[2], y[2], z[2], p[2]), (0, 0, 0, 1)))
+
+
 def camera(pos, look, up, vfov_deg):
     cam = bpy.data.cameras.new("camera")
     cam.sensor_fit = "VERTICAL"
@@ -44,8 +49,7 @@ def camera(pos, look, up, vfov_deg):
     p, z = Vector(pos), -(Vector(look) - Vector(pos)).normalized()  # Blender cameras look down -z
     x = Vector(up).cross(z).normalized()
     y = z.cross(x)
-    obj.matrix_world = Matrix(((x[0], y[0], z[0], p[0]), (x[1], y[1], z[1], p[1]), (x[2], y[2], z[2], p[2]),
-                               (0, 0, 0, 1)))
+    obj.matrix_world = frame(x, y, z, p)
     bpy.context.scene.camera = obj
 
 
@@ -80,8 +84,7 @@ def area_light(pos, look, size, radiance):
     light.energy = 4 * size[0] * size[1] * top
     obj = bpy.data.objects.new("area", light)
     x, y, z = ex, -ey, -n  # local -z along n, a right-handed frame
-    obj.matrix_world = Matrix(((x[0], y[0], z[0], pos[0]), (x[1], y[1], z[1], pos[1]), (x[2], y[2], z[2], pos[2]),
-                               (0, 0, 0, 1)))
+    obj.matrix_world = frame(x, y, z, pos)
     bpy.context.scene.collection.objects.link(obj)
 
 
