@@ -3,6 +3,7 @@
  *   recover_degraded [--per-family N] [--first I] [--family NAME[,NAME...]] [--seed S]
  *                    [--degrade on|off] [--iters N] [--iter-spp N] [--iter-scale N]
  *                    [--w-struct X] [--threads N] [--jobs N] [--model M] [--save DIR]
+ *                    [--shot-max A]
  * Targets: for each family (plain, basket, twill, satin; --family: those listed) draws I ..
  * I+N-1 (default 0 .. 7). Draw i of a family takes its built-in 3 i mod n (n built-ins in
  * wv_weave_builtin_name order: the first draws cover both orientations of the asymmetric
@@ -18,8 +19,9 @@
  * bilinear resampling (the view enlarged by a few percent so that no pixel samples outside
  * the render: the photo's densities are the drawn ones times the zoom, which the line and the
  * JSON compare the fit's with), a camera blur (Gaussian, sigma 0.5..1.5 px), sensor noise (variance
- * a x + b on the exposed signal x), then the scene's response, 8 bits and a JPEG round trip
- * (libjpeg-turbo, quality 75..95). --degrade off: the render quantised to 8 bits.
+ * a x + b on the exposed signal x; a from 0.0003 up to 0.003, or up to --shot-max: a grainier
+ * photo), then the scene's response, 8 bits and a JPEG round trip (libjpeg-turbo, quality
+ * 75..95). --degrade off: the render quantised to 8 bits.
  * Each target is captured as `woven capture` captures a photo (the network's estimate, the
  * pattern choice, the fit) and measured by SSIM (per RGB channel, averaged) against the
  * ceiling: the true parameters rendered with the fit's noise seed instead of the target's,
@@ -86,17 +88,18 @@ typedef struct {
   uint64_t seed;
   double ypi_one_px; /* yarns per inch of yarns one pixel apart at the image centre */
   const char *save;  /* a directory for the targets (PNG), or NULL */
+  double shot_hi;    /* the shot noise's a is drawn over DEG_SHOT_LO .. shot_hi */
 } plan;
 
 static double uni(uint64_t seed, uint64_t k, double lo, double hi) {
   return lo + (hi - lo) * wv_u01d(wv_hash2(seed, k, 0x756e69));
 }
 
-static void draw_degradation(uint64_t seed, degradation *d) {
+static void draw_degradation(uint64_t seed, double shot_hi, degradation *d) {
   d->rotation_deg = uni(seed, 1, -DEG_ROTATION, DEG_ROTATION);
   d->lens_k = uni(seed, 2, -DEG_LENS, DEG_LENS);
   d->blur_px = uni(seed, 3, DEG_BLUR_LO, DEG_BLUR_HI);
-  d->noise_a = uni(seed, 4, DEG_SHOT_LO, DEG_SHOT_HI);
+  d->noise_a = uni(seed, 4, DEG_SHOT_LO, shot_hi);
   d->noise_b = uni(seed, 5, 0, DEG_READ_HI);
   d->jpeg_quality = DEG_JPEG_LO + (int)floor(uni(seed, 6, 0, DEG_JPEG_HI - DEG_JPEG_LO + 1 - 1e-9));
 }
@@ -228,7 +231,7 @@ static void run_target(const study *st, const plan *pl, int index, int fam, int 
   target.noise_level = r->noise_level = (int)fmin(floor(uni(ts, 12, 0, NOISE_LEVEL_MAX + 1)), NOISE_LEVEL_MAX);
   if (r->two_colour) two_colour(&target, ts);
   if (wv_params_validate(&target, &err)) die(&err);
-  draw_degradation(wv_hash2(ts, 13, 0x646567), &r->deg);
+  draw_degradation(wv_hash2(ts, 13, 0x646567), pl->shot_hi, &r->deg);
   r->deg.zoom = pl->degrade ? geometry_zoom(st->s->width, st->s->height, r->deg.rotation_deg, r->deg.lens_k) : 1;
   wv_image photo, ceiling;
   shoot(st, pl, &target, &r->deg, wv_hash2(ts, 14, 0x646567), 1, &photo);
@@ -426,7 +429,8 @@ static double ypi_one_px(const wv_scene *s) {
 static int usage(void) {
   fprintf(stderr, "usage: recover_degraded [--per-family N] [--first I] [--family NAME[,NAME...]] [--seed S]\n"
                   "                        [--degrade on|off] [--iters N] [--iter-spp N] [--iter-scale N]\n"
-                  "                        [--w-struct X] [--threads N] [--jobs N] [--model M] [--save DIR]\n");
+                  "                        [--w-struct X] [--threads N] [--jobs N] [--model M] [--save DIR]\n"
+                  "                        [--shot-max A]\n");
   return 1;
 }
 
@@ -434,7 +438,7 @@ int main(int argc, char **argv) {
   wv_fit_opts o;
   wv_fit_opts_default(&o);
   int per = 8, first = 0, jobs = 1, fam_on[NFAM] = {1, 1, 1, 1};
-  plan pl = {.degrade = 1, .seed = 1};
+  plan pl = {.degrade = 1, .seed = 1, .shot_hi = DEG_SHOT_HI};
   const char *model = NULL;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -451,6 +455,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--jobs")) jobs = atoi(v);
     else if (!strcmp(a, "--model")) model = v;
     else if (!strcmp(a, "--save")) pl.save = v;
+    else if (!strcmp(a, "--shot-max")) pl.shot_hi = atof(v);
     else if (!strcmp(a, "--degrade")) {
       if (strcmp(v, "on") && strcmp(v, "off")) return usage();
       pl.degrade = !strcmp(v, "on");
@@ -471,8 +476,8 @@ int main(int argc, char **argv) {
       return usage();
     }
   }
-  if (per < 1 || first < 0 || o.iters < 0 || jobs < 1 || jobs > 64 || o.threads < 0) {
-    fprintf(stderr, "recover_degraded: --per-family at least 1, --first and --iters not negative, --jobs 1..64\n");
+  if (per < 1 || first < 0 || o.iters < 0 || jobs < 1 || jobs > 64 || o.threads < 0 || !(pl.shot_hi >= DEG_SHOT_LO && pl.shot_hi <= 0.1)) {
+    fprintf(stderr, "recover_degraded: --per-family at least 1, --first and --iters not negative, --jobs 1..64, --shot-max 3e-4..0.1\n");
     return 1;
   }
   wv_error err = {0};
@@ -517,8 +522,9 @@ int main(int argc, char **argv) {
       json_object_set_new(fams, FAMILIES[f], json_pack("{s:i,s:f,s:f,s:f}", "targets", n, "family_right",
                                                        (double)fr / n, "mean_ratio", fs / n, "min_ratio", fl));
   }
-  json_t *out = json_pack("{s:s,s:s,s:I,s:b,s:i,s:i,s:i,s:i,s:i,s:f,s:i,s:f,s:f,s:f,s:o,s:o}", "mode", "degraded",
-                          "scene", s.name, "seed", (json_int_t)pl.seed, "degrade", pl.degrade, "per_family", per,
+  json_t *out = json_pack("{s:s,s:s,s:I,s:b,s:f,s:i,s:i,s:i,s:i,s:i,s:f,s:i,s:f,s:f,s:f,s:o,s:o}", "mode", "degraded",
+                          "scene", s.name, "seed", (json_int_t)pl.seed, "degrade", pl.degrade, "shot_max", pl.shot_hi,
+                          "per_family", per,
                           "first", first, "iters", o.iters, "iter_spp", o.iter_spp, "iter_scale", o.iter_scale,
                           "w_struct", o.w_struct, "targets", nt, "family_right_pct", 100.0 * right / nt,
                           "mean_ratio", sum / nt, "min_ratio", lo, "families", fams, "per_target", list);

@@ -222,6 +222,14 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
   cli_info(c, "SSIM %s %.4f -> fit %.4f, WSC %.3f -> %.3f, whitened WSC %.3f -> %.3f; %d iterations in %.1f s; "
               "results in %s/\n", r->start_label, r->ssim_start, r->ssim_fit, wv->wsc[0], wv->wsc[1],
            wv->wsc_whitened[0], wv->wsc_whitened[1], st->iter, st->timing.total, dir);
+  if (wv->below_blurred_copy) {
+    char grain[96] = "";
+    if (wv->periodic_share > -2)
+      snprintf(grain, sizeof grain, "; %.0f%% of the photo's detail is weave, the rest grain", 100 * wv->periodic_share);
+    cli_info(c, "an unsure fit: SSIM per RGB channel %.4f, below the photo's copy blurred by %.0f px (%.4f)%s; "
+                "see report.html\n",
+             wv->ssim_rgb[1], WV_BLURRED_COPY_SIGMA, wv->ssim_rgb_blurred, grain);
+  }
   if (c->json) {
     json_t *o_json = json_pack(
         "{s:o,s:i,s:o,s:o,s:o,s:{s:o,s:o,s:o,s:o,s:o,s:o},s:[o,o],s:{s:[o,o],s:[o,o],s:[o,o]}}", "dir",
@@ -250,6 +258,8 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
       json_object_set_new(o_json, "ssim_rgb_blurred_photo",
                           wv->ssim_rgb_blurred > -2 ? cli_real(wv->ssim_rgb_blurred, 6) : json_null());
       json_object_set_new(o_json, "below_blurred_copy", json_boolean(wv->below_blurred_copy));
+      json_object_set_new(o_json, "photo_periodic_share",
+                          wv->periodic_share > -2 ? cli_real(wv->periodic_share, 4) : json_null());
       json_t *fam = NULL;
       wv_pattern_families fs;
       if (pc) wv_pattern_family_scores(pc, &fs);

@@ -86,11 +86,13 @@ grep -q "network" "$T/cap/report.html" || fail "report does not name the network
 check "capture resumes as a fit" 0 '"iterations": 4' -- "$WOVEN" fit --resume "$T/cap" --iters 4 --json
 check "capture chooses the pattern" 0 '"pattern_choice": {"chosen": "' -- "$WOVEN" capture "$IMG" --scene "$T/tiny.json" --model "$T/m.bin" -o "$T/capc" --iters 2 --iter-spp 2 --align-radius 0 --json
 grep -q '"pattern_choice"' "$T/capc/fit.json" || fail "capture fit.json lacks the pattern choice"
-# How sure the capture is: each family's best candidate and score, the blurred-copy baseline.
+# How sure the capture is: each family's best candidate and score, the blurred-copy baseline,
+# how much of the photo's detail is periodic.
 grep -q '"family_scores": {"[a-z]*": {"pattern": "' "$T/out" || fail "capture JSON lacks the families' scores"
 grep -q '"family_score_kind": "probability"' "$T/out" || fail "capture JSON does not say what the families' scores are"
 grep -q '"ssim_rgb_blurred_photo": [0-9]' "$T/out" || fail "capture JSON lacks the blurred-copy SSIM"
 grep -Eq '"below_blurred_copy": (true|false)' "$T/out" || fail "capture JSON lacks the blurred-copy flag"
+grep -Eq '"photo_periodic_share": (0|1)(\.[0-9]+)?[,}]' "$T/out" || fail "capture JSON lacks the photo's periodic share"
 grep -q 'How the families stood' "$T/capc/report.html" || fail "capture report lacks the families' scores"
 grep -q "found no weave lattice" "$T/capc/report.html" || fail "capture report does not say the analysis found no lattice"
 for f in zoom.png spectra.png; do [[ -s $T/capc/$f ]] || fail "capture output $f missing"; done

@@ -142,6 +142,44 @@ static void test_wsc_whitened(void **state) {
   wv_image_free(&ta), wv_image_free(&tiny);
 }
 
+/* How much of an image's detail is periodic: most of a weave's render, hardly any of
+ * noise, and in between for the weave under grain; the periodic part of a weave's render,
+ * laid on its 4 px blur, gives most of the render back. */
+static void test_detail_periodic(void **state) {
+  (void)state;
+  wv_image a, b, ta, noise, grainy, per, low;
+  wv_error e = {0};
+  weave_crops("twill31s", 3, 120, 90, &a, &b, &ta);
+  noise_image(&noise, SIDE, SIDE, 9);
+  assert_int_equal(wv_image_alloc(&grainy, SIDE, SIDE, 3, NULL), WV_OK);
+  double sd = 0, mean = wv_image_mean(&a);
+  for (size_t i = 0; i < (size_t)SIDE * SIDE * 3; i++) sd += (a.data[i] - mean) * (a.data[i] - mean);
+  sd = sqrt(sd / ((double)SIDE * SIDE * 3));
+  for (size_t i = 0; i < (size_t)SIDE * SIDE; i++) /* grain of twice the weave's contrast */
+    for (int c = 0; c < 3; c++)
+      grainy.data[i * 3 + c] = a.data[i * 3 + c] + (float)(2 * sd * 3.46 * (noise.data[i * 3] - 0.5));
+  double s_weave, s_noise, s_grainy, back, blur_only;
+  assert_int_equal(wv_detail_periodic(&a, 4, &s_weave, &per, &e), WV_OK);
+  assert_int_equal(wv_detail_periodic(&noise, 4, &s_noise, NULL, &e), WV_OK);
+  assert_int_equal(wv_detail_periodic(&grainy, 4, &s_grainy, NULL, &e), WV_OK);
+  assert_int_equal(wv_image_blur(&a, 4, &low, &e), WV_OK);
+  assert_int_equal(wv_ssim(&low, &a, WV_SSIM_RGB, &blur_only, &e), WV_OK);
+  for (size_t i = 0; i < (size_t)SIDE * SIDE * 3; i++) low.data[i] += per.data[i];
+  assert_int_equal(wv_ssim(&low, &a, WV_SSIM_RGB, &back, &e), WV_OK);
+  fprintf(stderr, "periodic share: weave %.3f, weave under grain %.3f, noise %.3f; periodic part on the blur: SSIM %.3f "
+                  "(the blur alone %.3f)\n",
+          s_weave, s_grainy, s_noise, back, blur_only);
+  assert_true(s_weave > 0.6);
+  assert_true(s_noise < 0.05);
+  assert_true(s_grainy > 2 * s_noise && s_grainy < 0.5 * s_weave);
+  assert_true(back > 0.8 && back > blur_only + 0.3);
+  wv_image tiny;
+  assert_int_equal(wv_image_alloc(&tiny, 8, 8, 3, NULL), WV_OK);
+  assert_int_equal(wv_detail_periodic(&tiny, 4, &back, NULL, &e), WV_ERR_INVALID);
+  wv_image_free(&a), wv_image_free(&b), wv_image_free(&ta), wv_image_free(&noise), wv_image_free(&grainy);
+  wv_image_free(&per), wv_image_free(&low), wv_image_free(&tiny);
+}
+
 /* The Gaussian blur keeps a constant and conserves the mean of a smooth image. */
 static void test_gaussian(void **state) {
   (void)state;
@@ -442,7 +480,7 @@ static void test_weave_relate(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_wsc),         cmocka_unit_test(test_wsc_whitened), cmocka_unit_test(test_gaussian), cmocka_unit_test(test_lattice_recovers),
+      cmocka_unit_test(test_wsc),         cmocka_unit_test(test_wsc_whitened), cmocka_unit_test(test_detail_periodic), cmocka_unit_test(test_gaussian), cmocka_unit_test(test_lattice_recovers),
       cmocka_unit_test(test_lattice_refine), cmocka_unit_test(test_no_lattice),  cmocka_unit_test(test_rank), cmocka_unit_test(test_open_area),
       cmocka_unit_test(test_weave_relate),
   };

@@ -30,7 +30,8 @@ static wv_status write_views(const char *dir, const wv_image *photo, const wv_im
 }
 
 /* The blurred copy is measured once (wv_blurred_copy_ssim), and a fit that loses the weave
- * (a flat mean colour) scores below it; the photo itself does not. */
+ * (a flat mean colour) scores below it; the photo itself does not. The photo's periodic share
+ * is measured with it. */
 static void test_below_blurred_copy(void **state) {
   (void)state;
   const char *dir = tu_tmpdir("capture_views");
@@ -52,6 +53,9 @@ static void test_below_blurred_copy(void **state) {
   assert_true(fabs(v.ssim_rgb_blurred - base) < 1e-12);
   assert_true(v.ssim_rgb[1] < base);
   assert_true(v.below_blurred_copy);
+  /* the checks' detail is all periodic */
+  fprintf(stderr, "periodic share of the checks: %.3f\n", v.periodic_share);
+  assert_true(v.periodic_share > 0.9 && v.periodic_share <= 1);
   assert_int_equal(write_views(dir, &photo, &photo, &v), WV_OK);
   assert_true(fabs(v.ssim_rgb[1] - 1) < 1e-9);
   assert_false(v.below_blurred_copy);
@@ -68,8 +72,9 @@ static int contains(const char *path, const char *text) {
   return found;
 }
 
-/* The report warns of a fit below the blurred copy, shows the baseline, and lists the
- * families of the pattern choice with their candidates and scores. */
+/* The report warns of a fit below the blurred copy, shows the baseline and the photo's
+ * periodic share, and lists the families of the pattern choice with their candidates and
+ * scores. */
 static void test_report_says_unsure(void **state) {
   (void)state;
   const char *dir = tu_tmpdir("capture_report");
@@ -94,13 +99,16 @@ static void test_report_says_unsure(void **state) {
   c.prob[satin5] = 0.52, c.prob[twill21s] = 0.31, c.best = satin5;
   snprintf(c.lattice.reason, sizeof c.lattice.reason, "no weave lattice (test)");
   wv_weave_views v = {.ssim_rgb = {0.30, 0.35}, .wsc = {-2, -2}, .wsc_whitened = {-2, -2},
-                      .ssim_rgb_blurred = 0.61, .below_blurred_copy = 1};
+                      .ssim_rgb_blurred = 0.61, .below_blurred_copy = 1, .periodic_share = 0.075};
   wv_report r = {.title = "test", .photo_png = png, .start_png = png, .fit_png = png, .start_label = "network",
                  .start = &p, .fit = &p, .descriptor = "default", .pattern_choice = &c, .weave = &v};
   assert_int_equal(wv_report_write_html(html, &r, &e), WV_OK);
   assert_true(contains(html, "Warning: an unsure capture."));
   assert_true(contains(html, "(0.6100)"));
   assert_true(contains(html, "the fit scores below it"));
+  /* how much of the photo is weave, and what the rest is */
+  assert_true(contains(html, "8% lies in the peaks of its spectrum"));
+  assert_true(contains(html, "<td colspan=\"2\">7.5%</td>"));
   /* the runner-up family, its candidate and its score, and how far behind it is */
   assert_true(contains(html, "<tr><td><b>satin</b></td><td><b>satin5</b></td><td>0.5200</td><td>0.0000</td></tr>"));
   assert_true(contains(html, "<tr><td>twill</td><td>twill21s</td><td>0.3100</td><td>0.2100</td></tr>"));
@@ -108,6 +116,7 @@ static void test_report_says_unsure(void **state) {
   v.ssim_rgb[1] = 0.7, v.below_blurred_copy = 0;
   assert_int_equal(wv_report_write_html(html, &r, &e), WV_OK);
   assert_false(contains(html, "Warning: an unsure capture."));
+  assert_false(contains(html, "lies in the peaks of its spectrum"));
   assert_true(contains(html, "copy blurred by 4 px, the baseline"));
   wv_image_free(&photo);
 }

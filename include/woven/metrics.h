@@ -53,6 +53,15 @@ wv_status wv_image_detail_window(const wv_image *img, int x0, int y0, int w, int
  * out: n * n floats. */
 wv_status wv_weave_spectrum(const wv_image *img, int x0, int y0, int n, float *out, wv_error *err);
 
+/* How much of an image's detail is periodic. The detail is the luminance (Rec. 709 weights)
+ * minus its Gaussian blur of sigma px; share is the part of its power (over the whole image)
+ * in the bins of its spectrum holding at least 8 times the mean of the 9 x 9 bins about them:
+ * near 1 for a clean render of a weave, near 0 for noise, in between for a photo whose weave
+ * lies under the grain of its cloth and sensor. periodic (may be NULL): each channel's detail
+ * kept at those bins only (w x h x 3, allocated here), the periodic texture in register with
+ * img. img: RGB, at least 9 x 9. */
+wv_status wv_detail_periodic(const wv_image *img, double sigma, double *share, wv_image *periodic, wv_error *err);
+
 /* Weave-spectrum correlation (WSC): the Pearson correlation of the weave spectra of
  * the centre 256 x 256 pixels of a and b over the bins farther than 4 bins from DC.
  * Phase-invariant: it asks whether the two images hold the same periodic structure

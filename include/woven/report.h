@@ -33,7 +33,7 @@ wv_status wv_blurred_copy_ssim(const wv_image *photo, double sigma, double *ssim
 
 /* What shows the weave to a person, next to SSIM: SSIM per RGB channel and WSC of start
  * and fit against the photo, the photo's blurred-copy SSIM (wv_blurred_copy_ssim) and
- * whether the fit scores below it, the weave spectra of photo, start and fit (spectra.png)
+ * whether the fit scores below it, how much of the photo's detail is periodic, the weave spectra of photo, start and fit (spectra.png)
  * and the same centre crop of the three, enlarged (zoom.png). Empty paths: not made (the
  * image is too small); wsc and ssim_rgb_blurred -2: not measured. */
 #define WV_WEAVE_ZOOM 4
@@ -41,6 +41,8 @@ typedef struct {
   double ssim_rgb[2], wsc[2], wsc_whitened[2]; /* [0] start, [1] fit */
   double ssim_rgb_blurred;                     /* the photo's copy blurred by WV_BLURRED_COPY_SIGMA px */
   int below_blurred_copy;                      /* ssim_rgb[1] < ssim_rgb_blurred: the fit is unsure */
+  double periodic_share; /* the share of the photo's detail that is periodic (wv_detail_periodic, at
+                          * WV_BLURRED_COPY_SIGMA: the detail the blurred copy lacks); -2: not measured */
   char zoom_png[4096], spectra_png[4096];
   int zoom_side, zoom_factor;
 } wv_weave_views;

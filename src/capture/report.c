@@ -61,12 +61,15 @@ wv_status wv_weave_views_write(const char *dir, const wv_image *photo, const wv_
   const wv_image *img[3] = {photo, start, fit};
   v->wsc[0] = v->wsc[1] = v->wsc_whitened[0] = v->wsc_whitened[1] = v->ssim_rgb_blurred = -2;
   v->below_blurred_copy = 0;
+  v->periodic_share = -2;
   v->zoom_png[0] = v->spectra_png[0] = 0;
   v->zoom_factor = WV_WEAVE_ZOOM;
   wv_status st = WV_OK;
   for (int i = 0; i < 2 && !st; i++) st = wv_ssim(photo, img[i + 1], WV_SSIM_RGB, &v->ssim_rgb[i], err);
   if (!st) st = wv_blurred_copy_ssim(photo, WV_BLURRED_COPY_SIGMA, &v->ssim_rgb_blurred, err);
   if (!st) v->below_blurred_copy = v->ssim_rgb[1] < v->ssim_rgb_blurred;
+  if (!st && photo->c == 3 && wv_detail_periodic(photo, WV_BLURRED_COPY_SIGMA, &v->periodic_share, NULL, NULL))
+    v->periodic_share = -2;
   int n = photo->w < photo->h ? photo->w : photo->h;
   n = n > WV_WSC_SIZE ? WV_WSC_SIZE : n - n % 2;
   if (!st && n >= 32) {
@@ -275,14 +278,21 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
       sb_printf(&b, "\"><figcaption>%s: SSIM %.4f</figcaption></figure>\n", labels[i],
                 i == 1 ? r->ssim_start : r->ssim_fit);
   }
+  char grain[320] = "";
+  if (r->weave && r->weave->periodic_share > -2)
+    snprintf(grain, sizeof grain,
+             " Of the photo's detail (what the blurred copy lacks), %.0f%% lies in the peaks of its spectrum, "
+             "the weave; the rest is grain, which a procedural material matches in its statistics but not "
+             "where it lies.",
+             100 * r->weave->periodic_share);
   if (r->weave && r->weave->below_blurred_copy)
     sb_printf(&b, "<p class=\"unsure\" style=\"background:#fde8e8;border:2px solid #c00;padding:0.6em\"><b>Warning: "
                   "an unsure %s.</b> The fit's render scores a lower SSIM against the photo (per RGB channel, "
                   "%.4f) than the photo's own copy blurred by a Gaussian of sigma %.0f px (%.4f), a copy that keeps "
                   "no weave at all: the fit reproduces the photo less well than a blur does. Check the weave "
-                  "close up%s before using these parameters.</p>\n",
+                  "close up%s before using these parameters.%s</p>\n",
               r->pattern_choice ? "capture" : "fit", r->weave->ssim_rgb[1], WV_BLURRED_COPY_SIGMA,
-              r->weave->ssim_rgb_blurred, r->pattern_choice ? " and the families' scores below" : "");
+              r->weave->ssim_rgb_blurred, r->pattern_choice ? " and the families' scores below" : "", grain);
   if (r->weave && r->weave->zoom_png[0] && !st) {
     sb_printf(&b, "<h2>The weave, close up</h2>\n<figure><img alt=\"zoom\" src=\"data:image/png;base64,");
     sb_base64_file(&b, r->weave->zoom_png, &st, err);
@@ -308,6 +318,10 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                   "<td colspan=\"2\">%.4f%s</td></tr>\n",
               WV_BLURRED_COPY_SIGMA, r->weave->ssim_rgb_blurred,
               r->weave->below_blurred_copy ? " <b style=\"color:#c00\">(the fit scores below it)</b>" : "");
+  if (r->weave && r->weave->periodic_share > -2)
+    sb_printf(&b, "<tr><td>the photo's detail in the peaks of its spectrum (the weave; the rest is grain)</td>"
+                  "<td colspan=\"2\">%.1f%%</td></tr>\n",
+              100 * r->weave->periodic_share);
   if (r->weave && r->weave->wsc[0] > -2)
     sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td><td>%.4f</td></tr>\n",
               r->weave->wsc[0], r->weave->wsc[1]);

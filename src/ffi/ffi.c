@@ -463,6 +463,16 @@ int wv_ffi_capture(const char *photo, const char *scene, const char *dir, const 
   json_t *s = json_pack("{s:s,s:s,s:b,s:f,s:f,s:i,s:o}", "dir", dir, "pattern", out.state.params.pattern,
                         "pattern_chosen", est.chosen, "ssim_network", out.ssim_start, "ssim_fit", out.ssim_fit,
                         "iterations", out.state.iter, "params", params ? params : json_null());
+  if (s) { /* how the re-render stands against the photo (woven capture --json's names) */
+    const wv_weave_views *v = &out.views;
+    json_object_set_new(s, "ssim_rgb_fit", json_real(v->ssim_rgb[1]));
+    if (v->ssim_rgb_blurred > -2) {
+      json_object_set_new(s, "ssim_rgb_blurred_photo", json_real(v->ssim_rgb_blurred));
+      json_object_set_new(s, "below_blurred_copy", json_boolean(v->below_blurred_copy));
+    }
+    if (v->wsc[1] > -2) json_object_set_new(s, "wsc_fit", json_real(v->wsc[1]));
+    if (v->periodic_share > -2) json_object_set_new(s, "photo_periodic_share", json_real(v->periodic_share));
+  }
   if (s && out.pair) { /* the transmission photo against its re-render */
     json_object_set_new(s, "ssim_rgb_fit_t", json_real(out.ssim_rgb_t));
     json_object_set_new(s, "ssim_rgb_blurred_photo_t", json_real(out.ssim_rgb_blurred_t));

@@ -238,6 +238,82 @@ wv_status wv_spectrum_whiten(const float *spec, int n, double floor_z, double ca
 }
 
 
+/* A bin of the detail's power spectrum is a peak when it holds at least this many times the
+ * mean of the (2 r + 1)^2 bins about it. */
+#define PERIODIC_RATIO 8.0
+#define PERIODIC_HALF 4
+
+wv_status wv_detail_periodic(const wv_image *img, double sigma, double *share, wv_image *periodic, wv_error *err) {
+  if (img->w < 2 * PERIODIC_HALF + 1 || img->h < 2 * PERIODIC_HALF + 1 || img->c < 3)
+    return wv_fail(err, WV_ERR_INVALID, "the periodic share needs an RGB image of at least %d x %d, not %d x %d x %d",
+                   2 * PERIODIC_HALF + 1, 2 * PERIODIC_HALF + 1, img->w, img->h, img->c);
+  int w = img->w, h = img->h, wc = w / 2 + 1;
+  size_t np = (size_t)w * h, nf = (size_t)h * wc;
+  wv_image low = {0};
+  wv_status st = wv_image_blur(img, sigma, &low, err);
+  if (st) return st;
+  if (periodic && (st = wv_image_alloc(periodic, w, h, 3, err))) {
+    wv_image_free(&low);
+    return st;
+  }
+  float *x = fftwf_alloc_real(np);
+  fftwf_complex *f = fftwf_alloc_complex(nf);
+  double *pw = malloc(sizeof(double) * nf);
+  unsigned char *mask = calloc(nf, 1);
+  fftwf_plan fwd = NULL, inv = NULL;
+  if (!x || !f || !pw || !mask) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for a %d x %d spectrum", w, h);
+  if (!st) {
+#pragma omp critical(wv_fftw_planner)
+    {
+      fwd = fftwf_plan_dft_r2c_2d(h, w, x, f, FFTW_ESTIMATE);
+      inv = periodic ? fftwf_plan_dft_c2r_2d(h, w, f, x, FFTW_ESTIMATE) : NULL;
+    }
+    if (!fwd || (periodic && !inv)) st = wv_fail(err, WV_ERR_NOMEM, "cannot plan a %d x %d FFT", w, h);
+  }
+  if (!st) {
+    for (size_t i = 0; i < np; i++) {
+      const float *p = img->data + i * img->c, *l = low.data + i * low.c;
+      x[i] = (float)(WV_LUMA_R * (p[0] - l[0]) + WV_LUMA_G * (p[1] - l[1]) + WV_LUMA_B * (p[2] - l[2]));
+    }
+    fftwf_execute(fwd);
+    for (size_t i = 0; i < nf; i++) pw[i] = (double)f[i][0] * f[i][0] + (double)f[i][1] * f[i][1];
+    double total = 0, peaks = 0;
+    for (int v = 0; v < h; v++)
+      for (int u = 0; u < wc; u++) {
+        double m = 0;
+        for (int dv = -PERIODIC_HALF; dv <= PERIODIC_HALF; dv++)
+          for (int du = -PERIODIC_HALF; du <= PERIODIC_HALF; du++) {
+            int uu = u + du, vv = ((v + dv) % h + h) % h;
+            if (uu < 0 || uu >= wc) uu = uu < 0 ? -uu : w - uu, vv = (h - vv) % h; /* the conjugate half */
+            m += pw[(size_t)vv * wc + uu];
+          }
+        m /= (2 * PERIODIC_HALF + 1) * (2 * PERIODIC_HALF + 1);
+        size_t i = (size_t)v * wc + u;
+        int twice = !(u == 0 || (w % 2 == 0 && u == wc - 1)); /* the bin stands for its mirror too */
+        total += (1 + twice) * pw[i];
+        if ((u || v) && pw[i] >= PERIODIC_RATIO * m && pw[i] > 0) mask[i] = 1, peaks += (1 + twice) * pw[i];
+      }
+    *share = total > 0 ? peaks / total : 0;
+    for (int c = 0; periodic && c < 3; c++) {
+      for (size_t i = 0; i < np; i++) x[i] = img->data[i * img->c + c] - low.data[i * low.c + c];
+      fftwf_execute(fwd);
+      for (size_t i = 0; i < nf; i++)
+        if (!mask[i]) f[i][0] = f[i][1] = 0;
+      fftwf_execute(inv);
+      for (size_t i = 0; i < np; i++) periodic->data[i * 3 + c] = x[i] / (float)np;
+    }
+  }
+#pragma omp critical(wv_fftw_planner)
+  {
+    if (fwd) fftwf_destroy_plan(fwd);
+    if (inv) fftwf_destroy_plan(inv);
+  }
+  fftwf_free(x), fftwf_free(f), free(pw), free(mask);
+  wv_image_free(&low);
+  if (st && periodic) wv_image_free(periodic);
+  return st;
+}
+
 double wv_wsc_spectra(const float *sa, const float *sb, int n) {
   double ma = 0, mb = 0;
   long cnt = 0;
