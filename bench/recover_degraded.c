@@ -476,8 +476,10 @@ int main(int argc, char **argv) {
       return usage();
     }
   }
-  if (per < 1 || first < 0 || o.iters < 0 || jobs < 1 || jobs > 64 || o.threads < 0 || !(pl.shot_hi >= DEG_SHOT_LO && pl.shot_hi <= 0.1)) {
-    fprintf(stderr, "recover_degraded: --per-family at least 1, --first and --iters not negative, --jobs 1..64, --shot-max 3e-4..0.1\n");
+  if (per < 1 || first < 0 || o.iters < 0 || jobs < 1 || jobs > 64 || o.threads < 0 ||
+      !(pl.shot_hi >= DEG_SHOT_LO && pl.shot_hi <= 0.1)) {
+    fprintf(stderr, "recover_degraded: --per-family at least 1, --first and --iters not negative, --jobs 1..64, "
+                    "--shot-max 3e-4..0.1\n");
     return 1;
   }
   wv_error err = {0};
@@ -523,9 +525,8 @@ int main(int argc, char **argv) {
                                                        (double)fr / n, "mean_ratio", fs / n, "min_ratio", fl));
   }
   json_t *out = json_pack("{s:s,s:s,s:I,s:b,s:f,s:i,s:i,s:i,s:i,s:i,s:f,s:i,s:f,s:f,s:f,s:o,s:o}", "mode", "degraded",
-                          "scene", s.name, "seed", (json_int_t)pl.seed, "degrade", pl.degrade, "shot_max", pl.shot_hi,
-                          "per_family", per,
-                          "first", first, "iters", o.iters, "iter_spp", o.iter_spp, "iter_scale", o.iter_scale,
+                          "scene", s.name, "seed", (json_int_t)pl.seed, "degrade", pl.degrade, "shot_max",
+                          pl.shot_hi, "per_family", per, "first", first, "iters", o.iters, "iter_spp", o.iter_spp, "iter_scale", o.iter_scale,
                           "w_struct", o.w_struct, "targets", nt, "family_right_pct", 100.0 * right / nt,
                           "mean_ratio", sum / nt, "min_ratio", lo, "families", fams, "per_target", list);
   char *text = json_dumps(out, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(6));

@@ -33,8 +33,9 @@ wv_status wv_blurred_copy_ssim(const wv_image *photo, double sigma, double *ssim
 
 /* What shows the weave to a person, next to SSIM: SSIM per RGB channel and WSC of start
  * and fit against the photo, the photo's blurred-copy SSIM (wv_blurred_copy_ssim) and
- * whether the fit scores below it, how much of the photo's detail is periodic, the weave spectra of photo, start and fit (spectra.png)
- * and the same centre crop of the three, enlarged (zoom.png). Empty paths: not made (the
+ * whether the fit scores below it, how much of the photo's detail is periodic, the weave
+ * spectra of photo, start and fit (spectra.png) and the same centre crop of the three,
+ * enlarged (zoom.png). Empty paths: not made (the
  * image is too small); wsc and ssim_rgb_blurred -2: not measured. */
 #define WV_WEAVE_ZOOM 4
 typedef struct {

@@ -391,7 +391,8 @@ wv_status wv_fit_job_run(const wv_fit_job *job, wv_fit_outcome *out, wv_error *e
         !(rc = copy_into(job->dir, "checkpoint.json", od.tmp, 0, err)))
       rc = copy_into(job->dir, "network.json", od.tmp, 1, err);
   }
-  out->views = (wv_weave_views){.wsc = {-2, -2}, .wsc_whitened = {-2, -2}, .ssim_rgb_blurred = -2, .periodic_share = -2};
+  out->views = (wv_weave_views){
+      .wsc = {-2, -2}, .wsc_whitened = {-2, -2}, .ssim_rgb_blurred = -2, .periodic_share = -2};
   wv_fit_scene(&st, job->scene, &out->fit_scene); /* with the registration's fabric offset */
   if (!rc)
     wv_note(job->progress.on_note, job->progress.user, "rendering start and fit at %d x %d, %d spp", job->scene->width,

@@ -68,7 +68,7 @@ wv_status wv_weave_views_write(const char *dir, const wv_image *photo, const wv_
   for (int i = 0; i < 2 && !st; i++) st = wv_ssim(photo, img[i + 1], WV_SSIM_RGB, &v->ssim_rgb[i], err);
   if (!st) st = wv_blurred_copy_ssim(photo, WV_BLURRED_COPY_SIGMA, &v->ssim_rgb_blurred, err);
   if (!st) v->below_blurred_copy = v->ssim_rgb[1] < v->ssim_rgb_blurred;
-  if (!st && photo->c == 3 && wv_detail_periodic(photo, WV_BLURRED_COPY_SIGMA, &v->periodic_share, NULL, NULL))
+  if (!st && wv_detail_periodic(photo, WV_BLURRED_COPY_SIGMA, &v->periodic_share, NULL, NULL))
     v->periodic_share = -2;
   int n = photo->w < photo->h ? photo->w : photo->h;
   n = n > WV_WSC_SIZE ? WV_WSC_SIZE : n - n % 2;

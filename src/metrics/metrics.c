@@ -273,7 +273,7 @@ wv_status wv_detail_periodic(const wv_image *img, double sigma, double *share, w
   if (!st) {
     for (size_t i = 0; i < np; i++) {
       const float *p = img->data + i * img->c, *l = low.data + i * low.c;
-      x[i] = (float)(WV_LUMA_R * (p[0] - l[0]) + WV_LUMA_G * (p[1] - l[1]) + WV_LUMA_B * (p[2] - l[2]));
+      x[i] = (float)wv_luminance_d(p[0] - l[0], p[1] - l[1], p[2] - l[2]);
     }
     fftwf_execute(fwd);
     for (size_t i = 0; i < nf; i++) pw[i] = (double)f[i][0] * f[i][0] + (double)f[i][1] * f[i][1];
