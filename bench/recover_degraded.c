@@ -31,7 +31,8 @@
  * --jobs N captures N targets at once in N processes (each with --threads render threads;
  * give both, e.g. --jobs 2 --threads 1). Prints one line per target as it finishes, then one
  * JSON object on the last line: per target, per family and overall. --save DIR writes each
- * target as DIR/<family>_<draw>_<pattern>.png (an existing directory). */
+ * target as DIR/<family>_<draw>_<pattern>.png (an existing directory), its true parameters
+ * as <family>_<draw>_truth.json and the capture's as <family>_<draw>_fit.json. */
 #define _DEFAULT_SOURCE /* fork, pipe, poll, M_PI */
 #define RECOVER_NAME "recover_degraded"
 #include "recover_common.h"
@@ -239,9 +240,16 @@ static void run_target(const study *st, const plan *pl, int index, int fam, int 
     char path[4096];
     snprintf(path, sizeof path, "%s/%s_%d_%s.png", pl->save, FAMILIES[fam], draw, r->pattern);
     if (wv_image_write_png(path, &photo, 8, &err)) die(&err);
+    snprintf(path, sizeof path, "%s/%s_%d_truth.json", pl->save, FAMILIES[fam], draw);
+    if (wv_params_write(path, &target, &err)) die(&err);
   }
   capture c;
   run_capture(st, &photo, NULL, &c);
+  if (pl->save) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s_%d_fit.json", pl->save, FAMILIES[fam], draw);
+    if (wv_params_write(path, &c.fit, &err)) die(&err);
+  }
   snprintf(r->chosen, sizeof r->chosen, "%s", c.chosen);
   r->family_right = !strcmp(wv_weave_family(c.chosen), FAMILIES[fam]);
   snprintf(r->family_kind, sizeof r->family_kind, "%s", c.families.kind);
