@@ -4,8 +4,9 @@
  * offset through the pixel -> fabric map), and an exact fit is left alone; the cloth's
  * distortion follows a bent cloth and leaves a straight one; neither moves a two-colour
  * fit in register to please the luminance alone; the first step's coarse grid and climbs
- * give the whole grid's candidates. */
+ * give the whole grid's candidates, and none where no coarse score shows a peak. */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -294,8 +295,42 @@ static void test_register_coarse_grid_matches_whole(void **state) {
   }
 }
 
+/* A photo whose weave lines up nowhere in the small window (seeded noise): no coarse score
+ * shows a peak, and the whole-range step gives no candidates after the coarse grid alone,
+ * where the whole grid would hand on four of its noise maxima. */
+static void test_register_no_candidates_without_a_peak(void **state) {
+  (void)state;
+  wv_scene s;
+  tu_centre_window(&s, "flat45", 128, 128, 16);
+  wv_image photo;
+  assert_int_equal(wv_image_alloc(&photo, 128, 128, 3, NULL), WV_OK);
+  uint32_t x = 12345u;
+  for (size_t i = 0; i < (size_t)128 * 128 * 3; i++) {
+    x = x * 1664525u + 1013904223u;
+    photo.data[i] = 0.2f + 0.6f * (float)(x >> 8) / 16777216.0f;
+  }
+  wv_params from;
+  assert_int_equal(wv_params_default("twill", &from, NULL), WV_OK);
+  wv_fit_opts o;
+  wv_fit_opts_default(&o);
+  wv_fit_state st;
+  wv_error err = {0};
+  assert_int_equal(wv_fit_state_init(&st, &from, &o, &err), WV_OK);
+  double cw[4][2], cc[4][2];
+  int nw = 0, nc = 0, rw = 0, rcn = 0;
+  if (wv_fit_register_candidates(&st, &s, &photo, &o, 1, cw, &nw, &rw, &err)) fail_msg("%s", err.msg);
+  if (wv_fit_register_candidates(&st, &s, &photo, &o, 0, cc, &nc, &rcn, &err)) fail_msg("%s", err.msg);
+  fprintf(stderr, "noise: whole grid %d renders, %d candidates; coarse %d renders, %d candidates\n", rw, nw, rcn, nc);
+  assert_true(nw >= 1);
+  assert_int_equal(nc, 0);
+  assert_true(rcn < rw / 3);
+  wv_fit_state_free(&st);
+  wv_image_free(&photo);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_register_coarse_grid_matches_whole),
+                                     cmocka_unit_test(test_register_no_candidates_without_a_peak),
                                      cmocka_unit_test(test_register_recovers_density_and_phase),
                                      cmocka_unit_test(test_register_keeps_an_exact_fit),
                                      cmocka_unit_test(test_distortion_follows_a_bent_cloth),

@@ -308,7 +308,7 @@ static wv_status hill_climb(level_set *ls, const wv_params *base, const double *
 #define GLOBAL_WINDOW 64 /* its window's side */
 #define GLOBAL_COARSE 2  /* the grid's first pass: every second density of each */
 #define N_SEED 24        /* coarse points whose neighbourhoods climb on the whole grid */
-#define GLOBAL_CLEAR 0.4 /* below this best coarse score the whole grid is rendered */
+#define GLOBAL_CLEAR 0.4 /* below this best coarse score the step gives no candidates */
 
 /* Step 1 of the registration: the N_CAND best density pairs of the ratio grid (GLOBAL_STEP
  * apart over the whole range), each at least 4 grid steps from those before it. The grid is
@@ -317,10 +317,10 @@ static wv_status hill_climb(level_set *ls, const wv_params *base, const double *
  * of a weave that lines up is wider than a coarse step in this window, so the coarse grid
  * lands on its slope and the climb finds the grid's own best: the candidates are those of
  * the whole grid (as measured: docs/fit.md), from a third of its renders. Unrendered grid
- * points are not chosen. When no coarse score reaches
- * GLOBAL_CLEAR (a photo whose weave lines up nowhere in this window: satin1_R.png's best is
- * 0.22, the twills' 0.7), the whole grid is rendered, as with whole (the reference the
- * tests compare with). *renders: how many were rendered. */
+ * points are not chosen. When no coarse score reaches GLOBAL_CLEAR (a photo whose weave
+ * lines up nowhere in this window: satin1_R.png's best is 0.22, the twills' 0.7), there are
+ * no candidates: the registration goes on from the fitted densities alone. whole renders
+ * the whole grid (the reference the tests compare with). *renders: how many were rendered. */
 static wv_status global_candidates(level_set *ls, const wv_params *base, int whole, double cand[][2], int *nc,
                                    int *renders, wv_error *err) {
   const int n = (int)floor(log(WV_DENSITY_MAX / WV_DENSITY_MIN) / log(GLOBAL_STEP)) + 1;
@@ -348,16 +348,13 @@ static wv_status global_candidates(level_set *ls, const wv_params *base, int who
     }
   if (!rc) rc = eval_many(ls, base, (const double(*)[2])q, m, qv, err);
   for (int t = 0; t < m && !rc; t++) grid[qk[t]] = qv[t], done[qk[t]] = 1, *renders += in_range(q[t]);
-  /* no clear peak: the scores are noise with many maxima of about one height, which no
-   * few seeds cover; the rest of the grid is rendered */
+  /* no clear peak: the scores are noise with many maxima of about one height, and a
+   * candidate taken from them is one of those maxima, not a density the weave lines up at */
   double top = -2;
   for (int t = 0; t < m && !rc; t++) top = qv[t] > top ? qv[t] : top;
   if (!rc && !whole && top < GLOBAL_CLEAR) {
-    whole = 1, m = 0;
-    for (size_t k = 0; k < nn; k++)
-      if (!done[k]) q[m][0] = gd[k][0], q[m][1] = gd[k][1], qk[m++] = (int)k;
-    rc = eval_many(ls, base, (const double(*)[2])q, m, qv, err);
-    for (int t = 0; t < m && !rc; t++) grid[qk[t]] = qv[t], done[qk[t]] = 1, *renders += in_range(q[t]);
+    free(gd), free(grid), free(q), free(qk), free(qv), free(done);
+    return rc;
   }
   /* the seeds: the best coarse points, each blanking its coarse neighbours */
   int seed[N_SEED], ns = 0;
