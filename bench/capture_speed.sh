@@ -30,7 +30,7 @@ for i in range(1, runs + 1):
     wall, user, sys_ = (float(x) for x in open(f"{t}/time.{i}").read().split()[-3:])
     d = json.load(open(f"{t}/run.{i}.json"))
     stages = dict(d["time_s"])
-    stages["pattern_choice"] = d.get("pattern_choice", {}).get("seconds", 0.0)
+    stages["pattern_choice"] = (d.get("pattern_choice") or {}).get("seconds", 0.0)
     rows.append({"wall_s": wall, "cpu_s": round(user + sys_, 2), "stages_s": stages, "summary": d})
 med = lambda k: statistics.median(r[k] for r in rows)
 keys = rows[0]["stages_s"].keys()
@@ -41,8 +41,8 @@ out = {
     "stages_s_median": {k: round(statistics.median(r["stages_s"][k] for r in rows), 3) for k in keys},
     "quality": {"iterations": last.get("iterations"), "ssim_rgb_fit": last.get("ssim_rgb_fit"),
                 "wsc_fit": last.get("wsc_fit"), "wsc_whitened_fit": last.get("wsc_whitened_fit"),
-                "family": last.get("pattern_choice", {}).get("family"),
-                "pattern": last.get("pattern_choice", {}).get("chosen"),
+                "family": (last.get("pattern_choice") or {}).get("family"),
+                "pattern": (last.get("pattern_choice") or {}).get("chosen"),
                 **{k: last[k] for k in ("ssim_rgb_fit_t", "ssim_rgb_blurred_photo_t", "wsc_fit_t", "open_area_photo",
                                         "open_area_fit", "mean_t") if k in last}},
     "each": [{"wall_s": r["wall_s"], "cpu_s": r["cpu_s"], "stages_s": r["stages_s"]} for r in rows],
