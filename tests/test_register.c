@@ -4,7 +4,8 @@
  * offset through the pixel -> fabric map), and an exact fit is left alone; the cloth's
  * distortion follows a bent cloth and leaves a straight one; neither moves a two-colour
  * fit in register to please the luminance alone; the first step's coarse grid and climbs
- * give the whole grid's candidates, and none where no coarse score shows a peak. */
+ * give the whole grid's candidates, and none where no coarse score shows a peak; without a
+ * peak in the middle window either, the registration stops there. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -78,6 +79,7 @@ static void test_register_recovers_density_and_phase(void **state) {
   assert_true(st.reg_ncc_after > st.reg_ncc_before + 0.3);
   assert_true(before < 0.6);
   assert_true(after > 0.85);
+  assert_true(st.reg_renders[3] > 0); /* a weave in the middle window goes on to the whole image */
   wv_fit_state_free(&st);
   wv_image_free(&photo);
 }
@@ -328,9 +330,44 @@ static void test_register_no_candidates_without_a_peak(void **state) {
   wv_image_free(&photo);
 }
 
+/* A photo whose weave lines up in neither the small nor the middle window (seeded noise):
+ * the registration stops after the middle window, before the larger windows render
+ * anything, and leaves the fit where it was. */
+static void test_register_stops_without_a_middle_peak(void **state) {
+  (void)state;
+  wv_scene s;
+  tu_centre_window(&s, "flat45", 128, 128, 16);
+  wv_image photo;
+  assert_int_equal(wv_image_alloc(&photo, 128, 128, 3, NULL), WV_OK);
+  uint32_t x = 777u;
+  for (size_t i = 0; i < (size_t)128 * 128 * 3; i++) {
+    x = x * 1664525u + 1013904223u;
+    photo.data[i] = 0.2f + 0.6f * (float)(x >> 8) / 16777216.0f;
+  }
+  wv_params from;
+  truth(&from);
+  wv_fit_opts o;
+  wv_fit_opts_default(&o);
+  wv_fit_state st;
+  wv_error err = {0};
+  assert_int_equal(wv_fit_state_init(&st, &from, &o, &err), WV_OK);
+  if (wv_fit_register(&st, &s, &photo, &o, &err)) fail_msg("%s", err.msg);
+  print_message("noise: renders per window %d %d %d %d, ncc %.3f\n", st.reg_renders[0], st.reg_renders[1],
+                st.reg_renders[2], st.reg_renders[3], st.reg_ncc_before);
+  assert_true(st.registered);
+  assert_true(st.reg_renders[0] > 0 && st.reg_renders[1] > 0);
+  assert_int_equal(st.reg_renders[2], 0);
+  assert_int_equal(st.reg_renders[3], 0);
+  assert_true(st.params.density[WV_WARP] == from.density[WV_WARP] && st.params.density[WV_WEFT] == from.density[WV_WEFT]);
+  assert_true(st.offset_mm[0] == 0 && st.offset_mm[1] == 0);
+  wv_fit_state_free(&st);
+  wv_image_free(&photo);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_register_coarse_grid_matches_whole),
                                      cmocka_unit_test(test_register_no_candidates_without_a_peak),
+                                     cmocka_unit_test(test_register_stops_without_a_middle_peak),
                                      cmocka_unit_test(test_register_recovers_density_and_phase),
                                      cmocka_unit_test(test_register_keeps_an_exact_fit),
                                      cmocka_unit_test(test_distortion_follows_a_bent_cloth),

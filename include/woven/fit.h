@@ -140,6 +140,7 @@ typedef struct {
   float psf_m, psf_v;  /* its Adam moments */
   double reg_ncc_before, reg_ncc_after;   /* correlation with the photo at zero shift, whole image */
   double reg_ssim_before, reg_ssim_after; /* SSIM of the whole image (RGB) at the iteration spp */
+  int reg_renders[4];  /* renders of the last registration per window: 64, 128, 256 px, the whole image */
   int distorted;       /* the distortion after the registration is done */
   double distort_extent_mm, distort[2][WV_DISTORT_TERMS]; /* found (added to the scene's; wv_scene) */
   double dist_ssim_before, dist_ssim_after; /* SSIM of the whole image (RGB, 16 spp) */

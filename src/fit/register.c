@@ -191,20 +191,21 @@ typedef struct {
   wv_footprints *fp; /* the window's camera geometry, shared */
   scored *seen;      /* every density pair scored in this window: a climb's neighbourhoods overlap */
   int nseen, capseen;
+  int renders;       /* density pairs rendered in this window */
 } level_set;
 
 static void set_free(level_set *ls) {
   for (int i = 0; i < ls->n; i++) level_free(&ls->lv[i]);
   free(ls->seen);
   ls->seen = NULL, ls->nseen = ls->capseen = 0;
-  ls->n = 0;
+  ls->n = 0, ls->renders = 0;
   wv_footprints_free(ls->fp);
   ls->fp = NULL;
 }
 
 static wv_status set_init(level_set *ls, const wv_scene *full, const wv_image *photo, int size, int threads,
                           const wv_fit_opts *o, wv_error *err) {
-  ls->n = 0;
+  ls->n = 0, ls->renders = 0;
   for (int i = 0; i < threads; i++) {
     wv_status rc = level_init(&ls->lv[i], full, photo, size, o, err);
     if (rc) {
@@ -245,6 +246,7 @@ static wv_status eval_many(level_set *ls, const wv_params *base, const double (*
     const scored *sc = count <= 64 ? seen_find(ls, d[i]) : NULL; /* the climbs' few, not the grids */
     todo[i] = !sc;
     fresh += !sc;
+    ls->renders += !sc && in_range(d[i]);
     if (sc) out[i] = sc->score;
   }
   if (count <= 64 && ls->nseen + fresh > ls->capseen) {
@@ -520,6 +522,16 @@ static wv_status register_run(wv_fit_state *st, const wv_scene *s, const wv_imag
     if ((rc = hill_climb(&S[1], base, mid_steps, 3, d, &v, err))) break;
     if (v > mid_best) mid_best = v, mid[0] = d[0], mid[1] = d[1];
   }
+  /* No candidate lines up in the middle window either: the larger windows would only refine
+   * a density the keep rule below turns down (a correlation under WV_REGISTER_MIN_NCC). */
+  if (!rc && mid_best < WV_REGISTER_MIN_NCC) {
+    st->reg_ssim_before = st->reg_ssim_after = ssim_before;
+    st->reg_ncc_after = st->reg_ncc_before;
+    st->registered = 1;
+    for (int i = 0; i < 4; i++) st->reg_renders[i] = S[i].renders, set_free(&S[i]);
+    free(S);
+    return rc;
+  }
   /* 3. In the large window, then the whole image (a tenth of a yarn/inch is a
    * yarn of drift across 500 pixels): the last tenths, then the shift. */
   cur[0] = mid[0], cur[1] = mid[1];
@@ -551,7 +563,7 @@ static wv_status register_run(wv_fit_state *st, const wv_scene *s, const wv_imag
       st->registered = 1;
     }
   }
-  for (int i = 0; i < 4; i++) set_free(&S[i]);
+  for (int i = 0; i < 4; i++) st->reg_renders[i] = S[i].renders, set_free(&S[i]);
   free(S);
   return rc;
 }
