@@ -7,7 +7,6 @@
  * give the whole grid's candidates, and none where no coarse score shows a peak; without a
  * peak in the middle window either, the registration stops there. */
 #include <math.h>
-#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -297,6 +296,13 @@ static void test_register_coarse_grid_matches_whole(void **state) {
   }
 }
 
+/* A 128 x 128 photo of seeded uniform noise: no weave lines up with it anywhere. */
+static void noise_photo(uint64_t seed, wv_image *photo) {
+  assert_int_equal(wv_image_alloc(photo, 128, 128, 3, NULL), WV_OK);
+  tu_rng r = {seed};
+  for (size_t i = 0; i < (size_t)128 * 128 * 3; i++) photo->data[i] = (float)(0.2 + 0.6 * tu_rnd(&r));
+}
+
 /* A photo whose weave lines up nowhere in the small window (seeded noise): no coarse score
  * shows a peak, and the whole-range step gives no candidates after the coarse grid alone,
  * where the whole grid would hand on four of its noise maxima. */
@@ -305,12 +311,7 @@ static void test_register_no_candidates_without_a_peak(void **state) {
   wv_scene s;
   tu_centre_window(&s, "flat45", 128, 128, 16);
   wv_image photo;
-  assert_int_equal(wv_image_alloc(&photo, 128, 128, 3, NULL), WV_OK);
-  uint32_t x = 12345u;
-  for (size_t i = 0; i < (size_t)128 * 128 * 3; i++) {
-    x = x * 1664525u + 1013904223u;
-    photo.data[i] = 0.2f + 0.6f * (float)(x >> 8) / 16777216.0f;
-  }
+  noise_photo(12345, &photo);
   wv_params from;
   assert_int_equal(wv_params_default("twill", &from, NULL), WV_OK);
   wv_fit_opts o;
@@ -338,12 +339,7 @@ static void test_register_stops_without_a_middle_peak(void **state) {
   wv_scene s;
   tu_centre_window(&s, "flat45", 128, 128, 16);
   wv_image photo;
-  assert_int_equal(wv_image_alloc(&photo, 128, 128, 3, NULL), WV_OK);
-  uint32_t x = 777u;
-  for (size_t i = 0; i < (size_t)128 * 128 * 3; i++) {
-    x = x * 1664525u + 1013904223u;
-    photo.data[i] = 0.2f + 0.6f * (float)(x >> 8) / 16777216.0f;
-  }
+  noise_photo(777, &photo);
   wv_params from;
   truth(&from);
   wv_fit_opts o;

@@ -523,45 +523,40 @@ static wv_status register_run(wv_fit_state *st, const wv_scene *s, const wv_imag
     if (v > mid_best) mid_best = v, mid[0] = d[0], mid[1] = d[1];
   }
   /* No candidate lines up in the middle window either: the larger windows would only refine
-   * a density the keep rule below turns down (a correlation under WV_REGISTER_MIN_NCC). */
-  if (!rc && mid_best < WV_REGISTER_MIN_NCC) {
-    st->reg_ssim_before = st->reg_ssim_after = ssim_before;
-    st->reg_ncc_after = st->reg_ncc_before;
-    st->registered = 1;
-    for (int i = 0; i < 4; i++) st->reg_renders[i] = S[i].renders, set_free(&S[i]);
-    free(S);
-    return rc;
-  }
-  /* 3. In the large window, then the whole image (a tenth of a yarn/inch is a
-   * yarn of drift across 500 pixels): the last tenths, then the shift. */
-  cur[0] = mid[0], cur[1] = mid[1];
-  if (!rc) rc = eval_many(&S[2], base, (const double(*)[2])cur, 1, &best, err);
-  if (!rc) rc = hill_climb(&S[2], base, fine_steps, 2, cur, &best, err);
-  if (!rc) rc = eval_many(&S[3], base, (const double(*)[2])cur, 1, &best, err);
-  if (!rc) rc = hill_climb(&S[3], base, fine_steps + 2, 1, cur, &best, err);
-  const scored *at = rc ? NULL : seen_find(&S[3], cur); /* the best's shift, from its score */
-  if (at) shift[0] = at->shift[0], shift[1] = at->shift[1], best = at->score;
-  double off[2] = {0, 0};
-  if (!rc) shift_offset(&full, shift, off);
-  if (!rc) { /* kept only if the whole image's SSIM rises */
-    wv_params cand_p = *base;
-    cand_p.density[0] = cur[0], cand_p.density[1] = cur[1];
-    wv_scene moved = top->win;
-    moved.fabric_offset[0] += off[0], moved.fabric_offset[1] += off[1];
-    top_ro.footprints = NULL; /* the moved fabric has other footprints */
-    double after, ncc_after;
-    if (!(rc = measure(top, &moved, &cand_p, &top_ro, &ncc_after, &after, err))) {
-      st->reg_ssim_before = ssim_before;
+   * a density the keep rule below turns down (a correlation under WV_REGISTER_MIN_NCC), so
+   * they are skipped and the fit stays where it was. */
+  int keep = 0;
+  double after = ssim_before, ncc_after = st->reg_ncc_before, off[2] = {0, 0};
+  wv_params cand_p = *base;
+  if (!rc && mid_best >= WV_REGISTER_MIN_NCC) {
+    /* 3. In the large window, then the whole image (a tenth of a yarn/inch is a
+     * yarn of drift across 500 pixels): the last tenths, then the shift. */
+    cur[0] = mid[0], cur[1] = mid[1];
+    rc = eval_many(&S[2], base, (const double(*)[2])cur, 1, &best, err);
+    if (!rc) rc = hill_climb(&S[2], base, fine_steps, 2, cur, &best, err);
+    if (!rc) rc = eval_many(&S[3], base, (const double(*)[2])cur, 1, &best, err);
+    if (!rc) rc = hill_climb(&S[3], base, fine_steps + 2, 1, cur, &best, err);
+    const scored *at = rc ? NULL : seen_find(&S[3], cur); /* the best's shift, from its score */
+    if (at) shift[0] = at->shift[0], shift[1] = at->shift[1], best = at->score;
+    if (!rc) { /* kept only if the whole image's SSIM rises */
+      shift_offset(&full, shift, off);
+      cand_p.density[0] = cur[0], cand_p.density[1] = cur[1];
+      wv_scene moved = top->win;
+      moved.fabric_offset[0] += off[0], moved.fabric_offset[1] += off[1];
+      top_ro.footprints = NULL; /* the moved fabric has other footprints */
+      rc = measure(top, &moved, &cand_p, &top_ro, &ncc_after, &after, err);
       /* A rise without a correlation peak would only trade contrast for SSIM. */
-      if (after > ssim_before && ncc_after >= WV_REGISTER_MIN_NCC) {
-        st->params = cand_p;
-        st->offset_mm[0] += off[0], st->offset_mm[1] += off[1];
-        st->reg_ssim_after = after, st->reg_ncc_after = ncc_after;
-      } else {
-        st->reg_ssim_after = ssim_before, st->reg_ncc_after = st->reg_ncc_before;
-      }
-      st->registered = 1;
+      keep = !rc && after > ssim_before && ncc_after >= WV_REGISTER_MIN_NCC;
     }
+  }
+  if (!rc) {
+    st->reg_ssim_before = ssim_before;
+    if (keep) {
+      st->params = cand_p;
+      st->offset_mm[0] += off[0], st->offset_mm[1] += off[1];
+    }
+    st->reg_ssim_after = keep ? after : ssim_before, st->reg_ncc_after = keep ? ncc_after : st->reg_ncc_before;
+    st->registered = 1;
   }
   for (int i = 0; i < 4; i++) st->reg_renders[i] = S[i].renders, set_free(&S[i]);
   free(S);
