@@ -19,6 +19,7 @@
 #include "woven/descriptor.h"
 #include "woven/error.h"
 #include "woven/image.h"
+#include "woven/nn.h"
 #include "woven/params.h"
 #include "woven/scene.h"
 
@@ -76,6 +77,8 @@ void wv_fit_opts_default(wv_fit_opts *o);
                                   * rate, this times lr (docs/fit.md) */
 #define WV_FIT_T_SHARE 0.25      /* a pair: the share of the iterations left to the transmission
                                   * colours, and the most they take (docs/fit.md, "Photo pairs") */
+#define WV_FIT_T_STEP0 0.1       /* a pair: the transmission colours' first step, in units of their
+                                  * range, along the steepest descent (a larger one is cut back) */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000
@@ -161,6 +164,7 @@ typedef struct {
   double t_reg_ssim_before, t_reg_ssim_after, t_dist_ssim_before, t_dist_ssim_after; /* its SSIM per RGB
                                    * channel before and after each (the registration's at the iteration spp) */
   float adam_m[WV_P_COUNT], adam_v[WV_P_COUNT]; /* wv_nn_adam's moments */
+  wv_nn_lbfgs t_qn; /* a pair's transmission colours: their quasi-Newton memory (docs/fit.md, "Photo pairs") */
   uint64_t rng;
   wv_fit_record *log; /* iter entries */
   int log_cap;

@@ -146,6 +146,33 @@ void wv_nn_adam_step(wv_nn_adam *a, float *params, const float *grads);
 void wv_nn_adam_step_box(wv_nn_adam *a, float *params, const float *grads, float lo, float hi);
 void wv_nn_adam_free(wv_nn_adam *a);
 
+/* ---- Limited-memory BFGS directions on a box [lo, hi]^n (Nocedal & Wright, algorithm 7.4),
+ * for small problems (n <= WV_NN_LBFGS_DIM) with dear evaluations. Plain data: a caller keeps
+ * the struct (and may save it) and runs its own line search along the direction. ---- */
+#define WV_NN_LBFGS_DIM 12 /* the largest n */
+#define WV_NN_LBFGS_MEM 5  /* curvature pairs kept */
+typedef struct {
+  int n, count, has_prev, stuck;
+  double s[WV_NN_LBFGS_MEM][WV_NN_LBFGS_DIM], y[WV_NN_LBFGS_MEM][WV_NN_LBFGS_DIM]; /* oldest first */
+  double f_prev, x_prev[WV_NN_LBFGS_DIM], g_prev[WV_NN_LBFGS_DIM]; /* the point of the last call */
+} wv_nn_lbfgs;
+
+/* No curvature seen, n coordinates. */
+void wv_nn_lbfgs_reset(wv_nn_lbfgs *q, int n);
+/* The direction d at x with value f and gradient g: first the pair (x - x_prev, g - g_prev) of
+ * the last call joins the memory (where its curvature is positive and the mean of the two
+ * gradients along the step gives f - f_prev within half), then d = -H g over the coordinates
+ * free to move (a coordinate on a bound whose descent points out of the box gets 0). With no
+ * curvature yet, or when -H g does not descend, d = -g on the free coordinates. Returns the
+ * number of pairs d was made from (0: steepest descent), or -1 with d = 0 when x is the point
+ * where a steepest descent was last turned down (wv_nn_lbfgs_reject): nothing is left to try. */
+int wv_nn_lbfgs_direction(wv_nn_lbfgs *q, const double *x, double f, const double *g, double lo, double hi,
+                          double *d);
+/* The caller's line search turned down every step along the last direction: the memory is
+ * cleared (the next direction is the steepest descent), or, when that direction already was,
+ * the point is marked as one to stay at. */
+void wv_nn_lbfgs_reject(wv_nn_lbfgs *q);
+
 /* ---- safetensors (Hugging Face): 8-byte little-endian header length, a JSON
  * header {name: {dtype, shape, data_offsets [begin, end)}} and the data bytes.
  * open() validates the whole header (length, JSON, dtypes, shapes, sizes, offsets

@@ -60,6 +60,19 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
   json_object_set_new(root, "opts", wv_fit_opts_json(o));
   json_object_set_new(root, "colour_split", json_integer(st->colour_split));
   if (st->open_measured) json_object_set_new(root, "open_area_photo", json_real(st->open_photo));
+  if (st->pair) { /* the transmission colours' quasi-Newton memory: a resume steps as a straight run */
+    const wv_nn_lbfgs *q = &st->t_qn;
+    double sf[WV_NN_LBFGS_MEM * WV_NN_LBFGS_DIM], yf[WV_NN_LBFGS_MEM * WV_NN_LBFGS_DIM];
+    for (int k = 0; k < q->count; k++)
+      for (int i = 0; i < q->n; i++) sf[k * q->n + i] = q->s[k][i], yf[k * q->n + i] = q->y[k][i];
+    json_t *qn = json_pack("{s:i,s:i,s:b,s:b,s:f}", "n", q->n, "count", q->count, "has_prev", q->has_prev, "stuck",
+                           q->stuck, "f_prev", q->f_prev);
+    json_object_set_new(qn, "s", darray(sf, q->count * q->n)); /* pair k at k * n, oldest first */
+    json_object_set_new(qn, "y", darray(yf, q->count * q->n));
+    json_object_set_new(qn, "x_prev", darray(q->x_prev, q->n));
+    json_object_set_new(qn, "g_prev", darray(q->g_prev, q->n));
+    json_object_set_new(root, "colours_qn", qn);
+  }
   if (st->t_related) { /* a pair's back-lit photo as its own view of the cloth */
     json_t *v = json_pack("{s:b,s:f,s:f,s:b,s:b,s:[f,f],s:[f,f],s:f,s:f,s:f,s:f,s:f}", "found", st->t_found, "scale",
                           st->t_scale, "rotation_deg", st->t_rotation_deg, "registered", st->t_registered, "distorted",
@@ -145,6 +158,34 @@ static wv_status read_view_t(json_t *v, wv_fit_state *st, wv_error *err) {
   return WV_OK;
 }
 
+/* A pair's colours' quasi-Newton memory (wv_fit_state.t_qn), every value checked. */
+static wv_status read_colours_qn(json_t *v, wv_fit_state *st, wv_error *err) {
+  wv_nn_lbfgs *q = &st->t_qn;
+  int n = 0, count = 0;
+  double sf[WV_NN_LBFGS_MEM * WV_NN_LBFGS_DIM], yf[WV_NN_LBFGS_MEM * WV_NN_LBFGS_DIM];
+  wv_status rc;
+  if ((rc = wv_json_int(v, "colours_qn", "n", 0, WV_NN_LBFGS_DIM, 1, &n, err)) ||
+      (rc = wv_json_int(v, "colours_qn", "count", 0, WV_NN_LBFGS_MEM, 1, &count, err)))
+    return rc;
+  wv_nn_lbfgs_reset(q, n);
+  json_t *hp = json_object_get(v, "has_prev");
+  if (!json_is_boolean(hp)) return wv_fail(err, WV_ERR_INVALID, "'colours_qn.has_prev' must be true or false");
+  q->has_prev = json_is_true(hp);
+  json_t *sk = json_object_get(v, "stuck");
+  if (!json_is_boolean(sk)) return wv_fail(err, WV_ERR_INVALID, "'colours_qn.stuck' must be true or false");
+  q->stuck = json_is_true(sk);
+  if ((rc = wv_json_number(v, "colours_qn", "f_prev", WV_JSON_FINITE, 1, &q->f_prev, err)) ||
+      (rc = wv_json_numbers(v, "colours_qn", "s", count * n, WV_JSON_FINITE, 1, sf, err)) ||
+      (rc = wv_json_numbers(v, "colours_qn", "y", count * n, WV_JSON_FINITE, 1, yf, err)) ||
+      (rc = wv_json_numbers(v, "colours_qn", "x_prev", n, WV_JSON_FINITE, 1, q->x_prev, err)) ||
+      (rc = wv_json_numbers(v, "colours_qn", "g_prev", n, WV_JSON_FINITE, 1, q->g_prev, err)))
+    return rc;
+  q->count = count;
+  for (int k = 0; k < count; k++)
+    for (int i = 0; i < n; i++) q->s[k][i] = sf[k * n + i], q->y[k][i] = yf[k * n + i];
+  return WV_OK;
+}
+
 /* Every value of a checkpoint is checked: it sizes arrays, seeds the search and
  * moves the weave; messages name the key (the caller adds the file). */
 static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *st, wv_fit_opts *o,
@@ -226,6 +267,8 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
     return rc;
   json_t *vt = json_object_get(root, "view_t"); /* a pair's back-lit view; absent: not measured yet */
   if (vt && (rc = read_view_t(vt, st, err))) return rc;
+  json_t *qn = json_object_get(root, "colours_qn"); /* absent before it existed: no curvature seen */
+  if (qn && (rc = read_colours_qn(qn, st, err))) return rc;
   json_t *reg = json_object_get(root, "registration"); /* absent in checkpoints before it existed */
   if (reg) {
     json_t *done = json_object_get(reg, "done"), *off = json_object_get(reg, "offset_mm");

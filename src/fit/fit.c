@@ -270,6 +270,66 @@ static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st
   return rc;
 }
 
+/* One step of the transmission colours from p = st->params (loss rec->loss, gradient g): along
+ * the quasi-Newton direction of st->t_qn in normalised coordinates, the box [0, 1] holding each,
+ * the first of the steps 1, 1/4, 1/16, 1/64 along it that lowers the loss (no more is asked of
+ * it: where a colour and its partner sit at 0 the response's slope has no bound, and a rule
+ * that trusts the slope's prediction turns down every step);
+ * with no curvature seen yet, the first step moves the farthest colour by WV_FIT_T_STEP0. The
+ * accepted trial, evaluated with its gradient, is handed back for the next iteration. None
+ * accepted: the colours stay, and the next step starts again from the steepest descent; when
+ * that was the steepest descent, the colours stay until the stopping rule ends their
+ * iterations, at no further cost. Adam's fixed step length took about 30
+ * iterations to carry satin1's colours to the photo's detail colour (docs/measurements.md,
+ * "The colours' steps"). */
+static wv_status colours_step(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st, const wv_fit_record *rec,
+                              const double g[WV_P_COUNT], wv_params *next, wv_fit_record *next_rec,
+                              double next_g[WV_P_COUNT], int *have_next, wv_error *err) {
+  enum { N = WV_P_COUNT - WV_P_REFLECT_COUNT };
+  double x[N], gx[N], dir[N], lo[N], span[N];
+  for (int i = 0; i < N; i++) {
+    double hi;
+    wv_param_range(WV_P_REFLECT_COUNT + i, &lo[i], &hi);
+    span[i] = hi - lo[i];
+    x[i] = (wv_param_get(&st->params, WV_P_REFLECT_COUNT + i) - lo[i]) / span[i];
+    gx[i] = isfinite(g[WV_P_REFLECT_COUNT + i]) ? g[WV_P_REFLECT_COUNT + i] * span[i] : 0;
+  }
+  *have_next = 0;
+  double alpha = 1;
+  int pairs = wv_nn_lbfgs_direction(&st->t_qn, x, rec->loss, gx, 0, 1, dir);
+  if (pairs < 0) alpha = 0; /* the steepest descent was turned down here before */
+  if (pairs == 0) {
+    double m = 0;
+    for (int i = 0; i < N; i++) m = fabs(dir[i]) > m ? fabs(dir[i]) : m;
+    alpha = m > 0 ? WV_FIT_T_STEP0 / m : 0;
+  }
+  for (int k = 0; k < 4 && alpha > 0; k++, alpha *= 0.25) {
+    wv_params trial = st->params;
+    double dec = 0;
+    for (int i = 0; i < N; i++) {
+      double xt = x[i] + alpha * dir[i];
+      xt = xt < 0 ? 0 : xt > 1 ? 1 : xt;
+      dec += gx[i] * (xt - x[i]);
+      wv_param_set(&trial, WV_P_REFLECT_COUNT + i, lo[i] + xt * span[i]);
+    }
+    if (!(dec < 0)) break; /* the box leaves no descent along it */
+    wv_fit_record tr = {0};
+    double tg[WV_P_COUNT] = {0};
+    wv_status rc = evaluate_t(c, tb, &trial, &tr, tg, err);
+    if (rc) return rc;
+    if (tr.loss < rec->loss) {
+      st->params = trial;
+      *next = trial, *next_rec = tr, *have_next = 1;
+      memcpy(next_g, tg, sizeof tg);
+      return WV_OK;
+    }
+  }
+  if (pairs >= 0) wv_nn_lbfgs_reject(&st->t_qn);
+  *next = st->params, *next_rec = *rec, *have_next = 1; /* the same point again */
+  memcpy(next_g, g, sizeof(double) * WV_P_COUNT);
+  return WV_OK;
+}
+
 wv_status wv_fit_loss(const wv_scene *s, const wv_image *photo, wv_descriptor *d, const wv_params *p,
                       const wv_fit_opts *o, wv_fit_record *out, wv_error *err) {
   fit_ctx c;
@@ -737,6 +797,10 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
   fit_ctx cx[2], ct[2]; /* ct: the transmission photo's, for a pair */
   wv_trans_basis *tb = NULL; /* the transmission colours' iterations: the back-lit capture as their function */
   int made[2] = {0, 0}, made_t[2] = {0, 0};
+  wv_params t_cache_p; /* the colours' last accepted trial, evaluated: the next iteration's point */
+  wv_fit_record t_cache_rec;
+  double t_cache_g[WV_P_COUNT];
+  int t_cached = 0;
   double scale = o->iter_scale;
   memset(cx, 0, sizeof cx);
   memset(ct, 0, sizeof ct);
@@ -820,17 +884,18 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
     if (t_alone) {
       /* the transmission colours on the transmission photo: nothing else is stepped, so the
        * reflection photo, which does not see them, is not rendered */
-      if (t_phase(st->log, from, st->iter) == st->iter && (rc = colours_start(tc, &tb, st, err))) break;
-      if ((rc = evaluate_t(tc, &tb, &st->params, &rec, g, err))) break;
+      if (t_phase(st->log, from, st->iter) == st->iter) {
+        if ((rc = colours_start(tc, &tb, st, err))) break;
+        wv_nn_lbfgs_reset(&st->t_qn, WV_P_COUNT - WV_P_REFLECT_COUNT);
+      }
+      if (t_cached && !memcmp(&t_cache_p, &st->params, sizeof t_cache_p)) { /* the last step's trial */
+        rec = t_cache_rec, rec.iter = st->iter;
+        memcpy(g, t_cache_g, sizeof g);
+      } else if ((rc = evaluate_t(tc, &tb, &st->params, &rec, g, err))) {
+        break;
+      }
       rec.loss_t = rec.loss, rec.t_alone = 1;
-      param_z(&st->params, g, z, gz);
-      /* the step count is this phase's own */
-      wv_nn_adam adam_t = {.n = WV_P_COUNT - WV_P_REFLECT_COUNT, .lr = (float)o->lr,
-                           .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f, .weight_decay = 0.0f,
-                           .t = st->iter - t_phase(st->log, from, st->iter),
-                           .m = st->adam_m + WV_P_REFLECT_COUNT, .v = st->adam_v + WV_P_REFLECT_COUNT};
-      wv_nn_adam_step_box(&adam_t, z + WV_P_REFLECT_COUNT, gz + WV_P_REFLECT_COUNT, 0.0f, 1.0f);
-      param_set_z(&st->params, z, WV_P_REFLECT_COUNT, WV_P_COUNT);
+      if ((rc = colours_step(tc, &tb, st, &rec, g, &t_cache_p, &t_cache_rec, t_cache_g, &t_cached, err))) break;
     } else {
       if ((rc = evaluate(c, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, err))) break;
       int t = st->iter + 1;

@@ -1,6 +1,7 @@
 /* Adam (Kingma & Ba, ICLR 2015), bias-corrected; weight decay decoupled as in AdamW;
- * optionally projected onto a box after each step. The one optimiser of the project:
- * FabricNet's training and the fit (in normalised parameter coordinates, box [0, 1]). */
+ * optionally projected onto a box after each step. FabricNet's training and the fit (in
+ * normalised parameter coordinates, box [0, 1]); a pair's transmission colours alone, twelve
+ * values whose evaluations are exact, step by L-BFGS (lbfgs.c). */
 #include <math.h>
 #include <stdlib.h>
 
