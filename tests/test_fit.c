@@ -770,6 +770,23 @@ static void test_fit_pair(void **state) {
     checkpoint_round_trip("fit_pair_resume", path, &b, &o, &o2, name, sizeof name);
     assert_int_equal(b.pair, 1);
     assert_int_equal(b.iter, at);
+    if (at > r_iters) { /* the colours' quasi-Newton memory is in it, and checked when read */
+      json_t *root = json_load_file(path, 0, NULL);
+      json_t *qn = json_object_get(root, "colours_qn");
+      assert_non_null(qn);
+      assert_int_equal(json_integer_value(json_object_get(qn, "n")), WV_P_COUNT - WV_P_REFLECT_COUNT);
+      json_object_set_new(qn, "n", json_integer(5));
+      char bad[300];
+      snprintf(bad, sizeof bad, "%s.bad", path);
+      assert_int_equal(json_dump_file(root, bad, 0), 0);
+      json_decref(root);
+      wv_fit_state x;
+      wv_fit_opts ox;
+      char nx[32];
+      assert_int_not_equal(wv_fit_checkpoint_read(bad, &x, &ox, nx, sizeof nx, &err), WV_OK);
+      assert_non_null(strstr(err.msg, "colours_qn.n"));
+      remove(bad);
+    }
     assert_int_equal(wv_fit_run_pair(&b, &s, &photo, &sb, &photo_t, d, &o2, NULL, NULL, &err), WV_OK);
     assert_int_equal(b.iter, o.iters);
     assert_memory_equal(&fitted[0], &b.params, sizeof b.params);

@@ -164,9 +164,12 @@ static wv_status read_colours_qn(json_t *v, wv_fit_state *st, wv_error *err) {
   int n = 0, count = 0;
   double sf[WV_NN_LBFGS_MEM * WV_NN_LBFGS_DIM], yf[WV_NN_LBFGS_MEM * WV_NN_LBFGS_DIM];
   wv_status rc;
-  if ((rc = wv_json_int(v, "colours_qn", "n", 0, WV_NN_LBFGS_DIM, 1, &n, err)) ||
+  /* 0 before the colours' first step, else one coordinate per transmission colour */
+  if ((rc = wv_json_int(v, "colours_qn", "n", 0, WV_P_COUNT - WV_P_REFLECT_COUNT, 1, &n, err)) ||
       (rc = wv_json_int(v, "colours_qn", "count", 0, WV_NN_LBFGS_MEM, 1, &count, err)))
     return rc;
+  if (n != 0 && n != WV_P_COUNT - WV_P_REFLECT_COUNT)
+    return wv_fail(err, WV_ERR_INVALID, "'colours_qn.n' must be 0 or %d", WV_P_COUNT - WV_P_REFLECT_COUNT);
   wv_nn_lbfgs_reset(q, n);
   json_t *hp = json_object_get(v, "has_prev");
   if (!json_is_boolean(hp)) return wv_fail(err, WV_ERR_INVALID, "'colours_qn.has_prev' must be true or false");
