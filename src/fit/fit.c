@@ -888,7 +888,10 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
         if ((rc = colours_start(tc, &tb, st, err))) break;
         wv_nn_lbfgs_reset(&st->t_qn, WV_P_COUNT - WV_P_REFLECT_COUNT);
       }
-      if (t_cached && !memcmp(&t_cache_p, &st->params, sizeof t_cache_p)) { /* the last step's trial */
+      int same = t_cached; /* the last step's trial, evaluated, is where the colours are */
+      for (int i = WV_P_REFLECT_COUNT; i < WV_P_COUNT && same; i++)
+        same = wv_param_get(&t_cache_p, i) == wv_param_get(&st->params, i);
+      if (same) {
         rec = t_cache_rec, rec.iter = st->iter;
         memcpy(g, t_cache_g, sizeof g);
       } else if ((rc = evaluate_t(tc, &tb, &st->params, &rec, g, err))) {

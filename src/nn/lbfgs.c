@@ -59,10 +59,9 @@ int wv_nn_lbfgs_direction(wv_nn_lbfgs *q, const double *x, double f, const doubl
   q->f_prev = f, q->has_prev = 1;
   /* the two loops over the free coordinates (those held on a bound take no part) */
   double r[WV_NN_LBFGS_DIM], a[WV_NN_LBFGS_MEM];
-  int freec[WV_NN_LBFGS_DIM], nfree = 0;
+  int freec[WV_NN_LBFGS_DIM];
   for (int i = 0; i < n; i++) {
     freec[i] = is_free(x[i], g[i], lo, hi);
-    nfree += freec[i];
     r[i] = freec[i] ? g[i] : 0;
   }
   for (int k = q->count - 1; k >= 0; k--) {
