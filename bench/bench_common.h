@@ -1,4 +1,5 @@
-/* Small helpers shared by the benchmarks: wall time and medians. */
+/* Small helpers shared by the benchmarks: wall time, medians, the .png files of a folder and
+ * bilinear sampling of an image. */
 #ifndef WOVEN_BENCH_COMMON_H
 #define WOVEN_BENCH_COMMON_H
 #include <dirent.h>
@@ -40,5 +41,17 @@ static inline int bench_list_png(const char *dir, char names[64][256]) {
   closedir(dd);
   qsort(names, (size_t)n, 256, bench_cmp_name);
   return n;
+}
+#include "woven/image.h"
+/* img at the pixel position (u, v), bilinearly, each channel into out; (u, v) held inside. */
+static inline void bench_bilinear(const wv_image *img, double u, double v, float *out) {
+  int w = img->w, h = img->h;
+  u = u < 0 ? 0 : u > w - 1 ? w - 1 : u, v = v < 0 ? 0 : v > h - 1 ? h - 1 : v;
+  int x0 = (int)u, y0 = (int)v, x1 = x0 + 1 < w ? x0 + 1 : x0, y1 = y0 + 1 < h ? y0 + 1 : y0;
+  double fx = u - x0, fy = v - y0;
+  const float *p00 = wv_image_px(img, x0, y0), *p10 = wv_image_px(img, x1, y0), *p01 = wv_image_px(img, x0, y1),
+              *p11 = wv_image_px(img, x1, y1);
+  for (int ch = 0; ch < img->c; ch++)
+    out[ch] = (float)((1 - fy) * ((1 - fx) * p00[ch] + fx * p10[ch]) + fy * ((1 - fx) * p01[ch] + fx * p11[ch]));
 }
 #endif

@@ -10,8 +10,13 @@
  *     confusion matrix, what the lattice alone and the render ranking alone would have chosen,
  *     and the choice replayed with other margins of the family and pattern ties (the loss
  *     criterion deciding near ties; wv_pattern_decide).
- *   pattern MODEL SCENE --real DIR
+ *   pattern MODEL SCENE --real DIR [--views]
  *     every .png file in DIR as a photo in SCENE: the weave analysis and the chosen pattern.
+ *     With --views also of other views of each photo that show the same weave (mirrored left to
+ *     right, moved half a pixel, enlarged 1.15 and 1.3 times about the centre, turned by +-3
+ *     degrees; all but the mirror resampled bilinearly): which family
+ *     each view gets, and how many views keep the photo's own view's family, or the family its
+ *     file name starts with (plain, basket, twill, satin), when it does.
  * Prints progress on stderr and one JSON object on the last line of stdout. */
 #include <math.h>
 #include <stdio.h>
@@ -66,14 +71,51 @@ static int twill_dir(const char *name) {
   return strchr(c, 'z') ? -1 : 1;
 }
 
+/* Views of a photo that show the same weave: as it is, mirrored left to right (a twill's S
+ * becomes a Z; the light stays at the top, as the rig has it), moved half a pixel in x and y
+ * (the bilinear resampling's own blur and nothing else: the other resampled views have it too),
+ * enlarged about the centre (the yarns more pixels apart), turned about the centre. */
+#define NVIEW 7
+static const char *const VIEW_NAME[NVIEW] = {"as is",     "mirrored",  "moved half a pixel", "enlarged 1.15",
+                                             "enlarged 1.3", "turned +3", "turned -3"};
+static const double VIEW_ZOOM[NVIEW] = {1, 1, 1, 1.15, 1.3, 1, 1}, VIEW_TURN[NVIEW] = {0, 0, 0, 0, 0, 3, -3},
+                    VIEW_SHIFT[NVIEW] = {0, 0, 0.5, 0, 0, 0, 0};
+
+/* Output pixel (x, y) samples the input bilinearly at the centre plus the turned offset over
+ * the zoom; a turned view is enlarged just enough (cos + |sin|) that no pixel samples outside. */
+static void make_view(const wv_image *in, int v, wv_image *out) {
+  wv_error e = {0};
+  int w = in->w, h = in->h, nc = in->c;
+  double a = VIEW_TURN[v] * 3.14159265358979323846 / 180, c = cos(a), s = sin(a);
+  double zoom = fmax(VIEW_ZOOM[v], c + fabs(s));
+  if (wv_image_alloc(out, w, h, nc, &e)) die(&e);
+  for (int y = 0; y < h; y++)
+    for (int x = 0; x < w; x++) {
+      double dx = x - 0.5 * (w - 1), dy = y - 0.5 * (h - 1);
+      if (v == 1) dx = -dx;
+      double u = (c * dx - s * dy) / zoom + 0.5 * (w - 1) + VIEW_SHIFT[v],
+             t = (s * dx + c * dy) / zoom + 0.5 * (h - 1) + VIEW_SHIFT[v];
+      bench_bilinear(in, u, t, wv_image_px(out, x, y));
+    }
+}
+
+/* The family a file name starts with, or NULL. */
+static const char *named_family(const char *name) {
+  static const char *F[4] = {"plain", "basket", "twill", "satin"};
+  for (int i = 0; i < 4; i++)
+    if (!strncmp(name, F[i], strlen(F[i]))) return F[i];
+  return NULL;
+}
+
 static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s, const char *dir,
-                    const wv_pattern_opts *po) {
+                    const wv_pattern_opts *po, int views) {
   char names[64][256];
   int n = bench_list_png(dir, names);
   if (n < 0) {
     fprintf(stderr, "pattern bench: cannot open %s\n", dir);
     return 1;
   }
+  int nv = views ? NVIEW : 1, kept = 0, named = 0, named_right = 0;
   printf("{\"mode\": \"real\", \"scene\": \"%s\", \"spp\": %d, \"photos\": [", s->name, po->spp);
   for (int i = 0; i < n; i++) {
     char path[4096];
@@ -81,19 +123,33 @@ static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s
     wv_error e = {0};
     wv_image photo = {0};
     wv_crop crop = {0, 0, 0, 0};
-    float y[WV_NET_OUT];
-    wv_pattern_choice c;
-    if (wv_photo_load(path, s, &crop, &photo, NULL, &e) ||
-        wv_fabricnet_predict_pattern(net, d, s, &photo, po, y, &c, &e))
-      die(&e);
-    const char *chosen = wv_weave_builtin_name(c.best);
-    fprintf(stderr, "%s: %s (%s, %s), %.2f s\n", names[i], chosen, wv_weave_family(chosen), c.method, c.seconds);
-    char *cj = wv_pattern_choice_to_json(&c);
-    printf("%s{\"photo\": \"%s\", \"choice\": %s}", i ? ", " : "", names[i], cj ? cj : "null");
-    free(cj);
+    if (wv_photo_load(path, s, &crop, &photo, NULL, &e)) die(&e);
+    const char *own = NULL, *want = named_family(names[i]);
+    printf("%s{\"photo\": \"%s\", \"views\": [", i ? ", " : "", names[i]);
+    for (int v = 0; v < nv; v++) {
+      float y[WV_NET_OUT];
+      wv_pattern_choice c;
+      wv_image img = {0};
+      if (v) make_view(&photo, v, &img);
+      if (wv_fabricnet_predict_pattern(net, d, s, v ? &img : &photo, po, y, &c, &e)) die(&e);
+      wv_image_free(&img);
+      const char *chosen = wv_weave_builtin_name(c.best), *fam = wv_weave_family(chosen);
+      if (!v) own = fam;
+      else kept += !strcmp(fam, own);
+      if (want) named++, named_right += !strcmp(fam, want);
+      fprintf(stderr, "%s, %s: %s (%s, %s), %.2f s\n", names[i], VIEW_NAME[v], chosen, fam, c.method, c.seconds);
+      char *cj = wv_pattern_choice_to_json(&c);
+      printf("%s{\"view\": \"%s\", \"family\": \"%s\", \"choice\": %s}", v ? ", " : "", VIEW_NAME[v], fam,
+             cj ? cj : "null");
+      free(cj);
+    }
+    printf("]}");
     wv_image_free(&photo);
   }
-  printf("]}\n");
+  printf("], \"views_keeping_the_family\": [%d, %d], \"family_as_named\": [%d, %d]}\n", kept, n * (nv - 1),
+         named_right, named);
+  fprintf(stderr, "views keeping the photo's own family: %d of %d; family as the file name has it: %d of %d\n", kept,
+          n * (nv - 1), named_right, named);
   return 0;
 }
 
@@ -107,11 +163,11 @@ int main(int argc, char **argv) {
   if (argc < 3) {
     fprintf(stderr, "usage: pattern MODEL SCENE [--per-pattern N] [--seed S] [--spp N] [--target-spp N] [--tie T]\n"
                     "                           [--family-tie T] [--blur SIGMA] [--noise SIGMA] [--no-lattice]\n"
-                    "       pattern MODEL SCENE --real DIR [--spp N]\n");
+                    "       pattern MODEL SCENE --real DIR [--spp N] [--views]\n");
     return 1;
   }
   const char *mpath = argv[1], *real = NULL;
-  int per = 2, target_spp = 0;
+  int per = 2, target_spp = 0, views = 0;
   double blur = 0, noise = 0;
   uint64_t seed = 2022;
   wv_pattern_opts po;
@@ -127,6 +183,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--noise") && i + 1 < argc) noise = atof(argv[++i]);
     else if (!strcmp(argv[i], "--real") && i + 1 < argc) real = argv[++i];
     else if (!strcmp(argv[i], "--no-lattice")) po.lattice = 0;
+    else if (!strcmp(argv[i], "--views")) views = 1;
     else {
       fprintf(stderr, "pattern bench: unknown argument '%s'\n", argv[i]);
       return 1;
@@ -141,7 +198,7 @@ int main(int argc, char **argv) {
       wv_fabricnet_check(&net, mpath, wv_descriptor_name(d), wv_descriptor_size(d), &s, &e))
     die(&e);
   if (real) {
-    int rc = run_real(&net, d, &s, real, &po);
+    int rc = run_real(&net, d, &s, real, &po, views);
     wv_descriptor_free(d);
     wv_fabricnet_free(&net);
     return rc;

@@ -142,14 +142,7 @@ static wv_status degrade_geometry(const wv_image *in, double rotation_deg, doubl
   for (int y = 0; y < h; y++)
     for (int x = 0; x < w; x++) {
       geometry_map(x, y, w, h, c, s, k, zoom, &u, &v);
-      u = fmin(fmax(u, 0), w - 1), v = fmin(fmax(v, 0), h - 1); /* rounding only */
-      int x0 = (int)u, y0 = (int)v, x1 = x0 + 1 < w ? x0 + 1 : x0, y1 = y0 + 1 < h ? y0 + 1 : y0;
-      double fx = u - x0, fy = v - y0;
-      const float *p00 = wv_image_px(in, x0, y0), *p10 = wv_image_px(in, x1, y0), *p01 = wv_image_px(in, x0, y1),
-                  *p11 = wv_image_px(in, x1, y1);
-      float *o = wv_image_px(out, x, y);
-      for (int ch = 0; ch < nc; ch++)
-        o[ch] = (float)((1 - fy) * ((1 - fx) * p00[ch] + fx * p10[ch]) + fy * ((1 - fx) * p01[ch] + fx * p11[ch]));
+      bench_bilinear(in, u, v, wv_image_px(out, x, y)); /* holding (u, v) inside: rounding only */
     }
   return WV_OK;
 }
