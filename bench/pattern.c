@@ -15,8 +15,12 @@
  *     With --views also of other views of each photo that show the same weave (mirrored left to
  *     right, moved half a pixel, enlarged 1.15 and 1.3 times about the centre, turned by +-3
  *     degrees; all but the mirror resampled bilinearly): which family
- *     each view gets, and how many views keep the photo's own view's family, or the family its
- *     file name starts with (plain, basket, twill, satin), when it does.
+ *     each view gets, and how many views keep the photo's own view's family; for photos whose
+ *     file name starts with their family (plain, basket, twill, satin), how often each view's
+ *     family is right, and two ways to decide from all views: a vote of their families (ties
+ *     to the photo's own view's), and the family with the largest sum of the network's
+ *     probabilities over the views that keep a twill's direction (all but the mirrored),
+ *     beside the network's most probable family on the photo as it is.
  * Prints progress on stderr and one JSON object on the last line of stdout. */
 #include <math.h>
 #include <stdio.h>
@@ -115,7 +119,8 @@ static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s
     fprintf(stderr, "pattern bench: cannot open %s\n", dir);
     return 1;
   }
-  int nv = views ? NVIEW : 1, kept = 0, named = 0, named_right = 0;
+  int nv = views ? NVIEW : 1, kept = 0, named = 0, named_right = 0, view_right[NVIEW] = {0}, photos_named = 0,
+      vote_right = 0, net_sum_right = 0, net_own_right = 0;
   printf("{\"mode\": \"real\", \"scene\": \"%s\", \"spp\": %d, \"photos\": [", s->name, po->spp);
   for (int i = 0; i < n; i++) {
     char path[4096];
@@ -125,6 +130,8 @@ static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s
     wv_crop crop = {0, 0, 0, 0};
     if (wv_photo_load(path, s, &crop, &photo, NULL, &e)) die(&e);
     const char *own = NULL, *want = named_family(names[i]);
+    int votes[4] = {0}, own_f = 0, net_own = -1;
+    double net_sum[4] = {0};
     printf("%s{\"photo\": \"%s\", \"views\": [", i ? ", " : "", names[i]);
     for (int v = 0; v < nv; v++) {
       float y[WV_NET_OUT];
@@ -134,9 +141,18 @@ static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s
       if (wv_fabricnet_predict_pattern(net, d, s, v ? &img : &photo, po, y, &c, &e)) die(&e);
       wv_image_free(&img);
       const char *chosen = wv_weave_builtin_name(c.best), *fam = wv_weave_family(chosen);
-      if (!v) own = fam;
+      if (!v) own = fam, own_f = fam_index(chosen);
       else kept += !strcmp(fam, own);
-      if (want) named++, named_right += !strcmp(fam, want);
+      if (want) named++, named_right += !strcmp(fam, want), view_right[v] += !strcmp(fam, want);
+      votes[fam_index(chosen)]++;
+      if (c.has_prob) {
+        int top = 0;
+        for (int b = 0; b < wv_weave_builtin_count(); b++) {
+          if (v != 1) net_sum[fam_index(wv_weave_builtin_name(b))] += c.prob[b];
+          if (c.prob[b] > c.prob[top]) top = b;
+        }
+        if (!v) net_own = fam_index(wv_weave_builtin_name(top));
+      }
       fprintf(stderr, "%s, %s: %s (%s, %s), %.2f s\n", names[i], VIEW_NAME[v], chosen, fam, c.method, c.seconds);
       char *cj = wv_pattern_choice_to_json(&c);
       printf("%s{\"view\": \"%s\", \"family\": \"%s\", \"choice\": %s}", v ? ", " : "", VIEW_NAME[v], fam,
@@ -145,11 +161,36 @@ static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s
     }
     printf("]}");
     wv_image_free(&photo);
+    if (want && views) {
+      static const char *F[4] = {"plain", "basket", "twill", "satin"};
+      int vote = own_f, net = 0;
+      for (int f = 0; f < 4; f++) {
+        if (votes[f] > votes[vote]) vote = f;
+        if (net_sum[f] > net_sum[net]) net = f;
+      }
+      photos_named++;
+      vote_right += !strcmp(F[vote], want);
+      net_sum_right += net_sum[net] > 0 && !strcmp(F[net], want);
+      net_own_right += net_own >= 0 && !strcmp(F[net_own], want);
+    }
   }
-  printf("], \"views_keeping_the_family\": [%d, %d], \"family_as_named\": [%d, %d]}\n", kept, n * (nv - 1),
+  printf("], \"views_keeping_the_family\": [%d, %d], \"family_as_named\": [%d, %d]", kept, n * (nv - 1),
          named_right, named);
   fprintf(stderr, "views keeping the photo's own family: %d of %d; family as the file name has it: %d of %d\n", kept,
           n * (nv - 1), named_right, named);
+  if (views && photos_named) {
+    printf(", \"named_right_per_view\": {");
+    for (int v = 0; v < NVIEW; v++) {
+      printf("%s\"%s\": %d", v ? ", " : "", VIEW_NAME[v], view_right[v]);
+      fprintf(stderr, "%s %s %d", v ? "," : "family right per view of the named photos:", VIEW_NAME[v], view_right[v]);
+    }
+    printf("}, \"named_photos\": %d, \"vote_right\": %d, \"network_sum_right\": %d, \"network_own_right\": %d",
+           photos_named, vote_right, net_sum_right, net_own_right);
+    fprintf(stderr, " (of %d); the views' vote %d, the network's family sums over the views %d, the network on the "
+                    "photo as it is %d\n",
+            photos_named, vote_right, net_sum_right, net_own_right);
+  }
+  printf("}\n");
   return 0;
 }
 
