@@ -61,10 +61,11 @@ static void camera(wv_image *img, double blur, double noise, uint64_t seed) {
   }
 }
 
+static const char *const FAMILIES[4] = {"plain", "basket", "twill", "satin"};
+
 static int fam_index(const char *name) {
-  static const char *F[4] = {"plain", "basket", "twill", "satin"};
   for (int i = 0; i < 4; i++)
-    if (!strcmp(wv_weave_family(name), F[i])) return i;
+    if (!strcmp(wv_weave_family(name), FAMILIES[i])) return i;
   return 0;
 }
 
@@ -103,12 +104,11 @@ static void make_view(const wv_image *in, int v, wv_image *out) {
     }
 }
 
-/* The family a file name starts with, or NULL. */
-static const char *named_family(const char *name) {
-  static const char *F[4] = {"plain", "basket", "twill", "satin"};
+/* The index in FAMILIES of the family a file name starts with, or -1. */
+static int named_family(const char *name) {
   for (int i = 0; i < 4; i++)
-    if (!strncmp(name, F[i], strlen(F[i]))) return F[i];
-  return NULL;
+    if (!strncmp(name, FAMILIES[i], strlen(FAMILIES[i]))) return i;
+  return -1;
 }
 
 static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s, const char *dir,
@@ -129,8 +129,7 @@ static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s
     wv_image photo = {0};
     wv_crop crop = {0, 0, 0, 0};
     if (wv_photo_load(path, s, &crop, &photo, NULL, &e)) die(&e);
-    const char *own = NULL, *want = named_family(names[i]);
-    int votes[4] = {0}, own_f = 0, net_own = -1;
+    int want = named_family(names[i]), votes[4] = {0}, own = 0, net_own = -1;
     double net_sum[4] = {0};
     printf("%s{\"photo\": \"%s\", \"views\": [", i ? ", " : "", names[i]);
     for (int v = 0; v < nv; v++) {
@@ -141,10 +140,11 @@ static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s
       if (wv_fabricnet_predict_pattern(net, d, s, v ? &img : &photo, po, y, &c, &e)) die(&e);
       wv_image_free(&img);
       const char *chosen = wv_weave_builtin_name(c.best), *fam = wv_weave_family(chosen);
-      if (!v) own = fam, own_f = fam_index(chosen);
-      else kept += !strcmp(fam, own);
-      if (want) named++, named_right += !strcmp(fam, want), view_right[v] += !strcmp(fam, want);
-      votes[fam_index(chosen)]++;
+      int f = fam_index(chosen);
+      if (!v) own = f;
+      else kept += f == own;
+      if (want >= 0) named++, named_right += f == want, view_right[v] += f == want;
+      votes[f]++;
       if (c.has_prob) {
         int top = 0;
         for (int b = 0; b < wv_weave_builtin_count(); b++) {
@@ -161,23 +161,24 @@ static int run_real(const wv_fabricnet *net, wv_descriptor *d, const wv_scene *s
     }
     printf("]}");
     wv_image_free(&photo);
-    if (want && views) {
-      static const char *F[4] = {"plain", "basket", "twill", "satin"};
-      int vote = own_f, net = 0;
+    if (want >= 0 && views) {
+      int vote = own, net = 0;
       for (int f = 0; f < 4; f++) {
         if (votes[f] > votes[vote]) vote = f;
         if (net_sum[f] > net_sum[net]) net = f;
       }
       photos_named++;
-      vote_right += !strcmp(F[vote], want);
-      net_sum_right += net_sum[net] > 0 && !strcmp(F[net], want);
-      net_own_right += net_own >= 0 && !strcmp(F[net_own], want);
+      vote_right += vote == want;
+      net_sum_right += net_sum[net] > 0 && net == want;
+      net_own_right += net_own == want;
     }
   }
-  printf("], \"views_keeping_the_family\": [%d, %d], \"family_as_named\": [%d, %d]", kept, n * (nv - 1),
-         named_right, named);
-  fprintf(stderr, "views keeping the photo's own family: %d of %d; family as the file name has it: %d of %d\n", kept,
-          n * (nv - 1), named_right, named);
+  printf("], \"family_as_named\": [%d, %d]", named_right, named);
+  if (named) fprintf(stderr, "family as the file name has it: %d of %d\n", named_right, named);
+  if (views) {
+    printf(", \"views_keeping_the_family\": [%d, %d]", kept, n * (nv - 1));
+    fprintf(stderr, "views keeping the photo's own family: %d of %d\n", kept, n * (nv - 1));
+  }
   if (views && photos_named) {
     printf(", \"named_right_per_view\": {");
     for (int v = 0; v < NVIEW; v++) {
@@ -238,6 +239,10 @@ int main(int argc, char **argv) {
   if (wv_fabricnet_load(mpath, &net, &e) || wv_descriptor_create("default", NULL, &d, &e) ||
       wv_fabricnet_check(&net, mpath, wv_descriptor_name(d), wv_descriptor_size(d), &s, &e))
     die(&e);
+  if (views && !real) {
+    fprintf(stderr, "pattern bench: --views needs --real DIR (the views are of photos)\n");
+    return 1;
+  }
   if (real) {
     int rc = run_real(&net, d, &s, real, &po, views);
     wv_descriptor_free(d);
@@ -299,12 +304,11 @@ int main(int argc, char **argv) {
             c.seconds);
     wv_image_free(&photo);
   }
-  static const char *FAM[4] = {"plain", "basket", "twill", "satin"};
   fprintf(stderr, "families (rows: truth, columns: chosen)\n%-8s", "");
-  for (int j = 0; j < 4; j++) fprintf(stderr, " %7s", FAM[j]);
+  for (int j = 0; j < 4; j++) fprintf(stderr, " %7s", FAMILIES[j]);
   fprintf(stderr, "\n");
   for (int i = 0; i < 4; i++) {
-    fprintf(stderr, "%-8s", FAM[i]);
+    fprintf(stderr, "%-8s", FAMILIES[i]);
     for (int j = 0; j < 4; j++) fprintf(stderr, " %7d", conf[i][j]);
     fprintf(stderr, "\n");
   }
@@ -324,7 +328,7 @@ int main(int argc, char **argv) {
   printf("}");
   printf(", \"family_confusion\": {");
   for (int i = 0; i < 4; i++) {
-    printf("%s\"%s\": [", i ? ", " : "", FAM[i]);
+    printf("%s\"%s\": [", i ? ", " : "", FAMILIES[i]);
     for (int j = 0; j < 4; j++) printf("%s%d", j ? ", " : "", conf[i][j]);
     printf("]");
   }
