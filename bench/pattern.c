@@ -231,6 +231,10 @@ int main(int argc, char **argv) {
       return 1;
     }
   }
+  if (views && !real) {
+    fprintf(stderr, "pattern bench: --views needs --real DIR (the views are of photos)\n");
+    return 1;
+  }
   wv_error e = {0};
   wv_scene s;
   if (wv_scene_load(argv[2], &s, &e)) die(&e);
@@ -239,10 +243,6 @@ int main(int argc, char **argv) {
   if (wv_fabricnet_load(mpath, &net, &e) || wv_descriptor_create("default", NULL, &d, &e) ||
       wv_fabricnet_check(&net, mpath, wv_descriptor_name(d), wv_descriptor_size(d), &s, &e))
     die(&e);
-  if (views && !real) {
-    fprintf(stderr, "pattern bench: --views needs --real DIR (the views are of photos)\n");
-    return 1;
-  }
   if (real) {
     int rc = run_real(&net, d, &s, real, &po, views);
     wv_descriptor_free(d);
