@@ -161,19 +161,22 @@ static void rec_put(wv_grad_record *rec, size_t k, const wv_grad_pixel *pix, con
  * two), as it is made for every sum of every pixel (inv made once, outside the loops). */
 static double per_sample(double v, int spp, double inv) { return spp & (spp - 1) ? v / spp : v * inv; }
 
-/* Sensor response of one pixel and its slope; in float mode exactly
- * wv_scene_response's arithmetic, so the capture is wv_render's. */
-static void respond(const wv_scene *s, int dbl, int px, int py, const double rad[3], float cap[3], pixel_rec *rec) {
+/* Sensor response of one pixel and its slope in double mode. */
+static void respond_d(const wv_scene *s, int px, int py, const double rad[3], float cap[3], pixel_rec *rec) {
   double m = wv_response_mask(s, px, py);
   for (int c = 0; c < 3; c++) {
-    if (dbl) {
-      rec->cap[c] = wv_respond_d(s, m, rad[c], &rec->slope[c]);
-      cap[c] = (float)rec->cap[c];
-    } else {
-      cap[c] = wv_respond_f(s, m, (float)rad[c], &rec->slope[c]);
-      rec->cap[c] = cap[c];
-    }
+    rec->cap[c] = wv_respond_d(s, m, rad[c], &rec->slope[c]);
+    cap[c] = (float)rec->cap[c];
   }
+}
+
+/* Sensor response of n <= 8 pixels from (px, py), their radiance in float, and their
+ * slopes: wv_scene_response's arithmetic, so the capture is wv_render's. */
+static void respond_f8(const wv_scene *s, int px, int py, int n, const float rad[8][3], float cap[8][3],
+                       double slope[8][3]) {
+  double mask[8];
+  wv_response_mask_row(s, px, py, n, mask);
+  wv_respond_n(s, mask, n, 3, &rad[0][0], &cap[0][0], &slope[0][0]);
 }
 
 /* The pixel's radiance and, with sums, its sums / spp. */
@@ -243,21 +246,34 @@ static void load_radiance(void *ctx, int y, double *row) {
  * pixel's radiance first: the records' captures and slopes are made after the render,
  * a row at a time (wv_scene_capture's arithmetic). */
 static void store_response(void *ctx, int y, const double *row) {
+  enum { B = 64 }; /* pixels a block: the response's powers are taken a block at once */
   const blur_pass *bp = ctx;
   wv_grad_record *rec = bp->out;
-  for (int i = 0; i < rec->w; i++) {
-    size_t k = (size_t)y * rec->w + i;
-    double b[3];
-    for (int c = 0; c < 3; c++) b[c] = rec->dbl ? row[3 * i + c] : (double)(float)row[3 * i + c];
-    float cap[3];
-    pixel_rec pr;
-    respond(bp->s, rec->dbl, bp->x0 + i, bp->y0 + y, b, cap, &pr);
-    for (int c = 0; c < 3; c++) {
-      rec->slope[3 * k + c] = pr.slope[c];
-      if (rec->dbl) rec->capd[3 * k + c] = pr.cap[c];
-      else rec->capf[3 * k + c] = cap[c];
+  for (int i0 = 0; i0 < rec->w; i0 += B) {
+    int n = rec->w - i0 < B ? rec->w - i0 : B;
+    float b[B][3], cap[B][3];
+    double sl[B][3];
+    if (rec->dbl) {
+      for (int i = 0; i < n; i++) {
+        pixel_rec pr;
+        respond_d(bp->s, bp->x0 + i0 + i, bp->y0 + y, row + 3 * (i0 + i), cap[i], &pr);
+        for (int c = 0; c < 3; c++) sl[i][c] = pr.slope[c], rec->capd[3 * ((size_t)y * rec->w + i0 + i) + c] = pr.cap[c];
+      }
+    } else {
+      for (int i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) b[i][c] = (float)row[3 * (i0 + i) + c];
+      double mask[B];
+      wv_response_mask_row(bp->s, bp->x0 + i0, bp->y0 + y, n, mask);
+      wv_respond_n(bp->s, mask, n, 3, &b[0][0], &cap[0][0], &sl[0][0]);
     }
-    if (bp->capture) memcpy(wv_image_px(bp->capture, i, y), cap, sizeof cap);
+    for (int i = 0; i < n; i++) {
+      size_t k = (size_t)y * rec->w + i0 + i;
+      for (int c = 0; c < 3; c++) {
+        rec->slope[3 * k + c] = sl[i][c];
+        if (!rec->dbl) rec->capf[3 * k + c] = cap[i][c];
+      }
+      if (bp->capture) memcpy(wv_image_px(bp->capture, i0 + i, y), cap[i], sizeof cap[i]);
+    }
   }
 }
 
@@ -371,14 +387,26 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
     double inv = 1.0 / spp;
     row_sums g;
     memset(&g, 0, sizeof g);
+    float crad[8][3], ccap[8][3]; /* float mode without a blur: the chunk's response */
+    double cslope[8][3];
     for (int i = 0; i < W; i++) {
-      if (i % 8 == 0 && !dbl) wv_render_row(&rig, &fab, y0 + r, x0 + i, W - i < 8 ? W - i : 8, spp, NULL, pix);
+      if (i % 8 == 0 && !dbl) {
+        int n = W - i < 8 ? W - i : 8;
+        wv_render_row(&rig, &fab, y0 + r, x0 + i, n, spp, NULL, pix);
+        if (!blur) {
+          for (int k = 0; k < n; k++)
+            for (int c = 0; c < 3; c++) crad[k][c] = (float)pix[k].rad[c];
+          respond_f8(s, x0 + i, y0 + r, n, crad, ccap, cslope);
+        }
+      }
       if (dbl) wv_grad_pixel_d(&rig, &fab, &Pd, x0 + i, y0 + r, spp, &pix[i % 8]);
       pixel_rec pr;
       float cap[3];
       keep(spp, inv, &pix[i % 8], &pr, rows || dbl); /* a float record keeps the sums as made */
       /* with a camera blur the response comes after the loop, on the blurred radiance */
-      if (!blur) respond(s, dbl, x0 + i, y0 + r, pr.rad, cap, &pr);
+      if (!blur && dbl) respond_d(s, x0 + i, y0 + r, pr.rad, cap, &pr);
+      if (!blur && !dbl)
+        for (int c = 0; c < 3; c++) cap[c] = ccap[i % 8][c], pr.cap[c] = cap[c], pr.slope[c] = cslope[i % 8][c];
       if (rec) rec_put(rec, (size_t)r * W + i, &pix[i % 8], &pr, !blur);
       if (blur) continue;
       if (capture_out) memcpy(wv_image_px(capture_out, i, r), cap, sizeof cap);

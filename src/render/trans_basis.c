@@ -91,14 +91,25 @@ wv_status wv_trans_basis_capture(wv_trans_basis *b, const wv_params *p, wv_image
     for (int c = 0; c < 3; c++) k[t][c] = (float)colour_of(&q, t)[c];
   wv_status st = wv_image_alloc(capture, b->w, b->h, 3, err);
   if (st) return st;
-  size_t n = (size_t)b->w * b->h;
+  enum { B = 64 }; /* pixels a block: the response's powers are taken a block at once */
+  size_t n = (size_t)b->w * b->h, nb = (n + B - 1) / B;
 #pragma omp parallel for schedule(static)
-  for (size_t i = 0; i < n; i++)
-    for (int c = 0; c < 3; c++) {
-      float v = b->base[3 * i + c];
-      for (int t = 0; t < TB_TYPES; t++) v += k[t][c] * b->basis[t][3 * i + c];
-      capture->data[3 * i + c] = wv_respond_f(&b->scene, b->mask[i], v, &b->slope[3 * i + c]);
+  for (size_t q0 = 0; q0 < nb; q0++) {
+    size_t i0 = q0 * B;
+    int m = n - i0 < B ? (int)(n - i0) : B;
+    float v[B * 3];
+    double mask[B];
+    for (int j = 0; j < m; j++) {
+      size_t i = i0 + (size_t)j;
+      mask[j] = b->mask[i];
+      for (int c = 0; c < 3; c++) {
+        float x = b->base[3 * i + c];
+        for (int t = 0; t < TB_TYPES; t++) x += k[t][c] * b->basis[t][3 * i + c];
+        v[3 * j + c] = x;
+      }
     }
+    wv_respond_n(&b->scene, mask, m, 3, v, capture->data + 3 * i0, b->slope + 3 * i0);
+  }
   return WV_OK;
 }
 

@@ -48,7 +48,10 @@ wv_status wv_photo_load(const char *path, const wv_scene *s, const wv_crop *crop
     memcpy(wv_image_px(&cropped, 0, y), wv_image_px(&raw, x0, y0 + y), sizeof(float) * 3 * (size_t)cw);
   wv_image_free(&raw);
   if (ii.is_float) /* linear photo: apply the camera response the scene describes (no mask) */
-    for (size_t i = 0; i < (size_t)cw * ch * 3; i++) cropped.data[i] = wv_respond_f(s, 1.0, cropped.data[i], NULL);
+    for (int y = 0; y < ch; y++) {
+      float *row = wv_image_px(&cropped, 0, y);
+      wv_respond_n(s, NULL, cw, 3, row, row, NULL);
+    }
   if (cw == s->width && ch == s->height) {
     *out = cropped;
   } else {

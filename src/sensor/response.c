@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "sensor/sensor.h"
+#include "util/vmath.h"
 #include "woven/scene.h"
 
 float wv_encode(const wv_scene *s, float x) { return wv_encode_f(s, x); }
@@ -23,12 +24,64 @@ float wv_decode(const wv_scene *s, float y) {
   }
 }
 
-double wv_encode_slope(const wv_scene *s, double x) {
-  if (x <= 0.0) return 0.0;
+float wv_power_f(float x, float e) {
+  float y;
+  wv_powf_n(&x, e, &y, 1);
+  return y;
+}
+
+double wv_power_d(double x, double e) {
+  double y;
+  wv_pow_n(&x, e, &y, 1);
+  return y;
+}
+
+double wv_slope_exponent(const wv_scene *s) {
   switch (s->encoding) {
-    case WV_ENC_SRGB: return wv_srgb_encode_slope(x);
-    case WV_ENC_GAMMA: return pow(x, 1.0 / s->gamma - 1.0) / s->gamma;
-    default: return 1.0;
+    case WV_ENC_SRGB: return 1.0 / 2.4 - 1.0;
+    case WV_ENC_GAMMA: return 1.0 / s->gamma - 1.0;
+    default: return 0.0;
+  }
+}
+
+double wv_encode_slope(const wv_scene *s, double x) {
+  return wv_encode_slope_pow(s->encoding, s->gamma, x, x > 0.0 && s->encoding != WV_ENC_LINEAR ? wv_power_d(x, wv_slope_exponent(s)) : 0.0);
+}
+
+/* Blocks of RESP_B values: the powers of a block are taken at once, from the stack. */
+#define RESP_B 256
+
+void wv_respond_n(const wv_scene *s, const double *mask, int n, int c, const float *rad, float *cap, double *slope) {
+  float v[RESP_B], pe[RESP_B];
+  double vd[RESP_B], ps[RESP_B];
+  int clipped[RESP_B], per = c > 0 ? RESP_B / c : 0, powered = s->encoding != WV_ENC_LINEAR;
+  if (per < 1) return; /* images have 1 to 4 channels */
+  for (int p0 = 0; p0 < n; p0 += per) {
+    int np = n - p0 < per ? n - p0 : per, m = np * c;
+    const float *in = rad + (size_t)p0 * c;
+    for (int j = 0; j < m; j++) {
+      v[j] = wv_expose_f(s, in[j], &clipped[j]);
+      vd[j] = v[j], pe[j] = 0.0f, ps[j] = 0.0;
+    }
+    if (powered) {
+      wv_powf_n(v, wv_encode_exponent_f(s), pe, m);
+      if (slope) wv_pow_n(vd, wv_slope_exponent(s), ps, m);
+    }
+    float *out = cap + (size_t)p0 * c;
+    double *sl = slope ? slope + (size_t)p0 * c : NULL;
+    /* one loop for each encoding, the encoding a constant in each */
+#define RESPOND_BLOCK(enc)                                                                       \
+  for (int k = 0; k < np; k++) {                                                               \
+    double mk = mask ? mask[p0 + k] : 1.0;                                                     \
+    for (int j = k * c; j < (k + 1) * c; j++)                                                  \
+      out[j] = wv_respond_pow_f(s, enc, mk, v[j], clipped[j], pe[j], ps[j], sl ? sl + j : NULL); \
+  }
+    switch (s->encoding) {
+      case WV_ENC_SRGB: RESPOND_BLOCK(WV_ENC_SRGB) break;
+      case WV_ENC_GAMMA: RESPOND_BLOCK(WV_ENC_GAMMA) break;
+      default: RESPOND_BLOCK(WV_ENC_LINEAR)
+    }
+#undef RESPOND_BLOCK
   }
 }
 
@@ -42,15 +95,22 @@ double wv_response_mask(const wv_scene *s, int x, int y) {
   return wv_pixel_gaussian(s->width, s->height, x, y, s->falloff_sigma);
 }
 
+void wv_response_mask_row(const wv_scene *s, int x0, int y, int n, double *mask) {
+  for (int i = 0; i < n; i++) mask[i] = wv_response_mask(s, x0 + i, y);
+}
+
 void wv_scene_response(const wv_scene *s, const wv_image *rad, wv_image *cap) {
+  int c = rad->c, per = c > 0 ? RESP_B / c : 0;
+  if (per < 1) return;
 #pragma omp parallel for schedule(static)
-  for (int y = 0; y < rad->h; y++)
-    for (int x = 0; x < rad->w; x++) {
-      double m = wv_response_mask(s, x, y);
-      const float *in = wv_image_px(rad, x, y);
-      float *out = wv_image_px(cap, x, y);
-      for (int c = 0; c < rad->c; c++) out[c] = wv_respond_f(s, m, in[c], NULL);
+  for (int y = 0; y < rad->h; y++) {
+    double mask[RESP_B];
+    for (int x0 = 0; x0 < rad->w; x0 += per) { /* blocks of the row, from the stack */
+      int n = rad->w - x0 < per ? rad->w - x0 : per;
+      wv_response_mask_row(s, x0, y, n, mask);
+      wv_respond_n(s, mask, n, c, wv_image_px(rad, x0, y), wv_image_px(cap, x0, y), NULL);
     }
+  }
 }
 
 /* The camera blur, K = Ky Kx: a 1-D Gaussian along x on each row, then along y.
@@ -269,12 +329,14 @@ static void capture_load(void *ctx, int y, double *row) {
 static void capture_store(void *ctx, int y, const double *row) {
   const capture_rows *p = ctx;
   float *out = wv_image_px(p->cap, 0, y);
-  for (int x = 0; x < p->cap->w; x++) {
-    double m = wv_response_mask(p->s, x, y);
-    for (int ch = 0; ch < p->cap->c; ch++) {
-      size_t i = (size_t)x * p->cap->c + ch;
-      out[i] = wv_respond_f(p->s, m, (float)row[i], NULL);
-    }
+  int c = p->cap->c;
+  float v[RESP_B];
+  double mask[RESP_B];
+  for (int x0 = 0; x0 < p->cap->w; x0 += RESP_B / c) { /* blocks of the row, from the stack */
+    int n = p->cap->w - x0 < RESP_B / c ? p->cap->w - x0 : RESP_B / c;
+    for (int i = 0; i < n * c; i++) v[i] = (float)row[(size_t)x0 * c + i];
+    wv_response_mask_row(p->s, x0, y, n, mask);
+    wv_respond_n(p->s, mask, n, c, v, out + (size_t)x0 * c, NULL);
   }
 }
 

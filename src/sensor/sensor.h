@@ -51,7 +51,23 @@ typedef struct wv_footprint_s {
 void wv_footprint_prepare(const wv_camera_rig *rig, int px, int py, wv_footprint *fp);
 
 /* ---- sensor response ---- */
-#define wv_pow(x, y) _Generic((x), float: powf, double: pow)(x, y)
+/* The response's powers: in float and double, one value by the vector functions of
+ * util/vmath.h, so that a value's response is the same alone and in a row
+ * (wv_respond_n). */
+float wv_power_f(float x, float e);
+double wv_power_d(double x, double e);
+/* The power of a linear value in d encode / d linear (0: the slope is constant). */
+double wv_slope_exponent(const wv_scene *s);
+/* d encode / d linear in double of a linear value x under encoding enc (gamma: the
+ * scene's), given p = x^wv_slope_exponent (0 for x <= 0, where encode is clamped to 0). */
+static inline double wv_encode_slope_pow(wv_encoding enc, double gamma, double x, double p) {
+  if (x <= 0.0) return 0.0;
+  switch (enc) {
+    case WV_ENC_SRGB: return wv_srgb_encode_slope_pow(x, p);
+    case WV_ENC_GAMMA: return p / gamma;
+    default: return 1.0;
+  }
+}
 /* d encode / d linear in double (0 for linear <= 0, where encode is clamped to 0). */
 double wv_encode_slope(const wv_scene *s, double linear);
 /* exp(-d^2 / sigma^2), d the distance in pixels of pixel (x, y)'s centre from the centre
@@ -89,5 +105,12 @@ float wv_gap_glow(const wv_camera_rig *rig, int x, int y);
 #include "kernel/lane_begin.h"
 #include "sensor/response_impl.h"
 #include "kernel/lane_end.h"
+
+/* The response of n pixels of c channels each (interleaved): cap[i] = wv_respond_f of
+ * rad[i] with the mask of its pixel (mask[k], or 1 with mask NULL) and, with slope,
+ * slope[i] its slope; the powers taken many at once. */
+void wv_respond_n(const wv_scene *s, const double *mask, int n, int c, const float *rad, float *cap, double *slope);
+/* The falloff masks of n pixels of row y from column x0 (wv_response_mask). */
+void wv_response_mask_row(const wv_scene *s, int x0, int y, int n, double *mask);
 
 #endif
