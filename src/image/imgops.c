@@ -31,26 +31,71 @@ static wv_status check_size(int w, int h, wv_error *err) {
   return WV_OK;
 }
 
+/* For each index k of one axis, the indices j of the other that span(k, f_span, n_other)
+ * gives and their overlaps: overlap(j, k, f) (out: k an output cell, j its inputs) or
+ * overlap(k, j, f) (k an input, j the output cells over it). Made once per call, so the
+ * loops over pixels read the weights instead of making them again for every row. */
+typedef struct {
+  int *lo, *len; /* k's first j and how many */
+  size_t *at;    /* where k's weights start in wt */
+  double *wt;
+} span_table;
+
+static void table_free(span_table *t) {
+  free(t->lo), free(t->len), free(t->at), free(t->wt);
+}
+
+static wv_status table_make(int n, int n_other, double f_span, double f, int out, span_table *t, wv_error *err) {
+  memset(t, 0, sizeof *t);
+  t->lo = malloc(sizeof(int) * (size_t)n), t->len = malloc(sizeof(int) * (size_t)n);
+  t->at = malloc(sizeof(size_t) * (size_t)n);
+  size_t total = 0;
+  for (int k = 0; t->lo && t->len && t->at && k < n; k++) {
+    int j0, j1;
+    span(k, f_span, n_other, &j0, &j1);
+    t->lo[k] = j0, t->len[k] = j1 >= j0 ? j1 - j0 + 1 : 0, t->at[k] = total;
+    total += (size_t)t->len[k];
+  }
+  if (t->lo && t->len && t->at) t->wt = malloc(sizeof(double) * (total ? total : 1));
+  if (!t->wt) {
+    table_free(t);
+    return wv_fail(err, WV_ERR_NOMEM, "out of memory for the downsampling's weights");
+  }
+  for (int k = 0; k < n; k++)
+    for (int i = 0; i < t->len[k]; i++) {
+      int j = t->lo[k] + i;
+      t->wt[t->at[k] + (size_t)i] = out ? overlap(j, k, f) : overlap(k, j, f);
+    }
+  return WV_OK;
+}
+
 wv_status wv_image_downsample(const wv_image *in, int w, int h, wv_image *out, wv_error *err) {
   wv_status st = check_size(w, h, err);
   if (st) return st;
   if (!in || !in->data) return wv_fail(err, WV_ERR_INVALID, "downsample: no input image");
-  if ((st = wv_image_alloc(out, w, h, in->c, err))) return st;
   double fx = (double)in->w / w, fy = (double)in->h / h, norm = 1.0 / (fx * fy);
+  span_table tx, ty;
+  if ((st = table_make(w, in->w, fx, fx, 1, &tx, err))) return st;
+  if ((st = table_make(h, in->h, fy, fy, 1, &ty, err))) {
+    table_free(&tx);
+    return st;
+  }
+  if ((st = wv_image_alloc(out, w, h, in->c, err))) {
+    table_free(&tx), table_free(&ty);
+    return st;
+  }
   /* each output row is its own: the same values on any number of threads */
 #pragma omp parallel for schedule(static)
   for (int Y = 0; Y < h; Y++) {
-    int y0, y1;
-    span(Y, fy, in->h, &y0, &y1);
+    const double *wy = ty.wt + ty.at[Y];
     for (int X = 0; X < w; X++) {
-      int x0, x1;
-      span(X, fx, in->w, &x0, &x1);
+      const double *wx = tx.wt + tx.at[X];
       double acc[4] = {0, 0, 0, 0};
-      for (int y = y0; y <= y1; y++) {
-        double wy = overlap(y, Y, fy);
-        for (int x = x0; x <= x1; x++) {
-          double wxy = wy * overlap(x, X, fx);
-          const float *p = wv_image_px(in, x, y);
+      for (int a = 0; a < ty.len[Y]; a++) {
+        int y = ty.lo[Y] + a;
+        for (int b = 0; b < tx.len[X]; b++) {
+          double wxy = wy[a] * wx[b];
+          const float *p = wv_image_px(in, tx.lo[X] + b, y);
           for (int c = 0; c < in->c; c++) acc[c] += wxy * p[c];
         }
       }
@@ -58,6 +103,7 @@ wv_status wv_image_downsample(const wv_image *in, int w, int h, wv_image *out, w
       for (int c = 0; c < in->c; c++) o[c] = (float)(acc[c] * norm);
     }
   }
+  table_free(&tx), table_free(&ty);
   return WV_OK;
 }
 
@@ -65,27 +111,34 @@ wv_status wv_image_downsample_backward(int in_w, int in_h, const wv_image *dout,
   wv_status st = check_size(in_w, in_h, err);
   if (st) return st;
   if (!dout || !dout->data) return wv_fail(err, WV_ERR_INVALID, "downsample backward: no adjoint image");
-  if ((st = wv_image_alloc(din, in_w, in_h, dout->c, err))) return st;
   int w = dout->w, h = dout->h;
   double fx = (double)in_w / w, fy = (double)in_h / h, norm = 1.0 / (fx * fy);
+  span_table tx, ty;
+  if ((st = table_make(in_w, w, 1.0 / fx, fx, 0, &tx, err))) return st;
+  if ((st = table_make(in_h, h, 1.0 / fy, fy, 0, &ty, err))) {
+    table_free(&tx);
+    return st;
+  }
+  if ((st = wv_image_alloc(din, in_w, in_h, dout->c, err))) {
+    table_free(&tx), table_free(&ty);
+    return st;
+  }
   /* Gather form: each input pixel sums the output cells that cover it, so
    * every din value is written once (no accumulation order to worry about), and rows
    * can go to threads. */
 #pragma omp parallel for schedule(static)
   for (int y = 0; y < in_h; y++) {
-    int Y0, Y1;
-    span(y, 1.0 / fy, h, &Y0, &Y1);
+    const double *wy = ty.wt + ty.at[y];
     for (int x = 0; x < in_w; x++) {
-      int X0, X1;
-      span(x, 1.0 / fx, w, &X0, &X1);
+      const double *wx = tx.wt + tx.at[x];
       double acc[4] = {0, 0, 0, 0};
-      for (int Y = Y0; Y <= Y1; Y++) {
-        double wy = overlap(y, Y, fy);
-        if (wy <= 0) continue;
-        for (int X = X0; X <= X1; X++) {
-          double wxy = wy * overlap(x, X, fx);
+      for (int a = 0; a < ty.len[y]; a++) {
+        if (wy[a] <= 0) continue;
+        int Y = ty.lo[y] + a;
+        for (int b = 0; b < tx.len[x]; b++) {
+          double wxy = wy[a] * wx[b];
           if (wxy <= 0) continue;
-          const float *g = wv_image_px(dout, X, Y);
+          const float *g = wv_image_px(dout, tx.lo[x] + b, Y);
           for (int c = 0; c < dout->c; c++) acc[c] += wxy * g[c];
         }
       }
@@ -93,6 +146,7 @@ wv_status wv_image_downsample_backward(int in_w, int in_h, const wv_image *dout,
       for (int c = 0; c < dout->c; c++) o[c] = (float)(acc[c] * norm);
     }
   }
+  table_free(&tx), table_free(&ty);
   return WV_OK;
 }
 
