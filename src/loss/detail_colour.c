@@ -20,61 +20,76 @@ struct wv_colour_loss {
   float *tmp;        /* 3*n*n one pass of the blur, per channel */
   float *det;        /* 3*n*n the detail on the interior (0 outside), centred */
   float *gd;         /* 3*n*n the gradient with respect to the detail */
+  double *acc;       /* 3*n one row of the blur's sums, per channel */
   double photo[9];   /* the photo's normalised covariance */
   int flat;          /* the photo has no detail: nothing to match, L_k = 0 */
 };
 
 void wv_colour_loss_free(wv_colour_loss *c) {
   if (!c) return;
-  free(c->tmp), free(c->det), free(c->gd);
+  free(c->tmp), free(c->det), free(c->gd), free(c->acc);
   free(c);
 }
 
+/* The blur's sums are made a row at a time, tap after tap over the row's values (s[x] +=
+ * g[k] v[x + k], k ascending for every x): each value adds its terms in the same order as
+ * one sum per value would, and the row's loop is a vector loop. acc: n doubles. */
+
 /* det = x - blur(x) on the interior [r, n-r)^2 of the crop: the blur's taps there stay
  * inside the crop, so no edge rule enters. One channel; tmp and det n*n. */
-static void detail_forward(const wv_colour_loss *c, const wv_image *img, int ch, float *tmp, float *det) {
+static void detail_forward(const wv_colour_loss *c, const wv_image *img, int ch, float *tmp, float *det,
+                           double *acc) {
   int n = c->n, r = c->r;
   const double *g = c->g;
   for (int y = 0; y < n; y++) { /* along x, every row the second pass reads */
     const float *row = wv_image_px(img, c->x0, c->y0 + y) + ch;
-    for (int x = r; x < n - r; x++) {
-      double s = 0;
-      for (int k = -r; k <= r; k++) s += g[k + r] * row[3 * (x + k)];
-      tmp[(size_t)y * n + x] = (float)s;
-    }
+    for (int x = r; x < n - r; x++) acc[x] = 0;
+    for (int k = -r; k <= r; k++)
+#pragma omp simd
+      for (int x = r; x < n - r; x++) acc[x] += g[k + r] * row[3 * (x + k)];
+    for (int x = r; x < n - r; x++) tmp[(size_t)y * n + x] = (float)acc[x];
   }
   memset(det, 0, sizeof(float) * (size_t)n * n);
   for (int y = r; y < n - r; y++) { /* along y, then det = x - blur(x) */
     const float *row = wv_image_px(img, c->x0, c->y0 + y) + ch;
-    for (int x = r; x < n - r; x++) {
-      double s = 0;
-      for (int k = -r; k <= r; k++) s += g[k + r] * tmp[(size_t)(y + k) * n + x];
-      det[(size_t)y * n + x] = row[3 * x] - (float)s;
+    for (int x = r; x < n - r; x++) acc[x] = 0;
+    for (int k = -r; k <= r; k++) {
+      const float *t = tmp + (size_t)(y + k) * n;
+#pragma omp simd
+      for (int x = r; x < n - r; x++) acc[x] += g[k + r] * t[x];
     }
+    for (int x = r; x < n - r; x++) det[(size_t)y * n + x] = row[3 * x] - (float)acc[x];
   }
 }
 
 /* Backward of det = x - blur(x): dL/dx = gd - blur^T(gd), gd zero outside the interior;
  * blur^T is the same separable sum with the taps that land inside the interior.
  * weight * dL/dx is added into channel ch of d's crop. */
-static void detail_backward(const wv_colour_loss *c, const float *gd, float *tmp, wv_image *d, int ch, float weight) {
+static void detail_backward(const wv_colour_loss *c, const float *gd, float *tmp, wv_image *d, int ch, float weight,
+                            double *acc) {
   int n = c->n, r = c->r, lo = r, hi = n - r; /* the interior [lo, hi) */
   const double *g = c->g;
-  for (int y = 0; y < n; y++) /* along y: rows y + k inside the interior */
-    for (int x = lo; x < hi; x++) {
-      double s = 0;
-      int k0 = lo - y > -r ? lo - y : -r, k1 = hi - 1 - y < r ? hi - 1 - y : r;
-      for (int k = k0; k <= k1; k++) s += g[k + r] * gd[(size_t)(y + k) * n + x];
-      tmp[(size_t)y * n + x] = (float)s;
+  for (int y = 0; y < n; y++) { /* along y: rows y + k inside the interior */
+    for (int x = lo; x < hi; x++) acc[x] = 0;
+    int k0 = lo - y > -r ? lo - y : -r, k1 = hi - 1 - y < r ? hi - 1 - y : r;
+    for (int k = k0; k <= k1; k++) {
+      const float *t = gd + (size_t)(y + k) * n;
+#pragma omp simd
+      for (int x = lo; x < hi; x++) acc[x] += g[k + r] * t[x];
     }
+    for (int x = lo; x < hi; x++) tmp[(size_t)y * n + x] = (float)acc[x];
+  }
   for (int y = 0; y < n; y++) { /* along x: columns x + k inside the interior */
     float *row = wv_image_px(d, c->x0, c->y0 + y) + ch;
-    for (int x = 0; x < n; x++) {
-      double s = 0;
-      int k0 = lo - x > -r ? lo - x : -r, k1 = hi - 1 - x < r ? hi - 1 - x : r;
-      for (int k = k0; k <= k1; k++) s += g[k + r] * tmp[(size_t)y * n + x + k];
-      row[3 * x] += weight * (gd[(size_t)y * n + x] - (float)s);
+    const float *t = tmp + (size_t)y * n;
+    for (int x = 0; x < n; x++) acc[x] = 0;
+    /* tap k reaches the interior from columns x with lo <= x + k < hi */
+    for (int k = -r; k <= r; k++) {
+      int x0 = lo - k > 0 ? lo - k : 0, x1 = hi - k < n ? hi - k : n;
+#pragma omp simd
+      for (int x = x0; x < x1; x++) acc[x] += g[k + r] * t[x + k];
     }
+    for (int x = 0; x < n; x++) row[3 * x] += weight * (gd[(size_t)y * n + x] - (float)acc[x]);
   }
 }
 
@@ -87,7 +102,7 @@ static double covariance(wv_colour_loss *c, const wv_image *img, double a[9]) {
 #pragma omp parallel for schedule(static, 1)
   for (int ch = 0; ch < 3; ch++) {
     float *det = c->det + ch * nn;
-    detail_forward(c, img, ch, c->tmp + ch * nn, det);
+    detail_forward(c, img, ch, c->tmp + ch * nn, det, c->acc + ch * (size_t)n);
     double s = 0;
     for (int y = r; y < n - r; y++)
       for (int x = r; x < n - r; x++) s += det[(size_t)y * n + x];
@@ -121,8 +136,8 @@ wv_status wv_colour_loss_create(const wv_image *photo, wv_colour_loss **out, wv_
   wv_gaussian_taps(WV_COLOUR_SIGMA, c->g);
   size_t nn = (size_t)n * n;
   c->tmp = malloc(sizeof(float) * 3 * nn), c->det = malloc(sizeof(float) * 3 * nn);
-  c->gd = malloc(sizeof(float) * 3 * nn);
-  if (!c->tmp || !c->det || !c->gd) {
+  c->gd = malloc(sizeof(float) * 3 * nn), c->acc = malloc(sizeof(double) * 3 * (size_t)n);
+  if (!c->tmp || !c->det || !c->gd || !c->acc) {
     wv_colour_loss_free(c);
     return wv_fail(err, WV_ERR_NOMEM, "out of memory for the detail-colour loss");
   }
@@ -166,7 +181,7 @@ wv_status wv_colour_loss_eval(wv_colour_loss *c, const wv_image *render, wv_imag
     for (int j = 0; j < 3; j++) w[j] = (ga[i * 3 + j] + ga[j * 3 + i]) / M;
     for (size_t p = 0; p < nn; p++)
       gd[p] = (float)(w[0] * c->det[p] + w[1] * c->det[nn + p] + w[2] * c->det[2 * nn + p]);
-    detail_backward(c, gd, c->tmp + i * nn, d, i, weight);
+    detail_backward(c, gd, c->tmp + i * nn, d, i, weight, c->acc + i * (size_t)n);
   }
   return WV_OK;
 }
