@@ -53,7 +53,7 @@ double wv_encode_slope(const wv_scene *s, double x) {
 
 void wv_respond_n(const wv_scene *s, const double *mask, int n, int c, const float *rad, float *cap, double *slope) {
   float v[RESP_B], pe[RESP_B];
-  double vd[RESP_B], ps[RESP_B];
+  double vd[RESP_B], ps[RESP_B], mv[RESP_B];
   int clipped[RESP_B], per = c > 0 ? RESP_B / c : 0, powered = s->encoding != WV_ENC_LINEAR;
   if (per < 1) return; /* images have 1 to 4 channels */
   for (int p0 = 0; p0 < n; p0 += per) {
@@ -63,18 +63,23 @@ void wv_respond_n(const wv_scene *s, const double *mask, int n, int c, const flo
       v[j] = wv_expose_f(s, in[j], &clipped[j]);
       vd[j] = v[j], pe[j] = 0.0f, ps[j] = 0.0;
     }
+    for (int k = 0; k < np; k++)
+      for (int ch = 0; ch < c; ch++) mv[k * c + ch] = mask ? mask[p0 + k] : 1.0;
     if (powered) {
       wv_powf_n(v, wv_encode_exponent_f(s), pe, m);
       if (slope) wv_pow_n(vd, wv_slope_exponent(s), ps, m);
     }
     float *out = cap + (size_t)p0 * c;
     double *sl = slope ? slope + (size_t)p0 * c : NULL;
-    /* one loop for each encoding, the encoding a constant in each */
-#define RESPOND_BLOCK(enc)                                                                       \
-  for (int k = 0; k < np; k++) {                                                               \
-    double mk = mask ? mask[p0 + k] : 1.0;                                                     \
-    for (int j = k * c; j < (k + 1) * c; j++)                                                  \
-      out[j] = wv_respond_pow_f(s, enc, mk, v[j], clipped[j], pe[j], ps[j], sl ? sl + j : NULL); \
+    /* one vector loop for each encoding, with and without slopes: the encoding a constant
+     * in each */
+#define RESPOND_BLOCK(enc)                                                                         \
+  if (sl) {                                                                                        \
+    _Pragma("omp simd") for (int j = 0; j < m; j++) out[j] =                                       \
+        wv_respond_pow_f(s, enc, mv[j], v[j], clipped[j], pe[j], ps[j], sl + j);                   \
+  } else {                                                                                         \
+    _Pragma("omp simd") for (int j = 0; j < m; j++) out[j] =                                       \
+        wv_respond_pow_f(s, enc, mv[j], v[j], clipped[j], pe[j], ps[j], NULL);                     \
   }
     switch (s->encoding) {
       case WV_ENC_SRGB: RESPOND_BLOCK(WV_ENC_SRGB) break;
