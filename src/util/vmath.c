@@ -1,13 +1,11 @@
 /* Powers and exponentials of many values at once (util/vmath.h). On x86-64 with
  * GCC or Clang the calls go to libmvec's functions for the widest vectors the CPU
  * runs. Their names follow the x86-64 vector function ABI: _ZGV, the ISA's letter
- * (b, d, e: SSE, AVX2, AVX-512), N, the lanes, a v per vector argument. A call's last
- * values that do not fill a vector go through a padded copy. Elsewhere, libm's scalar
- * functions. */
+ * (b, d, e: SSE, AVX2, AVX-512), N, the lanes, a v per vector argument. Elsewhere,
+ * libm's scalar functions. */
 #include "util/vmath.h"
 
 #include <math.h>
-#include <string.h>
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(WOVEN_NO_MVEC)
 #include <immintrin.h>
@@ -32,56 +30,85 @@ static int isa(void) {
   return 0;
 }
 
-/* A function over n values in vectors of L: whole vectors in place, the rest through a
- * copy padded with x[0]. VCALL(p) maps the L values at p to the vector result stored
- * at q. */
-#define VMAP(L, T, VCALL)                                                   \
-  int i = 0;                                                                \
-  for (; i + (L) <= n; i += (L)) VCALL(x + i, y + i);                       \
-  if (i < n) {                                                              \
-    T a[L], b[L];                                                           \
-    for (int k = 0; k < (L); k++) a[k] = i + k < n ? x[i + k] : x[0];       \
-    VCALL(a, b);                                                            \
-    memcpy(y + i, b, sizeof(T) * (size_t)(n - i));                          \
-  }
-
-#define POWF_E(p, q) _mm512_storeu_ps(q, _ZGVeN16vv_powf(_mm512_loadu_ps(p), ve))
-#define POWF_D(p, q) _mm256_storeu_ps(q, _ZGVdN8vv_powf(_mm256_loadu_ps(p), ve))
-#define POWF_B(p, q) _mm_storeu_ps(q, _ZGVbN4vv_powf(_mm_loadu_ps(p), ve))
-#define POW_E(p, q) _mm512_storeu_pd(q, _ZGVeN8vv_pow(_mm512_loadu_pd(p), ve))
-#define POW_D(p, q) _mm256_storeu_pd(q, _ZGVdN4vv_pow(_mm256_loadu_pd(p), ve))
-#define POW_B(p, q) _mm_storeu_pd(q, _ZGVbN2vv_pow(_mm_loadu_pd(p), ve))
-#define EXP_E(p, q) _mm512_storeu_pd(q, _ZGVeN8v_exp(_mm512_loadu_pd(p)))
-#define EXP_D(p, q) _mm256_storeu_pd(q, _ZGVdN4v_exp(_mm256_loadu_pd(p)))
-#define EXP_B(p, q) _mm_storeu_pd(q, _ZGVbN2v_exp(_mm_loadu_pd(p)))
-
+/* Each function maps its values a vector at a time; the last values that do not fill a
+ * vector are loaded and stored under a mask (the masked-off lanes compute on zeros, and
+ * their results are dropped). No vector lives in memory the code declares: a sanitizer's
+ * stack frames need not keep a 64-byte alignment. */
 AVX512 static void powf_e(const float *x, float e, float *y, int n) {
   __m512 ve = _mm512_set1_ps(e);
-  VMAP(16, float, POWF_E)
-}
-AVX2 static void powf_d(const float *x, float e, float *y, int n) {
-  __m256 ve = _mm256_set1_ps(e);
-  VMAP(8, float, POWF_D)
-}
-static void powf_b(const float *x, float e, float *y, int n) {
-  __m128 ve = _mm_set1_ps(e);
-  VMAP(4, float, POWF_B)
+  for (int i = 0; i < n; i += 16) {
+    __mmask16 k = n - i >= 16 ? (__mmask16)0xffff : (__mmask16)((1u << (n - i)) - 1);
+    _mm512_mask_storeu_ps(y + i, k, _ZGVeN16vv_powf(_mm512_maskz_loadu_ps(k, x + i), ve));
+  }
 }
 AVX512 static void pow_e(const double *x, double e, double *y, int n) {
   __m512d ve = _mm512_set1_pd(e);
-  VMAP(8, double, POW_E)
+  for (int i = 0; i < n; i += 8) {
+    __mmask8 k = n - i >= 8 ? (__mmask8)0xff : (__mmask8)((1u << (n - i)) - 1);
+    _mm512_mask_storeu_pd(y + i, k, _ZGVeN8vv_pow(_mm512_maskz_loadu_pd(k, x + i), ve));
+  }
+}
+AVX512 static void exp_e(const double *x, double *y, int n) {
+  for (int i = 0; i < n; i += 8) {
+    __mmask8 k = n - i >= 8 ? (__mmask8)0xff : (__mmask8)((1u << (n - i)) - 1);
+    _mm512_mask_storeu_pd(y + i, k, _ZGVeN8v_exp(_mm512_maskz_loadu_pd(k, x + i)));
+  }
+}
+
+/* AVX2's masks: lane j on where j < m (m the values left). */
+AVX2 static __m256i mask8(int m) {
+  return _mm256_cmpgt_epi32(_mm256_set1_epi32(m), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+}
+AVX2 static __m256i mask4(int m) {
+  return _mm256_cmpgt_epi64(_mm256_set1_epi64x(m), _mm256_setr_epi64x(0, 1, 2, 3));
+}
+AVX2 static void powf_d(const float *x, float e, float *y, int n) {
+  __m256 ve = _mm256_set1_ps(e);
+  for (int i = 0; i < n; i += 8) {
+    __m256i k = mask8(n - i);
+    _mm256_maskstore_ps(y + i, k, _ZGVdN8vv_powf(_mm256_maskload_ps(x + i, k), ve));
+  }
 }
 AVX2 static void pow_d(const double *x, double e, double *y, int n) {
   __m256d ve = _mm256_set1_pd(e);
-  VMAP(4, double, POW_D)
+  for (int i = 0; i < n; i += 4) {
+    __m256i k = mask4(n - i);
+    _mm256_maskstore_pd(y + i, k, _ZGVdN4vv_pow(_mm256_maskload_pd(x + i, k), ve));
+  }
+}
+AVX2 static void exp_d(const double *x, double *y, int n) {
+  for (int i = 0; i < n; i += 4) {
+    __m256i k = mask4(n - i);
+    _mm256_maskstore_pd(y + i, k, _ZGVdN4v_exp(_mm256_maskload_pd(x + i, k)));
+  }
+}
+
+/* SSE has no masked loads: the rest is made lane by lane in registers. */
+static __m128 load4f(const float *x, int m) {
+  return _mm_setr_ps(x[0], m > 1 ? x[1] : 0.0f, m > 2 ? x[2] : 0.0f, m > 3 ? x[3] : 0.0f);
+}
+static void store4f(float *y, int m, __m128 v) {
+  y[0] = _mm_cvtss_f32(v);
+  if (m > 1) y[1] = _mm_cvtss_f32(_mm_shuffle_ps(v, v, 1));
+  if (m > 2) y[2] = _mm_cvtss_f32(_mm_shuffle_ps(v, v, 2));
+  if (m > 3) y[3] = _mm_cvtss_f32(_mm_shuffle_ps(v, v, 3));
+}
+static __m128d load2d(const double *x, int m) { return _mm_setr_pd(x[0], m > 1 ? x[1] : 0.0); }
+static void store2d(double *y, int m, __m128d v) {
+  _mm_storel_pd(y, v);
+  if (m > 1) _mm_storeh_pd(y + 1, v);
+}
+static void powf_b(const float *x, float e, float *y, int n) {
+  __m128 ve = _mm_set1_ps(e);
+  for (int i = 0; i < n; i += 4) store4f(y + i, n - i, _ZGVbN4vv_powf(load4f(x + i, n - i), ve));
 }
 static void pow_b(const double *x, double e, double *y, int n) {
   __m128d ve = _mm_set1_pd(e);
-  VMAP(2, double, POW_B)
+  for (int i = 0; i < n; i += 2) store2d(y + i, n - i, _ZGVbN2vv_pow(load2d(x + i, n - i), ve));
 }
-AVX512 static void exp_e(const double *x, double *y, int n) { VMAP(8, double, EXP_E) }
-AVX2 static void exp_d(const double *x, double *y, int n) { VMAP(4, double, EXP_D) }
-static void exp_b(const double *x, double *y, int n) { VMAP(2, double, EXP_B) }
+static void exp_b(const double *x, double *y, int n) {
+  for (int i = 0; i < n; i += 2) store2d(y + i, n - i, _ZGVbN2v_exp(load2d(x + i, n - i)));
+}
 
 void wv_powf_n(const float *x, float e, float *y, int n) {
   if (n <= 0) return;
