@@ -104,18 +104,20 @@ static void test_mask_and_clip(void **state) {
   assert_true(wv_respond_f(&s, 0.5, 1.5f, NULL) == 0.75f);
 }
 
-/* The vector powers and exponentials against libm's, for every count up to 40 (whole
- * vectors and padded rests): within a few units in the last place, and a value's result
- * the same alone as among others. */
+/* The vector powers against libm's, for every count up to 40 (whole
+ * vectors and masked rests): within a few units in the last place, nothing written past
+ * the count, and a value's result the same alone as among others. */
 static void test_vmath(void **state) {
   (void)state;
   enum { N = 40 };
   float xf[N], yf[N], zf;
-  double xd[N], yd[N], ed[N], zd;
-  for (int i = 0; i < N; i++) xf[i] = 0.001f + 0.037f * (float)i, xd[i] = xf[i], ed[i] = -0.31 * i;
+  double xd[N], yd[N], zd;
+  for (int i = 0; i < N; i++) xf[i] = 0.001f + 0.037f * (float)i, xd[i] = xf[i];
   for (int n = 0; n <= N; n++) {
+    for (int i = 0; i < N; i++) yf[i] = -1.0f, yd[i] = -1.0;
     wv_powf_n(xf, 1.0f / 2.4f, yf, n);
     wv_pow_n(xd, 1.0 / 2.4 - 1.0, yd, n);
+    for (int i = n; i < N; i++) assert_true(yf[i] == -1.0f && yd[i] == -1.0);
     for (int i = 0; i < n; i++) {
       assert_true(fabs((double)yf[i] - pow(xf[i], 1.0 / 2.4)) <= 4 * FLT_EPSILON * yf[i]);
       assert_true(fabs(yd[i] - pow(xd[i], 1.0 / 2.4 - 1.0)) <= 8 * DBL_EPSILON * yd[i]);
@@ -123,8 +125,6 @@ static void test_vmath(void **state) {
       wv_pow_n(xd + i, 1.0 / 2.4 - 1.0, &zd, 1);
       assert_true(zf == yf[i] && zd == yd[i]);
     }
-    wv_exp_n(ed, yd, n);
-    for (int i = 0; i < n; i++) assert_true(fabs(yd[i] - exp(ed[i])) <= 8 * DBL_EPSILON * exp(ed[i]));
   }
 }
 

@@ -170,11 +170,14 @@ static void respond_d(const wv_scene *s, int px, int py, const double rad[3], fl
   }
 }
 
-/* Sensor response of n <= 8 pixels from (px, py), their radiance in float, and their
- * slopes: wv_scene_response's arithmetic, so the capture is wv_render's. */
-static void respond_f8(const wv_scene *s, int px, int py, int n, const float rad[8][3], float cap[8][3],
-                       double slope[8][3]) {
-  double mask[8];
+/* Pixels a block of the float response (respond_f). */
+#define RESPOND_MAX 64
+
+/* Sensor response of n <= RESPOND_MAX pixels from (px, py), their radiance in float, and
+ * their slopes: wv_scene_response's arithmetic, so the capture is wv_render's. */
+static void respond_f(const wv_scene *s, int px, int py, int n, const float (*rad)[3], float (*cap)[3],
+                      double (*slope)[3]) {
+  double mask[RESPOND_MAX];
   wv_response_mask_row(s, px, py, n, mask);
   wv_respond_n(s, mask, n, 3, &rad[0][0], &cap[0][0], &slope[0][0]);
 }
@@ -246,7 +249,7 @@ static void load_radiance(void *ctx, int y, double *row) {
  * pixel's radiance first: the records' captures and slopes are made after the render,
  * a row at a time (wv_scene_capture's arithmetic). */
 static void store_response(void *ctx, int y, const double *row) {
-  enum { B = 64 }; /* pixels a block: the response's powers are taken a block at once */
+  enum { B = RESPOND_MAX }; /* pixels a block: the response's powers are taken a block at once */
   const blur_pass *bp = ctx;
   wv_grad_record *rec = bp->out;
   for (int i0 = 0; i0 < rec->w; i0 += B) {
@@ -257,14 +260,13 @@ static void store_response(void *ctx, int y, const double *row) {
       for (int i = 0; i < n; i++) {
         pixel_rec pr;
         respond_d(bp->s, bp->x0 + i0 + i, bp->y0 + y, row + 3 * (i0 + i), cap[i], &pr);
-        for (int c = 0; c < 3; c++) sl[i][c] = pr.slope[c], rec->capd[3 * ((size_t)y * rec->w + i0 + i) + c] = pr.cap[c];
+        for (int c = 0; c < 3; c++)
+          sl[i][c] = pr.slope[c], rec->capd[3 * ((size_t)y * rec->w + i0 + i) + c] = pr.cap[c];
       }
     } else {
       for (int i = 0; i < n; i++)
         for (int c = 0; c < 3; c++) b[i][c] = (float)row[3 * (i0 + i) + c];
-      double mask[B];
-      wv_response_mask_row(bp->s, bp->x0 + i0, bp->y0 + y, n, mask);
-      wv_respond_n(bp->s, mask, n, 3, &b[0][0], &cap[0][0], &sl[0][0]);
+      respond_f(bp->s, bp->x0 + i0, bp->y0 + y, n, (const float(*)[3])b, cap, sl);
     }
     for (int i = 0; i < n; i++) {
       size_t k = (size_t)y * rec->w + i0 + i;
@@ -396,7 +398,7 @@ static wv_status run(const wv_scene *s, const wv_params *p, const wv_render_opts
         if (!blur) {
           for (int k = 0; k < n; k++)
             for (int c = 0; c < 3; c++) crad[k][c] = (float)pix[k].rad[c];
-          respond_f8(s, x0 + i, y0 + r, n, crad, ccap, cslope);
+          respond_f(s, x0 + i, y0 + r, n, (const float(*)[3])crad, ccap, cslope);
         }
       }
       if (dbl) wv_grad_pixel_d(&rig, &fab, &Pd, x0 + i, y0 + r, spp, &pix[i % 8]);

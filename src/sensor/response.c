@@ -45,7 +45,8 @@ double wv_slope_exponent(const wv_scene *s) {
 }
 
 double wv_encode_slope(const wv_scene *s, double x) {
-  return wv_encode_slope_pow(s->encoding, s->gamma, x, x > 0.0 && s->encoding != WV_ENC_LINEAR ? wv_power_d(x, wv_slope_exponent(s)) : 0.0);
+  double p = x > 0.0 && s->encoding != WV_ENC_LINEAR ? wv_power_d(x, wv_slope_exponent(s)) : 0.0;
+  return wv_encode_slope_pow(s->encoding, s->gamma, x, p);
 }
 
 /* Blocks of RESP_B values: the powers of a block are taken at once, from the stack. */
@@ -334,11 +335,11 @@ static void capture_load(void *ctx, int y, double *row) {
 static void capture_store(void *ctx, int y, const double *row) {
   const capture_rows *p = ctx;
   float *out = wv_image_px(p->cap, 0, y);
-  int c = p->cap->c;
+  int c = p->cap->c, per = c > 0 ? RESP_B / c : 0;
   float v[RESP_B];
   double mask[RESP_B];
-  for (int x0 = 0; x0 < p->cap->w; x0 += RESP_B / c) { /* blocks of the row, from the stack */
-    int n = p->cap->w - x0 < RESP_B / c ? p->cap->w - x0 : RESP_B / c;
+  for (int x0 = 0; per > 0 && x0 < p->cap->w; x0 += per) { /* blocks of the row, from the stack */
+    int n = p->cap->w - x0 < per ? p->cap->w - x0 : per;
     for (int i = 0; i < n * c; i++) v[i] = (float)row[(size_t)x0 * c + i];
     wv_response_mask_row(p->s, x0, y, n, mask);
     wv_respond_n(p->s, mask, n, c, v, out + (size_t)x0 * c, NULL);

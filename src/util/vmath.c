@@ -1,4 +1,4 @@
-/* Powers and exponentials of many values at once (util/vmath.h). On x86-64 with
+/* Powers of many values at once (util/vmath.h). On x86-64 with
  * GCC or Clang the calls go to libmvec's functions for the widest vectors the CPU
  * runs. Their names follow the x86-64 vector function ABI: _ZGV, the ISA's letter
  * (b, d, e: SSE, AVX2, AVX-512), N, the lanes, a v per vector argument. Elsewhere,
@@ -14,13 +14,10 @@
 #define AVX512 __attribute__((target("avx512f,avx512dq")))
 __m128 _ZGVbN4vv_powf(__m128 x, __m128 y);
 __m128d _ZGVbN2vv_pow(__m128d x, __m128d y);
-__m128d _ZGVbN2v_exp(__m128d x);
 AVX2 __m256 _ZGVdN8vv_powf(__m256 x, __m256 y);
 AVX2 __m256d _ZGVdN4vv_pow(__m256d x, __m256d y);
-AVX2 __m256d _ZGVdN4v_exp(__m256d x);
 AVX512 __m512 _ZGVeN16vv_powf(__m512 x, __m512 y);
 AVX512 __m512d _ZGVeN8vv_pow(__m512d x, __m512d y);
-AVX512 __m512d _ZGVeN8v_exp(__m512d x);
 
 /* 2: AVX-512, 1: AVX2, 0: SSE (every x86-64). The features libmvec's own versions need. */
 static int isa(void) {
@@ -48,12 +45,6 @@ AVX512 static void pow_e(const double *x, double e, double *y, int n) {
     _mm512_mask_storeu_pd(y + i, k, _ZGVeN8vv_pow(_mm512_maskz_loadu_pd(k, x + i), ve));
   }
 }
-AVX512 static void exp_e(const double *x, double *y, int n) {
-  for (int i = 0; i < n; i += 8) {
-    __mmask8 k = n - i >= 8 ? (__mmask8)0xff : (__mmask8)((1u << (n - i)) - 1);
-    _mm512_mask_storeu_pd(y + i, k, _ZGVeN8v_exp(_mm512_maskz_loadu_pd(k, x + i)));
-  }
-}
 
 /* AVX2's masks: lane j on where j < m (m the values left). */
 AVX2 static __m256i mask8(int m) {
@@ -74,12 +65,6 @@ AVX2 static void pow_d(const double *x, double e, double *y, int n) {
   for (int i = 0; i < n; i += 4) {
     __m256i k = mask4(n - i);
     _mm256_maskstore_pd(y + i, k, _ZGVdN4vv_pow(_mm256_maskload_pd(x + i, k), ve));
-  }
-}
-AVX2 static void exp_d(const double *x, double *y, int n) {
-  for (int i = 0; i < n; i += 4) {
-    __m256i k = mask4(n - i);
-    _mm256_maskstore_pd(y + i, k, _ZGVdN4v_exp(_mm256_maskload_pd(x + i, k)));
   }
 }
 
@@ -106,9 +91,6 @@ static void pow_b(const double *x, double e, double *y, int n) {
   __m128d ve = _mm_set1_pd(e);
   for (int i = 0; i < n; i += 2) store2d(y + i, n - i, _ZGVbN2vv_pow(load2d(x + i, n - i), ve));
 }
-static void exp_b(const double *x, double *y, int n) {
-  for (int i = 0; i < n; i += 2) store2d(y + i, n - i, _ZGVbN2v_exp(load2d(x + i, n - i)));
-}
 
 void wv_powf_n(const float *x, float e, float *y, int n) {
   if (n <= 0) return;
@@ -126,22 +108,11 @@ void wv_pow_n(const double *x, double e, double *y, int n) {
     default: pow_b(x, e, y, n);
   }
 }
-void wv_exp_n(const double *x, double *y, int n) {
-  if (n <= 0) return;
-  switch (isa()) {
-    case 2: exp_e(x, y, n); break;
-    case 1: exp_d(x, y, n); break;
-    default: exp_b(x, y, n);
-  }
-}
 #else
 void wv_powf_n(const float *x, float e, float *y, int n) {
   for (int i = 0; i < n; i++) y[i] = powf(x[i], e);
 }
 void wv_pow_n(const double *x, double e, double *y, int n) {
   for (int i = 0; i < n; i++) y[i] = pow(x[i], e);
-}
-void wv_exp_n(const double *x, double *y, int n) {
-  for (int i = 0; i < n; i++) y[i] = exp(x[i]);
 }
 #endif

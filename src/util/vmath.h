@@ -1,4 +1,4 @@
-/* Powers and exponentials of many values at once: glibc's vector maths library
+/* Powers of many values at once: glibc's vector maths library
  * (libmvec) on x86-64, libm's one value at a time elsewhere. The sensor response
  * takes two powers of every pixel's every channel, which one at a time cost about a
  * tenth of a fit's iteration. libmvec's results lie within a few units in the last
@@ -10,7 +10,5 @@
 void wv_powf_n(const float *x, float e, float *y, int n);
 /* y[i] = pow(x[i], e) for i < n. */
 void wv_pow_n(const double *x, double e, double *y, int n);
-/* y[i] = exp(x[i]) for i < n. */
-void wv_exp_n(const double *x, double *y, int n);
 
 #endif
