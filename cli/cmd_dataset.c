@@ -8,7 +8,7 @@
 
 typedef struct {
   const char *scene, *tscene, *dir, *descriptor, *weights;
-  int per, seed, spp, no_augment, jobs;
+  int per, seed, spp, no_augment, photo_draws, jobs;
 } dataset_args;
 
 static const cli_opt OPTS[] = {
@@ -21,6 +21,8 @@ static const cli_opt OPTS[] = {
               "dataset seed (default 1); sample parameters are a function of\n(seed, pattern, i)"),
     CLI_O_INT("--spp", NULL, dataset_args, spp, 1, WV_SCENE_MAX_SPP, "N", "samples per pixel (default: the scene's)"),
     CLI_O_FLAG("--no-augment", dataset_args, no_augment, "store the renders as they are (8-bit), without the camera"),
+    CLI_O_FLAG("--photo-draws", dataset_args, photo_draws,
+               "cloths as the flat45 rig's photos show them: yarns 1 to 2.5 pixels\napart at the image centre, any noise level, a camera blur up to\n1.5 pixels (docs/fabricnet.md)"),
     CLI_O_INT("--jobs", NULL, dataset_args, jobs, 1, 1024, "N", "samples rendered at once, one thread each (default: all cores)"),
     CLI_O_STR("--descriptor", NULL, dataset_args, descriptor, "default|vgg19", "the texture descriptor (default: default)"),
     CLI_O_STR("--vgg19-weights", NULL, dataset_args, weights, "FILE", "the VGG-19 weights (--descriptor vgg19)"),
@@ -29,7 +31,7 @@ static const cli_opt OPTS[] = {
 static const cli_cmd CMD = {
     "dataset",
     "usage: woven dataset --scene S.json|cylinder|flat45 --per-pattern N -o DIR [--seed N] [--spp N]\n"
-    "                     [--transmission-scene S.json|flat45-back] [--no-augment] [--jobs N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
+    "                     [--transmission-scene S.json|flat45-back] [--no-augment] [--photo-draws] [--jobs N] [--descriptor default|vgg19] [--vgg19-weights FILE]\n"
     "                     [--quiet] [--json]\n"
     "\n"
     "Renders N samples for each built-in weave pattern (plain, basket, the twills, the satins and\n"
@@ -70,7 +72,7 @@ static int on_progress(void *user, int done, int todo, double el) {
 
 int cmd_dataset(int argc, char **argv) {
   cli_ctx c = {0, 0, "dataset"};
-  dataset_args da = {NULL, NULL, NULL, "default", NULL, 0, 1, 0, 0, 0};
+  dataset_args da = {NULL, NULL, NULL, "default", NULL, 0, 1, 0, 0, 0, 0};
   CLI_PARSE(&CMD, argc, argv, &da, &c);
   if (!da.scene) return cli_usage_error(c.cmd, "--scene is required");
   if (!da.dir) return cli_usage_error(c.cmd, "-o DIR is required");
@@ -83,7 +85,7 @@ int cmd_dataset(int argc, char **argv) {
   wv_dataset_build_opts o;
   wv_dataset_build_opts_default(&o);
   o.scene = da.scene, o.transmission_scene = da.tscene, o.dir = da.dir, o.per_pattern = da.per, o.seed = (uint64_t)da.seed, o.spp = da.spp;
-  o.augment = !da.no_augment, o.jobs = da.jobs, o.descriptor = da.descriptor, o.weights = da.weights;
+  o.augment = !da.no_augment, o.draws = da.photo_draws ? WV_DRAWS_PHOTO : WV_DRAWS_PRIOR, o.jobs = da.jobs, o.descriptor = da.descriptor, o.weights = da.weights;
   o.on_note = on_note, o.on_progress = on_progress, o.user = &ui;
   cli_progress_start(&ui.bar, &c, "dataset");
   wv_dataset_build_result r;

@@ -531,6 +531,79 @@ static void test_dataset_build_resumes(void **state) {
   assert_same_file(ja, jb);
 }
 
+/* A set drawn as photos show cloths: every sample's yarns 1 to 2.5 pixels apart at the image
+ * centre, noise levels over the whole range; the setting is recorded, read back and kept: a
+ * build into the same directory with the priors' draws is refused. */
+static void test_dataset_photo_draws(void **state) {
+  (void)state;
+  wv_scene s;
+  tu_centre_window(&s, "flat45", 64, 48, 1);
+  snprintf(s.name, sizeof s.name, "tiny");
+  char scene[512], dir[512];
+  snprintf(scene, sizeof scene, "%s/tiny.json", tu_tmpdir("dp_scene"));
+  snprintf(dir, sizeof dir, "%s", tu_tmpdir("dp_set"));
+  char *sj = wv_scene_to_json(&s);
+  wv_error e;
+  assert_non_null(sj);
+  assert_int_equal(wv_write_file_atomic(scene, sj, strlen(sj), &e), WV_OK);
+  free(sj);
+  wv_dist one = {0, 1, 0};
+  wv_dataset_build_opts o;
+  wv_dataset_build_opts_default(&o);
+  o.scene = scene, o.dir = dir, o.per_pattern = 1, o.seed = 9, o.jobs = 1, o.draws = WV_DRAWS_PHOTO;
+  wv_dataset_build_result r;
+  wv_status st = wv_dataset_build(&one, &o, &r, &e);
+  if (st) print_message("%s\n", e.msg);
+  assert_int_equal(st, WV_OK);
+  wv_dataset_info info;
+  assert_int_equal(wv_dataset_info_read(dir, &info, &e), WV_OK);
+  assert_int_equal(info.draws, WV_DRAWS_PHOTO);
+  double jt[2][2], mmpp;
+  assert_true(wv_render_centre_scale(&info.scene, jt, &mmpp));
+  /* the priors' draws of the same samples, for comparison */
+  wv_dataset_info prior = info;
+  prior.draws = WV_DRAWS_PRIOR;
+  int n = 400, above6 = 0, dense = 0, prior_dense = 0;
+  double lo = 1e9, hi = 0;
+  for (int k = 0; k < n; k++) {
+    wv_params p, q;
+    assert_int_equal(wv_dataset_sample_params(&info, k, &p, &e), WV_OK);
+    assert_int_equal(wv_dataset_sample_params(&prior, k, &q, &e), WV_OK);
+    assert_string_equal(p.pattern, q.pattern);
+    for (int y = 0; y < 2; y++) {
+      double px = 25.4 / (p.density[y] * mmpp);
+      lo = px < lo ? px : lo, hi = px > hi ? px : hi;
+      if (!strcmp(p.pattern, "plain") || !strcmp(p.pattern, "basket")) /* the priors: 140 yarns/inch at most */
+        dense += px < 1.4, prior_dense += 25.4 / (q.density[y] * mmpp) < 1.4;
+    }
+    above6 += p.noise_level > 6;
+    assert_memory_equal(p.diffuse, q.diffuse, sizeof p.diffuse); /* the rest as the prior draws it */
+  }
+  fprintf(stderr, "photo draws: spacing %.3f .. %.3f px, plain and basket yarns under 1.4 px: %d (the priors: %d), noise above 6: %d of %d\n",
+          lo, hi, dense, prior_dense, above6, n);
+  assert_true(lo >= WV_DATASET_PHOTO_SPACING_LO - 1e-9 && hi <= WV_DATASET_PHOTO_SPACING_HI + 1e-9);
+  assert_true(lo < 1.05 && hi > 2.4);
+  assert_true(dense > 10 && prior_dense == 0);
+  assert_true(above6 > n / 8); /* the priors stop at 5 */
+  /* the same directory with the priors' draws: refused, naming the setting */
+  o.draws = WV_DRAWS_PRIOR;
+  assert_int_equal(wv_dataset_build(&one, &o, &r, &e), WV_ERR_INVALID);
+  assert_non_null(strstr(e.msg, "--photo-draws"));
+  /* a description with an unknown way of drawing is refused on reading */
+  char path[600];
+  snprintf(path, sizeof path, "%s/dataset.json", dir);
+  char *text = NULL;
+  size_t len = 0;
+  assert_int_equal(wv_read_file(path, &text, &len, &e), WV_OK);
+  char *at = strstr(text, "\"photo\"");
+  assert_non_null(at);
+  memcpy(at + 1, "fotos", 5);
+  assert_int_equal(wv_write_file_atomic(path, text, len, &e), WV_OK);
+  free(text);
+  assert_int_equal(wv_dataset_info_read(dir, &info, &e), WV_ERR_FORMAT);
+  assert_non_null(strstr(e.msg, "draws"));
+}
+
 typedef struct {
   double first, last;
   int n;
@@ -716,7 +789,7 @@ int main(void) {
       cmocka_unit_test(test_files),      cmocka_unit_test(test_features_file),
       cmocka_unit_test(test_v1_model),   cmocka_unit_test(test_augment),
       cmocka_unit_test(test_train),      cmocka_unit_test(test_dataset_build_resumes),
-      cmocka_unit_test(test_pair_dataset_and_model),
+      cmocka_unit_test(test_pair_dataset_and_model), cmocka_unit_test(test_dataset_photo_draws),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -34,6 +34,7 @@ typedef struct {
   int version;  /* 1, 2 or 3: which patterns the samples cycle through (wv_dataset_pattern); 3 a pair set */
   int renderer; /* WV_RENDER_VERSION of the renderer that made the samples */
   int augment;  /* 1: images pass through wv_camera_augment (version 2 only) */
+  int draws;    /* WV_DRAWS_PRIOR, or WV_DRAWS_PHOTO (version 2 and 3; "draws" in dataset.json) */
   uint64_t seed;
   int per_pattern;
   int spp;
@@ -55,6 +56,16 @@ const char *wv_dataset_pattern(const wv_dataset_info *info, int i);
 /* Sample k (0 .. n per_pattern - 1, n patterns) interleaves the patterns: pattern k % n,
  * index k / n. */
 void wv_dataset_sample_name(const wv_dataset_info *info, int k, char *buf, size_t cap);
+/* How a set draws its cloths: from the priors (SPEC section 5), or as the photos of the flat45
+ * rig show cloths: each yarn type's spacing uniform in WV_DATASET_PHOTO_SPACING_LO .. _HI
+ * pixels at the image centre (the densities follow from the scene's camera), the noise level
+ * uniform over its whole range, and the camera's blur up to WV_AUGMENT_PHOTO_BLUR pixels. */
+#define WV_DRAWS_PRIOR 0
+#define WV_DRAWS_PHOTO 1
+#define WV_DATASET_PHOTO_SPACING_LO 1.0
+#define WV_DATASET_PHOTO_SPACING_HI 2.5
+#define WV_AUGMENT_PHOTO_BLUR 1.5
+#define WV_AUGMENT_BLUR 0.8 /* the camera augmentation's defocus otherwise: sigma 0 .. this, pixels */
 #define WV_DATASET_PAIR_WIDTH_LO 0.7 /* a pair set's yarn widths: uniform in this .. 1 (open area up to 9%) */
 /* The prior draw of sample k (deterministic in the dataset seed); a pair set's with open gaps. */
 wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params *p, wv_error *err);
@@ -81,6 +92,9 @@ wv_status wv_dataset_make_sample(const char *dir, const wv_dataset_info *info, i
  * (the scene's image, 8-bit values). The same seed gives the same image. */
 wv_status wv_camera_augment(const wv_scene *s, const wv_image *radiance, uint64_t seed, wv_image *capture,
                             wv_error *err);
+/* The same with the defocus's sigma drawn up to blur_max pixels (WV_AUGMENT_BLUR above). */
+wv_status wv_camera_augment_blur(const wv_scene *s, const wv_image *radiance, uint64_t seed, double blur_max,
+                                 wv_image *capture, wv_error *err);
 
 /* Building a dataset (woven dataset): resumable, shared over the ranks of dist. */
 typedef struct {
@@ -91,6 +105,7 @@ typedef struct {
   uint64_t seed;           /* 1 */
   int spp;                 /* 0: the scene's */
   int augment;             /* 1: the camera augmentation */
+  int draws;               /* WV_DRAWS_PRIOR (0) or WV_DRAWS_PHOTO */
   int jobs;                /* samples rendered at once, one thread each (0: all cores) */
   const char *descriptor;  /* "default" */
   const char *weights;     /* the descriptor's weights file, or NULL */

@@ -44,4 +44,9 @@ wv_status wv_render(const wv_scene *s, const wv_params *p, const wv_render_opts 
  * when the ray misses the sample or the point faces away. */
 int wv_render_fabric_at(const wv_scene *s, double x, double y, double f[2]);
 
+/* The fabric's frame at the image centre: jt[k] the fabric mm one pixel along image axis k
+ * (x, then y) moves, and *mm_per_px the scale (the square root of the map's determinant).
+ * Returns 0 when the centre pixel or its neighbours miss the sample. */
+int wv_render_centre_scale(const wv_scene *s, double jt[2][2], double *mm_per_px);
+
 #endif

@@ -427,14 +427,7 @@ static void fit_pattern(const lmodel *m, const smap *sm, const frame *fr, double
 
 /* The scene's map pixel -> fabric mm at the image centre, transposed. */
 static int centre_frame(const wv_scene *s, frame *fr, double *mm_per_px) {
-  double f0[2], fx[2], fy[2], cx = 0.5 * s->width, cy = 0.5 * s->height;
-  if (!wv_render_fabric_at(s, cx, cy, f0) || !wv_render_fabric_at(s, cx + 1, cy, fx) ||
-      !wv_render_fabric_at(s, cx, cy + 1, fy))
-    return 0;
-  for (int i = 0; i < 2; i++) fr->jt[0][i] = fx[i] - f0[i], fr->jt[1][i] = fy[i] - f0[i];
-  double det = fabs(fr->jt[0][0] * fr->jt[1][1] - fr->jt[0][1] * fr->jt[1][0]);
-  *mm_per_px = sqrt(det);
-  return det > 0;
+  return wv_render_centre_scale(s, fr->jt, mm_per_px);
 }
 
 static int window_side(const wv_image *img) {

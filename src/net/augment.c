@@ -14,7 +14,6 @@
 /* The distribution, one line each (uniform draws). */
 #define AUG_GLINT_FRAC 0.004  /* up to this fraction of pixels (by brightness) sparkle */
 #define AUG_GLINT_GAIN 3.0    /* a glint multiplies radiance by 1.5 .. 1.5 + this */
-#define AUG_BLUR_SIGMA 0.8    /* defocus: Gaussian sigma 0 .. this, pixels */
 #define AUG_EXPOSURE_STOPS 0.5 /* exposure gain 2^(+-this) */
 #define AUG_WB 0.1            /* white balance: red and blue gains exp(+-this) */
 #define AUG_SHOT 0.003        /* noise variance a x + b on the exposed value: a up to this */
@@ -27,10 +26,15 @@ static double uni(wv_rng *r, double lo, double hi) { return lo + (hi - lo) * wv_
 
 wv_status wv_camera_augment(const wv_scene *s, const wv_image *radiance, uint64_t seed, wv_image *capture,
                             wv_error *err) {
+  return wv_camera_augment_blur(s, radiance, seed, WV_AUGMENT_BLUR, capture, err);
+}
+
+wv_status wv_camera_augment_blur(const wv_scene *s, const wv_image *radiance, uint64_t seed, double blur_max,
+                                 wv_image *capture, wv_error *err) {
   wv_rng r;
   wv_rng_seed(&r, seed);
   /* every draw first, so each one's value does not depend on the image */
-  double glint = uni(&r, 0, AUG_GLINT_FRAC), sigma = uni(&r, 0, AUG_BLUR_SIGMA);
+  double glint = uni(&r, 0, AUG_GLINT_FRAC), sigma = uni(&r, 0, blur_max);
   double expo = pow(2.0, uni(&r, -AUG_EXPOSURE_STOPS, AUG_EXPOSURE_STOPS));
   double gain[3] = {expo * exp(uni(&r, -AUG_WB, AUG_WB)), expo, expo * exp(uni(&r, -AUG_WB, AUG_WB))};
   double a = uni(&r, 0, AUG_SHOT), b = uni(&r, 0, AUG_READ);

@@ -52,6 +52,7 @@ static wv_status check_existing(const wv_dataset_build_opts *o, const wv_dist *d
                     : have.version != want->version ? "format version"
                     : have.seed != want->seed       ? "seed"
                     : have.augment != want->augment ? "camera augmentation setting"
+                    : have.draws != want->draws     ? "way of drawing the cloths (--photo-draws)"
                     : strcmp(have.descriptor, want->descriptor) || have.n_feat != want->n_feat ? "descriptor"
                     : have.spp != want->spp                                                    ? "spp"
                     : have.renderer != want->renderer                                          ? "renderer version"
@@ -177,7 +178,7 @@ wv_status wv_dataset_build(const wv_dist *dist, const wv_dataset_build_opts *o, 
     want.pair = 1;
   }
   want.version = want.pair ? 3 : 2, want.renderer = WV_RENDER_VERSION, want.seed = o->seed;
-  want.per_pattern = o->per_pattern, want.augment = o->augment;
+  want.per_pattern = o->per_pattern, want.augment = o->augment, want.draws = o->draws;
   want.spp = o->spp ? o->spp : want.scene.spp;
   int jobs = o->jobs ? o->jobs : omp_get_max_threads();
 

@@ -56,6 +56,7 @@ wv_status wv_dataset_info_write(const char *dir, const wv_dataset_info *info, wv
                         info->scene.width, "height", info->scene.height, "format", "png8", "scene", scene,
                         "sample_names", names);
   if (!o) return wv_fail(err, WV_ERR_INTERNAL, "cannot build dataset.json");
+  if (info->draws == WV_DRAWS_PHOTO) json_object_set_new(o, "draws", json_string("photo"));
   if (info->pair) {
     json_t *ts = json_loads(info->tscene_json, 0, &je);
     if (!ts) {
@@ -114,6 +115,11 @@ wv_status wv_dataset_info_read(const char *dir, wv_dataset_info *info, wv_error 
     info->augment = 0; /* version 1 sets have none */
     if (!st && (st = wv_json_int(o, NULL, "augment", 0, 1, 0, &info->augment, err)))
       wv_error_prefix(err, "%s", path);
+    json_t *dj = json_object_get(o, "draws"); /* absent: the priors */
+    const char *dn = dj ? json_string_value(dj) : "prior";
+    if (!st && (!dn || (strcmp(dn, "prior") && strcmp(dn, "photo")) || (dj && version < 2)))
+      st = wv_fail(err, WV_ERR_FORMAT, "%s: 'draws' must be \"prior\" or \"photo\" (version 2 and 3 sets)", path);
+    info->draws = dn && !strcmp(dn, "photo") ? WV_DRAWS_PHOTO : WV_DRAWS_PRIOR;
     snprintf(info->descriptor, sizeof info->descriptor, "%s", desc);
     char *sj = json_dumps(scene, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
     if (!st && (!sj || strlen(sj) >= sizeof info->scene_json))
@@ -158,6 +164,22 @@ wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params
   int np = wv_dataset_pattern_count(info);
   uint64_t s = wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x64617461ULL);
   wv_status st = wv_params_sample_prior(wv_dataset_pattern(info, k % np), s, p, err);
+  if (!st && info->draws == WV_DRAWS_PHOTO) {
+    /* as the photos show cloths: yarns WV_DATASET_PHOTO_SPACING_LO .. _HI pixels apart at the
+     * image centre, each type its own draw, and any noise level; streams of their own */
+    double jt[2][2], mm_per_px;
+    if (!wv_render_centre_scale(&info->scene, jt, &mm_per_px))
+      return wv_fail(err, WV_ERR_INVALID, "the dataset's scene does not see the sample at the image centre");
+    for (int y = 0; y < 2; y++) {
+      double u = wv_u01d(wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x73706163ULL + (uint64_t)y));
+      double px = WV_DATASET_PHOTO_SPACING_LO + (WV_DATASET_PHOTO_SPACING_HI - WV_DATASET_PHOTO_SPACING_LO) * u;
+      double d = 25.4 / (px * mm_per_px);
+      p->density[y] = d < WV_DENSITY_MIN ? WV_DENSITY_MIN : d > WV_DENSITY_MAX ? WV_DENSITY_MAX : d;
+    }
+    double u = wv_u01d(wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x6e6f6973ULL));
+    p->noise_level = (int)floor(u * 11) > 10 ? 10 : (int)floor(u * 11);
+    st = wv_params_validate(p, err);
+  }
   /* A pair set's cloths have open gaps, which the back-lit image shows: the prior has
    * none (yarn width 1), so a width of its own stream, uniform in WV_DATASET_PAIR_WIDTH_LO .. 1. */
   if (!st && info->pair)
@@ -181,7 +203,7 @@ static wv_status sample_image(const wv_dataset_info *info, const wv_scene *s, co
   int np = wv_dataset_pattern_count(info);
   uint64_t seed = wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), tag);
   wv_image_free(img);
-  st = wv_camera_augment(s, &rad, seed, img, err);
+  st = wv_camera_augment_blur(s, &rad, seed, info->draws == WV_DRAWS_PHOTO ? WV_AUGMENT_PHOTO_BLUR : WV_AUGMENT_BLUR, img, err);
   wv_image_free(&rad);
   return st;
 }

@@ -1,6 +1,7 @@
 /* The renderer's side of the camera rig: per-pixel footprints made once for many
  * renders of one geometry (wv_footprints), the rig prepared with them for a render,
- * and wv_render_fabric_at. */
+ * and wv_render_fabric_at with the scale at the image centre. */
+#include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,6 +16,18 @@ int wv_render_fabric_at(const wv_scene *s, double x, double y, double f[2]) {
   if (!hit.hit) return 0;
   f[0] = hit.fx, f[1] = hit.fy;
   return 1;
+}
+
+int wv_render_centre_scale(const wv_scene *s, double jt[2][2], double *mm_per_px) {
+  double f0[2], fx[2], fy[2], cx = 0.5 * s->width, cy = 0.5 * s->height;
+  *mm_per_px = 0;
+  if (!wv_render_fabric_at(s, cx, cy, f0) || !wv_render_fabric_at(s, cx + 1, cy, fx) ||
+      !wv_render_fabric_at(s, cx, cy + 1, fy))
+    return 0;
+  for (int i = 0; i < 2; i++) jt[0][i] = fx[i] - f0[i], jt[1][i] = fy[i] - f0[i];
+  double det = fabs(jt[0][0] * jt[1][1] - jt[0][1] * jt[1][0]);
+  *mm_per_px = sqrt(det);
+  return det > 0;
 }
 
 struct wv_footprints {
