@@ -22,7 +22,7 @@ static const cli_opt OPTS[] = {
     CLI_O_INT("--spp", NULL, dataset_args, spp, 1, WV_SCENE_MAX_SPP, "N", "samples per pixel (default: the scene's)"),
     CLI_O_FLAG("--no-augment", dataset_args, no_augment, "store the renders as they are (8-bit), without the camera"),
     CLI_O_FLAG("--photo-draws", dataset_args, photo_draws,
-               "cloths as the flat45 rig's photos show them: yarns 1 to 2.5 pixels\napart at the image centre, any noise level, a camera blur up to\n1.5 pixels (docs/fabricnet.md)"),
+               "cloths as the flat45 rig's photos show them: yarns 1 to 2.5 pixels\napart at the image centre, any noise level, and the camera's blur\nup to 1.5 pixels (docs/fabricnet.md)"),
     CLI_O_INT("--jobs", NULL, dataset_args, jobs, 1, 1024, "N", "samples rendered at once, one thread each (default: all cores)"),
     CLI_O_STR("--descriptor", NULL, dataset_args, descriptor, "default|vgg19", "the texture descriptor (default: default)"),
     CLI_O_STR("--vgg19-weights", NULL, dataset_args, weights, "FILE", "the VGG-19 weights (--descriptor vgg19)"),

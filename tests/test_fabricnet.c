@@ -476,20 +476,27 @@ static void assert_same_file(const char *a, const char *b) {
 }
 
 /* A build stopped after k samples and run again makes the same files as one run. */
-static void test_dataset_build_resumes(void **state) {
-  (void)state;
+/* A scene file of flat45's 64 x 48 centre window at 1 spp ("tiny") in a fresh directory
+ * named by tag; its path into path. */
+static void write_tiny_scene(const char *tag, char *path, size_t cap) {
   wv_scene s;
   tu_centre_window(&s, "flat45", 64, 48, 1);
   snprintf(s.name, sizeof s.name, "tiny");
-  char scene[512], whole[512], resumed[512];
-  snprintf(scene, sizeof scene, "%s/tiny.json", tu_tmpdir("ds_scene"));
-  snprintf(whole, sizeof whole, "%s", tu_tmpdir("ds_whole"));
-  snprintf(resumed, sizeof resumed, "%s", tu_tmpdir("ds_resumed"));
+  snprintf(path, cap, "%s/tiny.json", tu_tmpdir(tag));
   char *sj = wv_scene_to_json(&s);
   wv_error e;
   assert_non_null(sj);
-  assert_int_equal(wv_write_file_atomic(scene, sj, strlen(sj), &e), WV_OK);
+  assert_int_equal(wv_write_file_atomic(path, sj, strlen(sj), &e), WV_OK);
   free(sj);
+}
+
+static void test_dataset_build_resumes(void **state) {
+  (void)state;
+  char scene[512], whole[512], resumed[512];
+  write_tiny_scene("ds_scene", scene, sizeof scene);
+  snprintf(whole, sizeof whole, "%s", tu_tmpdir("ds_whole"));
+  snprintf(resumed, sizeof resumed, "%s", tu_tmpdir("ds_resumed"));
+  wv_error e;
   wv_dist one = {0, 1, 0};
   wv_dataset_build_opts o;
   wv_dataset_build_opts_default(&o);
@@ -536,17 +543,10 @@ static void test_dataset_build_resumes(void **state) {
  * build into the same directory with the priors' draws is refused. */
 static void test_dataset_photo_draws(void **state) {
   (void)state;
-  wv_scene s;
-  tu_centre_window(&s, "flat45", 64, 48, 1);
-  snprintf(s.name, sizeof s.name, "tiny");
   char scene[512], dir[512];
-  snprintf(scene, sizeof scene, "%s/tiny.json", tu_tmpdir("dp_scene"));
+  write_tiny_scene("dp_scene", scene, sizeof scene);
   snprintf(dir, sizeof dir, "%s", tu_tmpdir("dp_set"));
-  char *sj = wv_scene_to_json(&s);
   wv_error e;
-  assert_non_null(sj);
-  assert_int_equal(wv_write_file_atomic(scene, sj, strlen(sj), &e), WV_OK);
-  free(sj);
   wv_dist one = {0, 1, 0};
   wv_dataset_build_opts o;
   wv_dataset_build_opts_default(&o);
@@ -602,6 +602,26 @@ static void test_dataset_photo_draws(void **state) {
   free(text);
   assert_int_equal(wv_dataset_info_read(dir, &info, &e), WV_ERR_FORMAT);
   assert_non_null(strstr(e.msg, "draws"));
+  /* a scene that does not see the cloth at its image centre (the camera looks along it):
+   * refused before anything is written */
+  wv_scene side;
+  tu_centre_window(&side, "flat45", 64, 48, 1);
+  side.cam_look_at[0] = side.cam_pos[0], side.cam_look_at[1] = side.cam_pos[1] + 100;
+  side.cam_look_at[2] = side.cam_pos[2], side.cam_up[0] = 0, side.cam_up[1] = 0, side.cam_up[2] = 1;
+  char sidefile[512], sidedir[512], sidejson[600];
+  snprintf(sidefile, sizeof sidefile, "%s/side.json", tu_tmpdir("dp_side_scene"));
+  snprintf(sidedir, sizeof sidedir, "%s/set", tu_tmpdir("dp_side"));
+  char *sj = wv_scene_to_json(&side);
+  assert_non_null(sj);
+  assert_int_equal(wv_write_file_atomic(sidefile, sj, strlen(sj), &e), WV_OK);
+  free(sj);
+  o.scene = sidefile, o.dir = sidedir, o.draws = WV_DRAWS_PHOTO;
+  assert_int_equal(wv_dataset_build(&one, &o, &r, &e), WV_ERR_INVALID);
+  print_message("%s\n", e.msg);
+  assert_non_null(strstr(e.msg, "image centre"));
+  snprintf(sidejson, sizeof sidejson, "%s/dataset.json", sidedir);
+  struct stat sb;
+  assert_int_not_equal(stat(sidejson, &sb), 0);
 }
 
 typedef struct {

@@ -180,6 +180,11 @@ wv_status wv_dataset_build(const wv_dist *dist, const wv_dataset_build_opts *o, 
   want.version = want.pair ? 3 : 2, want.renderer = WV_RENDER_VERSION, want.seed = o->seed;
   want.per_pattern = o->per_pattern, want.augment = o->augment, want.draws = o->draws;
   want.spp = o->spp ? o->spp : want.scene.spp;
+  double jt[2][2], mm_per_px;
+  if (want.draws == WV_DRAWS_PHOTO && !wv_render_centre_scale(&want.scene, jt, &mm_per_px))
+    return wv_fail(err, WV_ERR_INVALID,
+                   "%s does not see the sample at its image centre: --photo-draws sets the yarns' spacing there",
+                   o->scene);
   int jobs = o->jobs ? o->jobs : omp_get_max_threads();
 
   wv_descriptor **desc = calloc((size_t)jobs, sizeof *desc);

@@ -177,7 +177,8 @@ wv_status wv_dataset_sample_params(const wv_dataset_info *info, int k, wv_params
       p->density[y] = d < WV_DENSITY_MIN ? WV_DENSITY_MIN : d > WV_DENSITY_MAX ? WV_DENSITY_MAX : d;
     }
     double u = wv_u01d(wv_hash4(info->seed, (uint64_t)(k % np), (uint64_t)(k / np), 0x6e6f6973ULL));
-    p->noise_level = (int)floor(u * 11) > 10 ? 10 : (int)floor(u * 11);
+    int q = (int)(u * 11);
+    p->noise_level = q > 10 ? 10 : q;
     st = wv_params_validate(p, err);
   }
   /* A pair set's cloths have open gaps, which the back-lit image shows: the prior has
