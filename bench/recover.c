@@ -2,8 +2,8 @@
  * built-in library, then the fit), on synthetic targets or on real photos.
  *   recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b,...] [--seed S]
  *           [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]
- *           [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur auto|measured|S] [--no-orient]
- *           [--no-refine]
+ *           [--w-struct X] [--w-colour X] [--lr X] [--[no-]colour-split]
+ *           [--camera-blur auto|measured|S] [--no-orient] [--no-refine]
  *           (the fit's options, as woven fit's; --no-orient: candidates and fit on square cloth
  *           without the lattice's rotation and skew; --no-refine: the chosen lattice as the
  *           analysis's centre window measured it, not refined over the whole image)
@@ -189,6 +189,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--threads") && i + 1 < argc) st.o.threads = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--w-struct") && i + 1 < argc) st.o.w_struct = atof(argv[++i]);
     else if (!strcmp(argv[i], "--w-colour") && i + 1 < argc) st.o.w_colour = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--lr") && i + 1 < argc) st.o.lr = atof(argv[++i]);
     else if (!strcmp(argv[i], "--camera-blur") && i + 1 < argc) {
       const char *v = argv[++i]; /* auto, measured (not fitted) or a sigma */
       st.o.psf_fit = strcmp(v, "measured") != 0;
@@ -213,8 +214,8 @@ int main(int argc, char **argv) {
     else {
       fprintf(stderr, "usage: recover [--scene S] [--model M] [--per-pattern N] [--patterns a,b] [--seed S]\n"
                       "               [--start network|prior] [--iters N] [--iter-spp N] [--iter-scale N] [--threads N]\n"
-                      "               [--w-struct X] [--w-colour X] [--[no-]colour-split] [--camera-blur auto|measured|S]\n"
-                      "               [--no-orient] [--no-refine]\n"
+                      "               [--w-struct X] [--w-colour X] [--lr X] [--[no-]colour-split]\n"
+                      "               [--camera-blur auto|measured|S] [--no-orient] [--no-refine]\n"
                       "       recover --real DIR [--model M] [--iters N] ...\n");
       return 1;
     }

@@ -2,7 +2,7 @@
  * rig: yarns 1 to 2.5 pixels apart, irregular cloths, and what a camera does to a photo.
  *   recover_degraded [--per-family N] [--first I] [--family NAME[,NAME...]] [--seed S]
  *                    [--degrade on|off] [--iters N] [--iter-spp N] [--iter-scale N]
- *                    [--w-struct X] [--threads N] [--jobs N] [--model M] [--save DIR]
+ *                    [--w-struct X] [--lr X] [--threads N] [--jobs N] [--model M] [--save DIR]
  *                    [--shot-max A]
  * Targets: for each family (plain, basket, twill, satin; --family: those listed) draws I ..
  * I+N-1 (default 0 .. 7). Draw i of a family takes its built-in 3 i mod n (n built-ins in
@@ -430,8 +430,8 @@ static double ypi_one_px(const wv_scene *s) {
 static int usage(void) {
   fprintf(stderr, "usage: recover_degraded [--per-family N] [--first I] [--family NAME[,NAME...]] [--seed S]\n"
                   "                        [--degrade on|off] [--iters N] [--iter-spp N] [--iter-scale N]\n"
-                  "                        [--w-struct X] [--threads N] [--jobs N] [--model M] [--save DIR]\n"
-                  "                        [--shot-max A]\n");
+                  "                        [--w-struct X] [--lr X] [--threads N] [--jobs N] [--model M]\n"
+                  "                        [--save DIR] [--shot-max A]\n");
   return 1;
 }
 
@@ -452,6 +452,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--iter-spp")) o.iter_spp = atoi(v);
     else if (!strcmp(a, "--iter-scale")) o.iter_scale = atoi(v);
     else if (!strcmp(a, "--w-struct")) o.w_struct = atof(v);
+    else if (!strcmp(a, "--lr")) o.lr = atof(v);
     else if (!strcmp(a, "--threads")) o.threads = atoi(v);
     else if (!strcmp(a, "--jobs")) jobs = atoi(v);
     else if (!strcmp(a, "--model")) model = v;
@@ -525,10 +526,10 @@ int main(int argc, char **argv) {
       json_object_set_new(fams, FAMILIES[f], json_pack("{s:i,s:f,s:f,s:f}", "targets", n, "family_right",
                                                        (double)fr / n, "mean_ratio", fs / n, "min_ratio", fl));
   }
-  json_t *out = json_pack("{s:s,s:s,s:I,s:b,s:f,s:i,s:i,s:i,s:i,s:i,s:f,s:i,s:f,s:f,s:f,s:o,s:o}", "mode", "degraded",
+  json_t *out = json_pack("{s:s,s:s,s:I,s:b,s:f,s:i,s:i,s:i,s:i,s:i,s:f,s:f,s:i,s:f,s:f,s:f,s:o,s:o}", "mode", "degraded",
                           "scene", s.name, "seed", (json_int_t)pl.seed, "degrade", pl.degrade, "shot_max",
                           pl.shot_hi, "per_family", per, "first", first, "iters", o.iters, "iter_spp", o.iter_spp, "iter_scale", o.iter_scale,
-                          "w_struct", o.w_struct, "targets", nt, "family_right_pct", 100.0 * right / nt,
+                          "w_struct", o.w_struct, "lr", o.lr, "targets", nt, "family_right_pct", 100.0 * right / nt,
                           "mean_ratio", sum / nt, "min_ratio", lo, "families", fams, "per_target", list);
   char *text = json_dumps(out, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(6));
   json_decref(out);

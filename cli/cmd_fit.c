@@ -108,7 +108,7 @@ const cli_opt CLI_MODEL_OPTS[] = {
 const cli_opt CLI_FIT_OPTS[] = {
     CLI_O_CUSTOM("--iters", capture_args, fit.iters, 0, WV_FIT_MAX_ITERS, parse_iters, "N", "iterations (default 200)"),
     CLI_O_REAL("--lr", capture_args, fit.lr, 1e-6, 1, 0, "X",
-               "Adam's step size on the parameters scaled to [0, 1] (default 0.01)"),
+               "Adam's step size on the parameters scaled to [0, 1] (default 0.02)"),
     CLI_O_INT("--iter-spp", NULL, capture_args, fit.iter_spp, 1, WV_SCENE_MAX_SPP, "N",
               "samples per pixel while iterating (default 4)"),
     CLI_O_INT("--iter-scale", NULL, capture_args, fit.iter_scale, 1, WV_FIT_MAX_ITER_SCALE, "N",
@@ -177,7 +177,7 @@ static const cli_cmd CMD = {
     "\n"
     "Refines fabric parameters so that a render of the scene matches the photo (paper 4.3):\n"
     "Gram-matrix loss + 16x8 pixel loss + heightfield prior + the weave's spectrum (structure)\n"
-    "+ the colour of its detail, Adam (lr 0.01) on the continuous\n"
+    "+ the colour of its detail, Adam (lr 0.02) on the continuous\n"
     "parameters, random steps of noise level and densities every 5 iterations.\n",
     "Writes to DIR: params.json, render.png, compare.png (photo | start | fit), zoom.png (their\n"
     "centre crop enlarged 4x), spectra.png (their weave spectra), loss.svg, report.html (with\n"

@@ -25,7 +25,7 @@
 
 typedef struct {
   int iters;          /* 200 */
-  double lr;          /* Adam learning rate in normalised units: 0.01 */
+  double lr;          /* Adam learning rate in normalised units: 0.02 */
   double w_prior;     /* w1 = 0.0005 */
   double w_pixel;     /* w2 = 0.2 */
   double w_struct;    /* w3 = WV_FIT_W_STRUCT (0: no structure term) */

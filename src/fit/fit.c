@@ -424,24 +424,45 @@ static wv_status align_densities(wv_fit_state *st, const wv_scene *s, const wv_i
     wv_image_free(&img);
   }
   best = before;
+  /* A window this small is rendered faster one per thread than split across them (the
+   * render does not depend on the thread count); the scores are compared in order after. */
+  int nthreads = o->threads > 0 ? o->threads : omp_get_max_threads();
+  double *score = rc ? NULL : malloc(sizeof(double) * (2 * (size_t)o->align_radius + 1));
+  if (!rc && !score) rc = wv_fail(err, WV_ERR_NOMEM, "out of memory for the density alignment");
+  wv_render_opts ro1 = ro;
+  ro1.threads = 1;
   int unchanged = 0;
   for (int pass = 0; pass < 6 && unchanged < 2 && !rc; pass++) {
     int y = pass & 1;
     int R = pass < 2 ? o->align_radius : (o->align_radius < 5 ? o->align_radius : 5); /* later rounds refine */
     double centre = cur.density[y], best_d = centre;
-    for (int k = -R; k <= R && !rc; k++) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads)
+    for (int k = -R; k <= R; k++) {
       wv_params trial = cur;
       trial.density[y] = centre + k;
+      score[k + R] = -3;
       if (k == 0 || trial.density[y] < WV_DENSITY_MIN || trial.density[y] > WV_DENSITY_MAX) continue; /* k = 0 is best already */
-      if ((rc = wv_render(&win, &trial, &ro, &img, NULL, err))) break;
-      double v;
-      rc = wv_ssim(&ref, &img, WV_SSIM_LUMA, &v, err);
-      wv_image_free(&img);
-      if (!rc && v > best) best = v, best_d = trial.density[y];
+      wv_error e = {0};
+      wv_image im;
+      wv_status r = wv_render(&win, &trial, &ro1, &im, NULL, &e);
+      if (!r) {
+        r = wv_ssim(&ref, &im, WV_SSIM_LUMA, &score[k + R], &e);
+        wv_image_free(&im);
+      }
+      if (r) {
+#pragma omp critical(wv_align_error)
+        if (!rc) {
+          rc = r;
+          if (err) *err = e;
+        }
+      }
     }
+    for (int k = -R; k <= R && !rc; k++)
+      if (score[k + R] > best) best = score[k + R], best_d = centre + k;
     unchanged = best_d == centre ? unchanged + 1 : 0;
     cur.density[y] = best_d;
   }
+  free(score);
   wv_image_free(&ref);
   wv_footprints_free(fp);
   if (rc) return rc;

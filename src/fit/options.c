@@ -12,7 +12,7 @@
 void wv_fit_opts_default(wv_fit_opts *o) {
   memset(o, 0, sizeof *o);
   o->iters = 200;
-  o->lr = 0.01;
+  o->lr = 0.02;
   o->w_prior = 0.0005;
   o->w_pixel = 0.2;
   o->w_struct = WV_FIT_W_STRUCT;
