@@ -475,21 +475,26 @@ static void assert_same_file(const char *a, const char *b) {
   free(da), free(db);
 }
 
-/* A build stopped after k samples and run again makes the same files as one run. */
-/* A scene file of flat45's 64 x 48 centre window at 1 spp ("tiny") in a fresh directory
- * named by tag; its path into path. */
-static void write_tiny_scene(const char *tag, char *path, size_t cap) {
-  wv_scene s;
-  tu_centre_window(&s, "flat45", 64, 48, 1);
-  snprintf(s.name, sizeof s.name, "tiny");
-  snprintf(path, cap, "%s/tiny.json", tu_tmpdir(tag));
-  char *sj = wv_scene_to_json(&s);
+/* Writes scene s as a scene file at path. */
+static void write_scene(const wv_scene *s, const char *path) {
+  char *sj = wv_scene_to_json(s);
   wv_error e;
   assert_non_null(sj);
   assert_int_equal(wv_write_file_atomic(path, sj, strlen(sj), &e), WV_OK);
   free(sj);
 }
 
+/* flat45's 64 x 48 centre window at 1 spp ("tiny") as tiny.json in a fresh directory named
+ * by tag; its path into path. */
+static void write_tiny_scene(const char *tag, char *path, size_t cap) {
+  wv_scene s;
+  tu_centre_window(&s, "flat45", 64, 48, 1);
+  snprintf(s.name, sizeof s.name, "tiny");
+  snprintf(path, cap, "%s/tiny.json", tu_tmpdir(tag));
+  write_scene(&s, path);
+}
+
+/* A build stopped after k samples and run again makes the same files as one run. */
 static void test_dataset_build_resumes(void **state) {
   (void)state;
   char scene[512], whole[512], resumed[512];
@@ -610,11 +615,8 @@ static void test_dataset_photo_draws(void **state) {
   side.cam_look_at[2] = side.cam_pos[2], side.cam_up[0] = 0, side.cam_up[1] = 0, side.cam_up[2] = 1;
   char sidefile[512], sidedir[512], sidejson[600];
   snprintf(sidefile, sizeof sidefile, "%s/side.json", tu_tmpdir("dp_side_scene"));
+  write_scene(&side, sidefile);
   snprintf(sidedir, sizeof sidedir, "%s/set", tu_tmpdir("dp_side"));
-  char *sj = wv_scene_to_json(&side);
-  assert_non_null(sj);
-  assert_int_equal(wv_write_file_atomic(sidefile, sj, strlen(sj), &e), WV_OK);
-  free(sj);
   o.scene = sidefile, o.dir = sidedir, o.draws = WV_DRAWS_PHOTO;
   assert_int_equal(wv_dataset_build(&one, &o, &r, &e), WV_ERR_INVALID);
   print_message("%s\n", e.msg);
@@ -681,15 +683,6 @@ static void test_train(void **state) {
   o.resume = 0;
   assert_int_equal(wv_train(ds, m1, &o, &r, &e), WV_ERR_IO);
   assert_non_null(strstr(e.msg, "--resume"));
-}
-
-/* Writes scene s under dir/name.json and returns the path. */
-static void write_scene(const wv_scene *s, const char *path) {
-  char *sj = wv_scene_to_json(s);
-  wv_error e;
-  assert_non_null(sj);
-  assert_int_equal(wv_write_file_atomic(path, sj, strlen(sj), &e), WV_OK);
-  free(sj);
 }
 
 /* The features of an 8-bit PNG as a dataset stores them (f16). */

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "testutil.h"
+#include "woven/fit.h"
 #include "woven/nn.h"
 
 static float *rnd(wv_rng *r, size_t n, float lo, float hi) {
@@ -454,9 +455,11 @@ static void test_lbfgs_box(void **state) {
   print_message("L-BFGS: f < 1e-10 after %d iterations\n", it);
   assert_true(it < 60);
   for (int i = 0; i < 12; i++) assert_true(fabs(x[i] - t[i]) < 1e-4);
-  /* Adam (lr 0.02, the fit's) for the same number of steps */
+  /* Adam at the fit's learning rate for the same number of steps */
+  wv_fit_opts fo;
+  wv_fit_opts_default(&fo);
   float z[12], gz[12], m[12] = {0}, v[12] = {0};
-  wv_nn_adam a = {.n = 12, .lr = 0.02f, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f, .m = m, .v = v};
+  wv_nn_adam a = {.n = 12, .lr = (float)fo.lr, .beta1 = 0.9f, .beta2 = 0.999f, .eps = 1e-8f, .m = m, .v = v};
   for (int i = 0; i < 12; i++) z[i] = 0.5f;
   double f = 0;
   for (int k = 0; k < it; k++) {
