@@ -96,7 +96,7 @@ static void test_finite_differences(void **state) {
       random_params(patterns[j], &r, &p);
       p.noise_level = j % 2 ? 3 : 0;
       p.specular_noise = j % 2;
-      if (k == 2 && j >= 2) p.yarn_width = 0.8; /* open gaps, and gaps beside a yarn over the crossing one */
+      if (k >= 1 && j >= 2) p.yarn_width = 0.8; /* open gaps, and gaps beside a yarn over the crossing one */
       fd_check(&s, &p, s.width / 2 - 24, s.height / 2 - 16, 48, 32, 12, &r, &st);
     }
   }

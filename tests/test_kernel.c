@@ -3,7 +3,8 @@
  * in gaps, with noise and glints, the light in front, behind and both in one
  * vector, and past the 8-wide integer range where lanes fall back to scalar);
  * its derivative sums per sample against central differences of the double
- * flavour, reflected and transmitted; the public entry points. */
+ * flavour, reflected and transmitted; the yarn underneath beside a visible one; the public
+ * entry points. */
 #include <math.h>
 #include <string.h>
 
@@ -83,6 +84,49 @@ static void test_scalar_equals_8wide(void **state) {
     }
   }
   assert_true(fallbacks > 0 && gaps > 0 && through > 0 && open > 0); /* every path seen */
+}
+
+/* Front-lit, beside the visible yarn but over the crossing one, the crossing yarn shows its
+ * diffuse lobe with the macro normal, k_d mu_i / pi times the light, and the derivative sums
+ * name its yarn type; an open gap reflects nothing. */
+static void test_yarn_underneath(void **state) {
+  (void)state;
+  tu_rng r = {5};
+  static wv_fabric f;
+  wv_params p;
+  wv_error err = {0};
+  assert_int_equal(wv_params_default("plain", &p, &err), WV_OK);
+  p.yarn_width = 0.7, p.noise_level = 0, p.specular_noise = 0;
+  for (int c = 0; c < 3; c++) p.diffuse[WV_WARP][c] = c == 0 ? 0.8 : 0.1, p.diffuse[WV_WEFT][c] = c == 2 ? 0.8 : 0.1;
+  assert_int_equal(wv_fabric_prepare(&p, &f, &err), WV_OK);
+  int under[2] = {0, 0}, open = 0;
+  for (int k = 0; k < 4000; k++) {
+    float wi[3], wo[3], rad[3];
+    above(&r, wi), above(&r, wo);
+    wv_dirs_f d;
+    wv_dirs_make_f(wi, wo, 1.0f, &d);
+    float x = (float)(4 * tu_rnd(&r)), y = (float)(-4 * tu_rnd(&r));
+    wv_yarn_point yp;
+    wv_yarn_eval(&f.ym, x, y, &yp);
+    if (yp.type >= 0) continue;
+    wv_shade_grad_f g;
+    wv_shade_f(&f, &f.P, &d, x, y, rad, &g);
+    if (yp.open) {
+      open++;
+      for (int c = 0; c < 3; c++) assert_true(rad[c] == 0.0f);
+      continue;
+    }
+    int t = yp.through;
+    under[t]++;
+    for (int c = 0; c < 3; c++) {
+      double want = d.light * f.P.kd[t][c] * d.mi / 3.14159265358979323846;
+      assert_true(fabs(rad[c] - want) <= 1e-5 * want);
+    }
+    assert_int_equal(g.warp != 0, t == WV_WARP);
+    assert_true(fabs(g.J[WV_J_DF] - d.light * d.mi / 3.14159265358979323846) <= 1e-5 * g.J[WV_J_DF]);
+    assert_true(g.J[WV_J_S] == 0.0f);
+  }
+  assert_true(under[WV_WARP] > 50 && under[WV_WEFT] > 50 && open > 20);
 }
 
 /* The public entry points agree with each other and with the directions' horizon rule. */
@@ -190,7 +234,8 @@ static void test_sample_derivatives(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_scalar_equals_8wide), cmocka_unit_test(test_entry_points),
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_scalar_equals_8wide), cmocka_unit_test(test_yarn_underneath),
+                                     cmocka_unit_test(test_entry_points),
                                      cmocka_unit_test(test_sample_derivatives), cmocka_unit_test(test_floori_range)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -79,6 +79,8 @@ void wv_fit_opts_default(wv_fit_opts *o);
                                   * colours, and the most they take (docs/fit.md, "Photo pairs") */
 #define WV_FIT_T_STEP0 0.1       /* a pair: the transmission colours' first step, in units of their
                                   * range, along the steepest descent (a larger one is cut back) */
+#define WV_FIT_T_PROBE 20        /* a pair: steps of the colours' descent from each of their two best
+                                  * starts before one is chosen (docs/fit.md, "Photo pairs") */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000

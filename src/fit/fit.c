@@ -237,41 +237,85 @@ static wv_status evaluate_t(fit_ctx *c, wv_trans_basis **tb, const wv_params *p,
   return st;
 }
 
-/* The transmission colours' start, before their first iteration: of the colours as they are
- * and those matched to the back-lit photo's brightness (wv_trans_basis_match: free, or with
- * the split of the light between the yarn types kept, the start's or its mirror's), the
- * lowest back-lit loss. Adam's steps from the start
- * took about 50 iterations to reach that brightness; the match alone, free, can split the
- * light wrongly, and the split kept can leave it too bright (docs/measurements.md, "The
- * back-lit photo's colours alone"). */
-static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st, wv_error *err) {
-  wv_params best = st->params;
+static wv_status colours_step(fit_ctx *c, wv_trans_basis **tb, wv_params *p, wv_nn_lbfgs *qn,
+                              const wv_fit_record *rec, const double g[WV_P_COUNT], wv_params *next,
+                              wv_fit_record *next_rec, double next_g[WV_P_COUNT], int *have_next, wv_error *err);
+
+/* steps of the colours' descent (colours_step) from p with a fresh memory qn; p moves, *loss
+ * is where it ends. */
+static wv_status colours_descend(fit_ctx *c, wv_trans_basis **tb, wv_params *p, int steps, wv_nn_lbfgs *qn,
+                                 double *loss, wv_error *err) {
+  wv_nn_lbfgs_reset(qn, WV_P_COUNT - WV_P_REFLECT_COUNT);
   wv_fit_record rec = {0};
-  wv_status rc = evaluate_t(c, tb, &best, &rec, NULL, err);
-  double least = rec.loss;
-  /* free; the split kept; the split of the mirror kept (the yarn types' colours exchanged:
-   * the start's way round is that of the reflection colours before the colour split, which
-   * may have turned them) */
-  for (int k = 0; !rc && k < 3; k++) {
-    wv_trans_match mode = k == 0 ? WV_TRANS_MATCH_FREE : WV_TRANS_MATCH_SPLIT;
+  double g[WV_P_COUNT] = {0};
+  wv_status rc = evaluate_t(c, tb, p, &rec, g, err);
+  for (int k = 0; !rc && k < steps; k++) {
+    wv_params next;
+    wv_fit_record nr;
+    double ng[WV_P_COUNT];
+    int have = 0;
+    if ((rc = colours_step(c, tb, p, qn, &rec, g, &next, &nr, ng, &have, err))) break;
+    rec = nr;
+    memcpy(g, ng, sizeof g);
+  }
+  *loss = rec.loss;
+  return rc;
+}
+
+/* The transmission colours' start, before their first iteration. The candidates: the colours
+ * as they are, and those matched to the back-lit photo's brightness (wv_trans_basis_match):
+ * free; with the split of the light between the yarn types kept, the start's, its mirror's,
+ * or the reflection colours' (k_t following k_d and k_st following k_s: each yarn type's light
+ * coloured by the yarn as the front-lit photo shows it). The two with the lowest back-lit loss
+ * each take WV_FIT_T_PROBE steps of the descent, and the lower end is kept. Adam's steps from
+ * the start took about 50 iterations to reach that brightness; the match alone, free, can split
+ * the light wrongly, and the split kept can leave it too bright; a start's loss alone can
+ * choose a basin whose end is higher (docs/measurements.md, "The back-lit photo's colours
+ * alone", "The yarn underneath"). */
+static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st, wv_error *err) {
+  enum { CANDS = 5 };
+  wv_params cand[CANDS];
+  double loss[CANDS];
+  wv_fit_record rec = {0};
+  cand[0] = st->params;
+  wv_status rc = evaluate_t(c, tb, &cand[0], &rec, NULL, err);
+  loss[0] = rec.loss;
+  for (int k = 1; !rc && k < CANDS; k++) {
+    wv_trans_match mode = k == 1 ? WV_TRANS_MATCH_FREE : WV_TRANS_MATCH_SPLIT;
     wv_params m = st->params;
-    if (k == 2)
+    if (k == 3) /* the mirror: the start's way round is that of the reflection colours before the colour split */
       for (int ch = 0; ch < 3; ch++) {
         double t = m.transmission[0][ch], u = m.transmission_specular[0][ch];
         m.transmission[0][ch] = m.transmission[1][ch], m.transmission[1][ch] = t;
         m.transmission_specular[0][ch] = m.transmission_specular[1][ch], m.transmission_specular[1][ch] = u;
       }
+    if (k == 4)
+      for (int y = 0; y < 2; y++)
+        for (int ch = 0; ch < 3; ch++)
+          m.transmission[y][ch] = m.diffuse[y][ch], m.transmission_specular[y][ch] = m.specular[y][ch];
     if ((rc = wv_trans_basis_match(*tb, &c->photo, c->o->down_w, c->o->down_h, mode, &m, err)) ||
         (rc = evaluate_t(c, tb, &m, &rec, NULL, err)))
       break;
-    if (rec.loss < least) least = rec.loss, best = m;
+    cand[k] = m, loss[k] = rec.loss;
   }
-  if (!rc) st->params = best;
-  return rc;
+  if (rc) return rc;
+  int a = 0, b = -1; /* the lowest two, the earlier on a tie */
+  for (int k = 1; k < CANDS; k++)
+    if (loss[k] < loss[a]) b = a, a = k;
+    else if (b < 0 || loss[k] < loss[b]) b = k;
+  double ea, eb;
+  wv_nn_lbfgs qa, qb;
+  if ((rc = colours_descend(c, tb, &cand[a], WV_FIT_T_PROBE, &qa, &ea, err)) ||
+      (rc = colours_descend(c, tb, &cand[b], WV_FIT_T_PROBE, &qb, &eb, err)))
+    return rc;
+  /* the iterations go on from the chosen end, with its memory */
+  st->params = eb < ea ? cand[b] : cand[a];
+  st->t_qn = eb < ea ? qb : qa;
+  return WV_OK;
 }
 
-/* One step of the transmission colours from p = st->params (loss rec->loss, gradient g): along
- * the quasi-Newton direction of st->t_qn in normalised coordinates, the box [0, 1] holding each,
+/* One step of the transmission colours from *p (loss rec->loss, gradient g): along the
+ * quasi-Newton direction of the memory qn in normalised coordinates, the box [0, 1] holding each,
  * the first of the steps 1, 1/4, 1/16, 1/64 along it that lowers the loss (no more is asked of
  * it: where a colour and its partner sit at 0 the response's slope has no bound, and a rule
  * that trusts the slope's prediction turns down every step);
@@ -282,21 +326,21 @@ static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st
  * iterations, at no further cost. Adam's fixed step length took about 30
  * iterations to carry satin1's colours to the photo's detail colour (docs/measurements.md,
  * "The colours' steps"). */
-static wv_status colours_step(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st, const wv_fit_record *rec,
-                              const double g[WV_P_COUNT], wv_params *next, wv_fit_record *next_rec,
-                              double next_g[WV_P_COUNT], int *have_next, wv_error *err) {
+static wv_status colours_step(fit_ctx *c, wv_trans_basis **tb, wv_params *p, wv_nn_lbfgs *qn,
+                              const wv_fit_record *rec, const double g[WV_P_COUNT], wv_params *next,
+                              wv_fit_record *next_rec, double next_g[WV_P_COUNT], int *have_next, wv_error *err) {
   enum { N = WV_P_COUNT - WV_P_REFLECT_COUNT };
   double x[N], gx[N], dir[N], lo[N], span[N];
   for (int i = 0; i < N; i++) {
     double hi;
     wv_param_range(WV_P_REFLECT_COUNT + i, &lo[i], &hi);
     span[i] = hi - lo[i];
-    x[i] = (wv_param_get(&st->params, WV_P_REFLECT_COUNT + i) - lo[i]) / span[i];
+    x[i] = (wv_param_get(p, WV_P_REFLECT_COUNT + i) - lo[i]) / span[i];
     gx[i] = isfinite(g[WV_P_REFLECT_COUNT + i]) ? g[WV_P_REFLECT_COUNT + i] * span[i] : 0;
   }
   *have_next = 0;
   double alpha = 1;
-  int pairs = wv_nn_lbfgs_direction(&st->t_qn, x, rec->loss, gx, 0, 1, dir);
+  int pairs = wv_nn_lbfgs_direction(qn, x, rec->loss, gx, 0, 1, dir);
   if (pairs < 0) alpha = 0; /* the steepest descent was turned down here before */
   if (pairs == 0) {
     double m = 0;
@@ -304,7 +348,7 @@ static wv_status colours_step(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st,
     alpha = m > 0 ? WV_FIT_T_STEP0 / m : 0;
   }
   for (int k = 0; k < 4 && alpha > 0; k++, alpha *= 0.25) {
-    wv_params trial = st->params;
+    wv_params trial = *p;
     double dec = 0;
     for (int i = 0; i < N; i++) {
       double xt = x[i] + alpha * dir[i];
@@ -318,14 +362,14 @@ static wv_status colours_step(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st,
     wv_status rc = evaluate_t(c, tb, &trial, &tr, tg, err);
     if (rc) return rc;
     if (tr.loss < rec->loss) {
-      st->params = trial;
+      *p = trial;
       *next = trial, *next_rec = tr, *have_next = 1;
       memcpy(next_g, tg, sizeof tg);
       return WV_OK;
     }
   }
-  if (pairs >= 0) wv_nn_lbfgs_reject(&st->t_qn);
-  *next = st->params, *next_rec = *rec, *have_next = 1; /* the same point again */
+  if (pairs >= 0) wv_nn_lbfgs_reject(qn);
+  *next = *p, *next_rec = *rec, *have_next = 1; /* the same point again */
   memcpy(next_g, g, sizeof(double) * WV_P_COUNT);
   return WV_OK;
 }
@@ -907,7 +951,6 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
        * reflection photo, which does not see them, is not rendered */
       if (t_phase(st->log, from, st->iter) == st->iter) {
         if ((rc = colours_start(tc, &tb, st, err))) break;
-        wv_nn_lbfgs_reset(&st->t_qn, WV_P_COUNT - WV_P_REFLECT_COUNT);
       }
       int same = t_cached; /* the last step's trial, evaluated, is where the colours are */
       for (int i = WV_P_REFLECT_COUNT; i < WV_P_COUNT && same; i++)
@@ -919,7 +962,9 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
         break;
       }
       rec.loss_t = rec.loss, rec.t_alone = 1;
-      if ((rc = colours_step(tc, &tb, st, &rec, g, &t_cache_p, &t_cache_rec, t_cache_g, &t_cached, err))) break;
+      if ((rc = colours_step(tc, &tb, &st->params, &st->t_qn, &rec, g, &t_cache_p, &t_cache_rec, t_cache_g, &t_cached,
+                              err)))
+        break;
     } else {
       if ((rc = evaluate(c, &st->params, &rec, g, st->psf_fit ? &dpsf : NULL, err))) break;
       int t = st->iter + 1;

@@ -362,15 +362,28 @@ WV_INLINE void wv_shade_lanewise_8(const wv_fabric *fab, const wv_shade_params_f
 #endif
 
 /* Light reflected by the yarn in cell c (the light in front: d->mi > 0): per
- * channel in rad (0 in a gap). With G, also what the gradient sums. */
+ * channel in rad (0 in an open gap). On the visible yarn its specular and diffuse
+ * lobes; in a gap beside it, over the crossing yarn, that yarn's diffuse lobe with the
+ * macro normal, k_d mu_i / pi (as the light through the cloth takes it there). With G,
+ * also what the gradient sums, for the yarn type seen (G->warp). */
 WV_INLINE void WV_FN(wv_shade_refl)(const wv_fabric *fab, const K_PARAMS *P, const WV_FN(wv_dirs) * d, WV_P x,
                                     WV_P y, const WV_FN(wv_yarn_cell) * c, WV_L rad[3], WV_FN(wv_shade_grad) * G) {
   const wv_yarn_model *m = &fab->ym;
+  const WV_M over = wv_not(c->lit) & c->cov; /* beside the visible yarn, over the crossing one */
+  const WV_M seen_warp = (c->lit & c->warp) | (over & wv_not(c->warp));
   if (G) {
-    G->warp = c->warp;
+    G->warp = seen_warp;
     for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = WV_B(0);
   }
   for (int ch = 0; ch < 3; ch++) rad[ch] = WV_B(0);
+  if (wv_any(over)) {
+    WV_L under = WV_FN(wv_diffuse)(d->mi, d->mi, P->blend, NULL, NULL);
+    for (int ch = 0; ch < 3; ch++) {
+      WV_L kd = WV_FN(wv_pick)(seen_warp, P->kd[WV_WARP][ch], P->kd[WV_WEFT][ch]);
+      rad[ch] = wv_sel(over, d->light * kd * under, WV_B(0));
+    }
+    if (G) G->J[WV_J_DF] = wv_sel(over, d->light * under, WV_B(0));
+  }
   if (!wv_any(c->lit)) return;
   const WV_M warp = c->warp;
   WV_FN(wv_yarn_frame) f;
@@ -400,7 +413,7 @@ WV_INLINE void WV_FN(wv_shade_refl)(const wv_fabric *fab, const K_PARAMS *P, con
   for (int ch = 0; ch < 3; ch++) {
     WV_L ks = WV_FN(wv_pick)(warp, P->ks[WV_WARP][ch], P->ks[WV_WEFT][ch]);
     WV_L kd = WV_FN(wv_pick)(warp, P->kd[WV_WARP][ch], P->kd[WV_WEFT][ch]);
-    rad[ch] = wv_sel(c->lit, d->light * (ks * spec + kd * diff), WV_B(0));
+    rad[ch] = wv_sel(c->lit, d->light * (ks * spec + kd * diff), rad[ch]);
   }
   if (!G) return;
 
@@ -422,7 +435,7 @@ WV_INLINE void WV_FN(wv_shade_refl)(const wv_fabric *fab, const K_PARAMS *P, con
   J[WV_J_S_BETA] = ds[WV_T_BETA], J[WV_J_S_ALPHA] = S.alpha, J[WV_J_S_UMAX] = ds[WV_T_UMAX];
   J[WV_J_S_PSI] = ds[WV_T_PSI], J[WV_J_DF_BETA] = dd[WV_T_BETA], J[WV_J_DF_UMAX] = dd[WV_T_UMAX];
   J[WV_J_DF_BLEND] = diff_w;
-  for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(c->lit, d->light * J[j], WV_B(0));
+  for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(c->lit, d->light * J[j], G->J[j]);
 }
 
 /* The cloth's local thickness at the point, in yarn diameters: the chord of the

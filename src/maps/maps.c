@@ -62,7 +62,8 @@ wv_status wv_maps_generate(const wv_params *p, int size, wv_maps *m, wv_error *e
       int ty = yp.type;
       id[0] = ty == WV_WARP, id[1] = ty == WV_WEFT, id[2] = ty < 0 ? 0.0f : wv_u01(yp.segment);
       for (int c = 0; c < 3; c++) {
-        kd[c] = ty < 0 ? 0.0f : (float)p->diffuse[ty][c];
+        /* beside a yarn the crossing yarn underneath shows its diffuse colour; an open gap none */
+        kd[c] = ty >= 0 ? (float)p->diffuse[ty][c] : yp.through >= 0 ? (float)p->diffuse[yp.through][c] : 0.0f;
         ks[c] = ty < 0 ? 0.0f : (float)p->specular[ty][c];
         a[c] = ty < 0 ? 1.0f : (float)p->roughness[ty];
         op[c] = (float)yp.open;

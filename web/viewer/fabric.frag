@@ -227,19 +227,11 @@ vec3 shadeLight(int ty, vec3 n, vec3 t, float us, vec3 wi, vec3 wo, float light)
   return light * (uKs[ty] * spec + uKd[ty] * diff);
 }
 
-#ifdef WV_TRANSMIT
-// phi(y) = (1 - e^-y) / y, its Taylor series below 0.5 (wv_phi).
-float phiWv(float y) {
-  if (y < 0.5)
-    return 1.0 - y * (1.0 / 2.0 - y * (1.0 / 6.0 - y * (1.0 / 24.0 - y * (1.0 / 120.0 - y * (1.0 / 720.0 -
-           y * (1.0 / 5040.0 - y * (1.0 / 40320.0 - y * (1.0 / 362880.0 - y * (1.0 / 3628800.0)))))))));
-  return (1.0 - expWv(-y)) / y;
-}
-
-// The cloth at a fabric point for light from behind (wv_yarn_locate's crossing
-// yarn, wv_cloth_chords): the type of the yarn the light passes (the visible
-// one, or beside it the crossing one; -1 in an open gap, where no yarn is) and
-// the chords of the visible (lv) and the crossing (lh) yarn, in yarn diameters.
+// The cloth at a fabric point (wv_yarn_locate's crossing yarn, wv_cloth_chords):
+// the type of the yarn seen from the front and passed by light from behind (the
+// visible one, or beside it the crossing one; -1 in an open gap, where no yarn
+// is) and the chords of the visible (lv) and the crossing (lh) yarn, in yarn
+// diameters.
 int clothAt(float x, float y, out float lv, out float lh) {
   float r = -y * uInvSpacing.y, c = x * uInvSpacing.x;
   int I = int(floor(r)), J = int(floor(c));
@@ -254,6 +246,22 @@ int clothAt(float x, float y, out float lv, out float lh) {
   lh = cov && ch > 0.0 ? ch : 0.0;
   if (lit) return type;
   return cov ? 1 - type : -1;
+}
+
+// wv_shade_refl beside the visible yarn, over the crossing yarn tc: that yarn's
+// diffuse lobe with the macro normal.
+vec3 shadeUnder(int tc, vec3 wi, vec3 wo, float light) {
+  if (wi.z <= 0.0 || wo.z <= 0.0) return vec3(0.0);
+  return light * uKd[tc] * (wi.z * (1.0 / PI_F));
+}
+
+#ifdef WV_TRANSMIT
+// phi(y) = (1 - e^-y) / y, its Taylor series below 0.5 (wv_phi).
+float phiWv(float y) {
+  if (y < 0.5)
+    return 1.0 - y * (1.0 / 2.0 - y * (1.0 / 6.0 - y * (1.0 / 24.0 - y * (1.0 / 120.0 - y * (1.0 / 720.0 -
+           y * (1.0 / 5040.0 - y * (1.0 / 40320.0 - y * (1.0 / 362880.0 - y * (1.0 / 3628800.0)))))))));
+  return (1.0 - expWv(-y)) / y;
 }
 
 // wv_shade_trans for one light behind the cloth (wi.z < 0): the visible yarn ty
@@ -375,21 +383,21 @@ void main() {
     vec2 fs = f + fdx * (xi.x - 0.5) + fdy * (xi.y - 0.5);
     vec3 yn, yt;
     int ty = yarnEval(fs.x, fs.y, cache, yn, yt);
+    float lv = 0.0, lh = 0.0;
 #ifdef WV_TRANSMIT
-    float lv, lh;
-    int tw = clothAt(fs.x, fs.y, lv, lh);
+    int tw = clothAt(fs.x, fs.y, lv, lh); // the yarn seen: the visible one, or beside it the crossing one
     if (tw < 0) { open += 1.0; continue; } // an open gap: what is behind shows (display.frag)
     float us = ty >= 0 ? glint(fs.x, fs.y, gcache) : 1.0;
     sum += wi.z < 0.0 ? shadeTrans(ty, tw, yn, yt, us, lv, lh, wi, wo, light)
-                      : (ty >= 0 ? shadeLight(ty, yn, yt, us, wi, wo, light) : vec3(0.0));
+                      : (ty >= 0 ? shadeLight(ty, yn, yt, us, wi, wo, light) : shadeUnder(tw, wi, wo, light));
     if (lightb > 0.0)
       sum += wib.z < 0.0 ? shadeTrans(ty, tw, yn, yt, us, lv, lh, wib, wo, lightb)
-                         : (ty >= 0 ? shadeLight(ty, yn, yt, us, wib, wo, lightb) : vec3(0.0));
-#endif
-    if (ty < 0) continue; // gap: nothing reflects
-#ifndef WV_TRANSMIT
-    float us = glint(fs.x, fs.y, gcache);
-    sum += shadeLight(ty, yn, yt, us, wi, wo, light);
+                         : (ty >= 0 ? shadeLight(ty, yn, yt, us, wib, wo, lightb) : shadeUnder(tw, wib, wo, lightb));
+#else
+    int tw = ty >= 0 ? ty : clothAt(fs.x, fs.y, lv, lh);
+    if (tw < 0) continue; // an open gap: nothing reflects
+    float us = ty >= 0 ? glint(fs.x, fs.y, gcache) : 1.0;
+    sum += ty >= 0 ? shadeLight(ty, yn, yt, us, wi, wo, light) : shadeUnder(tw, wi, wo, light);
 #endif
     for (int b = 0; b < uBoxes; b++) { // one point of each soft box per sample
       vec2 e = fract(rot.yx + g * vec2(0.5698402909980532, 0.7548776662466927) + 0.37 * float(b + 1)) * 2.0 - 1.0;
@@ -399,10 +407,11 @@ void main() {
       vec3 lb = Lb * (1.0 / sqrt(rb2));
       float cosb = abs(dot(lb, uBoxN[b])); // two-sided emitter
       vec3 wib = vec3(dot(lb, T), dot(lb, B), dot(lb, N));
-      sum += shadeLight(ty, yn, yt, us, wib, wo, uBoxL[b] * uBoxArea[b] * cosb / rb2);
+      float lb2 = uBoxL[b] * uBoxArea[b] * cosb / rb2;
+      sum += ty >= 0 ? shadeLight(ty, yn, yt, us, wib, wo, lb2) : shadeUnder(tw, wib, wo, lb2);
     }
-    if (uAmbient > 0.0 && wo.z > 0.0) // uniform sky on the diffuse lobe: its exact cosine integral
-      sum += uAmbient * uKd[ty] * (uBlend * 0.5 * (1.0 + yn.z) + (1.0 - uBlend));
+    if (uAmbient > 0.0 && wo.z > 0.0) // uniform sky on the diffuse lobe: its exact cosine integral (yn the macro normal beside a yarn)
+      sum += uAmbient * uKd[tw] * (uBlend * 0.5 * (1.0 + yn.z) + (1.0 - uBlend));
   }
 #ifdef WV_TRANSMIT
   outColor = vec4(sum / float(uSpp), 1.0 - open / float(uSpp)); // alpha: the cloth's cover
