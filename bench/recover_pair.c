@@ -221,25 +221,31 @@ int main(int argc, char **argv) {
       double kt_e = kt_error(&fs.params, &truth, WV_P_KT_WARP_R), kt_s = kt_error(&start, &truth, WV_P_KT_WARP_R);
       double kst_e = kt_error(&fs.params, &truth, WV_P_KST_WARP_R), kst_s = kt_error(&start, &truth, WV_P_KST_WARP_R);
       double tc_e = colour_error(mean_fit, mean_truth);
+      double kf_e = kt_error(&fs.params, &truth, WV_P_KF_WARP_R);
       int fam_right = !strcmp(wv_weave_family(fs.params.pattern), FAMILIES[f]);
       printf("%s %d %s -> %s: density %.1f/%.1f -> %.1f/%.1f, R %.3f/%.3f = %.3f, T %.3f/%.3f = %.3f, open area %.4f -> "
              "%.4f (%.2f), k_t error "
-             "%.3f (start %.3f, %s), k_st error %.3f (start %.3f), transmitted colour error %.3f, back-lit view %s %.4f %+.2f deg, "
-             "%d it, %.0f s\n",
+             "%.3f (start %.3f, %s), k_st error %.3f (start %.3f), k_f error %.3f (width %.3f -> %.3f), transmitted colour "
+             "error %.3f, back-lit view %s %.4f %+.2f deg, %d it, %.0f s\n",
              FAMILIES[f], i, pattern, fs.params.pattern, truth.density[0], truth.density[1], fs.params.density[0],
              fs.params.density[1], sr, cr, sr / cr, st_, ct, st_ / ct, oa_t, oa_f, oa_err, kt_e,
-             kt_s, kt_model == 1 ? "pair model" : "prior", kst_e, kst_s, tc_e, fs.t_found ? "related" : "not related",
+             kt_s, kt_model == 1 ? "pair model" : "prior", kst_e, kst_s, kf_e, truth.forward_width,
+             fs.params.forward_width, tc_e, fs.t_found ? "related" : "not related",
              fs.t_scale, fs.t_rotation_deg, fs.iter, secs);
       fflush(stdout);
-      json_array_append_new(
-          targets, json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:b,s:f,s:f,s:i,s:f}",
+      json_t *tj = json_pack("{s:f,s:f,s:f}", "kf_error", kf_e, "forward_width", truth.forward_width,
+                             "forward_width_fit", fs.params.forward_width);
+      json_t *rest = json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:b,s:f,s:f,s:i,s:f}",
                              "family", FAMILIES[f], "draw", i, "pattern", pattern, "chosen", fs.params.pattern, "family_right",
                              fam_right, "ssim_r", sr, "ceiling_r", cr, "ratio_r", sr / cr, "ssim_t", st_, "ceiling_t",
                              ct, "ratio_t", st_ / ct, "open_area", oa_t, "open_area_fit", oa_f, "open_area_error",
                              oa_err, "kt_error", kt_e, "kt_error_start", kt_s, "kst_error", kst_e, "kst_error_start",
                              kst_s, "transmitted_colour_error", tc_e, "view_t_related", fs.t_found, "view_t_scale",
                              fs.t_scale, "view_t_rotation_deg", fs.t_rotation_deg, "iterations", fs.iter, "seconds",
-                             secs));
+                             secs);
+      json_object_update(tj, rest);
+      json_decref(rest);
+      json_array_append_new(targets, tj);
       fam_sum[f][0] += sr / cr, fam_sum[f][1] += st_ / ct, fam_sum[f][2] += oa_err;
       fam_sum[f][3] += kt_e, fam_sum[f][4] += kst_e, fam_sum[f][5] += tc_e;
       fam_n[f]++, fam_ok[f] += fam_right;

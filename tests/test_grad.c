@@ -29,9 +29,12 @@ static void random_params(const char *pattern, tu_rng *r, wv_params *p) {
     wv_param_range(i, &lo, &hi);
     wv_param_set(p, i, lo + (hi - lo) * (0.02 + 0.96 * tu_rnd(r)));
   }
-  /* k_st from k_t, drawing nothing more: the checks' random points stay where they were */
+  /* k_st and k_f from k_t, drawing nothing more: the checks' random points stay where they were */
   for (int y = 0; y < 2; y++)
-    for (int c = 0; c < 3; c++) p->transmission_specular[y][c] = 1.0 - p->transmission[y][c];
+    for (int c = 0; c < 3; c++)
+      p->transmission_specular[y][c] = 1.0 - p->transmission[y][c],
+      p->transmission_forward[y][c] = 0.02 + 0.1 * p->transmission[y][c]; /* little more light: no clipping */
+  p->forward_width = 0.3;
   p->density[0] = 60 + 100 * tu_rnd(r);
   p->density[1] = 60 + 100 * tu_rnd(r);
   p->seed = (int64_t)(tu_rnd(r) * 1000);
@@ -68,7 +71,7 @@ static void fd_check(const wv_scene *s, const wv_params *p, int x0, int y0, int 
     assert_true(e[i].rel_err < 1e-3);
     /* A random adjoint sees every parameter of the model the scene shows, and nothing of
      * the other: transmission colours in front light, reflection albedos in back light. */
-    int kt = i >= WV_P_KT_WARP_R && i <= WV_P_KST_WEFT_B, kd = i >= WV_P_KD_WARP_R && i <= WV_P_KS_WEFT_B;
+    int kt = i >= WV_P_KT_WARP_R, kd = i >= WV_P_KD_WARP_R && i <= WV_P_KS_WEFT_B;
     if (wv_scene_transmits(s) ? kd : kt)
       assert_true(e[i].analytic == 0.0 && e[i].numeric == 0.0);
     else
@@ -297,9 +300,11 @@ static void test_exact_zeros_back(void **state) {
       for (int c = 1; c < 3; c++) {
         assert_true(g[WV_P_KT_WARP_R + 3 * y + c] == 0.0);
         assert_true(g[WV_P_KST_WARP_R + 3 * y + c] == 0.0);
+        assert_true(g[WV_P_KF_WARP_R + 3 * y + c] == 0.0);
       }
     }
     assert_true(g[WV_P_KT_WARP_R] != 0.0 && g[WV_P_KT_WEFT_R] != 0.0 && g[WV_P_KST_WEFT_R] != 0.0);
+    assert_true(g[WV_P_KF_WARP_R] != 0.0 && g[WV_P_KF_WEFT_R] != 0.0);
     fill_random(&dc, &r);
     /* No specular transmission colour: roughness and twist do not matter. */
     wv_params q = p;
@@ -321,12 +326,12 @@ static void test_exact_zeros_back(void **state) {
     snprintf(q.custom[0], sizeof q.custom[0], "1");
     grad_window(&s, &q, &dc, dbl, g);
     int weft[] = {WV_P_BETA_WEFT, WV_P_KT_WEFT_R, WV_P_KT_WEFT_G, WV_P_KT_WEFT_B, WV_P_KST_WEFT_R,
-                  WV_P_KST_WEFT_G, WV_P_KST_WEFT_B, WV_P_ALPHA_WEFT};
+                  WV_P_KST_WEFT_G, WV_P_KST_WEFT_B, WV_P_ALPHA_WEFT, WV_P_KF_WEFT_R, WV_P_KF_WEFT_G, WV_P_KF_WEFT_B};
     for (size_t i = 0; i < sizeof weft / sizeof weft[0]; i++) assert_true(g[weft[i]] == 0.0);
     assert_true(g[WV_P_BETA_WARP] != 0.0 && g[WV_P_ALPHA_WARP] != 0.0);
     q.yarn_width = 0.6;
     grad_window(&s, &q, &dc, dbl, g);
-    assert_true(g[WV_P_KT_WEFT_R] != 0.0 && g[WV_P_KT_WEFT_B] != 0.0);
+    assert_true(g[WV_P_KT_WEFT_R] != 0.0 && g[WV_P_KT_WEFT_B] != 0.0 && g[WV_P_KF_WEFT_R] != 0.0);
     assert_true(g[WV_P_BETA_WEFT] == 0.0 && g[WV_P_ALPHA_WEFT] == 0.0 && g[WV_P_KST_WEFT_R] == 0.0);
   }
   wv_image_free(&dc);
@@ -781,7 +786,7 @@ static void test_trans_basis(void **state) {
   assert_int_equal(wv_render(&s, &tq, &ro, &photo, NULL, &err), WV_OK);
   wv_params m = p;
   assert_int_equal(wv_trans_basis_capture(b, &m, &before, &err), WV_OK);
-  assert_int_equal(wv_trans_basis_match(b, &photo, 8, 5, WV_TRANS_MATCH_FREE, &m, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_match(b, &photo, 8, 5, WV_TRANS_MATCH_FREE, &m, NULL, &err), WV_OK);
   assert_int_equal(wv_trans_basis_capture(b, &m, &after, &err), WV_OK);
   double d0 = 0, d1 = 0;
   for (int i = 0; i < 48 * 40 * 3; i++) d0 += fabs(before.data[i] - photo.data[i]), d1 += fabs(after.data[i] - photo.data[i]);
@@ -791,7 +796,7 @@ static void test_trans_basis(void **state) {
   /* the split kept: each channel's k_t of the two yarn types, and their k_st, scaled alike */
   wv_params sp = p;
   wv_image split;
-  assert_int_equal(wv_trans_basis_match(b, &photo, 8, 5, WV_TRANS_MATCH_SPLIT, &sp, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_match(b, &photo, 8, 5, WV_TRANS_MATCH_SPLIT, &sp, NULL, &err), WV_OK);
   assert_int_equal(wv_trans_basis_capture(b, &sp, &split, &err), WV_OK);
   double d2 = 0;
   for (int i = 0; i < 48 * 40 * 3; i++) d2 += fabs(split.data[i] - photo.data[i]);
@@ -803,12 +808,33 @@ static void test_trans_basis(void **state) {
     assert_true(fabs(sp.transmission_specular[1][c] - g * p.transmission_specular[1][c]) < 1e-9);
   }
   wv_image_free(&split);
-  assert_int_equal(wv_trans_basis_match(b, &photo, 100, 5, WV_TRANS_MATCH_FREE, &m, &err), WV_ERR_INVALID);
+  /* k_f alone: a photo of other forward colours; the match moves k_f toward them and nothing
+   * else, and what it leaves unexplained falls */
+  wv_params tf = p, fm = p;
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++) tf.transmission_forward[y][c] = y ? 0.1 + 0.1 * c : 0.4 - 0.1 * c;
+  wv_image photo_f;
+  assert_int_equal(wv_render(&s, &tf, &ro, &photo_f, NULL, &err), WV_OK);
+  double res0, res1, ef0 = 0, ef1 = 0;
+  wv_params held = p;
+  assert_int_equal(wv_trans_basis_match(b, &photo_f, 8, 5, WV_TRANS_MATCH_FORWARD, &fm, &res1, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_match(b, &photo_f, 8, 5, WV_TRANS_MATCH_SPLIT, &held, &res0, &err), WV_OK);
+  for (int i = WV_P_REFLECT_COUNT; i < WV_P_KF_WARP_R; i++) assert_true(wv_param_get(&fm, i) == wv_param_get(&p, i));
+  for (int i = WV_P_KF_WARP_R; i < WV_P_COUNT; i++) {
+    assert_true(wv_param_get(&held, i) == wv_param_get(&p, i)); /* the split holds k_f */
+    ef0 += fabs(wv_param_get(&p, i) - wv_param_get(&tf, i)), ef1 += fabs(wv_param_get(&fm, i) - wv_param_get(&tf, i));
+  }
+  print_message("forward match: k_f error %.4f before, %.4f after; residual %.2g (the split's %.2g)\n", ef0, ef1, res1,
+                res0);
+  assert_true(ef1 < 0.3 * ef0);
+  assert_true(res1 >= 0 && res1 < 0.5 * res0);
+  wv_image_free(&photo_f);
+  assert_int_equal(wv_trans_basis_match(b, &photo, 100, 5, WV_TRANS_MATCH_FREE, &m, NULL, &err), WV_ERR_INVALID);
   wv_image small;
   assert_int_equal(wv_image_alloc(&small, 40, 48, 3, &err), WV_OK);
   double gs[WV_P_COUNT];
   assert_int_equal(wv_trans_basis_grad(b, &small, gs, &err), WV_ERR_INVALID);
-  assert_int_equal(wv_trans_basis_match(b, &small, 8, 5, WV_TRANS_MATCH_SPLIT, &m, &err), WV_ERR_INVALID);
+  assert_int_equal(wv_trans_basis_match(b, &small, 8, 5, WV_TRANS_MATCH_SPLIT, &m, NULL, &err), WV_ERR_INVALID);
   wv_image_free(&small), wv_image_free(&photo), wv_image_free(&before), wv_image_free(&after), wv_image_free(&dc);
   wv_trans_basis_free(b);
   wv_trans_basis *none;

@@ -129,6 +129,78 @@ static void test_yarn_underneath(void **state) {
   assert_true(under[WV_WARP] > 50 && under[WV_WEFT] > 50 && open > 20);
 }
 
+/* The forward band's normalisation: its mean over a cosine-weighted hemisphere with the light
+ * straight behind and the yarn's axis in the plane, against Monte Carlo over that hemisphere
+ * (directions as points of the unit disk, s half the axis component). */
+static void test_forward_band_mean(void **state) {
+  (void)state;
+  static const double widths[] = {0.05, 0.1, 0.3, 1.0};
+  for (int k = 0; k < 4; k++) {
+    tu_rng r = {17};
+    double w = widths[k], sum = 0;
+    enum { N = 400000 };
+    for (int i = 0; i < N; i++) {
+      double rad = sqrt(tu_rnd(&r)), phi = 2 * 3.14159265358979323846 * tu_rnd(&r);
+      double sh = 0.5 * rad * cos(phi), q = 1 + sh * sh * 0.5 / (w * w);
+      sum += 1 / (q * q);
+    }
+    double mc = sum / N, m = wv_forward_band_mean(w);
+    assert_true(fabs(m - mc) < 4e-3 * mc);
+    assert_true(m > 0 && m < 1);
+  }
+  assert_true(wv_forward_band_mean(0.1) < wv_forward_band_mean(0.2)); /* a narrower band covers less */
+}
+
+/* Light through the cloth with only k_f: the band, coloured by the yarn the light passes, the
+ * cloth's transmittance times |mu_i| g(s) / (pi mean g), s half the component of omega_i +
+ * omega_o along that yarn's axis (fabric y for warp, x for weft); 0 in an open gap. */
+static void test_forward_band(void **state) {
+  (void)state;
+  tu_rng r = {9};
+  static wv_fabric f;
+  wv_params p;
+  wv_error err = {0};
+  assert_int_equal(wv_params_default("twill", &p, &err), WV_OK);
+  p.yarn_width = 0.75, p.noise_level = 0, p.specular_noise = 0, p.forward_width = 0.25;
+  memset(p.transmission, 0, sizeof p.transmission);
+  memset(p.transmission_specular, 0, sizeof p.transmission_specular);
+  for (int c = 0; c < 3; c++)
+    p.transmission_forward[WV_WARP][c] = c == 0 ? 0.9 : 0.2, p.transmission_forward[WV_WEFT][c] = c == 1 ? 0.7 : 0.1;
+  assert_int_equal(wv_fabric_prepare(&p, &f, &err), WV_OK);
+  double norm = 1 / wv_forward_band_mean(p.forward_width), peak[2] = {0, 0};
+  int seen[2] = {0, 0}, open = 0;
+  for (int k = 0; k < 4000; k++) {
+    float wi[3], wo[3], rad[3];
+    above(&r, wi), above(&r, wo);
+    wi[2] = -wi[2]; /* the light behind */
+    wv_dirs_f d;
+    wv_dirs_make_f(wi, wo, 1.0f, &d);
+    float x = (float)(4 * tu_rnd(&r)), y = (float)(-4 * tu_rnd(&r));
+    wv_yarn_point yp;
+    wv_yarn_eval(&f.ym, x, y, &yp);
+    wv_shade_grad_f g;
+    wv_shade_f(&f, &f.P, &d, x, y, rad, &g);
+    if (yp.open) {
+      open++;
+      for (int c = 0; c < 3; c++) assert_true(rad[c] == 0.0f);
+      continue;
+    }
+    int t = yp.through;
+    double sh = 0.5 * (t == WV_WARP ? d.wi[1] + d.wo[1] : d.wi[0] + d.wo[0]);
+    double q = 1 + sh * sh * 0.5 / (p.forward_width * p.forward_width);
+    double band = -d.mi * (1.0 / (1.0 + 0.5 * p.thickness * yp.thickness)) * norm / 3.14159265358979323846 / (q * q);
+    for (int c = 0; c < 3; c++) {
+      double want = d.light * p.transmission_forward[t][c] * band;
+      assert_true(fabs(rad[c] - want) <= 1e-4 * want + 1e-7);
+    }
+    assert_int_equal(g.warp != 0, t == WV_WARP);
+    assert_true(fabs(g.J[WV_J_F] - d.light * band) <= 1e-4 * d.light * band + 1e-7);
+    seen[t]++;
+    if (band > peak[t]) peak[t] = band;
+  }
+  assert_true(seen[WV_WARP] > 500 && seen[WV_WEFT] > 500 && open > 20);
+}
+
 /* The public entry points agree with each other and with the directions' horizon rule. */
 static void test_entry_points(void **state) {
   (void)state;
@@ -235,6 +307,7 @@ static void test_sample_derivatives(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_scalar_equals_8wide), cmocka_unit_test(test_yarn_underneath),
+                                     cmocka_unit_test(test_forward_band_mean), cmocka_unit_test(test_forward_band),
                                      cmocka_unit_test(test_entry_points),
                                      cmocka_unit_test(test_sample_derivatives), cmocka_unit_test(test_floori_range)};
   return cmocka_run_group_tests(tests, NULL, NULL);

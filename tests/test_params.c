@@ -52,8 +52,9 @@ static void test_parse_and_round_trip(void **state) {
 static void expect_bad(const char *text, wv_status code, const char *needle);
 
 /* Version 1 files (no "version", no "transmission") read with k_t = k_d / 2, versions 1 and
- * 2 (no "transmission_specular") with k_st = k_s; files are written as version 3 with the
- * transmission colours; a newer version is refused. */
+ * 2 (no "transmission_specular") with k_st = k_s, versions 1 to 3 (no "transmission_forward")
+ * with k_f = 0 and forward_width 0.2; files are written as version 4 with the transmission
+ * colours; a newer version is refused. */
 static void test_versions(void **state) {
   (void)state;
   wv_params p, q;
@@ -61,11 +62,15 @@ static void test_versions(void **state) {
   assert_int_equal(wv_params_parse(GOOD, "v1.json", &p, &err), WV_OK);
   for (int y = 0; y < 2; y++)
     for (int c = 0; c < 3; c++)
-      assert_true(p.transmission[y][c] == 0.5 * p.diffuse[y][c] && p.transmission_specular[y][c] == p.specular[y][c]);
+      assert_true(p.transmission[y][c] == 0.5 * p.diffuse[y][c] && p.transmission_specular[y][c] == p.specular[y][c] &&
+                  p.transmission_forward[y][c] == 0);
+  assert_true(p.forward_width == 0.2);
   char *text = wv_params_to_json(&p);
-  assert_non_null(strstr(text, "\"version\": 3"));
+  assert_non_null(strstr(text, "\"version\": 4"));
   assert_non_null(strstr(text, "\"transmission\""));
   assert_non_null(strstr(text, "\"transmission_specular\""));
+  assert_non_null(strstr(text, "\"transmission_forward\""));
+  assert_non_null(strstr(text, "\"forward_width\""));
   assert_int_equal(wv_params_parse(text, "v2.json", &q, &err), WV_OK);
   free(text);
   assert_memory_equal(&p, &q, sizeof p);
@@ -89,7 +94,16 @@ static void test_versions(void **state) {
   wv_params_default("satin", &q, NULL);
   assert_true(q.transmission[WV_WARP][1] == 0.25); /* the prior mean: half of k_d = 0.5 */
   assert_true(q.transmission_specular[WV_WEFT][1] == 0.5); /* k_s */
-  expect_bad("{\"version\": 4, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
+  assert_int_equal(wv_params_parse("{\"version\": 4, \"pattern\": \"plain\", \"forward_width\": 0.4,"
+                                   " \"transmission_forward\": {\"warp\": [0.1, 0.2, 0.3], \"weft\": 0.05}}",
+                                   "v4.json", &q, &err),
+                   WV_OK);
+  assert_true(q.transmission_forward[WV_WARP][2] == 0.3 && q.transmission_forward[WV_WEFT][1] == 0.05);
+  assert_true(q.forward_width == 0.4 && q.transmission[WV_WARP][0] == 0.25); /* k_t's default as before */
+  expect_bad("{\"version\": 5, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
+  expect_bad("{\"pattern\": \"twill\", \"forward_width\": 0.01}", WV_ERR_INVALID, "forward_width");
+  expect_bad("{\"pattern\": \"twill\", \"transmission_forward\": {\"warp\": [0.1, 1.5, 0]}}", WV_ERR_INVALID,
+             "transmission_forward.warp");
   expect_bad("{\"version\": 0, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
   expect_bad("{\"version\": 1.5, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
   expect_bad("{\"pattern\": \"twill\", \"transmission\": {\"weft\": [0.1, 1.2, 0]}}", WV_ERR_INVALID,
@@ -117,7 +131,8 @@ static void test_param_vector(void **state) {
   assert_true(p.roughness[WV_WEFT] == 0.505);
   /* the transmission colours come after the reflection model's parameters */
   assert_int_equal(WV_P_REFLECT_COUNT, 19);
-  assert_int_equal(WV_P_COUNT, 31);
+  assert_int_equal(WV_P_COUNT, 37);
+  assert_string_equal(wv_param_name(WV_P_KF_WEFT_B), "transmission_forward.weft[2]");
   assert_string_equal(wv_param_name(WV_P_KT_WEFT_B), "transmission.weft[2]");
   assert_string_equal(wv_param_name(WV_P_KST_WARP_G), "transmission_specular.warp[1]");
   assert_true(p.transmission[WV_WEFT][2] == 0.5 && p.transmission_specular[WV_WARP][0] == 0.5);
@@ -323,7 +338,13 @@ static void test_prior_samples(void **state) {
         assert_true(fs >= 0.1 && fs <= 1.0);
         for (int c = 0; c < 3; c++)
           assert_true(fabs(p.transmission_specular[y][c] - fs * p.specular[y][c]) < 1e-12);
+        /* the forward band: the transmission colour times one factor in 0..1 */
+        double ff = p.transmission[y][0] > 0 ? p.transmission_forward[y][0] / p.transmission[y][0] : 0.5;
+        assert_true(ff >= 0 && ff <= 1);
+        for (int c = 0; c < 3; c++)
+          assert_true(fabs(p.transmission_forward[y][c] - ff * p.transmission[y][c]) < 1e-12);
       }
+      assert_true(p.forward_width >= 0.1 && p.forward_width <= 0.8);
       same_colour += !memcmp(p.diffuse[0], p.diffuse[1], sizeof p.diffuse[0]);
       assert_true(p.noise_level >= 0 && p.noise_level <= 5);
     }

@@ -358,13 +358,16 @@ static void test_back_lit(void **state) {
 
 /* The transmission and open-area maps: the open area is (1 - w)^2 of the tile (no yarn
  * of either kind), dark in the transmission map; elsewhere the transmission map is the
- * yarn's k_t, dimmed by the cloth's thickness. */
+ * yarn's k_t + k_f (the light the forward band carries at normal incidence), dimmed by the
+ * cloth's thickness. */
 static void test_maps_transmission(void **state) {
   (void)state;
   wv_params p;
   wv_params_default("twill", &p, NULL);
   p.yarn_width = 0.8;
   for (int c = 0; c < 3; c++) p.transmission[WV_WARP][c] = 0.2 + 0.1 * c, p.transmission[WV_WEFT][c] = 0.6;
+  p.transmission_forward[WV_WARP][0] = 0.3, p.transmission_forward[WV_WARP][1] = 0.1; /* warp: 0.5, 0.4, 0.4 */
+  for (int c = 0; c < 3; c++) p.transmission_forward[WV_WEFT][c] = 0.2;             /* weft: 0.8 */
   wv_maps m;
   assert_int_equal(wv_maps_generate(&p, 256, &m, NULL), WV_OK);
   double open = 0, t = 0;
@@ -377,10 +380,10 @@ static void test_maps_transmission(void **state) {
       assert_true(kt[0] == 0.0f && kt[1] == 0.0f && kt[2] == 0.0f && id[0] == 0.0f && id[1] == 0.0f);
       continue;
     }
-    for (int c = 0; c < 3; c++) assert_true(kt[c] > 0.0f && kt[c] <= 0.6f + 1e-6f);
+    for (int c = 0; c < 3; c++) assert_true(kt[c] > 0.0f && kt[c] <= 0.8f + 1e-6f);
     if (id[0] == 1.0f) { /* on a warp yarn: its colour, dimmed alike in every channel */
-      assert_true(kt[0] <= 0.2f + 1e-6f && kt[0] >= 0.2f / 3);
-      assert_true(fabsf(kt[2] / kt[0] - 2.0f) < 1e-4f);
+      assert_true(kt[0] <= 0.5f + 1e-6f && kt[0] >= 0.5f / 3);
+      assert_true(fabsf(kt[2] / kt[0] - 0.8f) < 1e-4f);
       warp++;
     }
     t += kt[1];

@@ -57,6 +57,8 @@ typedef struct {
                        * the open area the back-lit photo's gap glow measures (wv_open_area_measure), or, in a
                        * back-lit scene without a glow, searched on the pair's loss when the iterations end,
                        * after the noise sweep (1); 0: it stays at its start */
+  int forward_sweep;  /* a photo pair: 1: the forward band's width is searched over WV_FIT_FORWARD_WIDTHS before
+                       * the transmission colours' start (1); 0: it stays at its start */
   int patience;       /* the stopping rule (wv_fit_converged): a stage ends when its smoothed loss has not
                        * fallen by WV_FIT_MIN_GAIN in this many iterations, and the last stage ends the
                        * iterations (WV_FIT_PATIENCE; 0: every stage runs to its limit, `iters` in all) */
@@ -81,6 +83,8 @@ void wv_fit_opts_default(wv_fit_opts *o);
                                   * range, along the steepest descent (a larger one is cut back) */
 #define WV_FIT_T_PROBE 20        /* a pair: steps of the colours' descent from each of their two best
                                   * starts before one is chosen (docs/fit.md, "Photo pairs") */
+#define WV_FIT_FORWARD_WIDTHS {0.1, 0.2, 0.4, 0.8} /* a pair: the forward band's widths searched, the
+                                  * prior's range in steps of two (docs/fit.md, "Photo pairs") */
 
 /* Ranges of the options (the command line and checkpoints are held to them). */
 #define WV_FIT_MAX_ITERS 100000

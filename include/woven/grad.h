@@ -63,10 +63,10 @@ wv_status wv_record_grad(const wv_grad_record *rec, const wv_image *dcapture, do
 wv_status wv_record_grad_psf(const wv_grad_record *rec, const wv_image *dcapture, double *dsigma, wv_error *err);
 void wv_record_free(wv_grad_record *rec);
 
-/* A back-lit scene's radiance is linear in the transmission colours (k_t and k_st, each
+/* A back-lit scene's radiance is linear in the transmission colours (k_t, k_st and k_f, each
  * channel of each yarn type) while the rest of the parameters stays: radiance = base +
- * sum_j c_j basis_j, with the same samples as wv_render. Made from five renders (all four
- * colours 0, then each yarn type's k_t or k_st 1), it gives the capture and the colours'
+ * sum_j c_j basis_j, with the same samples as wv_render. Made from seven renders (all six
+ * colours 0, then each yarn type's k_t, k_st or k_f 1), it gives the capture and the colours'
  * gradient for any colours without rendering: what a fit of the colours alone iterates
  * on (docs/fit.md, "Photo pairs"). */
 typedef struct wv_trans_basis wv_trans_basis;
@@ -83,13 +83,17 @@ wv_status wv_trans_basis_grad(const wv_trans_basis *b, const wv_image *dcapture,
  * size) over cells_w x cells_h cells: least squares on the cells' mean linear radiance (the
  * photo's decoded, its clipped or falloff-dark pixels left out), each channel on its own,
  * pulled weakly toward p's colours, each colour within its range. The cells' means barely
- * tell the yarn types apart, so two ways: */
+ * tell the yarn types apart, so two ways; k_f stays as p has it in both. A third matches k_f alone: */
 typedef enum {
-  WV_TRANS_MATCH_FREE,  /* the four colours of a channel free */
-  WV_TRANS_MATCH_SPLIT  /* two factors, one on both yarn types' k_t, one on their k_st: p's split kept */
+  WV_TRANS_MATCH_FREE,    /* k_t and k_st of a channel free */
+  WV_TRANS_MATCH_SPLIT,   /* two factors, one on both yarn types' k_t, one on their k_st: p's split kept */
+  WV_TRANS_MATCH_FORWARD  /* the forward band's k_f free (the others' as p has them) */
 } wv_trans_match;
+/* residual (may be NULL): what the matched colours leave unexplained, the cells' squared
+ * differences of mean radiance summed over cells and channels, over the same sum for the
+ * photo's means (0: explained exactly, 1: no better than black). */
 wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, int cells_w, int cells_h,
-                               wv_trans_match mode, wv_params *p, wv_error *err);
+                               wv_trans_match mode, wv_params *p, double *residual, wv_error *err);
 void wv_trans_basis_free(wv_trans_basis *b);
 
 /* Gradient check: analytic gradient of L = sum(dcapture * capture) against

@@ -19,16 +19,17 @@ typedef struct {
   wv_image diffuse;   /* k_d, linear RGB */
   wv_image specular;  /* k_s, linear RGB */
   wv_image roughness; /* alpha (grey) */
-  wv_image transmission; /* light through the cloth at normal incidence: k_t of the yarn it passes times the
-                          * diffuse transmittance of the cloth's thickness there, linear RGB; 0 in an open gap */
+  wv_image transmission; /* light through the cloth at normal incidence: k_t + k_f of the yarn it passes times
+                          * the diffuse transmittance of the cloth's thickness there (at most 1), linear RGB; 0 in
+                          * an open gap */
   wv_image open;      /* 1 in an open gap (no yarn of either kind: light passes straight through), else 0 (grey) */
   double tile_mm[2];  /* physical width and height of one tile, mm */
   double height_max;  /* largest height value, mm */
 } wv_maps;
 
-/* The transmission map's value at a point (woven's diffuse transmission at normal
- * incidence): k_t of the yarn the light passes times the cloth's diffuse
- * transmittance there, linear RGB; 0 in an open gap. */
+/* The transmission map's value at a point (woven's diffuse transmission and forward band at
+ * normal incidence, where the band carries k_f): k_t + k_f of the yarn the light passes times
+ * the cloth's diffuse transmittance there, at most 1, linear RGB; 0 in an open gap. */
 void wv_maps_transmission_at(const wv_params *p, const wv_yarn_point *yp, float out[3]);
 
 /* size x size pixels per tile (1..8192), one sample at each pixel centre. */

@@ -149,7 +149,7 @@ void wv_nn_adam_free(wv_nn_adam *a);
 /* ---- Limited-memory BFGS directions on a box [lo, hi]^n (Nocedal & Wright, algorithm 7.4),
  * for small problems (n <= WV_NN_LBFGS_DIM) with dear evaluations. Plain data: a caller keeps
  * the struct (and may save it) and runs its own line search along the direction. ---- */
-#define WV_NN_LBFGS_DIM 12 /* the largest n */
+#define WV_NN_LBFGS_DIM 18 /* the largest n */
 #define WV_NN_LBFGS_MEM 5  /* curvature pairs kept */
 typedef struct {
   int n, count, has_prev, stuck;
@@ -159,6 +159,9 @@ typedef struct {
 
 /* No curvature seen, n coordinates. */
 void wv_nn_lbfgs_reset(wv_nn_lbfgs *q, int n);
+/* n coordinates (at least q->n), the new ones appended: the pairs kept, with 0 along the new
+ * coordinates (no step moved them), and the last point forgotten (its gradient had none). */
+void wv_nn_lbfgs_grow(wv_nn_lbfgs *q, int n);
 /* The direction d at x with value f and gradient g: first the pair (x - x_prev, g - g_prev) of
  * the last call joins the memory (where its curvature is positive and the mean of the two
  * gradients along the step gives f - f_prev within half), then d = -H g over the coordinates

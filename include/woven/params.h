@@ -20,6 +20,8 @@ typedef struct {
   double specular[2][3];             /* k_s RGB: 0..1 */
   double transmission[2][3];         /* k_t RGB: 0..1, diffuse transmission colour (light through the yarn) */
   double transmission_specular[2][3]; /* k_st RGB: 0..1, the specular transmission's colour */
+  double transmission_forward[2][3]; /* k_f RGB: 0..1, the colour of the light scattered on around the fibres' forward cone */
+  double forward_width;              /* its width in the sine of the longitudinal angle: 0.05..1, default 0.2 */
   double roughness[2];               /* alpha: 0.01..1 */
   double twist_deg;                  /* psi: -60..60 */
   double inclination_deg;            /* u_max: 5..70 */
@@ -32,9 +34,10 @@ typedef struct {
 } wv_params;
 
 /* The parameter file's format version: 2 adds "transmission" (k_t), 3
- * "transmission_specular" (k_st); a file without either key reads with its default
- * (wv_params_transmission_default), which renders it as its version did. */
-#define WV_PARAMS_VERSION 3
+ * "transmission_specular" (k_st), 4 "transmission_forward" (k_f) and "forward_width"; a file
+ * without one of those keys reads with its default (wv_params_transmission_default), which
+ * renders it as its version did. */
+#define WV_PARAMS_VERSION 4
 
 /* Prior mean of a built-in pattern (also the fit's start without a network). */
 wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err);
@@ -43,8 +46,9 @@ wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err);
  * negated). Deterministic in seed. */
 wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *p, wv_error *err);
 /* The transmission colours' defaults, per yarn type and channel: k_t = k_d / 2 (the prior's
- * mean: light through a yarn takes the yarn's colour) and k_st = k_s (the fibres that
- * reflect the light are the ones that scatter it through). */
+ * mean: light through a yarn takes the yarn's colour), k_st = k_s (the fibres that
+ * reflect the light are the ones that scatter it through) and k_f = 0 (no forward band: the
+ * model before it existed); forward_width 0.2. */
 void wv_params_transmission_default(wv_params *p);
 
 /* Every value in range, pattern known; the message names the key. */
@@ -59,7 +63,7 @@ wv_status wv_params_write(const char *path, const wv_params *p, wv_error *err);
 /* The continuous parameters, in a fixed order (the differentiable renderer's and
  * the fit's vector). Values are in the file's units (angles in degrees). The
  * reflection model's come first (WV_P_REFLECT_COUNT of them: what a front-lit
- * photo shows, and FabricNet predicts); the transmission colours follow (k_t, then k_st). */
+ * photo shows, and FabricNet predicts); the transmission colours follow (k_t, k_st, then k_f). */
 typedef enum {
   WV_P_BETA_WARP, WV_P_BETA_WEFT,
   WV_P_KD_WARP_R, WV_P_KD_WARP_G, WV_P_KD_WARP_B,
@@ -72,6 +76,8 @@ typedef enum {
   WV_P_KT_WEFT_R, WV_P_KT_WEFT_G, WV_P_KT_WEFT_B,
   WV_P_KST_WARP_R, WV_P_KST_WARP_G, WV_P_KST_WARP_B,
   WV_P_KST_WEFT_R, WV_P_KST_WEFT_G, WV_P_KST_WEFT_B,
+  WV_P_KF_WARP_R, WV_P_KF_WARP_G, WV_P_KF_WARP_B,
+  WV_P_KF_WEFT_R, WV_P_KF_WEFT_G, WV_P_KF_WEFT_B,
   WV_P_COUNT
 } wv_param_id;
 #define WV_P_REFLECT_COUNT WV_P_KT_WARP_R /* 19 */
@@ -80,6 +86,8 @@ const char *wv_param_name(int id);              /* e.g. "diffuse.warp[1]" */
 void wv_param_range(int id, double *lo, double *hi);
 /* The range of yarn_width (not a continuous parameter of the gradient: a photo pair's fit searches it). */
 void wv_param_range_width(double *lo, double *hi);
+/* The range of forward_width (likewise searched by a photo pair's fit). */
+void wv_param_range_forward_width(double *lo, double *hi);
 double wv_param_get(const wv_params *p, int id);
 void wv_param_set(wv_params *p, int id, double value);
 

@@ -21,7 +21,8 @@ wv_status wv_image_centre_zoom(const wv_image *img, int side, int factor, wv_ima
 
 /* The parameters of p that lie on a bound of their range (the fit keeps every parameter
  * inside its range, so these are the ones it wanted to push further): up to cap entries
- * of text such as "inclination_deg = 70 (upper bound)" into lines (each 96 chars). */
+ * of text such as "inclination_deg = 70 (upper bound)" into lines (each 96 chars). k_f of a
+ * cloth without a forward band (all 0, by the fit's choice) is left out. */
 int wv_params_at_bounds(const wv_params *p, char (*lines)[96], int cap);
 
 /* The baseline a render must beat: SSIM per RGB channel of the photo against its own copy

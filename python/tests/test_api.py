@@ -44,7 +44,7 @@ def test_scene_capture_is_the_camera(root):
 def test_params_roundtrip(root):
     p = woven.Params(root / TWILL)
     v = p.vector
-    assert v.shape == (len(woven.PARAM_NAMES),) == (31,)
+    assert v.shape == (len(woven.PARAM_NAMES),) == (37,)
     assert p.with_vector(v).json == p.json
     v2 = v.copy()
     v2[woven.PARAM_NAMES.index("roughness.warp")] = 0.3

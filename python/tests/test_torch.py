@@ -126,12 +126,12 @@ def test_fit_one_parameter(base):
 
 def test_errors(base):
     theta = torch.tensor(base.vector, requires_grad=True)
-    with pytest.raises(ValueError, match="31"):
+    with pytest.raises(ValueError, match="37"):
         wt.render(theta[:5], base, "flat45", spp=1)
     with pytest.raises(TypeError):
         wt.render(base.vector, base, "flat45", spp=1)
     with pytest.raises(TypeError):
-        wt.render(torch.zeros(31, dtype=torch.int64), base, "flat45", spp=1)
+        wt.render(torch.zeros(37, dtype=torch.int64), base, "flat45", spp=1)
     bad = theta.detach().clone()
     bad[0] = math.nan
     with pytest.raises(woven.WovenError, match="heightfield.warp"):

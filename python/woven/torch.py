@@ -1,7 +1,7 @@
 """woven.torch: woven's render as a PyTorch operation, differentiable with woven's exact
 analytic gradient (include/woven/grad.h), not autograd through a re-implementation.
 
-The parameter vector theta is a 1-D tensor of the 31 continuous parameters in the order
+The parameter vector theta is a 1-D tensor of the 37 continuous parameters in the order
 of woven.PARAM_NAMES (the library's wv_param_id), in the parameter file's units:
 
     0 heightfield.warp (beta)     1 heightfield.weft
@@ -11,8 +11,9 @@ of woven.PARAM_NAMES (the library's wv_param_id), in the parameter file's units:
     16 inclination_deg (u_max, degrees)  17 diffuse_blend (w)  18 twist_deg (psi, degrees)
     19-21 transmission.warp[0..2] (k_t)  22-24 transmission.weft[0..2] (light through the cloth)
     25-27 transmission_specular.warp[0..2] (k_st)  28-30 transmission_specular.weft[0..2]
+    31-33 transmission_forward.warp[0..2] (k_f, the forward band)  34-36 transmission_forward.weft[0..2]
 
-Everything else (pattern, densities, noise level, thickness, yarn width, seed) comes
+Everything else (pattern, densities, noise level, thickness, yarn width, forward width, seed) comes
 from the base parameters and has no gradient. woven.Params(...).vector gives a start."""
 import ctypes
 import weakref
@@ -34,7 +35,7 @@ class _Record:
         self._free = weakref.finalize(self, lib.wv_ffi_record_free, handle)
 
     def vjp(self, dcapture):
-        """dL/dtheta (31 doubles) for dL/dcapture, and sum(dcapture * capture)."""
+        """dL/dtheta (37 doubles) for dL/dcapture, and sum(dcapture * capture)."""
         d = np.ascontiguousarray(dcapture, dtype=np.float32)
         if d.shape != self.shape:
             raise ValueError(f"dL/dcapture of shape {d.shape}, the render's is {self.shape}")

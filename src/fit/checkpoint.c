@@ -30,7 +30,7 @@ wv_status wv_fit_checkpoint_write(const char *path, const wv_fit_state *st, cons
                                   const char *descriptor_name, wv_error *err) {
   json_t *root = json_object();
   json_object_set_new(root, "kind", json_string("woven-fit-checkpoint"));
-  json_object_set_new(root, "version", json_integer(3)); /* 3: Adam's moments of every WV_P_COUNT parameter */
+  json_object_set_new(root, "version", json_integer(4)); /* 4: Adam's moments of every WV_P_COUNT parameter */
   json_object_set_new(root, "descriptor", json_string(descriptor_name));
   json_object_set_new(root, "iter", json_integer(st->iter));
   json_object_set_new(root, "aligned", json_boolean(st->aligned));
@@ -164,12 +164,14 @@ static wv_status read_colours_qn(json_t *v, wv_fit_state *st, wv_error *err) {
   int n = 0, count = 0;
   double sf[WV_NN_LBFGS_MEM * WV_NN_LBFGS_DIM], yf[WV_NN_LBFGS_MEM * WV_NN_LBFGS_DIM];
   wv_status rc;
-  /* 0 before the colours' first step, else one coordinate per transmission colour */
-  if ((rc = wv_json_int(v, "colours_qn", "n", 0, WV_P_COUNT - WV_P_REFLECT_COUNT, 1, &n, err)) ||
+  /* 0 before the colours' first step, else one coordinate per transmission colour that moves: all
+   * of them, or all but k_f (no forward band) */
+  const int all = WV_P_COUNT - WV_P_REFLECT_COUNT, no_band = WV_P_KF_WARP_R - WV_P_REFLECT_COUNT;
+  if ((rc = wv_json_int(v, "colours_qn", "n", 0, all, 1, &n, err)) ||
       (rc = wv_json_int(v, "colours_qn", "count", 0, WV_NN_LBFGS_MEM, 1, &count, err)))
     return rc;
-  if (n != 0 && n != WV_P_COUNT - WV_P_REFLECT_COUNT)
-    return wv_fail(err, WV_ERR_INVALID, "'colours_qn.n' must be 0 or %d", WV_P_COUNT - WV_P_REFLECT_COUNT);
+  if (n != 0 && n != no_band && n != all)
+    return wv_fail(err, WV_ERR_INVALID, "'colours_qn.n' must be 0, %d or %d", no_band, all);
   wv_nn_lbfgs_reset(q, n);
   json_t *hp = json_object_get(v, "has_prev");
   if (!json_is_boolean(hp)) return wv_fail(err, WV_ERR_INVALID, "'colours_qn.has_prev' must be true or false");
@@ -197,12 +199,12 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   json_t *kind = json_object_get(root, "kind");
   json_t *ver = json_object_get(root, "version");
   if (!json_is_string(kind) || strcmp(json_string_value(kind), "woven-fit-checkpoint") || !json_is_integer(ver) ||
-      json_integer_value(ver) < 1 || json_integer_value(ver) > 3)
-    return wv_fail(err, WV_ERR_FORMAT, "not a woven fit checkpoint (version 1, 2 or 3)");
-  /* moments of the reflection model's parameters only (version 1), and k_t's (version 2):
-   * the others start at 0 */
+      json_integer_value(ver) < 1 || json_integer_value(ver) > 4)
+    return wv_fail(err, WV_ERR_FORMAT, "not a woven fit checkpoint (version 1 to 4)");
+  /* moments of the reflection model's parameters only (version 1), and k_t's (version 2), and
+   * k_st's (version 3): the others start at 0 */
   json_int_t v = json_integer_value(ver);
-  int nm = v == 1 ? WV_P_REFLECT_COUNT : v == 2 ? WV_P_KST_WARP_R : WV_P_COUNT;
+  int nm = v == 1 ? WV_P_REFLECT_COUNT : v == 2 ? WV_P_KST_WARP_R : v == 3 ? WV_P_KF_WARP_R : WV_P_COUNT;
   wv_fit_opts_default(o);
   o->register_radius = 0; /* absent in checkpoints older than the registration */
   o->w_struct = 0, o->colour_split = 0; /* absent before the structure term: a resume stays without it */
@@ -213,6 +215,7 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   o->schedule = o->patience = 0;         /* absent before the schedule: every iteration alike, all of them */
   o->noise_sweep = 0;                    /* absent before the sweep: the discrete steps alone */
   o->width_sweep = 0;                    /* absent before the width sweep: the width as it started */
+  o->forward_sweep = 0;                  /* absent before the forward band: its width as it started */
   if ((rc = wv_fit_opts_read_json(json_object_get(root, "opts"), o, err))) return rc;
   wv_params start;
   if ((rc = read_params_obj(root, path, "start", &start, err))) return rc;
@@ -271,6 +274,7 @@ static wv_status read_checkpoint(json_t *root, const char *path, wv_fit_state *s
   json_t *vt = json_object_get(root, "view_t"); /* a pair's back-lit view; absent: not measured yet */
   if (vt && (rc = read_view_t(vt, st, err))) return rc;
   json_t *qn = json_object_get(root, "colours_qn"); /* absent before it existed: no curvature seen */
+  /* before version 4 there was no forward band: the memory moves the other colours */
   if (qn && (rc = read_colours_qn(qn, st, err))) return rc;
   json_t *reg = json_object_get(root, "registration"); /* absent in checkpoints before it existed */
   if (reg) {

@@ -241,11 +241,11 @@ static wv_status colours_step(fit_ctx *c, wv_trans_basis **tb, wv_params *p, wv_
                               const wv_fit_record *rec, const double g[WV_P_COUNT], wv_params *next,
                               wv_fit_record *next_rec, double next_g[WV_P_COUNT], int *have_next, wv_error *err);
 
-/* steps of the colours' descent (colours_step) from p with a fresh memory qn; p moves, *loss
- * is where it ends. */
-static wv_status colours_descend(fit_ctx *c, wv_trans_basis **tb, wv_params *p, int steps, wv_nn_lbfgs *qn,
+/* steps of the colours' descent (colours_step) from p with a fresh memory qn over the first n
+ * colours; p moves, *loss is where it ends. */
+static wv_status colours_descend(fit_ctx *c, wv_trans_basis **tb, wv_params *p, int n, int steps, wv_nn_lbfgs *qn,
                                  double *loss, wv_error *err) {
-  wv_nn_lbfgs_reset(qn, WV_P_COUNT - WV_P_REFLECT_COUNT);
+  wv_nn_lbfgs_reset(qn, n);
   wv_fit_record rec = {0};
   double g[WV_P_COUNT] = {0};
   wv_status rc = evaluate_t(c, tb, p, &rec, g, err);
@@ -262,6 +262,57 @@ static wv_status colours_descend(fit_ctx *c, wv_trans_basis **tb, wv_params *p, 
   return rc;
 }
 
+/* Whether p has a forward band (any k_f above 0). */
+static int has_band(const wv_params *p) {
+  for (int i = WV_P_KF_WARP_R; i < WV_P_COUNT; i++)
+    if (wv_param_get(p, i) != 0) return 1;
+  return 0;
+}
+
+/* Whether the back-lit photo shows a forward band, and its width. At each width of
+ * WV_FIT_FORWARD_WIDTHS the transmission basis is made again and k_f alone matched to the
+ * photo's brightness (wv_trans_basis_match, WV_TRANS_MATCH_FORWARD) with the other colours as
+ * they are; the width of the lowest back-lit loss is kept with its basis and k_f if that loss
+ * is below the colours' own. Run before the colours' start (colours_start), whose candidates
+ * then hold k_f and whose iterations move it too; where it finds no band there, once more
+ * after the start, against the colours the start chose (the iterations' memory grown to k_f).
+ * Without a band k_f stays 0 and the iterations move the other colours alone, as before the
+ * band. Before the candidates: with the band only after them, a synthetic basket whose
+ * back-lit photo shows a band came back with its warp and weft colours exchanged (its back-lit
+ * re-render at 0.57 of its ceiling against 0.99); only before them, a synthetic twill's band was
+ * not found against the start's colours (0.88 against 0.98; docs/measurements.md, "The forward
+ * band"). The width has no gradient in the colours' iterations, which keep the geometry. */
+static wv_status forward_sweep(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st, wv_error *err) {
+  static const double widths[] = WV_FIT_FORWARD_WIDTHS;
+  enum { NW = sizeof widths / sizeof widths[0] };
+  wv_fit_record rec = {0};
+  wv_status rc = evaluate_t(c, tb, &st->params, &rec, NULL, err);
+  double best = rec.loss;
+  wv_params best_p = st->params;
+  wv_trans_basis *keep = NULL;
+  for (int k = 0; k < NW && !rc; k++) {
+    wv_params m = st->params;
+    m.forward_width = widths[k];
+    wv_trans_basis *b = NULL;
+    if (!(rc = evaluate_t(c, &b, &m, &rec, NULL, err)) &&
+        !(rc = wv_trans_basis_match(b, &c->photo, c->o->down_w, c->o->down_h, WV_TRANS_MATCH_FORWARD, &m, NULL, err)) &&
+        !(rc = evaluate_t(c, &b, &m, &rec, NULL, err)) && rec.loss < best) {
+      best = rec.loss, best_p = m;
+      wv_trans_basis_free(keep);
+      keep = b, b = NULL;
+    }
+    wv_trans_basis_free(b);
+  }
+  if (rc || !keep) {
+    wv_trans_basis_free(keep);
+    return rc;
+  }
+  wv_trans_basis_free(*tb);
+  *tb = keep;
+  st->params = best_p;
+  return WV_OK;
+}
+
 /* The transmission colours' start, before their first iteration. The candidates: the colours
  * as they are, and those matched to the back-lit photo's brightness (wv_trans_basis_match):
  * free; with the split of the light between the yarn types kept, the start's, its mirror's,
@@ -271,8 +322,9 @@ static wv_status colours_descend(fit_ctx *c, wv_trans_basis **tb, wv_params *p, 
  * the start took about 50 iterations to reach that brightness; the match alone, free, can split
  * the light wrongly, and the split kept can leave it too bright; a start's loss alone can
  * choose a basin whose end is higher (docs/measurements.md, "The back-lit photo's colours
- * alone", "The yarn underneath"). */
-static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st, wv_error *err) {
+ * alone", "The yarn underneath"). The first n_free colours move: k_f too when all of them, as
+ * when the start has a forward band. */
+static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st, int n_free, wv_error *err) {
   enum { CANDS = 5 };
   wv_params cand[CANDS];
   double loss[CANDS];
@@ -285,15 +337,16 @@ static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st
     wv_params m = st->params;
     if (k == 3) /* the mirror: the start's way round is that of the reflection colours before the colour split */
       for (int ch = 0; ch < 3; ch++) {
-        double t = m.transmission[0][ch], u = m.transmission_specular[0][ch];
+        double t = m.transmission[0][ch], u = m.transmission_specular[0][ch], f = m.transmission_forward[0][ch];
         m.transmission[0][ch] = m.transmission[1][ch], m.transmission[1][ch] = t;
         m.transmission_specular[0][ch] = m.transmission_specular[1][ch], m.transmission_specular[1][ch] = u;
+        m.transmission_forward[0][ch] = m.transmission_forward[1][ch], m.transmission_forward[1][ch] = f;
       }
     if (k == 4)
       for (int y = 0; y < 2; y++)
         for (int ch = 0; ch < 3; ch++)
           m.transmission[y][ch] = m.diffuse[y][ch], m.transmission_specular[y][ch] = m.specular[y][ch];
-    if ((rc = wv_trans_basis_match(*tb, &c->photo, c->o->down_w, c->o->down_h, mode, &m, err)) ||
+    if ((rc = wv_trans_basis_match(*tb, &c->photo, c->o->down_w, c->o->down_h, mode, &m, NULL, err)) ||
         (rc = evaluate_t(c, tb, &m, &rec, NULL, err)))
       break;
     cand[k] = m, loss[k] = rec.loss;
@@ -305,8 +358,8 @@ static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st
     else if (b < 0 || loss[k] < loss[b]) b = k;
   double ea, eb;
   wv_nn_lbfgs qa, qb;
-  if ((rc = colours_descend(c, tb, &cand[a], WV_FIT_T_PROBE, &qa, &ea, err)) ||
-      (rc = colours_descend(c, tb, &cand[b], WV_FIT_T_PROBE, &qb, &eb, err)))
+  if ((rc = colours_descend(c, tb, &cand[a], n_free, WV_FIT_T_PROBE, &qa, &ea, err)) ||
+      (rc = colours_descend(c, tb, &cand[b], n_free, WV_FIT_T_PROBE, &qb, &eb, err)))
     return rc;
   /* the iterations go on from the chosen end, with its memory */
   st->params = eb < ea ? cand[b] : cand[a];
@@ -329,8 +382,9 @@ static wv_status colours_start(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st
 static wv_status colours_step(fit_ctx *c, wv_trans_basis **tb, wv_params *p, wv_nn_lbfgs *qn,
                               const wv_fit_record *rec, const double g[WV_P_COUNT], wv_params *next,
                               wv_fit_record *next_rec, double next_g[WV_P_COUNT], int *have_next, wv_error *err) {
-  enum { N = WV_P_COUNT - WV_P_REFLECT_COUNT };
-  double x[N], gx[N], dir[N], lo[N], span[N];
+  enum { NMAX = WV_P_COUNT - WV_P_REFLECT_COUNT };
+  const int N = qn->n; /* the colours that move: the first N (docs/fit.md, "Photo pairs") */
+  double x[NMAX], gx[NMAX], dir[NMAX], lo[NMAX], span[NMAX];
   for (int i = 0; i < N; i++) {
     double hi;
     wv_param_range(WV_P_REFLECT_COUNT + i, &lo[i], &hi);
@@ -950,7 +1004,19 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
       /* the transmission colours on the transmission photo: nothing else is stepped, so the
        * reflection photo, which does not see them, is not rendered */
       if (t_phase(st->log, from, st->iter) == st->iter) {
-        if ((rc = colours_start(tc, &tb, st, err))) break;
+        /* k_f moves if the start has a band or a search adds one: before the candidates, which
+         * then hold it, or else after them, against the colours they chose */
+        int band = has_band(&st->params);
+        if (!band && o->forward_sweep) {
+          if ((rc = forward_sweep(tc, &tb, st, err))) break;
+          band = has_band(&st->params);
+        }
+        int n_free = band ? WV_P_COUNT - WV_P_REFLECT_COUNT : WV_P_KF_WARP_R - WV_P_REFLECT_COUNT;
+        if ((rc = colours_start(tc, &tb, st, n_free, err))) break;
+        if (!band && o->forward_sweep) {
+          if ((rc = forward_sweep(tc, &tb, st, err))) break;
+          if (has_band(&st->params)) wv_nn_lbfgs_grow(&st->t_qn, WV_P_COUNT - WV_P_REFLECT_COUNT);
+        }
       }
       int same = t_cached; /* the last step's trial, evaluated, is where the colours are */
       for (int i = WV_P_REFLECT_COUNT; i < WV_P_COUNT && same; i++)

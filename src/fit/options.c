@@ -34,6 +34,7 @@ void wv_fit_opts_default(wv_fit_opts *o) {
   o->patience = WV_FIT_PATIENCE;
   o->noise_sweep = 1;
   o->width_sweep = 1;
+  o->forward_sweep = 1;
 }
 
 /* Every option's range, in one table: wv_fit_opts_validate and the checkpoint
@@ -72,6 +73,7 @@ static const opt_range OPT_RANGES[] = {
     OPT(patience, 'i', 0, WV_FIT_MAX_ITERS, 2),
     OPT(noise_sweep, 'i', 0, 1, 2),
     OPT(width_sweep, 'i', 0, 1, 2),
+    OPT(forward_sweep, 'i', 0, 1, 2),
 };
 #undef OPT
 #define N_OPTS (sizeof OPT_RANGES / sizeof OPT_RANGES[0])
@@ -131,5 +133,6 @@ json_t *wv_fit_opts_json(const wv_fit_opts *o) {
   json_object_set_new(j, "patience", json_integer(o->patience));
   json_object_set_new(j, "noise_sweep", json_integer(o->noise_sweep));
   json_object_set_new(j, "width_sweep", json_integer(o->width_sweep));
+  json_object_set_new(j, "forward_sweep", json_integer(o->forward_sweep));
   return j;
 }

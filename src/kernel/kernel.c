@@ -29,6 +29,22 @@ void wv_shade_params_set_roughness(wv_shade_params_f *P, int t, float a) {
   P->ia[t] = 1.0f / a;
 }
 
+double wv_forward_band_mean(double width) {
+  /* With the light straight behind (omega_i = -z) and a fibre in the plane, s = x / 2 for the
+   * outgoing direction's projection (x, y) on the plane, and a cosine-weighted hemisphere
+   * projects to the uniform unit disk: the mean is (2 / pi) int_-1^1 sqrt(1 - x^2) g(x / 2) dx,
+   * here with x = sin(phi) (midpoint rule; the integrand is smooth in phi). */
+  enum { N = 512 };
+  const double pi = 3.14159265358979323846;
+  double k = 1.0 / (8.0 * width * width), sum = 0;
+  for (int i = 0; i < N; i++) {
+    double ph = -0.5 * pi + (i + 0.5) * pi / N, x = sin(ph), c = cos(ph);
+    double q = 1.0 + x * x * k;
+    sum += c * c / (q * q);
+  }
+  return 2.0 / pi * sum * (pi / N);
+}
+
 wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
   memset(f, 0, sizeof *f);
   wv_status st = wv_params_validate(p, err);
@@ -42,11 +58,14 @@ wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
       P->ks[t][c] = (float)p->specular[t][c];
       P->kt[t][c] = (float)p->transmission[t][c];
       P->kst[t][c] = (float)p->transmission_specular[t][c];
+      P->kf[t][c] = (float)p->transmission_forward[t][c];
     }
     wv_shade_params_set_roughness(P, t, (float)p->roughness[t]);
   }
   P->blend = (float)p->diffuse_blend;
   P->thickness = (float)p->thickness;
+  P->fw_k = (float)(0.5 / (p->forward_width * p->forward_width));
+  P->fw_norm = (float)(1.0 / wv_forward_band_mean(p->forward_width));
   f->glints = p->specular_noise;
   f->inv_glint_cell[0] = 1.0f / (f->ym.spacing[WV_WARP] / 8.0f);
   f->inv_glint_cell[1] = 1.0f / (f->ym.spacing[WV_WEFT] / 8.0f);
@@ -73,8 +92,10 @@ void wv_shade_params_double(const wv_params *p, wv_shade_params_d *P) {
     P->ia[t] = 1.0 / a;
     for (int c = 0; c < 3; c++)
       P->kd[t][c] = p->diffuse[t][c], P->ks[t][c] = p->specular[t][c], P->kt[t][c] = p->transmission[t][c],
-      P->kst[t][c] = p->transmission_specular[t][c];
+      P->kst[t][c] = p->transmission_specular[t][c], P->kf[t][c] = p->transmission_forward[t][c];
   }
+  P->fw_k = 0.5 / (p->forward_width * p->forward_width);
+  P->fw_norm = 1.0 / wv_forward_band_mean(p->forward_width);
   P->sin_psi = sin(p->twist_deg * DEG), P->cos_psi = cos(p->twist_deg * DEG);
   P->noise = 0.1 * (double)p->noise_level;
   P->blend = p->diffuse_blend, P->thickness = p->thickness;

@@ -51,7 +51,8 @@
  * radiance of channel c = sum over types y of ks[y][c] S + kd[y][c] DF, and
  * the derivatives of S and DF with respect to the non-linear parameters. With
  * the light behind the cloth the same sums hold the transmission: S the
- * specular's, DF the diffuse's, whose albedos are then kst[y][c] and kt[y][c]. */
+ * specular's, DF the diffuse's, whose albedos are then kst[y][c] and kt[y][c],
+ * and F the forward band's (albedo kf[y][c]; 0 with the light in front). */
 enum {
   WV_J_S,        /* specular factor f_s mu_i / k_s (with the glint) */
   WV_J_DF,       /* diffuse factor f_d mu_i / k_d */
@@ -62,6 +63,7 @@ enum {
   WV_J_DF_BETA,  /* d DF / d beta */
   WV_J_DF_UMAX,  /* d DF / d u_max (radians) */
   WV_J_DF_BLEND, /* d DF / d w */
+  WV_J_F,        /* the forward band's factor F_f / k_f (no other parameter moves it) */
   WV_J_COUNT
 };
 
@@ -81,6 +83,8 @@ enum { WV_T_BETA, WV_T_UMAX, WV_T_PSI };
     R alpha[2], k[2], ia2m1[2], pia[2], ia[2]; /* alpha, 1 - alpha^2, 1/alpha^2 - 1, pi alpha, 1/alpha */ \
     R kd[2][3], ks[2][3];      /* albedos */                                                         \
     R kt[2][3], kst[2][3];     /* transmission colours: diffuse, specular */                        \
+    R kf[2][3];                /* the forward band's colour */                                       \
+    R fw_k, fw_norm;           /* 1 / (2 width^2); 1 / the band's mean at normal incidence */       \
     R blend, thickness;        /* diffuse blend w, SpongeCake thickness T */                         \
   }
 typedef WV_SHADE_PARAMS(float) wv_shade_params_f;
@@ -104,6 +108,9 @@ void wv_shade_params_from_yarn(const wv_yarn_model *m, wv_shade_params_f *P);
 /* Roughness alpha of yarn type t and the terms derived from it (a renderer that
  * edits alpha per point sets it through this). */
 void wv_shade_params_set_roughness(wv_shade_params_f *P, int t, float a);
+/* The forward band's mean g = 1 / (1 + s^2 / (2 width^2))^2 over a cosine-weighted hemisphere of
+ * outgoing directions with the light straight behind (what normalises the band). */
+double wv_forward_band_mean(double width);
 /* All of P in double, straight from the parameters (for gradient checks). */
 void wv_shade_params_double(const wv_params *p, wv_shade_params_d *P);
 

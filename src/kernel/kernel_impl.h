@@ -435,6 +435,7 @@ WV_INLINE void WV_FN(wv_shade_refl)(const wv_fabric *fab, const K_PARAMS *P, con
   J[WV_J_S_BETA] = ds[WV_T_BETA], J[WV_J_S_ALPHA] = S.alpha, J[WV_J_S_UMAX] = ds[WV_T_UMAX];
   J[WV_J_S_PSI] = ds[WV_T_PSI], J[WV_J_DF_BETA] = dd[WV_T_BETA], J[WV_J_DF_UMAX] = dd[WV_T_UMAX];
   J[WV_J_DF_BLEND] = diff_w;
+  J[WV_J_F] = WV_B(0); /* the forward band transmits only */
   for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(c->lit, d->light * J[j], G->J[j]);
 }
 
@@ -524,10 +525,18 @@ WV_INLINE void WV_FN(wv_shade_trans)(const wv_fabric *fab, const K_PARAMS *P, co
   }
   WV_L diff_ni = WV_B(0), diff_w = WV_B(0);
   WV_L diff = WV_FN(wv_diffuse)(ni, ami, P->blend, G ? &diff_ni : NULL, G ? &diff_w : NULL) * A;
+  /* the forward band: light scattered on near the cone of directions that leave the yarn the
+   * light passes at the angle to its axis they came in at, s = a.(omega_i + omega_o) / 2 = 0 with
+   * a the yarn's axis in the plane (fabric y for warp, x for weft); after many scatterings
+   * the light follows the yarn, not the tilt of the fibres at its surface (docs/model.md) */
+  WV_L sf = 0.5f * wv_sel(tw, d->wi[1] + d->wo[1], d->wi[0] + d->wo[0]);
+  WV_L fq = WV_B(1) + (sf * sf) * P->fw_k;
+  WV_L fwd = (ami * A * P->fw_norm * WV_B(0.3183098861837907)) / (fq * fq);
   for (int ch = 0; ch < 3; ch++) {
     WV_L kst = WV_FN(wv_pick)(warp, P->kst[WV_WARP][ch], P->kst[WV_WEFT][ch]);
     WV_L kt = WV_FN(wv_pick)(tw, P->kt[WV_WARP][ch], P->kt[WV_WEFT][ch]);
-    rad[ch] = wv_sel(opn, WV_B(0), d->light * (kst * spec + kt * diff));
+    WV_L kf = WV_FN(wv_pick)(tw, P->kf[WV_WARP][ch], P->kf[WV_WEFT][ch]);
+    rad[ch] = wv_sel(opn, WV_B(0), d->light * (kst * spec + kt * diff + kf * fwd));
   }
   if (!G) return;
   WV_L dd[2]; /* d(diff = diffuse(ni) A) */
@@ -537,6 +546,7 @@ WV_INLINE void WV_FN(wv_shade_trans)(const wv_fabric *fab, const K_PARAMS *P, co
   J[WV_J_S_BETA] = ds[WV_T_BETA], J[WV_J_S_ALPHA] = s_al, J[WV_J_S_UMAX] = ds[WV_T_UMAX];
   J[WV_J_S_PSI] = ds[WV_T_PSI], J[WV_J_DF_BETA] = dd[WV_T_BETA], J[WV_J_DF_UMAX] = dd[WV_T_UMAX];
   J[WV_J_DF_BLEND] = diff_w * A;
+  J[WV_J_F] = fwd;
   for (int j = 0; j < WV_J_COUNT; j++) G->J[j] = wv_sel(opn, WV_B(0), d->light * J[j]);
 }
 

@@ -22,7 +22,10 @@ void wv_maps_free(wv_maps *m) {
 
 void wv_maps_transmission_at(const wv_params *p, const wv_yarn_point *yp, float out[3]) {
   float tr = WV_CLOTH_TRANSMITTANCE((float)p->thickness * yp->thickness);
-  for (int c = 0; c < 3; c++) out[c] = yp->through < 0 ? 0.0f : (float)p->transmission[yp->through][c] * tr;
+  for (int c = 0; c < 3; c++) { /* the forward band carries k_f at normal incidence (docs/model.md) */
+    float k = yp->through < 0 ? 0.0f : (float)(p->transmission[yp->through][c] + p->transmission_forward[yp->through][c]);
+    out[c] = k * tr < 1.0f ? k * tr : 1.0f;
+  }
 }
 
 wv_status wv_maps_generate(const wv_params *p, int size, wv_maps *m, wv_error *err) {

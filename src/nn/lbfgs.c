@@ -12,6 +12,14 @@ void wv_nn_lbfgs_reset(wv_nn_lbfgs *q, int n) {
   q->n = n < 0 ? 0 : n > WV_NN_LBFGS_DIM ? WV_NN_LBFGS_DIM : n;
 }
 
+void wv_nn_lbfgs_grow(wv_nn_lbfgs *q, int n) {
+  n = n > WV_NN_LBFGS_DIM ? WV_NN_LBFGS_DIM : n;
+  for (int k = 0; k < WV_NN_LBFGS_MEM; k++)
+    for (int i = q->n; i < n; i++) q->s[k][i] = q->y[k][i] = 0;
+  if (n > q->n) q->n = n;
+  q->has_prev = 0, q->stuck = 0;
+}
+
 /* Free at x: inside the box, or on a bound with the descent pointing inside. */
 static int is_free(double x, double g, double lo, double hi) {
   return !((x <= lo && g > 0) || (x >= hi && g < 0));

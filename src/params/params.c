@@ -25,6 +25,8 @@ static const range R_KD = {"diffuse", 0, 1};
 static const range R_KS = {"specular", 0, 1};
 static const range R_KT = {"transmission", 0, 1};
 static const range R_KST = {"transmission_specular", 0, 1};
+static const range R_KF = {"transmission_forward", 0, 1};
+static const range R_FWIDTH = {"forward_width", 0.05, 1};
 static const range R_ALPHA = {"roughness", 0.01, 1};
 static const range R_TWIST = {"twist_deg", -60, 60};
 static const range R_UMAX = {"inclination_deg", 5, 70};
@@ -81,7 +83,9 @@ wv_status wv_params_default(const char *pattern, wv_params *p, wv_error *err) {
 void wv_params_transmission_default(wv_params *p) {
   for (int y = 0; y < 2; y++)
     for (int c = 0; c < 3; c++)
-      p->transmission[y][c] = 0.5 * p->diffuse[y][c], p->transmission_specular[y][c] = p->specular[y][c];
+      p->transmission[y][c] = 0.5 * p->diffuse[y][c], p->transmission_specular[y][c] = p->specular[y][c],
+      p->transmission_forward[y][c] = 0;
+  p->forward_width = 0.2;
 }
 
 static wv_status check(const range *r, const char *sub, double v, wv_error *err) {
@@ -117,6 +121,7 @@ wv_status wv_params_validate(const wv_params *p, wv_error *err) {
       if ((st = check(&R_KS, yn[y], p->specular[y][c], err))) return st;
       if ((st = check(&R_KT, yn[y], p->transmission[y][c], err))) return st;
       if ((st = check(&R_KST, yn[y], p->transmission_specular[y][c], err))) return st;
+      if ((st = check(&R_KF, yn[y], p->transmission_forward[y][c], err))) return st;
     }
   }
   if ((st = check(&R_TWIST, NULL, p->twist_deg, err))) return st;
@@ -124,6 +129,7 @@ wv_status wv_params_validate(const wv_params *p, wv_error *err) {
   if ((st = check(&R_BLEND, NULL, p->diffuse_blend, err))) return st;
   if ((st = check(&R_THICK, NULL, p->thickness, err))) return st;
   if ((st = check(&R_WIDTH, NULL, p->yarn_width, err))) return st;
+  if ((st = check(&R_FWIDTH, NULL, p->forward_width, err))) return st;
   if (p->noise_level < 0 || p->noise_level > 10)
     return wv_fail(err, WV_ERR_INVALID, "'noise_level' = %d is outside 0..10", p->noise_level);
   return WV_OK;
@@ -148,7 +154,8 @@ static wv_status get_pair(json_t *root, const char *key, int n, double *warp, do
 
 static const char *const KNOWN_KEYS[] = {
     "version",   "pattern",      "weave",         "density",         "heightfield",     "diffuse",
-    "specular",  "transmission", "transmission_specular", "roughness", "twist_deg",     "inclination_deg",
+    "specular",  "transmission", "transmission_specular", "transmission_forward", "forward_width", "roughness",
+    "twist_deg", "inclination_deg",
     "diffuse_blend", "noise_level", "thickness",  "yarn_width",      "seed",            "specular_noise",
     "comment",   NULL};
 
@@ -192,6 +199,9 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
       (st = get_pair(root, "transmission", 3, p->transmission[0], p->transmission[1], err)) ||
       (st = get_pair(root, "transmission_specular", 3, p->transmission_specular[0], p->transmission_specular[1],
                      err)) ||
+      (st = get_pair(root, "transmission_forward", 3, p->transmission_forward[0], p->transmission_forward[1],
+                     err)) ||
+      (st = wv_json_number(root, NULL, "forward_width", WV_JSON_FINITE, 0, &p->forward_width, err)) ||
       (st = wv_json_number(root, NULL, "twist_deg", WV_JSON_FINITE, 0, &p->twist_deg, err)) ||
       (st = wv_json_number(root, NULL, "inclination_deg", WV_JSON_FINITE, 0, &p->inclination_deg, err)) ||
       (st = wv_json_number(root, NULL, "diffuse_blend", WV_JSON_FINITE, 0, &p->diffuse_blend, err)) ||
@@ -202,15 +212,19 @@ static wv_status parse_root(json_t *root, wv_params *p, wv_error *err) {
       (st = wv_json_bool(root, NULL, "specular_noise", 0, &p->specular_noise, err)))
     return st;
   p->seed = (int64_t)seed;
-  /* a file without a key (every version 1 file; versions 1 and 2 for k_st): its default, from
-   * the albedos read above; a colour the file gives is kept */
+  /* a file without a key (every version 1 file; versions 1 and 2 for k_st; 1 to 3 for k_f and
+   * its width): its default, from the albedos read above; a value the file gives is kept */
   int has_kt = json_object_get(root, "transmission") != NULL;
   int has_kst = json_object_get(root, "transmission_specular") != NULL;
-  if (!has_kt || !has_kst) {
+  int has_kf = json_object_get(root, "transmission_forward") != NULL;
+  int has_fw = json_object_get(root, "forward_width") != NULL;
+  if (!has_kt || !has_kst || !has_kf || !has_fw) {
     wv_params given = *p;
     wv_params_transmission_default(p);
     if (has_kt) memcpy(p->transmission, given.transmission, sizeof p->transmission);
     if (has_kst) memcpy(p->transmission_specular, given.transmission_specular, sizeof p->transmission_specular);
+    if (has_kf) memcpy(p->transmission_forward, given.transmission_forward, sizeof p->transmission_forward);
+    if (has_fw) p->forward_width = given.forward_width;
   }
   return wv_params_validate(p, err);
 }
@@ -258,6 +272,9 @@ char *wv_params_to_json(const wv_params *p) {
                       json_pack("{s:o,s:o}", "warp", rgb(p->transmission[0]), "weft", rgb(p->transmission[1])));
   json_object_set_new(o, "transmission_specular", json_pack("{s:o,s:o}", "warp", rgb(p->transmission_specular[0]),
                                                             "weft", rgb(p->transmission_specular[1])));
+  json_object_set_new(o, "transmission_forward", json_pack("{s:o,s:o}", "warp", rgb(p->transmission_forward[0]),
+                                                           "weft", rgb(p->transmission_forward[1])));
+  json_object_set_new(o, "forward_width", json_real(p->forward_width));
   json_object_set_new(o, "roughness", json_pack("{s:f,s:f}", "warp", p->roughness[0], "weft", p->roughness[1]));
   json_object_set_new(o, "twist_deg", json_real(p->twist_deg));
   json_object_set_new(o, "inclination_deg", json_real(p->inclination_deg));
@@ -299,7 +316,9 @@ static double *param_slot(wv_params *p, int id) {
   if (id == WV_P_BLEND) return &p->diffuse_blend;
   if (id == WV_P_TWIST_DEG) return &p->twist_deg;
   if (id <= WV_P_KT_WEFT_B) return &p->transmission[(id - WV_P_KT_WARP_R) / 3][(id - WV_P_KT_WARP_R) % 3];
-  return &p->transmission_specular[(id - WV_P_KST_WARP_R) / 3][(id - WV_P_KST_WARP_R) % 3];
+  if (id <= WV_P_KST_WEFT_B)
+    return &p->transmission_specular[(id - WV_P_KST_WARP_R) / 3][(id - WV_P_KST_WARP_R) % 3];
+  return &p->transmission_forward[(id - WV_P_KF_WARP_R) / 3][(id - WV_P_KF_WARP_R) % 3];
 }
 
 double wv_param_get(const wv_params *p, int id) { return *param_slot((wv_params *)p, id); }
@@ -307,6 +326,10 @@ void wv_param_set(wv_params *p, int id, double v) { *param_slot(p, id) = v; }
 
 void wv_param_range_width(double *lo, double *hi) {
   *lo = R_WIDTH.lo, *hi = R_WIDTH.hi;
+}
+
+void wv_param_range_forward_width(double *lo, double *hi) {
+  *lo = R_FWIDTH.lo, *hi = R_FWIDTH.hi;
 }
 
 void wv_param_range(int id, double *lo, double *hi) {
@@ -318,7 +341,8 @@ void wv_param_range(int id, double *lo, double *hi) {
                    : id == WV_P_BLEND ? &R_BLEND
                    : id == WV_P_TWIST_DEG ? &R_TWIST
                    : id <= WV_P_KT_WEFT_B ? &R_KT
-                                          : &R_KST;
+                   : id <= WV_P_KST_WEFT_B ? &R_KST
+                                           : &R_KF;
   *lo = r->lo, *hi = r->hi;
 }
 
@@ -331,7 +355,9 @@ const char *wv_param_name(int id) {
       "transmission.warp[1]", "transmission.warp[2]", "transmission.weft[0]", "transmission.weft[1]",
       "transmission.weft[2]", "transmission_specular.warp[0]", "transmission_specular.warp[1]",
       "transmission_specular.warp[2]", "transmission_specular.weft[0]", "transmission_specular.weft[1]",
-      "transmission_specular.weft[2]"};
+      "transmission_specular.weft[2]", "transmission_forward.warp[0]", "transmission_forward.warp[1]",
+      "transmission_forward.warp[2]", "transmission_forward.weft[0]", "transmission_forward.weft[1]",
+      "transmission_forward.weft[2]"};
   return id >= 0 && id < WV_P_COUNT ? names[id] : "?";
 }
 
@@ -397,5 +423,13 @@ wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *
     double f = uni(&rs, 0.1, 1.0);
     for (int c = 0; c < 3; c++) p->transmission_specular[y][c] = f * p->specular[y][c];
   }
+  /* The forward band: k_f the transmission colour times a factor uniform in 0..1 per yarn type,
+   * its width log-uniform in 0.1..0.8, from a fourth stream. */
+  uint64_t rf = wv_mix64(seed ^ 0x666f7277ULL);
+  for (int y = 0; y < 2; y++) {
+    double f = uni(&rf, 0.0, 1.0);
+    for (int c = 0; c < 3; c++) p->transmission_forward[y][c] = f * p->transmission[y][c];
+  }
+  p->forward_width = 0.1 * pow(8.0, uni(&rf, 0, 1));
   return wv_params_validate(p, err);
 }

@@ -49,6 +49,7 @@ static const int KD_ID[2] = {WV_P_KD_WARP_R, WV_P_KD_WEFT_R};
 static const int KS_ID[2] = {WV_P_KS_WARP_R, WV_P_KS_WEFT_R};
 static const int KT_ID[2] = {WV_P_KT_WARP_R, WV_P_KT_WEFT_R};
 static const int KST_ID[2] = {WV_P_KST_WARP_R, WV_P_KST_WEFT_R};
+static const int KF_ID[2] = {WV_P_KF_WARP_R, WV_P_KF_WEFT_R};
 static const int BETA_ID[2] = {WV_P_BETA_WARP, WV_P_BETA_WEFT};
 static const int ALPHA_ID[2] = {WV_P_ALPHA_WARP, WV_P_ALPHA_WEFT};
 
@@ -59,6 +60,7 @@ enum { NG = WV_P_COUNT + 1 }; /* the gradient, then the dot */
 typedef struct {
   double df[2][3], ks[2][3]; /* per type: the diffuse (k_d, or k_t with the light behind) and specular (k_s, or
                               * k_st) albedos */
+  double kf[2][3];           /* the forward band's colour (the light behind only) */
   double beta[2], alpha[2], umax, twist, blend, dot;
 } row_sums;
 
@@ -67,6 +69,8 @@ static void sums_out(const wv_grad_model *gm, const row_sums *g, double out[NG])
   memset(out, 0, NG * sizeof *out);
   for (int y = 0; y < 2; y++) {
     for (int c = 0; c < 3; c++) out[DF_ID[y] + c] = g->df[y][c], out[S_ID[y] + c] = g->ks[y][c];
+    if (gm->transmit)
+      for (int c = 0; c < 3; c++) out[KF_ID[y] + c] = g->kf[y][c];
     out[BETA_ID[y]] = g->beta[y], out[ALPHA_ID[y]] = g->alpha[y];
   }
   out[WV_P_UMAX_DEG] = g->umax, out[WV_P_TWIST_DEG] = g->twist, out[WV_P_BLEND] = g->blend;
@@ -82,6 +86,7 @@ WV_INLINE void accumulate(const wv_grad_model *gm, const double *J, const double
     for (int c = 0; c < 3; c++) {
       g->df[y][c] += gr[c] * J[WV_J_DF];
       g->ks[y][c] += gr[c] * J[WV_J_S];
+      g->kf[y][c] += gr[c] * J[WV_J_F];
       ws += gr[c] * ksf[y][c];
       wd += gr[c] * kdf[y][c];
     }

@@ -1,7 +1,7 @@
 /* The back-lit capture as a linear function of the transmission colours: the radiance of a
- * back-lit scene is k_st S_t + k_t F_t on each yarn plus the light through the gaps
+ * back-lit scene is k_st S_t + k_t F_t + k_f F_f on each yarn plus the light through the gaps
  * (kernel/kernel_impl.h, wv_shade_trans), so with the geometry fixed it is an affine map of
- * the twelve colours, and so is its camera blur. The blurred basis is kept; each capture is
+ * the eighteen colours, and so is its camera blur. The blurred basis is kept; each capture is
  * then the response of a weighted sum (wv_scene_capture: the blur, then the response). */
 #include <math.h>
 #include <stdlib.h>
@@ -10,7 +10,7 @@
 #include "render/render_internal.h"
 #include "woven/grad.h"
 
-#define TB_TYPES 4 /* k_t warp, k_t weft, k_st warp, k_st weft: WV_P_KT_WARP_R + 3 type + channel */
+#define TB_TYPES 6 /* k_t, k_st, k_f, each warp then weft: WV_P_KT_WARP_R + 3 type + channel */
 #define WV_TRANS_MATCH_RIDGE 1e-3 /* the match's pull toward the start, relative to the cells' evidence */
 
 struct wv_trans_basis {
@@ -22,7 +22,7 @@ struct wv_trans_basis {
 };
 
 static double *colour_of(wv_params *p, int type) {
-  return type < 2 ? p->transmission[type] : p->transmission_specular[type - 2];
+  return type < 2 ? p->transmission[type] : type < 4 ? p->transmission_specular[type - 2] : p->transmission_forward[type - 4];
 }
 
 void wv_trans_basis_free(wv_trans_basis *b) {
@@ -139,7 +139,7 @@ wv_status wv_trans_basis_grad(const wv_trans_basis *b, const wv_image *dcapture,
 }
 
 wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, int cells_w, int cells_h,
-                               wv_trans_match mode, wv_params *p, wv_error *err) {
+                               wv_trans_match mode, wv_params *p, double *residual, wv_error *err) {
   if (photo->w != b->w || photo->h != b->h || photo->c != 3)
     return wv_fail(err, WV_ERR_INVALID, "the photo is %d x %d but the transmission basis %d x %d", photo->w, photo->h,
                    b->w, b->h);
@@ -166,14 +166,18 @@ wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, i
       }
     }
   wv_params q = *p;
+  double res = 0, tot = 0;
   for (int c = 0; c < 3; c++) {
-    /* the unknowns x_u, each weighing the four colours (W): the colours are sum_u W[u][t] x_u */
-    int nu = mode == WV_TRANS_MATCH_SPLIT ? 2 : TB_TYPES;
+    /* the unknowns x_u, each weighing the colours it moves (W): those are sum_u W[u][t] x_u; the
+     * types t0 .. t1 - 1 move (k_t and k_st, or k_f alone), the others are held */
+    int t0 = mode == WV_TRANS_MATCH_FORWARD ? TB_TYPES - 2 : 0, t1 = mode == WV_TRANS_MATCH_FORWARD ? TB_TYPES : 4;
+    int nu = mode == WV_TRANS_MATCH_SPLIT ? 2 : t1 - t0;
     double W[TB_TYPES][TB_TYPES] = {{0}}, x[TB_TYPES], lo[TB_TYPES], hi[TB_TYPES];
-    for (int t = 0; t < TB_TYPES; t++) {
+    for (int t = t0; t < t1; t++) {
       double k0 = colour_of(&q, t)[c];
+      int u = t - t0;
       if (mode == WV_TRANS_MATCH_SPLIT) W[t / 2][t] = k0, x[t / 2] = 1, lo[t / 2] = 0, hi[t / 2] = INFINITY;
-      else W[t][t] = 1, x[t] = k0, wv_param_range(WV_P_KT_WARP_R + 3 * t + c, &lo[t], &hi[t]);
+      else W[u][t] = 1, x[u] = k0, wv_param_range(WV_P_KT_WARP_R + 3 * t + c, &lo[u], &hi[u]);
     }
     /* the normal equations of sum over cells (base + sum_u x_u f_u - photo)^2, each cell its mean,
      * f_u = sum_t W[u][t] basis_t */
@@ -182,8 +186,10 @@ wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, i
       const double *a = acc + ((size_t)cell * 3 + c) * (3 + TB_TYPES);
       if (a[0] < 1) continue;
       double e = (a[1] - a[2]) / a[0], f[TB_TYPES] = {0};
+      for (int t = 0; t < TB_TYPES; t++) /* the held colours */
+        if (t < t0 || t >= t1) e -= colour_of(&q, t)[c] * a[3 + t] / a[0];
       for (int u = 0; u < nu; u++)
-        for (int t = 0; t < TB_TYPES; t++) f[u] += W[u][t] * a[3 + t] / a[0];
+        for (int t = t0; t < t1; t++) f[u] += W[u][t] * a[3 + t] / a[0];
       for (int u = 0; u < nu; u++) {
         r[u] += f[u] * e;
         for (int v = 0; v < nu; v++) A[u][v] += f[u] * f[v];
@@ -202,13 +208,21 @@ wv_status wv_trans_basis_match(const wv_trans_basis *b, const wv_image *photo, i
         double y = g / A[u][u];
         x[u] = y < lo[u] ? lo[u] : y > hi[u] ? hi[u] : y;
       }
-    for (int t = 0; t < TB_TYPES; t++) {
+    for (int t = t0; t < t1; t++) {
       double k = 0, klo, khi;
       for (int u = 0; u < nu; u++) k += W[u][t] * x[u];
       wv_param_range(WV_P_KT_WARP_R + 3 * t + c, &klo, &khi);
       colour_of(p, t)[c] = k < klo ? klo : k > khi ? khi : k;
     }
+    for (int cell = 0; cell < nc; cell++) { /* the matched colours' residual over the cells */
+      const double *a = acc + ((size_t)cell * 3 + c) * (3 + TB_TYPES);
+      if (a[0] < 1) continue;
+      double v = a[2];
+      for (int t = 0; t < TB_TYPES; t++) v += colour_of(p, t)[c] * a[3 + t];
+      res += (v - a[1]) * (v - a[1]) / (a[0] * a[0]), tot += a[1] * a[1] / (a[0] * a[0]);
+    }
   }
+  if (residual) *residual = tot > 0 ? res / tot : 0;
   free(acc);
   return WV_OK;
 }

@@ -18,9 +18,10 @@
 //      flat45-back; 16 frames of spp samples) against `woven render --scene
 //      flat45-back`: SSIM of 4-px blurs >= 0.999 and their MAE <= 0.002, on
 //      each pattern and on twill with open gaps (yarn width 0.75) and specular transmission colours of its own, where the
-//      centre's mean (the gap glow, clipped) must also be within 5 % of woven's; woven's renders without the diffuse
-//      transmission, without the specular transmission and without the gap glow
-//      must each miss those bounds (so a viewer without them would fail); the
+//      centre's mean (the gap glow, clipped) must also be within 5 % of woven's, and on twill with a forward
+//      band (transmission_forward of its own per yarn type, forward_width 0.15); woven's renders without the diffuse
+//      transmission, without the specular transmission, without the forward band (where there is one) and without
+//      the gap glow must each miss those bounds (so a viewer without them would fail); the
 //      glTF export carries KHR_materials_diffuse_transmission (and, with open
 //      gaps, KHR_materials_transmission), validates, and three.js's render of it
 //      in flat45-back (the light seen through the gaps as a lamp behind the
@@ -208,6 +209,7 @@ async function backLit(name, paramsFile) {
   // woven's render without each part: the bounds must reject it
   const parts = { diffuse_transmission: { transmission: { warp: [0, 0, 0], weft: [0, 0, 0] } },
                   specular_transmission: { transmission_specular: { warp: [0, 0, 0], weft: [0, 0, 0] } } };
+  if (params.transmission_forward) parts.forward_band = { transmission_forward: { warp: [0, 0, 0], weft: [0, 0, 0] } };
   const without = {};
   for (const [part, edit] of Object.entries(parts)) {
     const pf = `${base}_no_${part}.json`, pc = `${base}_no_${part}.png`;
@@ -345,6 +347,11 @@ for (const pat of patterns) {
     writeFileSync(pf, JSON.stringify({ ...JSON.parse(readFileSync(params, 'utf8')), yarn_width: 0.75,
                                        transmission_specular: { warp: [0.2, 0.9, 0.3], weft: [0.8, 0.3, 0.6] } }));
     backRows.push(await backLit(`${pat}_open`, pf));
+    // a forward band of its own colour per yarn type, narrower than the default
+    const ff = join(work, `${pat}_forward.json`);
+    writeFileSync(ff, JSON.stringify({ ...JSON.parse(readFileSync(params, 'utf8')), forward_width: 0.15,
+                                       transmission_forward: { warp: [0.6, 0.5, 0.3], weft: [0.2, 0.4, 0.5] } }));
+    backRows.push(await backLit(`${pat}_forward`, ff));
   }
 }
 
@@ -370,7 +377,9 @@ for (const r of backRows) {
   const d = r.without.diffuse_transmission, sp = r.without.specular_transmission;
   console.log(`${r.name.padEnd(11)} ${f(r.ssim_blur4)} ${f(r.mae_blur4)} ${f(r.ssim)}   ${f(r.centre_viewer)} ${f(r.centre_woven)}   ` +
               `${f(d.ssim_blur4)} ${f(d.mae_blur4)}   ${f(sp.ssim_blur4)} ${f(sp.mae_blur4)}` +
-              (r.without.gap_glow ? `   (without the glow: centre ${r.without.gap_glow.centre_mean.toFixed(4)})` : ''));
+              (r.without.gap_glow ? `   (without the glow: centre ${r.without.gap_glow.centre_mean.toFixed(4)})` : '') +
+              (r.without.forward_band ? `   (without the forward band: SSIM ${r.without.forward_band.ssim_blur4.toFixed(4)} ` +
+                                        `MAE ${r.without.forward_band.mae_blur4.toFixed(4)})` : ''));
   if (r.gltf)
     console.log(`  ${r.name} glTF in three.js, flat45-back: centre ${r.gltf.centre.toFixed(4)} (without KHR_materials_transmission ` +
                 `${r.gltf.centre_stripped.toFixed(4)}), vs woven render SSIM ${r.gltf.ssim_blur4.toFixed(4)} MAE ${r.gltf.mae_blur4.toFixed(4)} (4-px blurs)`);

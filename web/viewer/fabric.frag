@@ -6,7 +6,9 @@
 //   glint         src/render/render_internal.h  wv_glint (U_s from the hashed 1/8-spacing grid)
 //   shadeLight    src/render/render_internal.h  wv_shade (SGGX/SpongeCake specular, blended Lambert)
 //   clothAt, shadeTrans  src/kernel/kernel_impl.h  wv_yarn_locate's crossing yarn, wv_cloth_chords,
-//                 wv_shade_trans (light from behind: specular and diffuse transmission, open gaps)
+//                 wv_shade_trans (light from behind: specular and diffuse transmission, the forward
+//                 band, open gaps; the band's norm uFwNorm is computed in C, src/kernel/kernel.c
+//                 wv_forward_band_mean, and reaches the page from src/view/view.c)
 //   hash2, mix64  src/util/hash.h (64-bit integers emulated as uvec2(high, low))
 //   sinHp, cosHp, expWv  src/util/fastmath.h
 // The light through the cloth is compiled only with WV_TRANSMIT defined (the
@@ -68,6 +70,8 @@ uniform float uShadowTexel;     // a texel's width per unit distance from the li
 #ifdef WV_TRANSMIT
 uniform vec3 uKt[2];            // transmission colours: diffuse k_t
 uniform vec3 uKst[2];           // and specular k_st
+uniform vec3 uKf[2];            // the forward band's colour k_f
+uniform float uFwK, uFwNorm;    // 1 / (2 width^2); 1 / the band's mean (wv_forward_band_mean)
 uniform vec3 uBackPos;          // studio: a point light behind the cloth (uBackI 0: none)
 uniform float uBackI;
 #endif
@@ -286,7 +290,12 @@ vec3 shadeTrans(int ty, int tw, vec3 n, vec3 t, float us, float lv, float lh, ve
     ni = dot(wi, ty == 0 ? vec3(n.x, -n.y, -n.z) : vec3(-n.x, n.y, -n.z));
   }
   float diff = (uBlend * max(ni, 0.0) + (1.0 - uBlend) * ami) * (1.0 / PI_F) * A;
-  return light * (spec + uKt[tw] * diff);
+  // the forward band around the axis of the yarn the light passes, in the fabric frame
+  // (warp along y, weft along x), not the yarn's local one
+  float sf = 0.5 * (tw == 0 ? wi.y + wo.y : wi.x + wo.x);
+  float fq = 1.0 + (sf * sf) * uFwK;
+  float fwd = (ami * A * uFwNorm * 0.3183098861837907) / (fq * fq);
+  return light * (spec + uKt[tw] * diff + uKf[tw] * fwd);
 }
 #endif
 

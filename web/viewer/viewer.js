@@ -67,13 +67,25 @@ function problems(p) {
   if (!(p.yarn_width > 0 && p.yarn_width <= 1)) out.push(`yarn_width = ${p.yarn_width} is outside (0, 1]`);
   if (!(p.thickness > 0 && Number.isFinite(p.thickness))) out.push(`thickness = ${p.thickness} is not positive`);
   if (!Number.isInteger(p.noise_level)) out.push(`noise_level = ${p.noise_level} is not an integer`);
+  const fb = DATA.forward_band_mean, fw = p.forward_width ?? 0.2;
+  if (typeof fw !== 'number' || !(fw >= fb.lo && fw <= fb.hi)) out.push(`forward_width = ${fw} is outside ${fb.lo}..${fb.hi}`);
   return out;
+}
+
+// The forward band's norm at width w: 1 / its mean, linear between the nodes of the
+// table of wv_forward_band_mean that woven view writes (src/view/view.c), so the mean
+// has its one formula in C; the nodes are 0.01 apart, the width slider's steps.
+function forwardNorm(w) {
+  const t = DATA.forward_band_mean, n = t.values.length;
+  const x = (w - t.lo) / (t.hi - t.lo) * (n - 1), i = Math.min(Math.max(Math.floor(x), 0), n - 2), a = x - i;
+  return 1 / (t.values[i] * (1 - a) + t.values[i + 1] * a);
 }
 
 // The fabric's uniforms: a mirror of wv_params_yarn_model, wv_yarn_model_update
 // and wv_fabric_prepare (float rounding as in C: Math.fround).
 function prepareFabric(p, seedWords) {
   const f = Math.fround, DEG = Math.PI / 180, PI_F = f(3.14159265358979);
+  const fw = p.forward_width ?? 0.2; // a file without it: 0.2, as wv_params_transmission_default
   const sp = [f(25.4 / p.density.warp), f(25.4 / p.density.weft)];
   const umax = f(p.inclination_deg * DEG), psi = f(p.twist_deg * DEG), width = f(p.yarn_width);
   return {
@@ -86,6 +98,9 @@ function prepareFabric(p, seedWords) {
     uKt: ['warp', 'weft'].map((y) => new THREE.Vector3(...(p.transmission ? p.transmission[y] : p.diffuse[y].map((x) => x / 2)))),
     // k_st (a file without it has k_s, as wv_params_transmission_default)
     uKst: ['warp', 'weft'].map((y) => new THREE.Vector3(...(p.transmission_specular || p.specular)[y])),
+    // k_f (a file without it has 0: no forward band, as wv_params_transmission_default)
+    uKf: ['warp', 'weft'].map((y) => new THREE.Vector3(...(p.transmission_forward ? p.transmission_forward[y] : [0, 0, 0]))),
+    uFwK: f(0.5 / (fw * fw)), uFwNorm: f(forwardNorm(fw)),
     uAlpha: [p.roughness.warp, p.roughness.weft], uBlend: p.diffuse_blend, uThickness: p.thickness,
     uGlints: p.specular_noise !== false, uInvGlintCell: sp.map((s) => f(1 / f(s / 8))),
   };
@@ -556,6 +571,12 @@ function buildFabricControls() {
   if (params.transmission_specular) { // k_st: likewise
     colour(box, 'specular transmission warp', 'transmission_specular.warp');
     colour(box, 'specular transmission weft', 'transmission_specular.weft');
+  }
+  if (params.transmission_forward) { // k_f and the band's width: likewise
+    colour(box, 'forward transmission warp', 'transmission_forward.warp');
+    colour(box, 'forward transmission weft', 'transmission_forward.weft');
+    const fb = DATA.forward_band_mean; // its range: forward_width's
+    slider(box, 'forward width', fb.lo, fb.hi, 0.01, () => params.forward_width ?? 0.2, onP('forward_width'), 'forward_width');
   }
   num('twist_deg', 'twist (deg)', 1);
   num('inclination_deg', 'inclination (deg)', 0.5);
