@@ -848,9 +848,7 @@ static void test_forward_sweep(void **state) {
   }
   print_message("k_f error: start %.4f, with the sweep %.4f; back-lit loss with the sweep %.5f, without %.5f\n", e0,
                 ef[0], last[0], last[1]);
-  /* the band and the diffuse transmission trade light in a window this small, so k_f comes
-   * only part of the way; the light through the cloth is what the loss shows */
-  assert_true(ef[0] < e0);
+  assert_true(ef[0] < 0.5 * e0);
   assert_true(last[0] < 0.2 * last[1]);
   wv_image_free(&photo), wv_image_free(&photo_t);
   wv_descriptor_free(d);

@@ -828,7 +828,19 @@ static void test_trans_basis(void **state) {
                 res0);
   assert_true(ef1 < 0.3 * ef0);
   assert_true(res1 >= 0 && res1 < 0.5 * res0);
-  wv_image_free(&photo_f);
+  /* the band's images at another width: the capture is wv_render's at that width */
+  wv_params wq = tf;
+  wq.forward_width = 0.6;
+  assert_int_equal(wv_trans_basis_forward_width(b, &wq, &ro, &err), WV_OK);
+  wv_image wwant, wgot;
+  assert_int_equal(wv_render(&s, &wq, &ro, &wwant, NULL, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_capture(b, &wq, &wgot, &err), WV_OK);
+  double wworst = 0, wmoved = 0;
+  for (int i = 0; i < 48 * 40 * 3; i++)
+    wworst = fmax(wworst, fabs(wwant.data[i] - wgot.data[i])), wmoved = fmax(wmoved, fabs(wgot.data[i] - photo_f.data[i]));
+  print_message("band width 0.6: capture off by %.2g at most (the width moved it by %.2g)\n", wworst, wmoved);
+  assert_true(wworst < 1e-4 && wmoved > 1e-2);
+  wv_image_free(&wwant), wv_image_free(&wgot), wv_image_free(&photo_f);
   assert_int_equal(wv_trans_basis_match(b, &photo, 100, 5, WV_TRANS_MATCH_FREE, &m, NULL, &err), WV_ERR_INVALID);
   wv_image small;
   assert_int_equal(wv_image_alloc(&small, 40, 48, 3, &err), WV_OK);

@@ -72,6 +72,11 @@ void wv_record_free(wv_grad_record *rec);
 typedef struct wv_trans_basis wv_trans_basis;
 wv_status wv_trans_basis_create(const wv_scene *s, const wv_params *p, const wv_render_opts *opt,
                                 wv_trans_basis **out, wv_error *err);
+/* The forward band's two images made again at p's forward_width (two renders; the rest of the
+ * parameters the basis's, k_f's width the one thing changed): a search over the width costs
+ * two renders a width, not a basis. */
+wv_status wv_trans_basis_forward_width(wv_trans_basis *b, const wv_params *p, const wv_render_opts *opt,
+                                       wv_error *err);
 /* The capture of p's transmission colours (its other parameters: the basis's), allocated
  * here; equal to wv_render's up to float rounding. */
 wv_status wv_trans_basis_capture(wv_trans_basis *b, const wv_params *p, wv_image *capture, wv_error *err);

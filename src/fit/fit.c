@@ -270,7 +270,8 @@ static int has_band(const wv_params *p) {
 }
 
 /* Whether the back-lit photo shows a forward band, and its width. At each width of
- * WV_FIT_FORWARD_WIDTHS the transmission basis is made again and k_f alone matched to the
+ * WV_FIT_FORWARD_WIDTHS the basis's band images are made again (wv_trans_basis_forward_width:
+ * two renders) and k_f alone matched to the
  * photo's brightness (wv_trans_basis_match, WV_TRANS_MATCH_FORWARD) with the other colours as
  * they are; the width of the lowest back-lit loss is kept with its basis and k_f if that loss
  * is below the colours' own. Run before the colours' start (colours_start), whose candidates
@@ -287,30 +288,24 @@ static wv_status forward_sweep(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st
   enum { NW = sizeof widths / sizeof widths[0] };
   wv_fit_record rec = {0};
   wv_status rc = evaluate_t(c, tb, &st->params, &rec, NULL, err);
-  double best = rec.loss;
+  double best = rec.loss, start_w = st->params.forward_width;
   wv_params best_p = st->params;
-  wv_trans_basis *keep = NULL;
+  wv_render_opts ro = {.spp = c->scene.spp, .threads = c->o->threads, .footprints = c->fp};
   for (int k = 0; k < NW && !rc; k++) {
     wv_params m = st->params;
     m.forward_width = widths[k];
-    wv_trans_basis *b = NULL;
-    if (!(rc = evaluate_t(c, &b, &m, &rec, NULL, err)) &&
-        !(rc = wv_trans_basis_match(b, &c->photo, c->o->down_w, c->o->down_h, WV_TRANS_MATCH_FORWARD, &m, NULL, err)) &&
-        !(rc = evaluate_t(c, &b, &m, &rec, NULL, err)) && rec.loss < best) {
+    if (!(rc = wv_trans_basis_forward_width(*tb, &m, &ro, err)) &&
+        !(rc = wv_trans_basis_match(*tb, &c->photo, c->o->down_w, c->o->down_h, WV_TRANS_MATCH_FORWARD, &m, NULL, err)) &&
+        !(rc = evaluate_t(c, tb, &m, &rec, NULL, err)) && rec.loss < best)
       best = rec.loss, best_p = m;
-      wv_trans_basis_free(keep);
-      keep = b, b = NULL;
-    }
-    wv_trans_basis_free(b);
   }
-  if (rc || !keep) {
-    wv_trans_basis_free(keep);
-    return rc;
-  }
-  wv_trans_basis_free(*tb);
-  *tb = keep;
+  if (rc) return rc;
   st->params = best_p;
-  return WV_OK;
+  /* the basis's band at the width kept (the start's when none was) */
+  wv_params w = best_p;
+  w.forward_width = has_band(&best_p) ? best_p.forward_width : start_w;
+  st->params.forward_width = w.forward_width;
+  return wv_trans_basis_forward_width(*tb, &w, &ro, err);
 }
 
 /* The transmission colours' start, before their first iteration. The candidates: the colours

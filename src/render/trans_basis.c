@@ -15,6 +15,7 @@
 
 struct wv_trans_basis {
   wv_scene scene;
+  wv_params p; /* what it was made of (its colours 0) */
   int w, h;
   float *base, *basis[TB_TYPES]; /* blurred radiance: all colours 0; each type's colour 1, minus base */
   float *mask;                   /* the response's falloff at each pixel */
@@ -65,6 +66,7 @@ wv_status wv_trans_basis_create(const wv_scene *s, const wv_params *p, const wv_
   wv_status st = ok ? WV_OK : wv_fail(err, WV_ERR_NOMEM, "out of memory for the transmission basis");
   wv_params q = *p;
   for (int t = 0; t < TB_TYPES; t++) memset(colour_of(&q, t), 0, sizeof(double) * 3);
+  if (b) b->p = q;
   if (!st) st = blurred(s, &q, opt, tmp, b->base, err);
   for (int t = 0; t < TB_TYPES && !st; t++) {
     wv_params u = q;
@@ -82,6 +84,26 @@ wv_status wv_trans_basis_create(const wv_scene *s, const wv_params *p, const wv_
   }
   *out = b;
   return WV_OK;
+}
+
+wv_status wv_trans_basis_forward_width(wv_trans_basis *b, const wv_params *p, const wv_render_opts *opt,
+                                       wv_error *err) {
+  if (p->forward_width == b->p.forward_width) return WV_OK;
+  size_t n = (size_t)b->w * b->h * 3;
+  double *tmp = malloc(sizeof *tmp * 2 * n);
+  if (!tmp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the transmission basis");
+  wv_params q = b->p;
+  q.forward_width = p->forward_width;
+  wv_status st = WV_OK;
+  for (int t = TB_TYPES - 2; t < TB_TYPES && !st; t++) { /* k_f warp, weft */
+    wv_params u = q;
+    for (int c = 0; c < 3; c++) colour_of(&u, t)[c] = 1.0;
+    if (!(st = blurred(&b->scene, &u, opt, tmp, b->basis[t], err)))
+      for (size_t i = 0; i < n; i++) b->basis[t][i] -= b->base[i];
+  }
+  free(tmp);
+  if (!st) b->p.forward_width = q.forward_width;
+  return st;
 }
 
 wv_status wv_trans_basis_capture(wv_trans_basis *b, const wv_params *p, wv_image *capture, wv_error *err) {
