@@ -125,8 +125,9 @@ const cli_opt CLI_FIT_OPTS[] = {
                 "open area the back-lit photo's gap\nglow measures, or, in a rig without a glow, searched on both "
                 "photos\nwhen the iterations end)"),
     CLI_O_CLEAR("--no-forward-sweep", capture_args, fit.forward_sweep,
-                "with --transmission: leave the forward band's width at its start (by\ndefault it is searched over "
-                "0.1, 0.2, 0.4 and 0.8 before the\ntransmission colours' start)"),
+                "with --transmission: leave the forward band as it starts (by default\nwhether the back-lit photo "
+                "shows one, and its width over 0.1, 0.2,\n0.4 and 0.8, is searched before the transmission colours' "
+                "start and,\nwhere none is found, after it)"),
     CLI_O_CLEAR("--no-noise-sweep", capture_args, fit.noise_sweep,
                 "leave the noise level to the discrete steps (by default every level\nis tried when the iterations end)"),
     CLI_O_CUSTOM("--seed", capture_args, fit.seed, 0, INT_MAX, parse_seed, "N", "the seed of the discrete steps"),

@@ -57,8 +57,9 @@ typedef struct {
                        * the open area the back-lit photo's gap glow measures (wv_open_area_measure), or, in a
                        * back-lit scene without a glow, searched on the pair's loss when the iterations end,
                        * after the noise sweep (1); 0: it stays at its start */
-  int forward_sweep;  /* a photo pair: 1: the forward band's width is searched over WV_FIT_FORWARD_WIDTHS before
-                       * the transmission colours' start (1); 0: it stays at its start */
+  int forward_sweep;  /* a photo pair: 1: whether the back-lit photo shows a forward band, and its width over
+                       * WV_FIT_FORWARD_WIDTHS, is searched before the transmission colours' start and, where
+                       * none is found, after it (1); 0: the band stays as it starts */
   int patience;       /* the stopping rule (wv_fit_converged): a stage ends when its smoothed loss has not
                        * fallen by WV_FIT_MIN_GAIN in this many iterations, and the last stage ends the
                        * iterations (WV_FIT_PATIENCE; 0: every stage runs to its limit, `iters` in all) */
