@@ -9,7 +9,7 @@ specular.png, which is an RGB colour the Principled specular cannot hold), with 
 roughness along the fibre tangent (tangent.png, turned into world space through the
 mesh's UV tangents) from woven's SGGX alpha and wide across it, as a fibre's highlight
 spreads across its length. Light through the cloth: a Translucent BSDF carries woven's
-diffuse transmission (transmission.png: k_t times the cloth's diffuse transmittance), and the
+diffuse transmission (transmission.png: k_t + k_f times the cloth's diffuse transmittance), and the
 open gaps between yarns (open.png) are a Transparent BSDF: they reflect nothing and let the
 light behind the cloth straight through.
 Install: Edit > Preferences > Add-ons > Install... and pick this file; then
@@ -215,7 +215,8 @@ def build_material(name, maps, meta, params, uv_mm, sheen=0.0):
     L.new(gloss.outputs["BSDF"], add.inputs[1])
 
     # light through the yarns: woven's diffuse transmission k_t F_t, F_t = (w cos_b + (1 - w)
-    # |mu_i|) / pi times the cloth's diffuse transmittance (the map holds k_t times it), cos_b
+    # |mu_i|) / pi times the cloth's diffuse transmittance (the map holds k_t + k_f times it: the
+    # forward band's light, at normal incidence, spread out diffusely), cos_b
     # on the yarn's underside, the mirror of its top: a Translucent BSDF (cos / pi toward the
     # far side) on the diffuse lobe's blended normal
     trans = node("ShaderNodeBsdfTranslucent", 200, -300)
