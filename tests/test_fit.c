@@ -662,6 +662,13 @@ static void pair_scenes(wv_scene *s, wv_scene *sb) {
   tu_centre_window(sb, "flat45-back", 64, 64, 4);
 }
 
+/* A pair's fit with its discrete and after-the-iterations steps off, every iteration run. */
+static void pair_opts(wv_fit_opts *o, int iters) {
+  opts(o, iters);
+  o->discrete_every = 0, o->colour_split = 0, o->noise_sweep = 0, o->width_sweep = 0, o->patience = 0;
+  o->align_radius = 0, o->register_radius = 0, o->distort_degree = 0, o->psf_sigma = 0;
+}
+
 /* tp rendered in both scenes, as a photo pair. */
 static void pair_photos(const wv_scene *s, const wv_scene *sb, const wv_params *tp, wv_image *photo, wv_image *photo_t) {
   wv_render_opts ro = {0};
@@ -693,9 +700,7 @@ static void test_fit_pair(void **state) {
   pair_photos(&s, &sb, &tp, &photo, &photo_t);
   assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
   wv_fit_opts o;
-  opts(&o, 16);
-  o.discrete_every = 0, o.colour_split = 0, o.noise_sweep = 0, o.width_sweep = 0, o.patience = 0;
-  o.align_radius = 0, o.register_radius = 0, o.distort_degree = 0, o.psf_sigma = 0;
+  pair_opts(&o, 16);
   int r_iters = (int)(o.iters * (1 - WV_FIT_T_SHARE));
   wv_error err = {0};
   double e[3] = {0, 0, 0}, es[3] = {0, 0, 0}; /* k_t and k_st errors: start, pair fit, reflection-only fit */
@@ -824,9 +829,7 @@ static void test_forward_sweep(void **state) {
   pair_photos(&s, &sb, &tp, &photo, &photo_t);
   assert_int_equal(wv_descriptor_create_default(&d, NULL), WV_OK);
   wv_fit_opts o;
-  opts(&o, 16);
-  o.discrete_every = 0, o.colour_split = 0, o.noise_sweep = 0, o.width_sweep = 0, o.patience = 0;
-  o.align_radius = 0, o.register_radius = 0, o.distort_degree = 0, o.psf_sigma = 0;
+  pair_opts(&o, 16);
   wv_error err = {0};
   double last[2], ef[2] = {0, 0}, e0 = 0;
   for (int run = 0; run < 2; run++) {

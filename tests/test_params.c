@@ -100,6 +100,7 @@ static void test_versions(void **state) {
                    WV_OK);
   assert_true(q.transmission_forward[WV_WARP][2] == 0.3 && q.transmission_forward[WV_WEFT][1] == 0.05);
   assert_true(q.forward_width == 0.4 && q.transmission[WV_WARP][0] == 0.25); /* k_t's default as before */
+  assert_true(wv_params_has_forward_band(&q) && !wv_params_has_forward_band(&p));
   expect_bad("{\"version\": 5, \"pattern\": \"twill\"}", WV_ERR_INVALID, "version");
   expect_bad("{\"pattern\": \"twill\", \"forward_width\": 0.01}", WV_ERR_INVALID, "forward_width");
   expect_bad("{\"pattern\": \"twill\", \"transmission_forward\": {\"warp\": [0.1, 1.5, 0]}}", WV_ERR_INVALID,

@@ -51,6 +51,9 @@ wv_status wv_params_sample_prior(const char *pattern, uint64_t seed, wv_params *
  * model before it existed); forward_width 0.2. */
 void wv_params_transmission_default(wv_params *p);
 
+/* Whether p has a forward band: any k_f above 0. */
+int wv_params_has_forward_band(const wv_params *p);
+
 /* Every value in range, pattern known; the message names the key. */
 wv_status wv_params_validate(const wv_params *p, wv_error *err);
 /* Parse from a JSON text; 'source' names it in messages (a file name). */

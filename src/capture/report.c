@@ -111,8 +111,7 @@ wv_status wv_weave_views_write(const char *dir, const wv_image *photo, const wv_
 }
 
 int wv_params_at_bounds(const wv_params *p, char (*lines)[96], int cap) {
-  int n = 0, band = 0;
-  for (int i = WV_P_KF_WARP_R; i < WV_P_COUNT; i++) band |= wv_param_get(p, i) != 0;
+  int n = 0, band = wv_params_has_forward_band(p);
   for (int i = 0; i < WV_P_COUNT && n < cap; i++) {
     if (i >= WV_P_KF_WARP_R && !band) break; /* no forward band: k_f is 0 by choice, not held there */
     double lo, hi, v = wv_param_get(p, i);

@@ -262,17 +262,9 @@ static wv_status colours_descend(fit_ctx *c, wv_trans_basis **tb, wv_params *p, 
   return rc;
 }
 
-/* Whether p has a forward band (any k_f above 0). */
-static int has_band(const wv_params *p) {
-  for (int i = WV_P_KF_WARP_R; i < WV_P_COUNT; i++)
-    if (wv_param_get(p, i) != 0) return 1;
-  return 0;
-}
-
 /* Whether the back-lit photo shows a forward band, and its width. At each width of
  * WV_FIT_FORWARD_WIDTHS the basis's band images are made again (wv_trans_basis_forward_width:
- * two renders) and k_f alone matched to the
- * photo's brightness (wv_trans_basis_match, WV_TRANS_MATCH_FORWARD) with the other colours as
+ * two renders) and k_f alone matched to the photo's brightness (wv_trans_basis_match, WV_TRANS_MATCH_FORWARD) with the other colours as
  * they are; the width of the lowest back-lit loss is kept with its basis and k_f if that loss
  * is below the colours' own. Run before the colours' start (colours_start), whose candidates
  * then hold k_f and whose iterations move it too; where it finds no band there, once more
@@ -301,11 +293,8 @@ static wv_status forward_sweep(fit_ctx *c, wv_trans_basis **tb, wv_fit_state *st
   }
   if (rc) return rc;
   st->params = best_p;
-  /* the basis's band at the width kept (the start's when none was) */
-  wv_params w = best_p;
-  w.forward_width = has_band(&best_p) ? best_p.forward_width : start_w;
-  st->params.forward_width = w.forward_width;
-  return wv_trans_basis_forward_width(*tb, &w, &ro, err);
+  if (!wv_params_has_forward_band(&best_p)) st->params.forward_width = start_w; /* no band: the width as it was */
+  return wv_trans_basis_forward_width(*tb, &st->params, &ro, err); /* the basis's band at that width */
 }
 
 /* The transmission colours' start, before their first iteration. The candidates: the colours
@@ -1001,16 +990,16 @@ wv_status wv_fit_run_pair(wv_fit_state *st, const wv_scene *s, const wv_image *p
       if (t_phase(st->log, from, st->iter) == st->iter) {
         /* k_f moves if the start has a band or a search adds one: before the candidates, which
          * then hold it, or else after them, against the colours they chose */
-        int band = has_band(&st->params);
+        int band = wv_params_has_forward_band(&st->params);
         if (!band && o->forward_sweep) {
           if ((rc = forward_sweep(tc, &tb, st, err))) break;
-          band = has_band(&st->params);
+          band = wv_params_has_forward_band(&st->params);
         }
         int n_free = band ? WV_P_COUNT - WV_P_REFLECT_COUNT : WV_P_KF_WARP_R - WV_P_REFLECT_COUNT;
         if ((rc = colours_start(tc, &tb, st, n_free, err))) break;
         if (!band && o->forward_sweep) {
           if ((rc = forward_sweep(tc, &tb, st, err))) break;
-          if (has_band(&st->params)) wv_nn_lbfgs_grow(&st->t_qn, WV_P_COUNT - WV_P_REFLECT_COUNT);
+          if (wv_params_has_forward_band(&st->params)) wv_nn_lbfgs_grow(&st->t_qn, WV_P_COUNT - WV_P_REFLECT_COUNT);
         }
       }
       int same = t_cached; /* the last step's trial, evaluated, is where the colours are */

@@ -88,6 +88,13 @@ void wv_params_transmission_default(wv_params *p) {
   p->forward_width = 0.2;
 }
 
+int wv_params_has_forward_band(const wv_params *p) {
+  for (int y = 0; y < 2; y++)
+    for (int c = 0; c < 3; c++)
+      if (p->transmission_forward[y][c] != 0) return 1;
+  return 0;
+}
+
 static wv_status check(const range *r, const char *sub, double v, wv_error *err) {
   char a[32], b[32], c[32];
   if (!isfinite(v) || v < r->lo || v > r->hi)
