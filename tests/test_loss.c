@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "testutil.h"
+#include "woven/descriptor.h"
 #include "woven/imgops.h"
 #include "woven/loss.h"
 #include "woven/nn.h"
@@ -232,11 +233,47 @@ static void test_gram_loss(void **state) {
   assert_true(d[0] == 0 && d[1] == -0.25f && d[2] == 0.25f && d[3] == -0.25f);
 }
 
+/* The gradient after a value taken without it (wv_image_loss_grad) is the one the evaluation
+ * with it gives, bit for bit; for a render other than the one last evaluated it fails. */
+static void test_image_loss_grad_later(void **state) {
+  (void)state;
+  wv_image photo, img, other, d1, d2;
+  wv_error e;
+  ribs(&photo, 64, 48, 0, 1, 1);
+  ribs(&img, 64, 48, 2, 0.6, 2);
+  ribs(&other, 64, 48, 1, 0.8, 3);
+  wv_descriptor *desc;
+  assert_int_equal(wv_descriptor_create_default(&desc, &e), WV_OK);
+  wv_loss_weights w = {.w_pixel = 0.2, .w_struct = 0.05, .w_colour = 0.1, .down_w = 8, .down_h = 4};
+  wv_image_loss *l;
+  assert_int_equal(wv_image_loss_create(&photo, desc, NULL, &w, &l, &e), WV_OK);
+  assert_int_equal(wv_image_alloc(&d1, 64, 48, 3, &e), WV_OK);
+  assert_int_equal(wv_image_alloc(&d2, 64, 48, 3, &e), WV_OK);
+  wv_loss_terms t1, t2;
+  assert_int_equal(wv_image_loss_eval(l, &img, &t1, &d1, &e), WV_OK);
+  /* another render's value in between, then this one's without and its gradient after */
+  assert_int_equal(wv_image_loss_eval(l, &other, &t2, NULL, &e), WV_OK);
+  assert_int_equal(wv_image_loss_grad(l, &img, &d2, &e), WV_ERR_INVALID);
+  assert_int_equal(wv_image_loss_eval(l, &img, &t2, NULL, &e), WV_OK);
+  assert_true(t1.total == t2.total && t1.total > 0);
+  assert_int_equal(wv_image_loss_grad(l, &img, &d2, &e), WV_OK);
+  size_t n = (size_t)64 * 48 * 3, nonzero = 0;
+  for (size_t i = 0; i < n; i++) {
+    assert_true(d1.data[i] == d2.data[i]);
+    nonzero += d1.data[i] != 0.0f;
+  }
+  assert_true(nonzero > n / 2);
+  wv_image_loss_free(l);
+  wv_descriptor_free(desc);
+  wv_image_free(&photo), wv_image_free(&img), wv_image_free(&other), wv_image_free(&d1), wv_image_free(&d2);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_spectrum_gradient),
       cmocka_unit_test(test_spectrum_erasing_costs),
       cmocka_unit_test(test_gram_loss),
+      cmocka_unit_test(test_image_loss_grad_later),
       cmocka_unit_test(test_colour_gradient),
       cmocka_unit_test(test_colour_what_it_sees),
   };

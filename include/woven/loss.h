@@ -50,6 +50,11 @@ void wv_image_loss_free(wv_image_loss *l);
  * allocated by the caller) it receives dL/drender, overwritten. Not thread-safe. */
 wv_status wv_image_loss_eval(wv_image_loss *l, const wv_image *render, wv_loss_terms *t, wv_image *dcap,
                              wv_error *err);
+/* dL/drender into dcap, as wv_image_loss_eval gives it, for the render that call last
+ * evaluated (the same image, unchanged) without its descriptor's forward pass again: a trial
+ * evaluated without the gradient and then kept costs one pass more, not two. A render other
+ * than the last evaluated: WV_ERR_INVALID. */
+wv_status wv_image_loss_grad(wv_image_loss *l, const wv_image *render, wv_image *dcap, wv_error *err);
 
 /* ---- L_g and L_c on precomputed pieces ---- */
 /* mean |a - b| over n Gram entries; d (may be NULL) receives dL/da = sign(a - b) / n. */

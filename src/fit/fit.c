@@ -237,6 +237,18 @@ static wv_status evaluate_t(fit_ctx *c, wv_trans_basis **tb, const wv_params *p,
   return st;
 }
 
+/* The transmission colours' gradient at the point evaluate_t evaluated last, without it: the
+ * loss's descriptor pass is not run again (wv_image_loss_grad). */
+static wv_status evaluate_t_grad(fit_ctx *c, wv_trans_basis *tb, double grad[WV_P_COUNT], wv_error *err) {
+  double t0 = omp_get_wtime();
+  wv_status st = wv_image_loss_grad(c->loss, &c->render, &c->dcap, err);
+  double t1 = omp_get_wtime();
+  c->timing->descriptor += t1 - t0;
+  if (!st) st = wv_trans_basis_grad(tb, &c->dcap, grad, err);
+  c->timing->gradient += omp_get_wtime() - t1;
+  return st;
+}
+
 static wv_status colours_step(fit_ctx *c, wv_trans_basis **tb, wv_params *p, wv_nn_lbfgs *qn,
                               const wv_fit_record *rec, const double g[WV_P_COUNT], wv_params *next,
                               wv_fit_record *next_rec, double next_g[WV_P_COUNT], int *have_next, wv_error *err);
@@ -397,9 +409,11 @@ static wv_status colours_step(fit_ctx *c, wv_trans_basis **tb, wv_params *p, wv_
     if (!(dec < 0)) break; /* the box leaves no descent along it */
     wv_fit_record tr = {0};
     double tg[WV_P_COUNT] = {0};
-    wv_status rc = evaluate_t(c, tb, &trial, &tr, tg, err);
+    /* the value first: most trials turned down cost half an evaluation with the gradient */
+    wv_status rc = evaluate_t(c, tb, &trial, &tr, NULL, err);
     if (rc) return rc;
     if (tr.loss < rec->loss) {
+      if ((rc = evaluate_t_grad(c, *tb, tg, err))) return rc;
       *p = trial;
       *next = trial, *next_rec = tr, *have_next = 1;
       memcpy(next_g, tg, sizeof tg);
@@ -854,7 +868,7 @@ static wv_status own_view_t(wv_fit_state *st, const wv_scene *s_t, const wv_imag
   if (!st->t_registered && o->register_radius == 0) st->t_registered = 1; /* off, as for the front-lit photo */
   if (!st->t_distorted && o->distort_degree == 0) st->t_distorted = 1;
   /* near the fit's densities: the scale already carries the front-lit photo's to the back-lit one's */
-  if (!st->t_registered && !(rc = wv_fit_register_near(&v, &base, photo_t, o, err))) {
+  if (!st->t_registered && !(rc = wv_fit_register_view(&v, &base, photo_t, o, err))) {
     st->t_registered = 1;
     for (int k = 0; k < 2; k++) st->t_density_ratio[k] = v.params.density[k] / st->params.density[k];
     st->t_offset_mm[0] = v.offset_mm[0], st->t_offset_mm[1] = v.offset_mm[1];

@@ -33,4 +33,12 @@ wv_status wv_fit_register_phase(const wv_fit_state *st, const wv_scene *s, const
 wv_status wv_fit_register_near(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                                wv_error *err);
 
+/* wv_fit_register_near for a view of the cloth, not its parameters (a pair's back-lit photo):
+ * without the last climb on the whole image (to a tenth of a yarn/inch), whose many renders of
+ * the whole image the distortion after it replaces: its displacement's linear terms are a
+ * density's last tenths, and the view's densities are not the cloth's (docs/fit.md, "Photo
+ * pairs"). The shift is still read on the whole image. */
+wv_status wv_fit_register_view(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
+                               wv_error *err);
+
 #endif

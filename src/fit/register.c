@@ -455,20 +455,25 @@ wv_status wv_fit_register_candidates(const wv_fit_state *st, const wv_scene *s, 
 }
 
 static wv_status register_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
-                              int global, wv_error *err);
+                              int global, int whole_climb, wv_error *err);
 
 wv_status wv_fit_register(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                           wv_error *err) {
-  return register_run(st, s, photo, o, 1, err);
+  return register_run(st, s, photo, o, 1, 1, err);
 }
 
 wv_status wv_fit_register_near(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
                                wv_error *err) {
-  return register_run(st, s, photo, o, 0, err);
+  return register_run(st, s, photo, o, 0, 1, err);
+}
+
+wv_status wv_fit_register_view(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
+                               wv_error *err) {
+  return register_run(st, s, photo, o, 0, 0, err);
 }
 
 static wv_status register_run(wv_fit_state *st, const wv_scene *s, const wv_image *photo, const wv_fit_opts *o,
-                              int global, wv_error *err) {
+                              int global, int whole_climb, wv_error *err) {
   if (o->register_radius < 0 || o->register_radius > WV_FIT_MAX_REGISTER_RADIUS)
     return wv_fail(err, WV_ERR_INVALID, "fit option 'register_radius' = %d is outside 0..%d", o->register_radius,
                    WV_FIT_MAX_REGISTER_RADIUS);
@@ -535,7 +540,7 @@ static wv_status register_run(wv_fit_state *st, const wv_scene *s, const wv_imag
     rc = eval_many(&S[2], base, (const double(*)[2])cur, 1, &best, err);
     if (!rc) rc = hill_climb(&S[2], base, fine_steps, 2, cur, &best, err);
     if (!rc) rc = eval_many(&S[3], base, (const double(*)[2])cur, 1, &best, err);
-    if (!rc) rc = hill_climb(&S[3], base, fine_steps + 2, 1, cur, &best, err);
+    if (!rc && whole_climb) rc = hill_climb(&S[3], base, fine_steps + 2, 1, cur, &best, err);
     const scored *at = rc ? NULL : seen_find(&S[3], cur); /* the best's shift, from its score */
     if (at) shift[0] = at->shift[0], shift[1] = at->shift[1], best = at->score;
     if (!rc) { /* kept only if the whole image's SSIM rises */

@@ -17,6 +17,7 @@ struct wv_image_loss {
   wv_image photo_down, down, ddown, dpix;
   wv_spectrum_loss *spec;
   wv_colour_loss *colour;
+  const float *last; /* the pixels of the render last evaluated (wv_image_loss_grad) */
 };
 
 void wv_image_loss_free(wv_image_loss *l) {
@@ -54,19 +55,24 @@ wv_status wv_image_loss_create(const wv_image *photo, wv_descriptor *d, const fl
   return WV_OK;
 }
 
-wv_status wv_image_loss_eval(wv_image_loss *l, const wv_image *render, wv_loss_terms *t, wv_image *dcap,
-                             wv_error *err) {
+/* The terms for render, from the descriptor's forward pass when forward is set, else from
+ * the one kept of the last call (the same render: the gradient of a value taken without it). */
+static wv_status loss_run(wv_image_loss *l, const wv_image *render, int forward, wv_loss_terms *t, wv_image *dcap,
+                          wv_error *err) {
   if (render->w != l->width || render->h != l->height)
     return wv_fail(err, WV_ERR_INVALID, "the render is %d x %d but the photo %d x %d", render->w, render->h,
                    l->width, l->height);
+  wv_status st = WV_OK;
+  if (forward) l->last = NULL; /* until this evaluation is whole */
   /* L_g = mean |G_render - G_photo| */
-  wv_status st = wv_descriptor_forward(l->d, render, l->gram, err);
-  if (st) return st;
+  if (forward && (st = wv_descriptor_forward(l->d, render, l->gram, err))) return st;
   memset(t, 0, sizeof *t);
   t->gram = wv_loss_gram(l->gram, l->gram_photo, l->ng, dcap ? l->dgram : NULL);
   /* L_c = mean |down(render) - down(photo)| */
-  wv_image_free(&l->down);
-  if ((st = wv_image_downsample(render, l->w.down_w, l->w.down_h, &l->down, err))) return st;
+  if (forward) {
+    wv_image_free(&l->down);
+    if ((st = wv_image_downsample(render, l->w.down_w, l->w.down_h, &l->down, err))) return st;
+  }
   t->pixel = wv_image_l1(&l->down, &l->photo_down, dcap ? &l->ddown : NULL);
   if (dcap) {
     /* dL/dcapture: descriptor backward (it overwrites dcap), the pixel term through the
@@ -84,5 +90,18 @@ wv_status wv_image_loss_eval(wv_image_loss *l, const wv_image *render, wv_loss_t
   if (l->colour && (st = wv_colour_loss_eval(l->colour, render, dcap, (float)l->w.w_colour, &t->colour, err)))
     return st;
   t->total = t->gram + l->w.w_pixel * t->pixel + l->w.w_struct * t->structure + l->w.w_colour * t->colour;
+  if (forward) l->last = render->data;
   return WV_OK;
+}
+
+wv_status wv_image_loss_eval(wv_image_loss *l, const wv_image *render, wv_loss_terms *t, wv_image *dcap,
+                             wv_error *err) {
+  return loss_run(l, render, 1, t, dcap, err);
+}
+
+wv_status wv_image_loss_grad(wv_image_loss *l, const wv_image *render, wv_image *dcap, wv_error *err) {
+  if (!l->last || l->last != render->data)
+    return wv_fail(err, WV_ERR_INVALID, "the loss's gradient asked for a render it did not evaluate last");
+  wv_loss_terms t;
+  return loss_run(l, render, 0, &t, dcap, err);
 }
