@@ -840,6 +840,24 @@ static void test_trans_basis(void **state) {
     wworst = fmax(wworst, fabs(wwant.data[i] - wgot.data[i])), wmoved = fmax(wmoved, fabs(wgot.data[i] - photo_f.data[i]));
   print_message("band width 0.6: capture off by %.2g at most (the width moved it by %.2g)\n", wworst, wmoved);
   assert_true(wworst < 1e-4 && wmoved > 1e-2);
+  /* widths made before come back from the basis's copies: the same captures bit for bit, also
+   * after more widths than it keeps have pushed the first ones out */
+  wv_params w1 = wq;
+  w1.forward_width = p.forward_width;
+  wv_image again;
+  assert_int_equal(wv_trans_basis_forward_width(b, &w1, &ro, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_forward_width(b, &wq, &ro, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_capture(b, &wq, &again, &err), WV_OK);
+  assert_memory_equal(again.data, wgot.data, sizeof(float) * 48 * 40 * 3);
+  wv_image_free(&again);
+  for (int k = 0; k < 10; k++) {
+    w1.forward_width = 0.1 + 0.05 * k;
+    assert_int_equal(wv_trans_basis_forward_width(b, &w1, &ro, &err), WV_OK);
+  }
+  assert_int_equal(wv_trans_basis_forward_width(b, &wq, &ro, &err), WV_OK);
+  assert_int_equal(wv_trans_basis_capture(b, &wq, &again, &err), WV_OK);
+  assert_memory_equal(again.data, wgot.data, sizeof(float) * 48 * 40 * 3);
+  wv_image_free(&again);
   wv_image_free(&wwant), wv_image_free(&wgot), wv_image_free(&photo_f);
   assert_int_equal(wv_trans_basis_match(b, &photo, 100, 5, WV_TRANS_MATCH_FREE, &m, NULL, &err), WV_ERR_INVALID);
   wv_image small;

@@ -74,7 +74,8 @@ wv_status wv_trans_basis_create(const wv_scene *s, const wv_params *p, const wv_
                                 wv_trans_basis **out, wv_error *err);
 /* The forward band's two images made again at p's forward_width (two renders; the rest of the
  * parameters the basis's, k_f's width the one thing changed): a search over the width costs
- * two renders a width, not a basis. */
+ * two renders a width, not a basis. The images of the last 8 widths made are kept: a width
+ * made before is copied back, not rendered (the same images: opt must be the same each call). */
 wv_status wv_trans_basis_forward_width(wv_trans_basis *b, const wv_params *p, const wv_render_opts *opt,
                                        wv_error *err);
 /* The capture of p's transmission colours (its other parameters: the basis's), allocated

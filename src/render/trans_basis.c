@@ -12,6 +12,7 @@
 
 #define TB_TYPES 6 /* k_t, k_st, k_f, each warp then weft: WV_P_KT_WARP_R + 3 type + channel */
 #define WV_TRANS_MATCH_RIDGE 1e-3 /* the match's pull toward the start, relative to the cells' evidence */
+#define TB_WIDTHS 8 /* band images kept of as many widths: a search over widths visits each once */
 
 struct wv_trans_basis {
   wv_scene scene;
@@ -20,6 +21,11 @@ struct wv_trans_basis {
   float *base, *basis[TB_TYPES]; /* blurred radiance: all colours 0; each type's colour 1, minus base */
   float *mask;                   /* the response's falloff at each pixel */
   double *slope;                 /* d capture / d blurred radiance at the last capture */
+  /* the band's two images (k_f warp, weft) at each width made so far, the oldest replaced
+   * past TB_WIDTHS: they depend on the geometry alone, which the basis keeps */
+  double band_width[TB_WIDTHS];
+  float *band[TB_WIDTHS][2];
+  int nband;
 };
 
 static double *colour_of(wv_params *p, int type) {
@@ -30,6 +36,7 @@ void wv_trans_basis_free(wv_trans_basis *b) {
   if (!b) return;
   free(b->base), free(b->mask), free(b->slope);
   for (int t = 0; t < TB_TYPES; t++) free(b->basis[t]);
+  for (int k = 0; k < TB_WIDTHS; k++) free(b->band[k][0]), free(b->band[k][1]);
   free(b);
 }
 
@@ -46,6 +53,19 @@ static wv_status blurred(const wv_scene *s, const wv_params *q, const wv_render_
   wv_image_free(&rad);
   if ((st = wv_psf_apply(s->psf_sigma, s->width, s->height, 3, in, tmp, 0, err))) return st;
   for (size_t i = 0; i < n; i++) out[i] = (float)tmp[i];
+  return WV_OK;
+}
+
+/* Keeps the basis's band images as those of its width (b->p.forward_width). */
+static wv_status band_keep(wv_trans_basis *b, wv_error *err) {
+  size_t n = (size_t)b->w * b->h * 3;
+  int k = b->nband % TB_WIDTHS;
+  for (int t = 0; t < 2; t++)
+    if (!b->band[k][t] && !(b->band[k][t] = malloc(sizeof(float) * n)))
+      return wv_fail(err, WV_ERR_NOMEM, "out of memory for the transmission basis");
+  for (int t = 0; t < 2; t++) memcpy(b->band[k][t], b->basis[TB_TYPES - 2 + t], sizeof(float) * n);
+  b->band_width[k] = b->p.forward_width;
+  b->nband++;
   return WV_OK;
 }
 
@@ -77,6 +97,7 @@ wv_status wv_trans_basis_create(const wv_scene *s, const wv_params *p, const wv_
   if (!st)
     for (int y = 0; y < b->h; y++)
       for (int x = 0; x < b->w; x++) b->mask[(size_t)y * b->w + x] = (float)wv_response_mask(s, x, y);
+  if (!st) st = band_keep(b, err);
   free(tmp);
   if (st) {
     wv_trans_basis_free(b);
@@ -90,6 +111,13 @@ wv_status wv_trans_basis_forward_width(wv_trans_basis *b, const wv_params *p, co
                                        wv_error *err) {
   if (p->forward_width == b->p.forward_width) return WV_OK;
   size_t n = (size_t)b->w * b->h * 3;
+  int kept = b->nband < TB_WIDTHS ? b->nband : TB_WIDTHS;
+  for (int k = 0; k < kept; k++)
+    if (b->band_width[k] == p->forward_width) {
+      for (int t = 0; t < 2; t++) memcpy(b->basis[TB_TYPES - 2 + t], b->band[k][t], sizeof(float) * n);
+      b->p.forward_width = p->forward_width;
+      return WV_OK;
+    }
   double *tmp = malloc(sizeof *tmp * 2 * n);
   if (!tmp) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the transmission basis");
   wv_params q = b->p;
@@ -103,7 +131,7 @@ wv_status wv_trans_basis_forward_width(wv_trans_basis *b, const wv_params *p, co
   }
   free(tmp);
   if (!st) b->p.forward_width = q.forward_width;
-  return st;
+  return st ? st : band_keep(b, err);
 }
 
 wv_status wv_trans_basis_capture(wv_trans_basis *b, const wv_params *p, wv_image *capture, wv_error *err) {
