@@ -45,6 +45,12 @@ double wv_forward_band_mean(double width) {
   return 2.0 / pi * sum * (pi / N);
 }
 
+/* The band's terms the kernel reads (wv_shade_params): 1 / (2 width^2) and 1 / its mean. */
+static void forward_band_terms(double width, double *k, double *norm) {
+  *k = 0.5 / (width * width);
+  *norm = 1.0 / wv_forward_band_mean(width);
+}
+
 wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
   memset(f, 0, sizeof *f);
   wv_status st = wv_params_validate(p, err);
@@ -64,8 +70,9 @@ wv_status wv_fabric_prepare(const wv_params *p, wv_fabric *f, wv_error *err) {
   }
   P->blend = (float)p->diffuse_blend;
   P->thickness = (float)p->thickness;
-  P->fw_k = (float)(0.5 / (p->forward_width * p->forward_width));
-  P->fw_norm = (float)(1.0 / wv_forward_band_mean(p->forward_width));
+  double fw_k, fw_norm;
+  forward_band_terms(p->forward_width, &fw_k, &fw_norm);
+  P->fw_k = (float)fw_k, P->fw_norm = (float)fw_norm;
   f->glints = p->specular_noise;
   f->inv_glint_cell[0] = 1.0f / (f->ym.spacing[WV_WARP] / 8.0f);
   f->inv_glint_cell[1] = 1.0f / (f->ym.spacing[WV_WEFT] / 8.0f);
@@ -94,8 +101,7 @@ void wv_shade_params_double(const wv_params *p, wv_shade_params_d *P) {
       P->kd[t][c] = p->diffuse[t][c], P->ks[t][c] = p->specular[t][c], P->kt[t][c] = p->transmission[t][c],
       P->kst[t][c] = p->transmission_specular[t][c], P->kf[t][c] = p->transmission_forward[t][c];
   }
-  P->fw_k = 0.5 / (p->forward_width * p->forward_width);
-  P->fw_norm = 1.0 / wv_forward_band_mean(p->forward_width);
+  forward_band_terms(p->forward_width, &P->fw_k, &P->fw_norm);
   P->sin_psi = sin(p->twist_deg * DEG), P->cos_psi = cos(p->twist_deg * DEG);
   P->noise = 0.1 * (double)p->noise_level;
   P->blend = p->diffuse_blend, P->thickness = p->thickness;
