@@ -22,6 +22,7 @@
 #include "woven/image.h"
 #include "woven/io.h"
 #include "woven/metrics.h"
+#include "wsc_quadrants.h"
 
 static void die(const wv_error *e) {
   fprintf(stderr, "blur_budget: %s\n", e->msg);
@@ -33,6 +34,13 @@ static double ssim_rgb(const wv_image *a, const wv_image *b) {
   double s;
   if (wv_ssim(a, b, WV_SSIM_RGB, &s, &e)) die(&e);
   return s;
+}
+
+static double wsc(const wv_image *a, const wv_image *b) {
+  wv_error e = {0};
+  double v;
+  if (wv_wsc(a, b, &v, &e)) die(&e);
+  return v;
 }
 
 static wv_image blurred(const wv_image *in, double sigma) {
@@ -87,16 +95,17 @@ int main(int argc, char **argv) {
     if (wv_detail_periodic(&photo, 4, &share, &per, &e)) die(&e);
     wv_image oracle = plus_detail(&p4, &per, NULL, 1);
     wv_image_free(&per);
-    double so = ssim_rgb(&oracle, &photo);
+    double so = ssim_rgb(&oracle, &photo), w[4] = {wsc(&render, &photo), wsc(&p4, &photo), wsc(&oracle, &photo), 0};
+    if (bench_wsc_quadrants(&photo, 0, &w[3], &e)) die(&e);
     printf("%s vs %s: photo blurred by 1 / 2 / 4 px %.4f / %.4f / %.4f; render as it is %.4f, blurred %.4f / %.4f / "
            "%.4f; photo's 2 px blur + render detail x 0 / 0.5 / 1 %.4f / %.4f / %.4f; periodic share %.3f, oracle "
-           "%.4f\n",
-           argv[a], argv[a + 1], pb[0], pb[1], pb[2], rb[0], rb[1], rb[2], rb[3], pl[0], pl[1], pl[2], share, so);
+           "%.4f; WSC render %.3f, photo's 4 px blur %.3f, oracle %.3f, photo's quadrants %.3f\n",
+           argv[a], argv[a + 1], pb[0], pb[1], pb[2], rb[0], rb[1], rb[2], rb[3], pl[0], pl[1], pl[2], share, so, w[0], w[1], w[2], w[3]);
     json_array_append_new(
-        list, json_pack("{s:s,s:s,s:[f,f,f],s:[f,f,f,f],s:[f,f,f],s:f,s:f}", "photo", argv[a], "render", argv[a + 1],
+        list, json_pack("{s:s,s:s,s:[f,f,f],s:[f,f,f,f],s:[f,f,f],s:f,s:f,s:[f,f,f,f]}", "photo", argv[a], "render", argv[a + 1],
                         "photo_blur_1_2_4", pb[0], pb[1], pb[2], "render_blur_0_1_2_4", rb[0], rb[1], rb[2], rb[3],
                         "photo_low_render_detail_0_05_1", pl[0], pl[1], pl[2], "periodic_share", share,
-                        "periodic_oracle", so));
+                        "periodic_oracle", so, "wsc_render_blur4_oracle_quadrants", w[0], w[1], w[2], w[3]));
     wv_image_free(&p2), wv_image_free(&r2), wv_image_free(&p4), wv_image_free(&oracle);
     wv_image_free(&photo), wv_image_free(&render);
   }

@@ -29,25 +29,14 @@
 #define RECOVER_NAME "recover"
 #include "recover_common.h"
 #include "woven/imgops.h"
+#include "wsc_quadrants.h"
 
-/* WSC (whitened: 1) of the four quadrants of img against each other: the mean of the six pairs. */
+/* WSC (whitened: 1) of the photo's quadrants against each other (bench/wsc_quadrants.h). */
 static double wsc_quadrants(const wv_image *img, int whitened) {
-  int h = img->w < img->h ? img->w / 2 : img->h / 2;
-  wv_image q[4];
   wv_error err = {0};
-  for (int k = 0; k < 4; k++) {
-    if (wv_image_alloc(&q[k], h, h, 3, &err)) die(&err);
-    for (int y = 0; y < h; y++)
-      memcpy(wv_image_px(&q[k], 0, y), wv_image_px(img, (k & 1) * h, (k >> 1) * h + y), sizeof(float) * 3 * (size_t)h);
-  }
-  double sum = 0, v;
-  for (int a = 0; a < 4; a++)
-    for (int b = a + 1; b < 4; b++) {
-      if ((whitened ? wv_wsc_whitened : wv_wsc)(&q[a], &q[b], &v, &err)) die(&err);
-      sum += v;
-    }
-  for (int k = 0; k < 4; k++) wv_image_free(&q[k]);
-  return sum / 6;
+  double v;
+  if (bench_wsc_quadrants(img, whitened, &v, &err)) die(&err);
+  return v;
 }
 
 static const char *family(const char *pattern) { return wv_weave_family(pattern); }
