@@ -234,6 +234,14 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
                 "see report.html\n",
              wv->ssim_rgb[1], WV_BLURRED_COPY_SIGMA, wv->ssim_rgb_blurred, grain);
   }
+  if (r->pair && r->below_blurred_copy_t) {
+    char grain[96] = "";
+    if (r->periodic_share_t > -2)
+      snprintf(grain, sizeof grain, "; %.0f%% of its detail is weave, the rest grain", 100 * r->periodic_share_t);
+    cli_info(c, "an unsure back-lit re-render: SSIM per RGB channel %.4f, below the transmission photo's copy "
+                "blurred by %.0f px (%.4f)%s; see report.html\n",
+             r->ssim_rgb_t, WV_BLURRED_COPY_SIGMA, r->ssim_rgb_blurred_t, grain);
+  }
   if (c->json) {
     json_t *o_json = json_pack(
         "{s:o,s:i,s:o,s:o,s:o,s:{s:o,s:o,s:o,s:o,s:o,s:o},s:[o,o],s:{s:[o,o],s:[o,o],s:[o,o]}}", "dir",
@@ -292,6 +300,9 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
         json_object_set_new(o_json, "ssim_rgb_fit_t", cli_real(r->ssim_rgb_t, 6));
         json_object_set_new(o_json, "ssim_rgb_blurred_photo_t",
                             r->ssim_rgb_blurred_t > -2 ? cli_real(r->ssim_rgb_blurred_t, 6) : json_null());
+        json_object_set_new(o_json, "below_blurred_copy_t", json_boolean(r->below_blurred_copy_t));
+        json_object_set_new(o_json, "photo_periodic_share_t",
+                            r->periodic_share_t > -2 ? cli_real(r->periodic_share_t, 4) : json_null());
         json_object_set_new(o_json, "wsc_fit_t", r->wsc_t > -2 ? cli_real(r->wsc_t, 6) : json_null());
         json_object_set_new(o_json, "kt_start", json_string(r->kt_model == 1   ? "pair model"
                                                             : r->kt_model == 2 ? "prior (the pair model's start scored worse)"

@@ -121,10 +121,44 @@ static void test_report_says_unsure(void **state) {
   wv_image_free(&photo);
 }
 
+/* A pair's back-lit re-render below its photo's blurred copy: the report warns in the
+ * transmission section and gives the back-lit photo's periodic share; above it, no warning. */
+static void test_report_says_unsure_t(void **state) {
+  (void)state;
+  const char *dir = tu_tmpdir("capture_report_t");
+  wv_error e = {0};
+  wv_image photo;
+  photo_of_checks(&photo);
+  char png[4096], html[4096];
+  snprintf(png, sizeof png, "%s/photo.png", dir);
+  snprintf(html, sizeof html, "%s/report.html", dir);
+  assert_int_equal(wv_image_write_png(png, &photo, 8, &e), WV_OK);
+  wv_params p;
+  assert_int_equal(wv_params_default("satin5", &p, &e), WV_OK);
+  wv_report r = {.title = "test", .photo_png = png, .start_png = png, .fit_png = png, .start_label = "network",
+                 .start = &p, .fit = &p, .descriptor = "default", .photo_t_png = png, .fit_t_png = png,
+                 .ssim_rgb_t = 0.7845, .wsc_t = 0.27, .ssim_rgb_blurred_t = 0.8237, .periodic_share_t = 0.015,
+                 .below_blurred_copy_t = 1};
+  assert_int_equal(wv_report_write_html(html, &r, &e), WV_OK);
+  assert_true(contains(html, "Warning: the back-lit re-render is unsure."));
+  assert_true(contains(html, "(0.8237). Of the back-lit photo's detail, 2% lies in the peaks"));
+  assert_true(contains(html, "<td>0.8237 <b style=\"color:#c00\">(the fit scores below it)</b></td>"));
+  assert_true(contains(html, "<td>1.5%</td>"));
+  assert_false(contains(html, "Warning: an unsure")); /* the reflection side has no figures here */
+  r.ssim_rgb_t = 0.85, r.below_blurred_copy_t = 0, r.periodic_share_t = -2;
+  assert_int_equal(wv_report_write_html(html, &r, &e), WV_OK);
+  assert_false(contains(html, "the back-lit re-render is unsure"));
+  assert_false(contains(html, "(the fit scores below it)"));
+  assert_false(contains(html, "<td>1.5%</td>"));
+  assert_true(contains(html, "<td>0.8237</td>"));
+  wv_image_free(&photo);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_below_blurred_copy),
       cmocka_unit_test(test_report_says_unsure),
+      cmocka_unit_test(test_report_says_unsure_t),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -65,10 +65,12 @@ typedef struct {
   wv_weave_views views; /* SSIM per channel and WSC of start and fit (wsc -2: not measured) */
   char start_label[32]; /* what the start was: prior, start (a parameter file), network */
   /* A photo pair's transmission photo against its re-render (pair 0: none): SSIM per RGB
-   * channel, WSC (-2: not measured), the photo's blurred-copy SSIM, and the mean brightness
-   * of photo [0] and re-render [1] over the centre (half of each side) [0] and the whole frame [1]. */
-  int pair;
-  double ssim_rgb_t, wsc_t, ssim_rgb_blurred_t, mean_t[2][2];
+   * channel, WSC (-2: not measured), the photo's blurred-copy SSIM, whether the re-render scores
+   * below it, the share of the photo's detail in its spectral peaks (wv_detail_periodic; -2: not
+   * measured), and the mean brightness of photo [0] and re-render [1] over the centre (half of
+   * each side) [0] and the whole frame [1]. */
+  int pair, below_blurred_copy_t;
+  double ssim_rgb_t, wsc_t, ssim_rgb_blurred_t, periodic_share_t, mean_t[2][2];
   int kt_model; /* a pair's transmission colours started from a pair model (1), from the prior after the pair
                  * model's start scored worse on the pair's loss (2), from the prior without one (0) */
 } wv_fit_outcome;

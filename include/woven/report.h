@@ -71,10 +71,13 @@ typedef struct {
   const char *drape_png;                       /* the fit on the draped cloth under new light (NULL: none) */
   const char *drape_note;                      /* what the drape shows, or why it is missing */
   /* A photo pair: the transmission photo and the fit's re-render in the back-lit scene, SSIM per
-   * RGB channel and WSC between them (-2: not measured) and the photo's blurred-copy SSIM
-   * (NULL photo_t_png: one photo; the report says the transmission parameters were not fitted). */
+   * RGB channel and WSC between them (-2: not measured), the photo's blurred-copy SSIM, whether
+   * the re-render scores below it (a warning) and the share of the photo's detail in its
+   * spectral peaks (-2: not measured) (NULL photo_t_png: one photo; the report says the
+   * transmission parameters were not fitted). */
   const char *photo_t_png, *fit_t_png;
-  double ssim_rgb_t, wsc_t, ssim_rgb_blurred_t;
+  double ssim_rgb_t, wsc_t, ssim_rgb_blurred_t, periodic_share_t;
+  int below_blurred_copy_t;
   int kt_fitted; /* the one photo is back-lit: the fit moved k_t */
   const char *kt_start; /* a pair's transmission colours started from this pair model (NULL: the prior) */
   int kt_tried;         /* ... the prior after the pair model's start scored worse */

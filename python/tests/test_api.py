@@ -171,5 +171,7 @@ def test_capture_pair(root, tmp_path):
     r = woven.capture(tmp_path / "r.png", "flat45", out, transmission=tmp_path / "t.png", pattern="plain",
                       iters=1, iter_spp=1, register_radius=0, distort_degree=0, drape="none", threads=2)
     assert 0 < r["ssim_rgb_fit_t"] <= 1 and 0 < r["ssim_rgb_blurred_photo_t"] <= 1
+    assert r["below_blurred_copy_t"] == (r["ssim_rgb_fit_t"] < r["ssim_rgb_blurred_photo_t"])
+    assert 0 <= r["photo_periodic_share_t"] < 1
     assert r["render_t"].shape == (512, 512, 3) and (out / "photo_t.png").exists()
     assert r["params"].json == woven.Params(out / "params.json").json

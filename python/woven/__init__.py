@@ -243,8 +243,9 @@ def capture(photo, scene, out, **opts):
     iterations, dir, params (a woven.Params), render (the fit's render.png as an array), and
     as `woven capture --json` names them ssim_rgb_fit, ssim_rgb_blurred_photo,
     below_blurred_copy, wsc_fit and photo_periodic_share (the share of the photo's detail
-    that is its weave); for a pair also ssim_rgb_fit_t, ssim_rgb_blurred_photo_t, wsc_fit_t
-    and render_t (the back-lit re-render)."""
+    that is its weave); for a pair also ssim_rgb_fit_t, ssim_rgb_blurred_photo_t,
+    below_blurred_copy_t, photo_periodic_share_t, wsc_fit_t and render_t (the back-lit
+    re-render)."""
     if "crop" in opts:
         opts["crop"] = [int(v) for v in opts["crop"]]
     for k in ("transmission", "transmission_scene", "pair_model"):

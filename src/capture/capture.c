@@ -165,11 +165,15 @@ static wv_status write_transmission(const wv_fit_job *job, const char *dir, cons
   wv_render_opts ro = {.threads = threads};
   wv_image r = {0};
   wv_status rc = wv_render(&fs, &pt, &ro, &r, NULL, err);
-  out->pair = 1, out->wsc_t = -2, out->ssim_rgb_blurred_t = -2;
+  out->pair = 1, out->wsc_t = -2, out->ssim_rgb_blurred_t = -2, out->periodic_share_t = -2;
+  out->below_blurred_copy_t = 0;
   if (!rc) rc = wv_ssim(job->photo_t, &r, WV_SSIM_RGB, &out->ssim_rgb_t, err);
   if (!rc && wv_wsc(job->photo_t, &r, &out->wsc_t, NULL)) out->wsc_t = -2; /* too small an image: not measured */
   if (!rc && wv_blurred_copy_ssim(job->photo_t, WV_BLURRED_COPY_SIGMA, &out->ssim_rgb_blurred_t, NULL))
     out->ssim_rgb_blurred_t = -2;
+  if (!rc && out->ssim_rgb_blurred_t > -2) out->below_blurred_copy_t = out->ssim_rgb_t < out->ssim_rgb_blurred_t;
+  if (!rc && wv_detail_periodic(job->photo_t, WV_BLURRED_COPY_SIGMA, &out->periodic_share_t, NULL, NULL))
+    out->periodic_share_t = -2;
   if (!rc) rc = centre_whole_mean(job->photo_t, out->mean_t[0], err);
   if (!rc) rc = centre_whole_mean(&r, out->mean_t[1], err);
   snprintf(pphoto, cap, "%s/photo_t.png", dir);
@@ -237,6 +241,8 @@ static wv_status write_results(const wv_fit_job *job, const char *dir, const wv_
                    .ssim_rgb_t = out->ssim_rgb_t,
                    .wsc_t = out->wsc_t,
                    .ssim_rgb_blurred_t = out->ssim_rgb_blurred_t,
+                   .below_blurred_copy_t = out->below_blurred_copy_t,
+                   .periodic_share_t = out->periodic_share_t,
                    .kt_fitted = wv_scene_transmits(job->scene),
                    .kt_start = job->kt_start,
                    .kt_tried = job->kt_tried,

@@ -337,12 +337,32 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
       sb_base64_file(&b, tf[i], &st, err);
       sb_printf(&b, "\"><figcaption>%s</figcaption></figure>\n", tl[i]);
     }
+    if (r->below_blurred_copy_t) {
+      char grain_t[320] = "";
+      if (r->periodic_share_t > -2)
+        snprintf(grain_t, sizeof grain_t,
+                 " Of the back-lit photo's detail, %.0f%% lies in the peaks of its spectrum, the weave; the rest "
+                 "is grain, which no re-render places where the photo has it, so where the weave is a small "
+                 "share the blurred copy can be a bound no parameters pass.",
+                 100 * r->periodic_share_t);
+      sb_printf(&b, "<p class=\"unsure\" style=\"background:#fde8e8;border:2px solid #c00;padding:0.6em\"><b>Warning: "
+                    "the back-lit re-render is unsure.</b> It scores a lower SSIM against the transmission photo "
+                    "(per RGB channel, %.4f) than the photo's own copy blurred by a Gaussian of sigma %.0f px "
+                    "(%.4f).%s Compare the weave's spectrum (WSC below) before relying on the transmission "
+                    "colours.</p>\n",
+                r->ssim_rgb_t, WV_BLURRED_COPY_SIGMA, r->ssim_rgb_blurred_t, grain_t);
+    }
     sb_printf(&b, "<table><tr><th>against the transmission photo</th><th>fit</th></tr>\n");
     sb_printf(&b, "<tr><td>SSIM (per RGB channel)</td><td>%.4f</td></tr>\n", r->ssim_rgb_t);
     if (r->ssim_rgb_blurred_t > -2)
       sb_printf(&b, "<tr><td>SSIM (per RGB channel) of the photo's copy blurred by %.0f px, the baseline</td>"
-                    "<td>%.4f</td></tr>\n",
-                WV_BLURRED_COPY_SIGMA, r->ssim_rgb_blurred_t);
+                    "<td>%.4f%s</td></tr>\n",
+                WV_BLURRED_COPY_SIGMA, r->ssim_rgb_blurred_t,
+                r->below_blurred_copy_t ? " <b style=\"color:#c00\">(the fit scores below it)</b>" : "");
+    if (r->periodic_share_t > -2)
+      sb_printf(&b, "<tr><td>the photo's detail in the peaks of its spectrum (the weave; the rest is grain)</td>"
+                    "<td>%.1f%%</td></tr>\n",
+                100 * r->periodic_share_t);
     if (r->wsc_t > -2) sb_printf(&b, "<tr><td>WSC (weave-spectrum correlation)</td><td>%.4f</td></tr>\n", r->wsc_t);
     sb_printf(&b, "<tr><td colspan=\"2\">One set of parameters for both photos (docs/fit.md, \"Photo pairs\"): "
                   "the back-lit photo fitted the transmission colours, the reflection photo the rest.</td></tr>\n");

@@ -476,6 +476,8 @@ int wv_ffi_capture(const char *photo, const char *scene, const char *dir, const 
   if (s && out.pair) { /* the transmission photo against its re-render */
     json_object_set_new(s, "ssim_rgb_fit_t", json_real(out.ssim_rgb_t));
     json_object_set_new(s, "ssim_rgb_blurred_photo_t", json_real(out.ssim_rgb_blurred_t));
+    json_object_set_new(s, "below_blurred_copy_t", json_boolean(out.below_blurred_copy_t));
+    if (out.periodic_share_t > -2) json_object_set_new(s, "photo_periodic_share_t", json_real(out.periodic_share_t));
     json_object_set_new(s, "wsc_fit_t", json_real(out.wsc_t));
   }
   wv_fit_state_free(&out.state);
