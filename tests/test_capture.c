@@ -72,21 +72,29 @@ static int contains(const char *path, const char *text) {
   return found;
 }
 
+/* A report's files in a fresh folder NAME: the photo (a check pattern) written to png, the
+ * report's path in html, and satin5's default parameters for start and fit. */
+static void report_files(const char *name, char png[4096], char html[4096], wv_params *p) {
+  const char *dir = tu_tmpdir(name);
+  wv_error e = {0};
+  wv_image photo;
+  photo_of_checks(&photo);
+  snprintf(png, 4096, "%s/photo.png", dir);
+  snprintf(html, 4096, "%s/report.html", dir);
+  assert_int_equal(wv_image_write_png(png, &photo, 8, &e), WV_OK);
+  wv_image_free(&photo);
+  assert_int_equal(wv_params_default("satin5", p, &e), WV_OK);
+}
+
 /* The report warns of a fit below the blurred copy, shows the baseline and the photo's
  * periodic share, and lists the families of the pattern choice with their candidates and
  * scores. */
 static void test_report_says_unsure(void **state) {
   (void)state;
-  const char *dir = tu_tmpdir("capture_report");
   wv_error e = {0};
-  wv_image photo;
-  photo_of_checks(&photo);
   char png[4096], html[4096];
-  snprintf(png, sizeof png, "%s/photo.png", dir);
-  snprintf(html, sizeof html, "%s/report.html", dir);
-  assert_int_equal(wv_image_write_png(png, &photo, 8, &e), WV_OK);
   wv_params p;
-  assert_int_equal(wv_params_default("satin5", &p, &e), WV_OK);
+  report_files("capture_report", png, html, &p);
   static wv_pattern_choice c; /* no lattice, the network decided: satin first, twill the runner-up */
   memset(&c, 0, sizeof c);
   c.method = "network", c.has_prob = 1;
@@ -118,23 +126,16 @@ static void test_report_says_unsure(void **state) {
   assert_false(contains(html, "Warning: an unsure capture."));
   assert_false(contains(html, "lies in the peaks of its spectrum"));
   assert_true(contains(html, "copy blurred by 4 px, the baseline"));
-  wv_image_free(&photo);
 }
 
 /* A pair's back-lit re-render below its photo's blurred copy: the report warns in the
  * transmission section and gives the back-lit photo's periodic share; above it, no warning. */
 static void test_report_says_unsure_t(void **state) {
   (void)state;
-  const char *dir = tu_tmpdir("capture_report_t");
   wv_error e = {0};
-  wv_image photo;
-  photo_of_checks(&photo);
   char png[4096], html[4096];
-  snprintf(png, sizeof png, "%s/photo.png", dir);
-  snprintf(html, sizeof html, "%s/report.html", dir);
-  assert_int_equal(wv_image_write_png(png, &photo, 8, &e), WV_OK);
   wv_params p;
-  assert_int_equal(wv_params_default("satin5", &p, &e), WV_OK);
+  report_files("capture_report_t", png, html, &p);
   wv_report r = {.title = "test", .photo_png = png, .start_png = png, .fit_png = png, .start_label = "network",
                  .start = &p, .fit = &p, .descriptor = "default", .photo_t_png = png, .fit_t_png = png,
                  .ssim_rgb_t = 0.7845, .wsc_t = 0.27, .ssim_rgb_blurred_t = 0.8237, .periodic_share_t = 0.015,
@@ -151,7 +152,6 @@ static void test_report_says_unsure_t(void **state) {
   assert_false(contains(html, "(the fit scores below it)"));
   assert_false(contains(html, "<td>1.5%</td>"));
   assert_true(contains(html, "<td>0.8237</td>"));
-  wv_image_free(&photo);
 }
 
 int main(void) {
