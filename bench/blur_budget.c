@@ -100,9 +100,11 @@ int main(int argc, char **argv) {
     printf("%s vs %s: photo blurred by 1 / 2 / 4 px %.4f / %.4f / %.4f; render as it is %.4f, blurred %.4f / %.4f / "
            "%.4f; photo's 2 px blur + render detail x 0 / 0.5 / 1 %.4f / %.4f / %.4f; periodic share %.3f, oracle "
            "%.4f; WSC render %.3f, photo's 4 px blur %.3f, oracle %.3f, photo's quadrants %.3f\n",
-           argv[a], argv[a + 1], pb[0], pb[1], pb[2], rb[0], rb[1], rb[2], rb[3], pl[0], pl[1], pl[2], share, so, w[0], w[1], w[2], w[3]);
+           argv[a], argv[a + 1], pb[0], pb[1], pb[2], rb[0], rb[1], rb[2], rb[3], pl[0], pl[1], pl[2], share, so, w[0],
+           w[1], w[2], w[3]);
     json_array_append_new(
-        list, json_pack("{s:s,s:s,s:[f,f,f],s:[f,f,f,f],s:[f,f,f],s:f,s:f,s:[f,f,f,f]}", "photo", argv[a], "render", argv[a + 1],
+        list, json_pack("{s:s,s:s,s:[f,f,f],s:[f,f,f,f],s:[f,f,f],s:f,s:f,s:[f,f,f,f]}", "photo", argv[a], "render",
+                        argv[a + 1],
                         "photo_blur_1_2_4", pb[0], pb[1], pb[2], "render_blur_0_1_2_4", rb[0], rb[1], rb[2], rb[3],
                         "photo_low_render_detail_0_05_1", pl[0], pl[1], pl[2], "periodic_share", share,
                         "periodic_oracle", so, "wsc_render_blur4_oracle_quadrants", w[0], w[1], w[2], w[3]));

@@ -259,6 +259,10 @@ static void family_table(sbuf *b, const wv_pattern_choice *pc) {
   sb_printf(b, "</table>\n");
 }
 
+/* The warning box of an unsure re-render, and the mark on a baseline the fit scores below. */
+#define UNSURE_BOX "<p class=\"unsure\" style=\"background:#fde8e8;border:2px solid #c00;padding:0.6em\"><b>Warning: "
+#define BELOW_MARK " <b style=\"color:#c00\">(the fit scores below it)</b>"
+
 wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *err) {
   sbuf b = {0};
   wv_status st = WV_OK;
@@ -287,10 +291,9 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
              "where it lies.",
              100 * r->weave->periodic_share);
   if (r->weave && r->weave->below_blurred_copy)
-    sb_printf(&b, "<p class=\"unsure\" style=\"background:#fde8e8;border:2px solid #c00;padding:0.6em\"><b>Warning: "
-                  "an unsure %s.</b> The fit's render scores a lower SSIM against the photo (per RGB channel, "
-                  "%.4f) than the photo's own copy blurred by a Gaussian of sigma %.0f px (%.4f), a copy that keeps "
-                  "no weave at all: the fit reproduces the photo less well than a blur does. Check the weave "
+    sb_printf(&b, UNSURE_BOX "an unsure %s.</b> The fit's render scores a lower SSIM against the photo (per RGB "
+                  "channel, %.4f) than the photo's own copy blurred by a Gaussian of sigma %.0f px (%.4f), a copy "
+                  "that keeps no weave at all: the fit reproduces the photo less well than a blur does. Check the weave "
                   "close up%s before using these parameters.%s</p>\n",
               r->pattern_choice ? "capture" : "fit", r->weave->ssim_rgb[1], WV_BLURRED_COPY_SIGMA,
               r->weave->ssim_rgb_blurred, r->pattern_choice ? " and the families' scores below" : "", grain);
@@ -318,7 +321,7 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
     sb_printf(&b, "<tr><td>SSIM (per RGB channel) of the photo's copy blurred by %.0f px, the baseline</td>"
                   "<td colspan=\"2\">%.4f%s</td></tr>\n",
               WV_BLURRED_COPY_SIGMA, r->weave->ssim_rgb_blurred,
-              r->weave->below_blurred_copy ? " <b style=\"color:#c00\">(the fit scores below it)</b>" : "");
+              r->weave->below_blurred_copy ? BELOW_MARK : "");
   if (r->weave && r->weave->periodic_share > -2)
     sb_printf(&b, "<tr><td>the photo's detail in the peaks of its spectrum (the weave; the rest is grain)</td>"
                   "<td colspan=\"2\">%.1f%%</td></tr>\n",
@@ -345,9 +348,8 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                  "is grain, which no re-render places where the photo has it, so where the weave is a small "
                  "share the blurred copy can be a bound no parameters pass.",
                  100 * r->periodic_share_t);
-      sb_printf(&b, "<p class=\"unsure\" style=\"background:#fde8e8;border:2px solid #c00;padding:0.6em\"><b>Warning: "
-                    "the back-lit re-render is unsure.</b> It scores a lower SSIM against the transmission photo "
-                    "(per RGB channel, %.4f) than the photo's own copy blurred by a Gaussian of sigma %.0f px "
+      sb_printf(&b, UNSURE_BOX "the back-lit re-render is unsure.</b> It scores a lower SSIM against the "
+                    "transmission photo (per RGB channel, %.4f) than the photo's own copy blurred by a Gaussian of sigma %.0f px "
                     "(%.4f).%s Compare the weave's spectrum (WSC below) before relying on the transmission "
                     "colours.</p>\n",
                 r->ssim_rgb_t, WV_BLURRED_COPY_SIGMA, r->ssim_rgb_blurred_t, grain_t);
@@ -358,7 +360,7 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
       sb_printf(&b, "<tr><td>SSIM (per RGB channel) of the photo's copy blurred by %.0f px, the baseline</td>"
                     "<td>%.4f%s</td></tr>\n",
                 WV_BLURRED_COPY_SIGMA, r->ssim_rgb_blurred_t,
-                r->below_blurred_copy_t ? " <b style=\"color:#c00\">(the fit scores below it)</b>" : "");
+                r->below_blurred_copy_t ? BELOW_MARK : "");
     if (r->periodic_share_t > -2)
       sb_printf(&b, "<tr><td>the photo's detail in the peaks of its spectrum (the weave; the rest is grain)</td>"
                     "<td>%.1f%%</td></tr>\n",
