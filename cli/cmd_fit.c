@@ -10,6 +10,7 @@
 #include "woven/descriptor.h"
 #include "woven/fit.h"
 #include "woven/io.h"
+#include "woven/nn.h"
 #include "woven/photo.h"
 
 /* strtol-based: sscanf's %d has undefined behaviour on overflow. */
@@ -258,6 +259,7 @@ int cli_fit_summary(cli_ctx *c, const char *dir, const wv_pattern_choice *pc, wv
       json_object_set_new(o_json, "pattern_choice", pc ? cli_json_text(wv_pattern_choice_to_json(pc)) : json_null());
       json_object_set_new(o_json, "density_alignment_wsc",
                           json_pack("[o,o]", cli_real(st->align_wsc_before, 4), cli_real(st->align_wsc_after, 4)));
+      json_object_set_new(o_json, "blas_core", json_string(wv_nn_blas_core()));
       json_object_set_new(o_json, "camera_blur_px", cli_real(r->fit_scene.psf_sigma, 3));
       json_object_set_new(o_json, "camera_blur_measured_px", cli_real(st->psf_start, 3));
       json_object_set_new(json_object_get(o_json, "time_s"), "distortion", cli_real(st->timing.distortion, 3));

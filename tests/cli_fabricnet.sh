@@ -92,6 +92,8 @@ grep -q '"family_scores": {"[a-z]*": {"pattern": "' "$T/out" || fail "capture JS
 grep -q '"family_score_kind": "probability"' "$T/out" || fail "capture JSON does not say what the families' scores are"
 grep -q '"ssim_rgb_blurred_photo": [0-9]' "$T/out" || fail "capture JSON lacks the blurred-copy SSIM"
 grep -Eq '"below_blurred_copy": (true|false)' "$T/out" || fail "capture JSON lacks the blurred-copy flag"
+grep -Eq '"blas_core": "[A-Za-z0-9_]+"' "$T/out" || fail "capture JSON does not name OpenBLAS's kernels"
+grep -q 'OpenBLAS kernels <code>[A-Za-z0-9_]*</code>' "$T/cap/report.html" || fail "report does not name OpenBLAS's kernels"
 grep -Eq '"photo_periodic_share": (0|1)(\.[0-9]+)?[,}]' "$T/out" || fail "capture JSON lacks the photo's periodic share"
 grep -q 'How the families stood' "$T/capc/report.html" || fail "capture report lacks the families' scores"
 grep -q "found no weave lattice" "$T/capc/report.html" || fail "capture report does not say the analysis found no lattice"

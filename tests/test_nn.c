@@ -2,10 +2,12 @@
  * loss = sum(dy .* forward(...)) (accumulated in double), plus forward references,
  * the threaded sgemm, Adam, the RNG and half-float conversion. */
 #include <cblas.h>
+#include <ctype.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "testutil.h"
 #include "woven/fit.h"
@@ -354,6 +356,18 @@ static void test_sgemm(void **state) {
       }
 }
 
+/* The kernels' name is what a capture reports: a word, as the environment set it when it
+ * chose them. */
+static void test_blas_core(void **state) {
+  (void)state;
+  const char *name = wv_nn_blas_core();
+  assert_non_null(name);
+  assert_true(strlen(name) > 0 && strlen(name) < 64);
+  for (const char *c = name; *c; c++) assert_true(isalnum((unsigned char)*c) || *c == '_');
+  const char *want = getenv("OPENBLAS_CORETYPE");
+  if (want && !strcasecmp(want, "Haswell")) assert_string_equal(name, "Haswell");
+}
+
 /* ---- Adam ---- */
 static void test_adam(void **state) {
   (void)state;
@@ -619,6 +633,7 @@ int main(void) {
       cmocka_unit_test(test_elementwise), cmocka_unit_test(test_avgpool),
       cmocka_unit_test(test_gram),    cmocka_unit_test(test_fc),
       cmocka_unit_test(test_l1),      cmocka_unit_test(test_sgemm),
+      cmocka_unit_test(test_blas_core),
       cmocka_unit_test(test_adam),    cmocka_unit_test(test_adam_box), cmocka_unit_test(test_lbfgs_box),  cmocka_unit_test(test_mlp_training),
       cmocka_unit_test(test_rng_half),
   };

@@ -13,7 +13,8 @@
  * slower than this scheme). So every op that calls BLAS first makes OpenBLAS
  * single-threaded with openblas_set_num_threads(1) (wv_nn_blas_serial); that
  * setting is process-wide. Results are deterministic for a given OpenMP thread
- * count (partial sums are combined in thread order, never with atomics).
+ * count (partial sums are combined in thread order, never with atomics) and a given
+ * set of OpenBLAS kernels, which OpenBLAS chooses by the CPU (wv_nn_blas_core).
  */
 #ifndef WOVEN_NN_H
 #define WOVEN_NN_H
@@ -43,6 +44,11 @@ void wv_rng_fill_uniform(wv_rng *r, float *x, size_t n, float lo, float hi);
 /* ---- BLAS ---- */
 /* Makes OpenBLAS single-threaded (process-wide; see the top of this file). */
 void wv_nn_blas_serial(void);
+/* The name of the kernels OpenBLAS runs on this CPU ("Haswell", "SkylakeX", ...; the
+ * environment's OPENBLAS_CORETYPE can choose them): products summed by other kernels differ
+ * in their last bits, and a fit's iterations carry that to another end (docs/fit.md, "The
+ * same capture on another CPU"). A static string; "unknown" where OpenBLAS gives none. */
+const char *wv_nn_blas_core(void);
 /* Row-major C (m x n) = alpha op(A) op(B) + beta C, op = transpose when ta/tb is
  * nonzero. Large products are split over the OpenMP threads (by rows of C or by
  * columns, whichever is longer), each part a single-threaded OpenBLAS call. */

@@ -153,6 +153,7 @@ def test_capture(root, tmp_path):
     # the figures `woven capture --json` gives, against the photo
     assert 0 < r["ssim_rgb_fit"] <= 1 and 0 < r["ssim_rgb_blurred_photo"] <= 1
     assert r["below_blurred_copy"] == (r["ssim_rgb_fit"] < r["ssim_rgb_blurred_photo"])
+    assert r["blas_core"] and r["blas_core"].replace("_", "").isalnum()
     assert 0 < r["photo_periodic_share"] < 1 and -1 <= r["wsc_fit"] <= 1
     assert (out / "network.json").exists() and (out / "report.html").exists()
     with pytest.raises(woven.WovenError):  # an earlier capture is not replaced without force

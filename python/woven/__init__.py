@@ -242,8 +242,9 @@ def capture(photo, scene, out, **opts):
     transmission_scene, pair_model. Returns a dict: pattern, ssim_network, ssim_fit,
     iterations, dir, params (a woven.Params), render (the fit's render.png as an array), and
     as `woven capture --json` names them ssim_rgb_fit, ssim_rgb_blurred_photo,
-    below_blurred_copy, wsc_fit and photo_periodic_share (the share of the photo's detail
-    that is its weave); for a pair also ssim_rgb_fit_t, ssim_rgb_blurred_photo_t,
+    below_blurred_copy, wsc_fit, photo_periodic_share (the share of the photo's detail
+    that is its weave) and blas_core (OpenBLAS's kernels, which the fit's last digits follow:
+    docs/fit.md); for a pair also ssim_rgb_fit_t, ssim_rgb_blurred_photo_t,
     below_blurred_copy_t, photo_periodic_share_t, wsc_fit_t and render_t (the back-lit
     re-render)."""
     if "crop" in opts:

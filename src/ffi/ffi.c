@@ -16,6 +16,7 @@
 #include "woven/io.h"
 #include "woven/maps.h"
 #include "woven/metrics.h"
+#include "woven/nn.h"
 #include "woven/params.h"
 #include "woven/render.h"
 #include "woven/scene.h"
@@ -472,6 +473,7 @@ int wv_ffi_capture(const char *photo, const char *scene, const char *dir, const 
     }
     if (v->wsc[1] > -2) json_object_set_new(s, "wsc_fit", json_real(v->wsc[1]));
     if (v->periodic_share > -2) json_object_set_new(s, "photo_periodic_share", json_real(v->periodic_share));
+    json_object_set_new(s, "blas_core", json_string(wv_nn_blas_core()));
   }
   if (s && out.pair) { /* the transmission photo against its re-render */
     json_object_set_new(s, "ssim_rgb_fit_t", json_real(out.ssim_rgb_t));

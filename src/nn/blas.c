@@ -9,6 +9,11 @@ void wv_nn_blas_serial(void) {
   if (openblas_get_num_threads() != 1) openblas_set_num_threads(1);
 }
 
+const char *wv_nn_blas_core(void) {
+  const char *name = openblas_get_corename();
+  return name && *name ? name : "unknown";
+}
+
 static void gemm1(int ta, int tb, int m, int n, int k, float alpha, const float *a, int lda,
                   const float *b, int ldb, float beta, float *c, int ldc) {
   if (m <= 0 || n <= 0) return;
