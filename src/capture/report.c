@@ -407,8 +407,9 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
   sb_printf(&b, "<p>SSIM: Wang et al. 2004, 11x11 Gaussian window. WSC: Pearson correlation of the log "
                 "power spectra of the luminance detail of the centre 256 x 256 pixels, DC left out; 1 for the same "
                 "periodic structure, about 0 for none in common. Whitened WSC: the same after each ring of the spectrum is "
-                "standardised by its median and spread, which removes the blur's envelope that dominates WSC. %d iterations, descriptor <code>%s</code>, "
-                "OpenBLAS kernels <code>%s</code> (another CPU's can end the fit a few thousandths away).</p>\n",
+                "standardised by its median and spread, which removes the blur's envelope that dominates WSC. "
+                "%d iterations, descriptor <code>%s</code>, OpenBLAS kernels <code>%s</code> (another CPU's can end "
+                "the fit a few thousandths away).</p>\n",
             r->iters, r->descriptor, wv_nn_blas_core());
   char bounds[WV_P_COUNT + 3][96];
   int nbounds = wv_params_at_bounds(r->fit, bounds, WV_P_COUNT + 3);
