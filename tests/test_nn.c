@@ -357,7 +357,7 @@ static void test_sgemm(void **state) {
 }
 
 /* The kernels' name is what a capture reports: a word, as the environment set it when it
- * chose them. */
+ * chose them (ctest runs this test once more with OPENBLAS_CORETYPE=Haswell: test_nn_haswell). */
 static void test_blas_core(void **state) {
   (void)state;
   const char *name = wv_nn_blas_core();
@@ -627,7 +627,9 @@ static void test_rng_half(void **state) {
   assert_true(wv_nn_bf16_to_f32(0xc0a0) == -5.0f);
 }
 
-int main(void) {
+/* An argument runs only the tests whose names match it (cmocka's pattern). */
+int main(int argc, char **argv) {
+  if (argc > 1) cmocka_set_test_filter(argv[1]);
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_conv2d),  cmocka_unit_test(test_conv2d_invalid),
       cmocka_unit_test(test_elementwise), cmocka_unit_test(test_avgpool),
