@@ -74,6 +74,11 @@ static void print_choice(cli_ctx *c, const wv_pattern_choice *pc) {
              !strcmp(pc->method, "network") ? "the network's most probable pattern"
                                             : "the smallest fit loss of the estimate rendered with each built-in",
              pc->seconds);
+    if (pc->start_compared)
+      cli_info(c, "start densities %.1f x %.1f yarns/inch from the %s (peak match: network %.3f, weak %s lattice "
+                  "%.3f)\n",
+               pc->params[pc->best].density[0], pc->params[pc->best].density[1],
+               pc->lattice_densities ? "weak lattice" : "network", pc->start_match[0], name, pc->start_match[1]);
   }
 }
 

@@ -127,7 +127,61 @@ static void test_no_lattice_falls_back(void **state) {
   assert_int_equal(wv_fabricnet_choose_pattern(&f->net, f->d, &f->scene, &photo, f->gram, y, &o, &c, &e), WV_OK);
   assert_int_equal(c.best, 9);
   assert_string_equal(c.method, "network");
+  assert_false(c.start_compared); /* no peaks: nothing for a weak lattice to offer */
+  assert_false(c.lattice_densities);
   wv_image_free(&photo);
+}
+
+/* A plain weave under heavy sensor noise: too few of its spectral peaks stand out for a
+ * lattice (the plain lattice scores between 0 and WV_LATTICE_MIN_SCORE), yet that lattice's
+ * densities are the truth's, where the network's (here half the truth's) are an alias. The
+ * network decides the pattern; the start takes the densities whose render's peaks match the
+ * photo's better: the lattice's. */
+static void test_weak_lattice_densities(void **state) {
+  fixture *f = *state;
+  wv_error e = {0};
+  wv_params truth, net;
+  wv_params_default("plain", &truth, NULL);
+  truth.density[0] = 150, truth.density[1] = 110;
+  wv_image photo = {0};
+  wv_render_opts ro = {0};
+  assert_int_equal(wv_render(&f->scene, &truth, &ro, &photo, NULL, &e), WV_OK);
+  tu_rng r = {7};
+  for (size_t i = 0; i < (size_t)photo.w * photo.h * 3; i++) {
+    double g = 0; /* a sum of uniforms: near Gaussian, sd 0.58 */
+    for (int k = 0; k < 4; k++) g += tu_rnd(&r) - 0.5;
+    photo.data[i] += (float)g;
+  }
+  assert_int_equal(wv_descriptor_forward(f->d, &photo, f->gram, &e), WV_OK);
+  net = truth;
+  net.density[0] = truth.density[0] / 2, net.density[1] = truth.density[1] / 2;
+  float y[WV_NET_OUT], prob[WV_WEAVE_BUILTINS] = {0};
+  wv_fabricnet_targets(&net, WV_NET_OUT, y);
+  prob[0] = 1; /* plain */
+  wv_pattern_opts o;
+  wv_pattern_opts_default(&o);
+  o.prob = prob;
+  static wv_pattern_choice c;
+  assert_int_equal(wv_fabricnet_choose_pattern(&f->net, f->d, &f->scene, &photo, f->gram, y, &o, &c, &e), WV_OK);
+  wv_image_free(&photo);
+  fprintf(stderr, "lattice found %d, %d peaks, plain %.3f at %.1f x %.1f; peak match: network %.3f, lattice %.3f\n",
+          c.lattice.found, c.lattice.n_peaks, c.lattice.fit[0].score, c.lattice.fit[0].density[0],
+          c.lattice.fit[0].density[1], c.start_match[0], c.start_match[1]);
+  assert_false(c.lattice.found);
+  assert_string_equal(c.method, "network");
+  assert_int_equal(c.best, 0);
+  assert_true(c.lattice.fit[0].score > 0 && c.lattice.fit[0].score < WV_LATTICE_MIN_SCORE);
+  assert_true(c.start_compared);
+  assert_true(c.start_match[1] > c.start_match[0]);
+  assert_true(c.lattice_densities);
+  for (int y = 0; y < 2; y++) {
+    assert_true(fabs(c.params[0].density[y] - c.lattice.fit[0].density[y]) < 1e-9);
+    assert_true(fabs(c.params[0].density[y] / truth.density[y] - 1) < 0.02);
+  }
+  char *js = wv_pattern_choice_to_json(&c);
+  assert_non_null(js);
+  assert_non_null(strstr(js, "\"start_densities\": {\"from\": \"lattice\""));
+  free(js);
 }
 
 /* A photo of another size is an error naming both sizes, not a wrong answer. */
@@ -240,11 +294,13 @@ static void test_family_scores(void **state) {
   assert_string_equal(fs.family[fs.order[3]], "satin");
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  if (argc > 1) cmocka_set_test_filter(argv[1]);
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_picks_true_family, setup, teardown),
       cmocka_unit_test_setup_teardown(test_no_lattice_falls_back, setup, teardown),
       cmocka_unit_test_setup_teardown(test_photo_size, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_weak_lattice_densities, setup, teardown),
       cmocka_unit_test(test_family_hears_network),
       cmocka_unit_test(test_family_scores),
   };

@@ -33,6 +33,9 @@ typedef struct {
   double z;    /* prominence: robust standard deviations above its ring of the spectrum */
 } wv_spectral_peak;
 
+/* A lattice that explains the photo's peaks with a score below this is not a weave's: the
+ * analysis finds none, and a capture does not hold a pattern's densities to it. */
+#define WV_LATTICE_MIN_SCORE 0.35
 /* A pattern's lattice explaining the photo's peaks. */
 typedef struct {
   double density[2];  /* yarns per inch, [WV_WARP], [WV_WEFT] */
@@ -81,6 +84,11 @@ int wv_spectrum_peaks(const float *spectrum, int n, double min_z, wv_spectral_pe
 
 /* ---- ranking the built-in patterns by their own renders ---- */
 #define WV_RANK_SPP 4
+/* How well the spectral peaks of p's render, in the analysis window at the centre of s (as
+ * given: no lattice rotation added) at spp (0: WV_RANK_SPP), match the photo's peaks in lat
+ * (found or not): the ranking's peak match, 0..1 (0 when lat holds no peaks). */
+wv_status wv_lattice_match(const wv_scene *s, const wv_lattice *lat, const wv_params *p, int spp, int threads,
+                           double *match, wv_error *err);
 typedef struct {
   int spp;      /* samples per pixel of each candidate's render (WV_RANK_SPP) */
   int threads;  /* 0: OpenMP default */

@@ -15,6 +15,9 @@
  *      criterion. The chosen pattern starts with its lattice densities.
  *   3. Without a lattice (a flat card, sand, noise), the network's choice: the most
  *      probable class when o->prob is given, else the loss criterion over every built-in.
+ *      The network's choice starts from its chosen pattern's weak lattice densities (a score
+ *      above 0, below WV_LATTICE_MIN_SCORE) when their render's spectral peaks match the
+ *      photo's better than the network's densities do (wv_lattice_match).
  * The loss criterion renders a candidate's parameters over the whole scene image at a low
  * spp and compares it with the photo by the fit's loss terms: the Gram loss L_g = mean
  * |Gram(photo) - Gram(render)| plus w_pixel times the pixel loss L_c = mean |down(photo) -
@@ -80,6 +83,13 @@ typedef struct {
   double seconds;           /* analysis, renders and descriptor passes */
   double psf_sigma;         /* the camera blur the candidates were rendered with */
   int orient;               /* the candidates carry their lattice's orientation (wv_pattern_opts) */
+  /* Without a lattice, by the network, and with photo peaks that the chosen pattern's
+   * lattice explains a little (its score above 0, below WV_LATTICE_MIN_SCORE): the spectral
+   * peak match (wv_lattice_match) of the network's densities and of that lattice's was
+   * compared (start_compared), and the start took the lattice's when it matched better
+   * (lattice_densities). */
+  int start_compared, lattice_densities;
+  double start_match[2]; /* the network's densities, the lattice's */
 } wv_pattern_choice;
 /* The scene in which candidate i of c is rendered and fitted: s, with the rotation and
  * skew of its lattice added when c->orient and the lattice was found (a plane scene). out

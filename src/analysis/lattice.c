@@ -22,7 +22,6 @@
 #define FINE_RAD 1      /* ... and when refining */
 #define MATCH_RAD 2.5   /* bins: a render's peak matches a photo's peak this close */
 #define YARN_W 0.5      /* weight of the yarn frequencies against the strongest pattern coefficient */
-#define MIN_SCORE 0.35  /* a lattice that explains less than this is not a weave's */
 #define GRID_STEP 1.02  /* ratio between neighbouring densities of the coarse search */
 #define N_START 4       /* coarse maxima refined per pattern */
 
@@ -506,10 +505,10 @@ wv_status wv_lattice_analyse(const wv_scene *s, const wv_image *photo, wv_lattic
   int best = 0;
   for (int i = 1; i < nb; i++)
     if (out->fit[i].score > out->fit[best].score) best = i;
-  if (out->fit[best].score < MIN_SCORE) {
+  if (out->fit[best].score < WV_LATTICE_MIN_SCORE) {
     snprintf(out->reason, sizeof out->reason,
              "no weave lattice: the best built-in lattice (%s) explains the spectrum's %d peaks with score %.2f, "
-             "below %.2f", wv_weave_builtin_name(best), out->n_peaks, out->fit[best].score, MIN_SCORE);
+             "below %.2f", wv_weave_builtin_name(best), out->n_peaks, out->fit[best].score, WV_LATTICE_MIN_SCORE);
   } else {
     out->found = 1, out->best = best;
     wv_weave w;
@@ -635,6 +634,39 @@ static void deskew_peaks(const wv_lattice *lat, int i, const frame *fr, wv_spect
   }
 }
 
+/* p rendered in the n x n centre window of s at spp (0: WV_RANK_SPP): its weave spectrum sr,
+ * whitened zr (n x n each), and its peaks pk (*np of them, at most WV_LATTICE_PEAKS). */
+static wv_status render_peaks(const wv_scene *s, const wv_params *p, int n, int spp, int threads, float *sr,
+                              float *zr, wv_spectral_peak *pk, int *np, wv_error *err) {
+  wv_scene win;
+  wv_scene_centre_window(s, n, n, &win);
+  win.spp = spp > 0 ? spp : WV_RANK_SPP;
+  wv_render_opts ro = {.spp = win.spp, .threads = threads};
+  wv_image img = {0};
+  wv_status st = wv_render(&win, p, &ro, &img, NULL, err);
+  if (!st) st = wv_weave_spectrum(&img, 0, 0, n, sr, err);
+  if (!st) st = wv_spectrum_whiten(sr, n, WV_WSC_Z_FLOOR, WV_WSC_Z_CAP, zr, err);
+  wv_image_free(&img);
+  if (!st) *np = wv_spectrum_peaks(sr, n, Z_PEAK, pk, WV_LATTICE_PEAKS);
+  return st;
+}
+
+wv_status wv_lattice_match(const wv_scene *s, const wv_lattice *lat, const wv_params *p, int spp, int threads,
+                           double *match, wv_error *err) {
+  *match = 0;
+  int n = lat->window;
+  if (n < 1) return wv_fail(err, WV_ERR_INVALID, "the weave analysis has no window to match a render in");
+  size_t nn = (size_t)n * n;
+  float *sr = malloc(sizeof(float) * nn * 2);
+  if (!sr) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the peak match");
+  wv_spectral_peak pk[WV_LATTICE_PEAKS];
+  int np = 0;
+  wv_status st = render_peaks(s, p, n, spp, threads, sr, sr + nn, pk, &np, err);
+  if (!st) *match = peak_match(lat->peaks, lat->n_peaks, pk, np, n);
+  free(sr);
+  return st;
+}
+
 wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lattice *lat, const wv_params *base,
                           const wv_rank_opts *o, wv_lattice_ranking *out, wv_error *err) {
   double t0 = omp_get_wtime();
@@ -659,19 +691,11 @@ wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lat
   if (!st) st = wv_spectrum_whiten(sp, n, WV_WSC_Z_FLOOR, WV_WSC_Z_CAP, zp, err);
   for (int i = 0; i < nb && !st; i++) {
     wv_params p;
-    wv_scene ps, win;
+    wv_scene ps;
     wv_lattice_candidate(lat, i, base, s, o->rotate, &p, &ps);
-    wv_scene_centre_window(&ps, n, n, &win);
-    win.spp = o->spp > 0 ? o->spp : WV_RANK_SPP;
-    wv_render_opts ro = {.spp = win.spp, .threads = o->threads};
-    wv_image img = {0};
-    if ((st = wv_render(&win, &p, &ro, &img, NULL, err))) break;
-    st = wv_weave_spectrum(&img, 0, 0, n, sr, err);
-    if (!st) st = wv_spectrum_whiten(sr, n, WV_WSC_Z_FLOOR, WV_WSC_Z_CAP, zr, err);
-    wv_image_free(&img);
-    if (st) break;
     wv_spectral_peak pk[WV_LATTICE_PEAKS];
-    int np = wv_spectrum_peaks(sr, n, Z_PEAK, pk, WV_LATTICE_PEAKS);
+    int np = 0;
+    if ((st = render_peaks(&ps, &p, n, o->spp, o->threads, sr, zr, pk, &np, err))) break;
     /* a render without the lattice's skew is compared with the photo's peaks as its
      * square cloth would show them */
     wv_spectral_peak square[WV_LATTICE_PEAKS];

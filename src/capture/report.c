@@ -458,6 +458,13 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                 l->reason, chosen, wv_weave_family(chosen),
                 !strcmp(pc->method, "network") ? "its most probable class"
                                                : "the smallest fit loss of its estimate rendered with each built-in");
+      if (pc->start_compared)
+        sb_printf(&b, "<p>The start's densities: %s, %.1f / %.1f yarns/inch. The spectral peaks of the render "
+                      "matched the photo's %.3f with the network's densities and %.3f with those of the weak "
+                      "%s lattice (score %.3f).</p>\n",
+                  pc->lattice_densities ? "the weak lattice's" : "the network's", pc->params[pc->best].density[0],
+                  pc->params[pc->best].density[1], pc->start_match[0], pc->start_match[1], chosen,
+                  l->fit[pc->best].score);
     }
     family_table(&b, pc);
   }

@@ -238,6 +238,19 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
     for (int i = 1; i < nb; i++)
       if (o->prob[i] > o->prob[out->best]) out->best = i;
     out->method = "network";
+    /* A lattice too weak to count as a weave's often still holds the yarn spacings, where the
+     * network's densities can miss a dense cloth by far: the start takes the chosen pattern's
+     * lattice densities when their render's spectral peaks match the photo's better. */
+    int b = out->best;
+    if (!st && o->lattice && out->lattice.n_peaks > 0 && out->lattice.fit[b].score > 0) {
+      wv_params lat;
+      wv_scene unused;
+      wv_lattice_candidate(&out->lattice, b, &out->params[b], s, 0, &lat, &unused);
+      st = wv_lattice_match(s, &out->lattice, &out->params[b], sc.spp, o->threads, &out->start_match[0], err);
+      if (!st) st = wv_lattice_match(s, &out->lattice, &lat, sc.spp, o->threads, &out->start_match[1], err);
+      out->start_compared = !st;
+      if (!st && out->start_match[1] > out->start_match[0]) out->params[b] = lat, out->lattice_densities = 1;
+    }
   } else if (!st) {
     for (int i = 0; i < nb && !st; i++) {
       st = LOSS(i);
@@ -307,6 +320,10 @@ char *wv_pattern_choice_to_json(const wv_pattern_choice *c) {
       json_object_set_new(pr, wv_weave_builtin_name(i), json_real(c->prob[i]));
     json_object_set_new(o, "network_probability", pr);
   }
+  if (o && c->start_compared) /* the start's densities: the network's or a weak lattice's */
+    json_object_set_new(o, "start_densities",
+                        json_pack("{s:s,s:f,s:f}", "from", c->lattice_densities ? "lattice" : "network",
+                                  "match_network", c->start_match[0], "match_lattice", c->start_match[1]));
   char *s = o ? json_dumps(o, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(6)) : NULL;
   json_decref(o);
   return s;
