@@ -34,7 +34,7 @@ typedef struct {
 } wv_spectral_peak;
 
 /* A lattice that explains the photo's peaks with a score below this is not a weave's: the
- * analysis finds none, and a capture does not hold a pattern's densities to it. */
+ * analysis finds none (a weaker one may still give the start its densities, pattern.h). */
 #define WV_LATTICE_MIN_SCORE 0.35
 /* A pattern's lattice explaining the photo's peaks. */
 typedef struct {
