@@ -74,11 +74,21 @@ static void print_choice(cli_ctx *c, const wv_pattern_choice *pc) {
              !strcmp(pc->method, "network") ? "the network's most probable pattern"
                                             : "the smallest fit loss of the estimate rendered with each built-in",
              pc->seconds);
+    const double *d0 = pc->start_refine_tried ? pc->unrefined : pc->params[pc->best].density;
     if (pc->start_compared)
       cli_info(c, "start densities %.1f x %.1f yarns/inch from the %s (peak match: network %.3f, weak %s lattice "
                   "%.3f)\n",
-               pc->params[pc->best].density[0], pc->params[pc->best].density[1],
-               pc->lattice_densities ? "weak lattice" : "network", pc->start_match[0], name, pc->start_match[1]);
+               d0[0], d0[1], pc->lattice_densities ? "weak lattice" : "network", pc->start_match[0], name,
+               pc->start_match[1]);
+    if (pc->start_refined)
+      cli_info(c, "refined from the photo's peaks to %.1f x %.1f yarns/inch, the cloth turned %.2f deg and %.2f deg "
+                  "out of square (peak match %.3f -> %.3f)\n",
+               pc->start_fit.density[0], pc->start_fit.density[1], pc->start_fit.angle_deg, pc->start_fit.skew_deg,
+               pc->refine_match[0], pc->refine_match[1]);
+    else if (pc->start_refine_tried)
+      cli_info(c, "start densities kept: %s\n",
+               pc->start_refine_moved ? "the refined lattice's render matched the photo's peaks worse"
+                   : "no refinement near them explains the photo's peaks better");
   }
 }
 

@@ -128,7 +128,40 @@ static void test_no_lattice_falls_back(void **state) {
   assert_int_equal(c.best, 9);
   assert_string_equal(c.method, "network");
   assert_false(c.start_compared); /* no peaks: nothing for a weak lattice to offer */
+  assert_false(c.start_refine_tried); /* ... nor for a refinement */
   assert_false(c.lattice_densities);
+  wv_image_free(&photo);
+}
+
+/* A plain weave at 150 / 110 yarns/inch rendered in scene s under heavy noise (seeded), and
+ * the pattern chosen for it as the network would, sure of plain, with densities `scale`
+ * times the truth's. */
+static const double PLAIN_TRUTH[2] = {150, 110};
+static void choose_noisy_plain(fixture *f, const wv_scene *s, uint64_t seed, const double scale[2],
+                               wv_pattern_choice *c) {
+  wv_error e = {0};
+  wv_params truth, net;
+  wv_params_default("plain", &truth, NULL);
+  truth.density[0] = PLAIN_TRUTH[0], truth.density[1] = PLAIN_TRUTH[1];
+  wv_image photo = {0};
+  wv_render_opts ro = {0};
+  assert_int_equal(wv_render(s, &truth, &ro, &photo, NULL, &e), WV_OK);
+  tu_rng r = {seed};
+  for (size_t i = 0; i < (size_t)photo.w * photo.h * 3; i++) {
+    double g = 0; /* a sum of uniforms: near Gaussian, sd 0.58 */
+    for (int k = 0; k < 4; k++) g += tu_rnd(&r) - 0.5;
+    photo.data[i] += (float)g;
+  }
+  assert_int_equal(wv_descriptor_forward(f->d, &photo, f->gram, &e), WV_OK);
+  net = truth;
+  net.density[0] = truth.density[0] * scale[0], net.density[1] = truth.density[1] * scale[1];
+  float y[WV_NET_OUT], prob[WV_WEAVE_BUILTINS] = {0};
+  wv_fabricnet_targets(&net, WV_NET_OUT, y);
+  prob[0] = 1; /* plain */
+  wv_pattern_opts o;
+  wv_pattern_opts_default(&o);
+  o.prob = prob;
+  assert_int_equal(wv_fabricnet_choose_pattern(&f->net, f->d, &f->scene, &photo, f->gram, y, &o, c, &e), WV_OK);
   wv_image_free(&photo);
 }
 
@@ -139,31 +172,8 @@ static void test_no_lattice_falls_back(void **state) {
  * photo's better: the lattice's. */
 static void test_weak_lattice_densities(void **state) {
   fixture *f = *state;
-  wv_error e = {0};
-  wv_params truth, net;
-  wv_params_default("plain", &truth, NULL);
-  truth.density[0] = 150, truth.density[1] = 110;
-  wv_image photo = {0};
-  wv_render_opts ro = {0};
-  assert_int_equal(wv_render(&f->scene, &truth, &ro, &photo, NULL, &e), WV_OK);
-  tu_rng r = {7};
-  for (size_t i = 0; i < (size_t)photo.w * photo.h * 3; i++) {
-    double g = 0; /* a sum of uniforms: near Gaussian, sd 0.58 */
-    for (int k = 0; k < 4; k++) g += tu_rnd(&r) - 0.5;
-    photo.data[i] += (float)g;
-  }
-  assert_int_equal(wv_descriptor_forward(f->d, &photo, f->gram, &e), WV_OK);
-  net = truth;
-  net.density[0] = truth.density[0] / 2, net.density[1] = truth.density[1] / 2;
-  float y[WV_NET_OUT], prob[WV_WEAVE_BUILTINS] = {0};
-  wv_fabricnet_targets(&net, WV_NET_OUT, y);
-  prob[0] = 1; /* plain */
-  wv_pattern_opts o;
-  wv_pattern_opts_default(&o);
-  o.prob = prob;
   static wv_pattern_choice c;
-  assert_int_equal(wv_fabricnet_choose_pattern(&f->net, f->d, &f->scene, &photo, f->gram, y, &o, &c, &e), WV_OK);
-  wv_image_free(&photo);
+  choose_noisy_plain(f, &f->scene, 7, (const double[2]){0.5, 0.5}, &c);
   fprintf(stderr, "lattice found %d, %d peaks, plain %.3f at %.1f x %.1f; peak match: network %.3f, lattice %.3f\n",
           c.lattice.found, c.lattice.n_peaks, c.lattice.fit[0].score, c.lattice.fit[0].density[0],
           c.lattice.fit[0].density[1], c.start_match[0], c.start_match[1]);
@@ -174,13 +184,48 @@ static void test_weak_lattice_densities(void **state) {
   assert_true(c.start_compared);
   assert_true(c.start_match[1] > c.start_match[0]);
   assert_true(c.lattice_densities);
-  for (int y = 0; y < 2; y++) {
-    assert_true(fabs(c.params[0].density[y] - c.lattice.fit[0].density[y]) < 1e-9);
-    assert_true(fabs(c.params[0].density[y] / truth.density[y] - 1) < 0.02);
+  for (int y = 0; y < 2; y++) { /* the lattice's densities, refined or not */
+    assert_true(c.start_refined || fabs(c.params[0].density[y] - c.lattice.fit[0].density[y]) < 1e-9);
+    assert_true(fabs(c.params[0].density[y] / PLAIN_TRUTH[y] - 1) < 0.02);
   }
   char *js = wv_pattern_choice_to_json(&c);
   assert_non_null(js);
   assert_non_null(strstr(js, "\"start_densities\": {\"from\": \"lattice\""));
+  free(js);
+}
+
+/* A plain weave turned by 1.5 degrees, under the same heavy noise: no lattice is found,
+ * and the network's densities are 3% off either way. Across a photo a few hundred yarns
+ * wide that is several yarns of drift, beyond the registration's reach. The chosen
+ * pattern's lattice, searched near the start and climbed, gives the start the photo's
+ * densities and the scene the cloth's rotation. */
+static void test_refined_start(void **state) {
+  fixture *f = *state;
+  wv_scene turned = f->scene;
+  turned.rotation_deg = 1.5;
+  static wv_pattern_choice c;
+  choose_noisy_plain(f, &turned, 11, (const double[2]){1.03, 0.97}, &c);
+  fprintf(stderr,
+          "lattice found %d; start from %s; refined %d: %.2f x %.2f at %.3f deg, skew %.3f; match %.3f -> %.3f\n",
+          c.lattice.found, c.lattice_densities ? "the lattice" : "the network", c.start_refined,
+          c.start_fit.density[0], c.start_fit.density[1], c.start_fit.angle_deg, c.start_fit.skew_deg,
+          c.refine_match[0], c.refine_match[1]);
+  assert_false(c.lattice.found);
+  assert_int_equal(c.best, 0);
+  assert_true(c.start_refine_tried);
+  assert_true(c.start_refined);
+  assert_true(c.refine_match[1] >= c.refine_match[0]);
+  for (int y = 0; y < 2; y++) assert_true(fabs(c.params[0].density[y] / PLAIN_TRUTH[y] - 1) < 0.005);
+  assert_true(fabs(c.start_fit.angle_deg - 1.5) < 0.3);
+  assert_true(fabs(c.start_fit.skew_deg) < 0.3);
+  wv_scene sc;
+  wv_pattern_choice_scene(&c, &f->scene, 0, &sc);
+  assert_true(fabs(sc.rotation_deg - 1.5) < 0.3);
+  wv_pattern_choice_scene(&c, &f->scene, 1, &sc); /* another candidate keeps the scene as given */
+  assert_true(sc.rotation_deg == f->scene.rotation_deg);
+  char *js = wv_pattern_choice_to_json(&c);
+  assert_non_null(js);
+  assert_non_null(strstr(js, "\"start_refinement\": {\"moved\": true, \"kept\": true"));
   free(js);
 }
 
@@ -301,6 +346,7 @@ int main(int argc, char **argv) {
       cmocka_unit_test_setup_teardown(test_no_lattice_falls_back, setup, teardown),
       cmocka_unit_test_setup_teardown(test_photo_size, setup, teardown),
       cmocka_unit_test_setup_teardown(test_weak_lattice_densities, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_refined_start, setup, teardown),
       cmocka_unit_test(test_family_hears_network),
       cmocka_unit_test(test_family_scores),
   };

@@ -78,6 +78,18 @@ wv_status wv_lattice_analyse(const wv_scene *s, const wv_image *photo, wv_lattic
  * analysis's window. */
 wv_status wv_lattice_refine(const wv_scene *s, const wv_image *photo, wv_lattice *lat, int i, wv_error *err);
 
+/* For a photo whose lattice was not found but whose pattern and densities were estimated
+ * otherwise (FabricNet): built-in i's lattice refined from those densities with the cloth
+ * square, by the lattice power over the analysis window and then over the refinement
+ * window (coarse to fine: the smaller window's wider peaks reach a start a few percent
+ * off). *moved = 1 and out holds the densities, rotation and skew (not the score, precision
+ * or recall) when the power over the larger window rose and each density moved by less
+ * than WV_LATTICE_NEAR (log ratio; a larger move is an alias or a walk among weak peaks);
+ * otherwise out holds the densities given, square. */
+#define WV_LATTICE_NEAR 0.05
+wv_status wv_lattice_refine_from(const wv_scene *s, const wv_image *photo, int i, const double density[2],
+                                 wv_lattice_fit *out, int *moved, wv_error *err);
+
 /* The peaks of a weave spectrum (n x n, from wv_weave_spectrum) with prominence at least
  * min_z, strongest first; returns how many (at most cap). */
 int wv_spectrum_peaks(const float *spectrum, int n, double min_z, wv_spectral_peak *peaks, int cap);

@@ -523,29 +523,40 @@ wv_status wv_lattice_analyse(const wv_scene *s, const wv_image *photo, wv_lattic
 
 /* ---- the chosen lattice over the whole image ---- */
 
-wv_status wv_lattice_refine(const wv_scene *s, const wv_image *photo, wv_lattice *lat, int i, wv_error *err) {
-  int n = photo->w < photo->h ? photo->w : photo->h;
-  n = n > WV_LATTICE_REFINE_WINDOW ? WV_LATTICE_REFINE_WINDOW : n - n % 2;
-  frame fr;
-  double mmpp;
-  if (!lat->found || i < 0 || i >= wv_weave_builtin_count() || n <= lat->window || !centre_frame(s, &fr, &mmpp))
-    return WV_OK;
+/* Pattern i's lattice power climbed from h over the photo's n x n centre window; *before
+ * and *after the power at h and at the climbed hypothesis (which h becomes). */
+static wv_status climb(const wv_image *photo, int n, int i, const frame *fr, hyp *h, double *before, double *after,
+                       wv_error *err) {
   float *spec = malloc(sizeof(float) * (size_t)n * n);
   if (!spec) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the weave analysis");
   wv_status st = wv_weave_spectrum(photo, (photo->w - n) / 2, (photo->h - n) / 2, n, spec, err);
-  if (st) {
-    free(spec);
-    return st;
+  if (!st) {
+    wv_weave w;
+    lmodel m;
+    wv_weave_builtin(wv_weave_builtin_name(i), &w, NULL);
+    build_model(&w, &m);
+    objective ob = {&m, fr, NULL, NULL, spec, n};
+    *before = objective_at(&ob, h), *after = refine(&ob, h);
   }
-  wv_weave w;
-  lmodel m;
-  wv_weave_builtin(wv_weave_builtin_name(i), &w, NULL);
-  build_model(&w, &m);
+  free(spec);
+  return st;
+}
+
+static int refine_side(const wv_image *photo) {
+  int n = photo->w < photo->h ? photo->w : photo->h;
+  return n > WV_LATTICE_REFINE_WINDOW ? WV_LATTICE_REFINE_WINDOW : n - n % 2;
+}
+
+wv_status wv_lattice_refine(const wv_scene *s, const wv_image *photo, wv_lattice *lat, int i, wv_error *err) {
+  int n = refine_side(photo);
+  frame fr;
+  double mmpp, before = 0, after = 0;
+  if (!lat->found || i < 0 || i >= wv_weave_builtin_count() || n <= lat->window || !centre_frame(s, &fr, &mmpp))
+    return WV_OK;
   wv_lattice_fit *f = &lat->fit[i];
   hyp h = {f->density[WV_WARP], f->density[WV_WEFT], f->angle_deg * PI / 180, f->skew_deg * PI / 180}, r = h;
-  objective ob = {&m, &fr, NULL, NULL, spec, n};
-  double before = objective_at(&ob, &h), after = refine(&ob, &r);
-  free(spec);
+  wv_status st = climb(photo, n, i, &fr, &r, &before, &after, err);
+  if (st) return st;
   lat->refined_window = n;
   /* a step to a neighbouring alias is not a refinement: the densities may move by 2% */
   if (after > before && fabs(log(r.dw / h.dw)) < 0.02 && fabs(log(r.df / h.df)) < 0.02) {
@@ -554,6 +565,66 @@ wv_status wv_lattice_refine(const wv_scene *s, const wv_image *photo, wv_lattice
     if (i == lat->best)
       for (int y = 0; y < 2; y++) lat->spacing_px[y] = 25.4 / (f->density[y] * lat->mm_per_px);
   }
+  return WV_OK;
+}
+
+/* The search's neighbourhood of a start: densities within WV_LATTICE_NEAR in NEAR_STEPS
+ * steps either way, rotation and skew within NEAR_ANG degrees in NEAR_ANG_STEPS steps. */
+#define NEAR_STEPS 10
+#define NEAR_ANG 3.0
+#define NEAR_ANG_STEPS 3
+
+wv_status wv_lattice_refine_from(const wv_scene *s, const wv_image *photo, int i, const double density[2],
+                                 wv_lattice_fit *out, int *moved, wv_error *err) {
+  *moved = 0;
+  memset(out, 0, sizeof *out);
+  out->density[WV_WARP] = density[WV_WARP], out->density[WV_WEFT] = density[WV_WEFT];
+  int side[2] = {window_side(photo), refine_side(photo)};
+  frame fr;
+  double mmpp;
+  if (i < 0 || i >= wv_weave_builtin_count() || side[0] < WV_LATTICE_MIN_WINDOW || !centre_frame(s, &fr, &mmpp) ||
+      !(density[0] > 0) || !(density[1] > 0))
+    return WV_OK;
+  const hyp h = {density[WV_WARP], density[WV_WEFT], 0, 0};
+  hyp r = h;
+  wv_weave w;
+  lmodel m;
+  wv_weave_builtin(wv_weave_builtin_name(i), &w, NULL);
+  build_model(&w, &m);
+  float *spec = malloc(sizeof(float) * (size_t)side[1] * side[1]);
+  if (!spec) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the weave analysis");
+  /* A start a few percent off lies beyond the reach of a climb (the peaks are a bin or two
+   * wide): the neighbourhood is searched on a grid over the analysis window first, then
+   * climbed over it and over the refinement window, which judges. */
+  wv_status st = wv_weave_spectrum(photo, (photo->w - side[0]) / 2, (photo->h - side[0]) / 2, side[0], spec, err);
+  double before = 0, after = 0;
+  if (!st) {
+    objective ob = {&m, &fr, NULL, NULL, spec, side[0]};
+    double best = -1e300, ld = WV_LATTICE_NEAR / NEAR_STEPS, la = NEAR_ANG / NEAR_ANG_STEPS * PI / 180;
+    for (int a = -NEAR_STEPS; a <= NEAR_STEPS; a++)
+      for (int c = -NEAR_STEPS; c <= NEAR_STEPS; c++)
+        for (int q = -NEAR_ANG_STEPS; q <= NEAR_ANG_STEPS; q++)
+          for (int k = -NEAR_ANG_STEPS; k <= NEAR_ANG_STEPS; k++) {
+            hyp t = {h.dw * exp(a * ld), h.df * exp(c * ld), q * la, k * la};
+            double v = lattice_power(&ob, &t);
+            if (v > best) best = v, r = t;
+          }
+    refine(&ob, &r);
+    if (side[1] > side[0])
+      st = wv_weave_spectrum(photo, (photo->w - side[1]) / 2, (photo->h - side[1]) / 2, side[1], spec, err);
+    if (!st) {
+      objective ob1 = {&m, &fr, NULL, NULL, spec, side[1] > side[0] ? side[1] : side[0]};
+      before = objective_at(&ob1, &h), after = refine(&ob1, &r);
+    }
+  }
+  free(spec);
+  if (st) return st;
+  /* a move this far is an alias or a walk among weak peaks, not a refinement */
+  if (!(after > before) || fabs(log(r.dw / h.dw)) >= WV_LATTICE_NEAR || fabs(log(r.df / h.df)) >= WV_LATTICE_NEAR)
+    return WV_OK;
+  out->density[WV_WARP] = r.dw, out->density[WV_WEFT] = r.df;
+  out->angle_deg = r.rho * 180 / PI, out->skew_deg = r.sigma * 180 / PI;
+  *moved = 1;
   return WV_OK;
 }
 

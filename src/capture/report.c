@@ -458,13 +458,19 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
                 l->reason, chosen, wv_weave_family(chosen),
                 !strcmp(pc->method, "network") ? "its most probable class"
                                                : "the smallest fit loss of its estimate rendered with each built-in");
+      const double *d0 = pc->start_refine_tried ? pc->unrefined : pc->params[pc->best].density;
       if (pc->start_compared)
         sb_printf(&b, "<p>The start's densities: %s, %.1f / %.1f yarns/inch. The spectral peaks of the render "
                       "matched the photo's %.3f with the network's densities and %.3f with those of the weak "
                       "%s lattice (score %.3f).</p>\n",
-                  pc->lattice_densities ? "the weak lattice's" : "the network's", pc->params[pc->best].density[0],
-                  pc->params[pc->best].density[1], pc->start_match[0], pc->start_match[1], chosen,
-                  l->fit[pc->best].score);
+                  pc->lattice_densities ? "the weak lattice's" : "the network's", d0[0], d0[1], pc->start_match[0],
+                  pc->start_match[1], chosen, l->fit[pc->best].score);
+      if (pc->start_refined)
+        sb_printf(&b, "<p>Refined from the photo's spectral peaks (the %s lattice searched near those densities): "
+                      "%.1f / %.1f yarns/inch, the cloth turned %.2f&deg; and %.2f&deg; out of square. The "
+                      "render's peaks matched the photo's %.3f before and %.3f after.</p>\n",
+                  chosen, pc->start_fit.density[0], pc->start_fit.density[1], pc->start_fit.angle_deg,
+                  pc->start_fit.skew_deg, pc->refine_match[0], pc->refine_match[1]);
     }
     family_table(&b, pc);
   }

@@ -68,11 +68,22 @@ wv_status wv_pattern_loss(wv_descriptor *d, const wv_scene *s, const wv_image *p
   return st;
 }
 
+/* s with fit f's rotation and skew added (a plane scene). */
+static void orient(const wv_lattice_fit *f, const wv_scene *s, wv_scene *out) {
+  wv_lattice one;
+  memset(&one, 0, sizeof one);
+  one.fit[0] = *f;
+  wv_params base, unused;
+  wv_params_default(wv_weave_builtin_name(0), &base, NULL);
+  wv_lattice_candidate(&one, 0, &base, s, 1, &unused, out);
+}
+
 void wv_pattern_choice_scene(const wv_pattern_choice *c, const wv_scene *s, int i, wv_scene *out) {
   wv_params unused;
   wv_scene in = *s;
   *out = in;
   if (c->orient && c->lattice.found) wv_lattice_candidate(&c->lattice, i, &c->params[i], &in, 1, &unused, out);
+  else if (c->orient && c->start_refined && i == c->best) orient(&c->start_fit, &in, out);
 }
 
 static const char *const FAMILY[WV_PATTERN_FAMILIES] = {"plain", "basket", "twill", "satin"};
@@ -251,6 +262,27 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
       out->start_compared = !st;
       if (!st && out->start_match[1] > out->start_match[0]) out->params[b] = lat, out->lattice_densities = 1;
     }
+    /* The photo's peaks fix the yarns' spacings and the cloth's orientation far more finely
+     * than the network or a weak lattice: a start 2% off drifts by several yarns across a
+     * photo a few hundred yarns wide, out of the registration's reach. The chosen pattern's
+     * lattice, climbed from the start's densities, gives both when its render's peaks match
+     * the photo's no worse. */
+    if (!st && o->lattice && o->orient && out->lattice.n_peaks > 0) {
+      int moved = 0;
+      out->unrefined[0] = out->params[b].density[0], out->unrefined[1] = out->params[b].density[1];
+      st = wv_lattice_refine_from(s, photo, b, out->params[b].density, &out->start_fit, &moved, err);
+      out->start_refine_tried = !st, out->start_refine_moved = moved;
+      if (!st && moved) {
+        wv_params pr = out->params[b];
+        wv_scene sr;
+        for (int y = 0; y < 2; y++)
+          pr.density[y] = fmin(fmax(out->start_fit.density[y], WV_DENSITY_MIN), WV_DENSITY_MAX);
+        orient(&out->start_fit, s, &sr);
+        st = wv_lattice_match(s, &out->lattice, &out->params[b], sc.spp, o->threads, &out->refine_match[0], err);
+        if (!st) st = wv_lattice_match(&sr, &out->lattice, &pr, sc.spp, o->threads, &out->refine_match[1], err);
+        if (!st && out->refine_match[1] >= out->refine_match[0]) out->params[b] = pr, out->start_refined = 1;
+      }
+    }
   } else if (!st) {
     for (int i = 0; i < nb && !st; i++) {
       st = LOSS(i);
@@ -324,6 +356,14 @@ char *wv_pattern_choice_to_json(const wv_pattern_choice *c) {
     json_object_set_new(o, "start_densities",
                         json_pack("{s:s,s:f,s:f}", "from", c->lattice_densities ? "lattice" : "network",
                                   "match_network", c->start_match[0], "match_lattice", c->start_match[1]));
+  if (o && c->start_refine_tried) { /* the start's geometry: refined from the photo's peaks, or as estimated */
+    const wv_lattice_fit *f = &c->start_fit;
+    json_object_set_new(o, "start_refinement",
+                        json_pack("{s:b,s:b,s:[f,f],s:[f,f],s:f,s:f,s:f,s:f}", "moved", c->start_refine_moved, "kept",
+                                  c->start_refined, "from", c->unrefined[0], c->unrefined[1], "density",
+                                  f->density[0], f->density[1], "angle_deg", f->angle_deg, "skew_deg", f->skew_deg,
+                                  "match_start", c->refine_match[0], "match_refined", c->refine_match[1]));
+  }
   char *s = o ? json_dumps(o, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(6)) : NULL;
   json_decref(o);
   return s;
