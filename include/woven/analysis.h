@@ -129,9 +129,12 @@ typedef struct {
 wv_status wv_lattice_rank(const wv_scene *s, const wv_image *photo, const wv_lattice *lat, const wv_params *base,
                           const wv_rank_opts *o, wv_lattice_ranking *out, wv_error *err);
 
-/* The parameters base with built-in i and its lattice's densities (clamped to the
- * density range), and the scene s with its orientation (rotation and skew added to the
- * scene's) when rotate and s is a plane. */
+/* The parameters base with fit f's densities (clamped to the density range), and the scene
+ * s with f's orientation (rotation and skew added to the scene's) when rotate and s is a
+ * plane. */
+void wv_lattice_fit_apply(const wv_lattice_fit *f, const wv_params *base, const wv_scene *s, int rotate, wv_params *p,
+                          wv_scene *ps);
+/* wv_lattice_fit_apply of lat's fit i, with built-in i as the pattern. */
 void wv_lattice_candidate(const wv_lattice *lat, int i, const wv_params *base, const wv_scene *s, int rotate,
                           wv_params *p, wv_scene *ps);
 

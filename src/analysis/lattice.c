@@ -610,10 +610,10 @@ wv_status wv_lattice_refine_from(const wv_scene *s, const wv_image *photo, int i
             if (v > best) best = v, r = t;
           }
     refine(&ob, &r);
-    if (side[1] > side[0])
+    if (side[1] > side[0]) /* the refinement window is never the smaller */
       st = wv_weave_spectrum(photo, (photo->w - side[1]) / 2, (photo->h - side[1]) / 2, side[1], spec, err);
     if (!st) {
-      objective ob1 = {&m, &fr, NULL, NULL, spec, side[1] > side[0] ? side[1] : side[0]};
+      objective ob1 = {&m, &fr, NULL, NULL, spec, side[1]};
       before = objective_at(&ob1, &h), after = refine(&ob1, &r);
     }
   }
@@ -637,20 +637,25 @@ void wv_rank_opts_default(wv_rank_opts *o) {
   o->w_prob = 0.25;
 }
 
-void wv_lattice_candidate(const wv_lattice *lat, int i, const wv_params *base, const wv_scene *s, int rotate,
-                          wv_params *p, wv_scene *ps) {
+void wv_lattice_fit_apply(const wv_lattice_fit *f, const wv_params *base, const wv_scene *s, int rotate, wv_params *p,
+                          wv_scene *ps) {
   *p = *base;
-  snprintf(p->pattern, sizeof p->pattern, "%s", wv_weave_builtin_name(i));
-  p->custom_rows = 0;
   for (int y = 0; y < 2; y++) {
-    double d = lat->fit[i].density[y];
+    double d = f->density[y];
     p->density[y] = d < WV_DENSITY_MIN ? WV_DENSITY_MIN : d > WV_DENSITY_MAX ? WV_DENSITY_MAX : d;
   }
   *ps = *s;
   if (!rotate || s->shape != WV_SHAPE_PLANE) return;
-  double r = s->rotation_deg + lat->fit[i].angle_deg, k = s->skew_deg + lat->fit[i].skew_deg;
+  double r = s->rotation_deg + f->angle_deg, k = s->skew_deg + f->skew_deg;
   ps->rotation_deg = r > 360 ? r - 360 : r < -360 ? r + 360 : r;
   ps->skew_deg = k > WV_SCENE_MAX_SKEW ? WV_SCENE_MAX_SKEW : k < -WV_SCENE_MAX_SKEW ? -WV_SCENE_MAX_SKEW : k;
+}
+
+void wv_lattice_candidate(const wv_lattice *lat, int i, const wv_params *base, const wv_scene *s, int rotate,
+                          wv_params *p, wv_scene *ps) {
+  wv_lattice_fit_apply(&lat->fit[i], base, s, rotate, p, ps);
+  snprintf(p->pattern, sizeof p->pattern, "%s", wv_weave_builtin_name(i));
+  p->custom_rows = 0;
 }
 
 /* How well two peak lists agree: recall over a's prominence, precision over b's, their F. */

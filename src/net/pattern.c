@@ -68,22 +68,13 @@ wv_status wv_pattern_loss(wv_descriptor *d, const wv_scene *s, const wv_image *p
   return st;
 }
 
-/* s with fit f's rotation and skew added (a plane scene). */
-static void orient(const wv_lattice_fit *f, const wv_scene *s, wv_scene *out) {
-  wv_lattice one;
-  memset(&one, 0, sizeof one);
-  one.fit[0] = *f;
-  wv_params base, unused;
-  wv_params_default(wv_weave_builtin_name(0), &base, NULL);
-  wv_lattice_candidate(&one, 0, &base, s, 1, &unused, out);
-}
-
 void wv_pattern_choice_scene(const wv_pattern_choice *c, const wv_scene *s, int i, wv_scene *out) {
   wv_params unused;
   wv_scene in = *s;
   *out = in;
   if (c->orient && c->lattice.found) wv_lattice_candidate(&c->lattice, i, &c->params[i], &in, 1, &unused, out);
-  else if (c->orient && c->start_refined && i == c->best) orient(&c->start_fit, &in, out);
+  else if (c->orient && c->start_refined && i == c->best)
+    wv_lattice_fit_apply(&c->start_fit, &c->params[i], &in, 1, &unused, out);
 }
 
 static const char *const FAMILY[WV_PATTERN_FAMILIES] = {"plain", "basket", "twill", "satin"};
@@ -273,12 +264,12 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
       st = wv_lattice_refine_from(s, photo, b, out->params[b].density, &out->start_fit, &moved, err);
       out->start_refine_tried = !st, out->start_refine_moved = moved;
       if (!st && moved) {
-        wv_params pr = out->params[b];
+        wv_params pr;
         wv_scene sr;
-        for (int y = 0; y < 2; y++)
-          pr.density[y] = fmin(fmax(out->start_fit.density[y], WV_DENSITY_MIN), WV_DENSITY_MAX);
-        orient(&out->start_fit, s, &sr);
-        st = wv_lattice_match(s, &out->lattice, &out->params[b], sc.spp, o->threads, &out->refine_match[0], err);
+        wv_lattice_fit_apply(&out->start_fit, &out->params[b], s, 1, &pr, &sr);
+        /* the start's match is known when the weak lattice's densities were compared */
+        if (out->start_compared) out->refine_match[0] = out->start_match[out->lattice_densities];
+        else st = wv_lattice_match(s, &out->lattice, &out->params[b], sc.spp, o->threads, &out->refine_match[0], err);
         if (!st) st = wv_lattice_match(&sr, &out->lattice, &pr, sc.spp, o->threads, &out->refine_match[1], err);
         if (!st && out->refine_match[1] >= out->refine_match[0]) out->params[b] = pr, out->start_refined = 1;
       }
