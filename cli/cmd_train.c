@@ -8,7 +8,7 @@
 
 typedef struct {
   const char *dir, *model, *init;
-  int epochs, batch, seed, ck_every, resume, force, partial;
+  int epochs, batch, seed, ck_every, resume, force, partial, head_only;
   double lr, vf, ce;
 } train_args;
 
@@ -28,13 +28,16 @@ static const cli_opt OPTS[] = {
     CLI_O_FLAG("--resume", train_args, resume, "continue from MODEL.train/checkpoint.bin"),
     CLI_O_FLAG("--force", train_args, force, "start again even if MODEL.train/ holds a checkpoint"),
     CLI_O_FLAG("--partial", train_args, partial, "train on the finished samples of an incomplete dataset"),
+    CLI_O_FLAG("--pattern-head-only", train_args, head_only,
+               "with --init or --resume: train the pattern head alone; every other\n"
+               "weight, and so every parameter estimate, stays the starting model's"),
     CLI_O_END};
 
 static const cli_cmd CMD = {
     "train",
     "usage: woven train DIR -o MODEL [--epochs N] [--batch N] [--lr X] [--val-frac X] [--seed N]\n"
     "                   [--ce-weight X] [--init MODEL] [--checkpoint-every N] [--resume | --force]\n"
-    "                   [--partial]\n"
+    "                   [--partial] [--pattern-head-only]\n"
     "                   [--quiet] [--json]\n"
     "\n"
     "Trains FabricNet (SPEC section 7: features -> 256 -> LeakyReLU -> 256 -> LeakyReLU -> 21 ->\n"
@@ -90,6 +93,7 @@ int cmd_train(int argc, char **argv) {
   wv_train_opts_default(&o);
   o.epochs = ta.epochs, o.batch = ta.batch, o.lr = ta.lr, o.val_frac = ta.vf, o.seed = (uint64_t)ta.seed;
   o.checkpoint_every = ta.ck_every, o.resume = resume, o.force = force, o.partial = ta.partial, o.init = init;
+  o.pattern_head_only = ta.head_only;
   if (init && resume) return cli_usage_error(c.cmd, "--init and --resume exclude each other");
   if (ta.ce >= 0) o.ce_weight = ta.ce;
   cli_progress bar;

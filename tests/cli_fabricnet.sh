@@ -58,6 +58,10 @@ check "train refuses to restart" 3 "--resume" -- "$WOVEN" train "$DS" -o "$T/m.b
 check "train resume" 0 '"epochs": 5' -- "$WOVEN" train "$DS" -o "$T/m.bin" --epochs 5 --batch 4 --resume --json
 [[ $(wc -l <"$T/m.bin.train/loss.csv") == 6 ]] || fail "loss.csv should have 5 epochs after the resume"
 grep -q "^epoch,train_l1,val_l1,train_ce,val_ce,val_pattern_accuracy" "$T/m.bin.train/loss.csv" || fail "loss.csv lacks the pattern head's columns"
+check "train the pattern head alone without a start" 2 "pattern head" -- "$WOVEN" train "$DS" -o "$T/h.bin" --pattern-head-only
+check "train the pattern head alone" 0 '"epochs": 2' -- "$WOVEN" train "$DS" -o "$T/h.bin" --init "$T/m.bin" \
+  --pattern-head-only --epochs 2 --batch 4 --json
+grep -q '"pattern_head_only": true' "$T/h.bin.train/train.json" || fail "train.json does not record --pattern-head-only"
 
 # Prediction and capture.
 IMG=$DS/samples/twill31s_0.png

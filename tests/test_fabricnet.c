@@ -685,6 +685,56 @@ static void test_train(void **state) {
   assert_non_null(strstr(e.msg, "--resume"));
 }
 
+static void record_ce(void *user, const wv_train_epoch *ep) {
+  curve *c = user;
+  if (c->n++ == 0) c->first = ep->train_ce;
+  c->last = ep->train_ce;
+}
+
+/* Fine-tuning the pattern head alone: its cross-entropy falls while every other weight, the
+ * feature statistics and so every parameter estimate stay the starting model's, bit for bit. */
+static void test_train_pattern_head_only(void **state) {
+  (void)state;
+  const char *dir = tu_tmpdir("fabricnet_head_only");
+  char ds[512], m0[512], m1[512];
+  snprintf(ds, sizeof ds, "%s/ds", dir);
+  assert_int_equal(mkdir(ds, 0777), 0);
+  make_dataset(ds);
+  snprintf(m0, sizeof m0, "%s/start.bin", dir);
+  snprintf(m1, sizeof m1, "%s/head.bin", dir);
+  wv_train_opts o;
+  wv_train_opts_default(&o);
+  o.epochs = 2, o.batch = 8, o.lr = 1e-3, o.val_frac = 0.25;
+  wv_train_result r;
+  wv_error e;
+  /* without a model to start from there is no head to train alone */
+  o.pattern_head_only = 1;
+  assert_int_equal(wv_train(ds, m0, &o, &r, &e), WV_ERR_INVALID);
+  assert_non_null(strstr(e.msg, "pattern head"));
+  o.pattern_head_only = 0;
+  assert_int_equal(wv_train(ds, m0, &o, &r, &e), WV_OK);
+  curve cv = {0, 0, 0};
+  o.epochs = 15, o.lr = 1e-2, o.init = m0, o.pattern_head_only = 1, o.on_epoch = record_ce, o.user = &cv;
+  assert_int_equal(wv_train(ds, m1, &o, &r, &e), WV_OK);
+  fprintf(stderr, "pattern head alone: training CE %.4f -> %.4f\n", cv.first, cv.last);
+  assert_true(cv.last < 0.8 * cv.first);
+  wv_fabricnet a, b;
+  assert_int_equal(wv_fabricnet_load(m0, &a, &e), WV_OK);
+  assert_int_equal(wv_fabricnet_load(m1, &b, &e), WV_OK);
+  float *ta[WV_NET_TENSORS], *tb[WV_NET_TENSORS];
+  size_t la[WV_NET_TENSORS], lb[WV_NET_TENSORS];
+  wv_fabricnet_tensors(&a, ta, la);
+  wv_fabricnet_tensors(&b, tb, lb);
+  for (int i = 0; i < WV_NET_TENSORS; i++) {
+    assert_int_equal(la[i], lb[i]);
+    if (i < WV_NET_HEAD_W) assert_memory_equal(ta[i], tb[i], sizeof(float) * la[i]);
+  }
+  assert_memory_not_equal(ta[WV_NET_HEAD_W], tb[WV_NET_HEAD_W], sizeof(float) * la[WV_NET_HEAD_W]);
+  assert_memory_equal(a.mean, b.mean, sizeof(float) * (size_t)a.n_in);
+  assert_memory_equal(a.std, b.std, sizeof(float) * (size_t)a.n_in);
+  wv_fabricnet_free(&a), wv_fabricnet_free(&b);
+}
+
 /* The features of an 8-bit PNG as a dataset stores them (f16). */
 static void png_features(const char *png, wv_descriptor *d, float *feat, uint16_t *out, int n) {
   wv_image img;
@@ -801,7 +851,8 @@ int main(void) {
       cmocka_unit_test(test_param_mapping), cmocka_unit_test(test_f16_crc),
       cmocka_unit_test(test_files),      cmocka_unit_test(test_features_file),
       cmocka_unit_test(test_v1_model),   cmocka_unit_test(test_augment),
-      cmocka_unit_test(test_train),      cmocka_unit_test(test_dataset_build_resumes),
+      cmocka_unit_test(test_train),      cmocka_unit_test(test_train_pattern_head_only),
+      cmocka_unit_test(test_dataset_build_resumes),
       cmocka_unit_test(test_pair_dataset_and_model), cmocka_unit_test(test_dataset_photo_draws),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

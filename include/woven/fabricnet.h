@@ -38,6 +38,7 @@
 #define WV_NET_CLIP 10.0f         /* standardised features are clipped to +-10 */
 #define WV_NET_CLASSES 16         /* the pattern head: one class per canonical built-in (wv_weave_builtin_count) */
 #define WV_NET_TENSORS 8          /* w1 b1 w2 b2 w3 b3, then the pattern head's w4 b4 */
+#define WV_NET_HEAD_W 6           /* the index of the pattern head's first tensor, w4 */
 
 /* Range of output k (0..WV_NET_OUT_MAX - 1), in the parameter file's units. */
 void wv_fabricnet_output_range(int k, double *lo, double *hi);

@@ -44,6 +44,8 @@ typedef struct {
   double ce_weight;      /* WV_NET_CE_WEIGHT */
   const char *init;      /* optional: start from this model's weights and feature statistics
                           * (fine-tuning; a version 1 model's missing pattern head starts fresh) */
+  int pattern_head_only; /* with init or resume: only the pattern head learns; every other weight, and
+                          * so every parameter estimate, stays the starting model's */
   /* Optional callbacks: after loading (before the first epoch), during and after each epoch. */
   void (*on_start)(void *user, const wv_train_result *r);
   void (*on_progress)(void *user, double fraction);

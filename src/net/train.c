@@ -182,6 +182,8 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
     return wv_fail(err, WV_ERR_INVALID, "training options out of range (epochs >= 1, batch 1..4096, lr in (0, 1), "
                                         "validation fraction in (0, 0.9), checkpoint interval >= 1, CE weight >= 0)");
   if (o->resume && o->force) return wv_fail(err, WV_ERR_INVALID, "resume and force exclude each other");
+  if (o->pattern_head_only && !o->init && !o->resume)
+    return wv_fail(err, WV_ERR_INVALID, "training the pattern head alone needs a model to start from (init or resume)");
   char work[4096], ckpt[4096], path[4096];
   snprintf(work, sizeof work, "%s.train", model);
   { /* model and model.train/ must not land on the dataset's files */
@@ -333,13 +335,16 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
     for (int j = 0; j < info.n_feat && !st; j++) net.std[j] = (float)fmax(s2[j], fmax(0.1 * mean_sd, 1e-6));
     free(s1), free(s2);
   }
+  if (!st && o->pattern_head_only && net.n_cls < 1)
+    st = wv_fail(err, WV_ERR_INVALID, "%s has no pattern head to train", o->init ? o->init : ckpt);
   if (!st && mkdir(work, 0777) != 0 && errno != EEXIST)
     st = wv_fail(err, WV_ERR_IO, "%s: cannot create directory: %s", work, strerror(errno));
   if (!st) {
     snprintf(path, sizeof path, "%s/train.json", work);
-    json_t *tj = json_pack("{s:s,s:s,s:i,s:i,s:i,s:f,s:i,s:f,s:f,s:I,s:i}", "kind", "woven-train", "dataset", dir,
+    json_t *tj = json_pack("{s:s,s:s,s:i,s:i,s:i,s:f,s:i,s:f,s:f,s:I,s:i,s:b}", "kind", "woven-train", "dataset", dir,
                            "samples", n, "train", ntr, "validation", nva, "val_frac", o->val_frac, "batch", o->batch,
-                           "lr", o->lr, "ce_weight", o->ce_weight, "seed", (json_int_t)o->seed, "epochs", o->epochs);
+                           "lr", o->lr, "ce_weight", o->ce_weight, "seed", (json_int_t)o->seed, "epochs", o->epochs,
+                           "pattern_head_only", o->pattern_head_only);
     char *text = tj ? json_dumps(tj, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(15)) : NULL;
     json_decref(tj);
     size_t len = text ? strlen(text) : 0;
@@ -397,6 +402,8 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
       memset(grad, 0, P * sizeof(float));
       float l1, ce;
       wv_fabricnet_backward(&net, t.x, t.y, t.lab, (float)o->ce_weight, nb, &t.acts, gt, &l1, &ce);
+      /* Adam moves no weight whose gradient has always been 0 (its moments stay 0) */
+      if (o->pattern_head_only) memset(grad, 0, (size_t)(gt[WV_NET_HEAD_W] - grad) * sizeof(float));
       sum += (double)l1 * nb, sum_ce += (double)ce * nb;
       nb_total += nb;
       wv_nn_adam_step(&adam, net.w1, grad);
