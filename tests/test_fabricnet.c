@@ -637,13 +637,19 @@ static void record_epoch(void *user, const wv_train_epoch *ep) {
   c->last = ep->train + 0.1 * ep->train_ce;
 }
 
-static void test_train(void **state) {
-  (void)state;
-  const char *dir = tu_tmpdir("fabricnet_train");
-  char ds[512], m1[512], m2[512], c1[600], c2[600];
-  snprintf(ds, sizeof ds, "%s/ds", dir);
+/* A fresh test directory holding the small rendered set in its ds/ (ds receives that path). */
+static const char *train_dir(const char *name, char *ds, size_t n) {
+  const char *dir = tu_tmpdir(name);
+  snprintf(ds, n, "%s/ds", dir);
   assert_int_equal(mkdir(ds, 0777), 0);
   make_dataset(ds);
+  return dir;
+}
+
+static void test_train(void **state) {
+  (void)state;
+  char ds[512], m1[512], m2[512], c1[600], c2[600];
+  const char *dir = train_dir("fabricnet_train", ds, sizeof ds);
   snprintf(m1, sizeof m1, "%s/a.bin", dir);
   snprintf(m2, sizeof m2, "%s/b.bin", dir);
   wv_train_opts o;
@@ -695,11 +701,8 @@ static void record_ce(void *user, const wv_train_epoch *ep) {
  * feature statistics and so every parameter estimate stay the starting model's, bit for bit. */
 static void test_train_pattern_head_only(void **state) {
   (void)state;
-  const char *dir = tu_tmpdir("fabricnet_head_only");
   char ds[512], m0[512], m1[512];
-  snprintf(ds, sizeof ds, "%s/ds", dir);
-  assert_int_equal(mkdir(ds, 0777), 0);
-  make_dataset(ds);
+  const char *dir = train_dir("fabricnet_head_only", ds, sizeof ds);
   snprintf(m0, sizeof m0, "%s/start.bin", dir);
   snprintf(m1, sizeof m1, "%s/head.bin", dir);
   wv_train_opts o;
