@@ -9,7 +9,7 @@
 typedef struct {
   const char *dir, *model, *init;
   int epochs, batch, seed, ck_every, resume, force, partial, head_only;
-  double lr, vf, ce;
+  double lr, vf, ce, head_start;
 } train_args;
 
 static const cli_opt OPTS[] = {
@@ -31,13 +31,16 @@ static const cli_opt OPTS[] = {
     CLI_O_FLAG("--pattern-head-only", train_args, head_only,
                "with --init or --resume: train the pattern head alone; every other\n"
                "weight, and so every parameter estimate, stays the starting model's"),
+    CLI_O_REAL("--head-start-weight", train_args, head_start, 0, 1, CLI_OPEN_HI, "W",
+               "with --init and --pattern-head-only: save the pattern head as (1 - W)\n"
+               "times the trained head plus W times the starting model's (default 0)"),
     CLI_O_END};
 
 static const cli_cmd CMD = {
     "train",
     "usage: woven train DIR -o MODEL [--epochs N] [--batch N] [--lr X] [--val-frac X] [--seed N]\n"
     "                   [--ce-weight X] [--init MODEL] [--checkpoint-every N] [--resume | --force]\n"
-    "                   [--partial] [--pattern-head-only]\n"
+    "                   [--partial] [--pattern-head-only [--head-start-weight W]]\n"
     "                   [--quiet] [--json]\n"
     "\n"
     "Trains FabricNet (SPEC section 7: features -> 256 -> LeakyReLU -> 256 -> LeakyReLU -> 21 ->\n"
@@ -93,7 +96,7 @@ int cmd_train(int argc, char **argv) {
   wv_train_opts_default(&o);
   o.epochs = ta.epochs, o.batch = ta.batch, o.lr = ta.lr, o.val_frac = ta.vf, o.seed = (uint64_t)ta.seed;
   o.checkpoint_every = ta.ck_every, o.resume = resume, o.force = force, o.partial = ta.partial, o.init = init;
-  o.pattern_head_only = ta.head_only;
+  o.pattern_head_only = ta.head_only, o.head_start_weight = ta.head_start;
   if (init && resume) return cli_usage_error(c.cmd, "--init and --resume exclude each other");
   if (ta.ce >= 0) o.ce_weight = ta.ce;
   cli_progress bar;

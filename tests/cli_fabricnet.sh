@@ -62,6 +62,13 @@ check "train the pattern head alone without a start" 2 "pattern head" -- "$WOVEN
 check "train the pattern head alone" 0 '"epochs": 2' -- "$WOVEN" train "$DS" -o "$T/h.bin" --init "$T/m.bin" \
   --pattern-head-only --epochs 2 --batch 4 --json
 grep -q '"pattern_head_only": true' "$T/h.bin.train/train.json" || fail "train.json does not record --pattern-head-only"
+check "mix the starting head into a whole model's training" 2 "mixing" -- "$WOVEN" train "$DS" -o "$T/hm.bin" \
+  --init "$T/m.bin" --head-start-weight 0.5 --epochs 2 --batch 4
+check "a starting head's weight of 1" 1 "head-start-weight" -- "$WOVEN" train "$DS" -o "$T/hm.bin" \
+  --init "$T/m.bin" --pattern-head-only --head-start-weight 1 --epochs 2 --batch 4
+check "train the pattern head alone, mixed with the start's" 0 '"epochs": 2' -- "$WOVEN" train "$DS" -o "$T/hm.bin" \
+  --init "$T/m.bin" --pattern-head-only --head-start-weight 0.5 --epochs 2 --batch 4 --json
+grep -q '"head_start_weight": 0.5' "$T/hm.bin.train/train.json" || fail "train.json does not record --head-start-weight"
 
 # Prediction and capture.
 IMG=$DS/samples/twill31s_0.png

@@ -735,7 +735,40 @@ static void test_train_pattern_head_only(void **state) {
   assert_memory_not_equal(ta[WV_NET_HEAD_W], tb[WV_NET_HEAD_W], sizeof(float) * la[WV_NET_HEAD_W]);
   assert_memory_equal(a.mean, b.mean, sizeof(float) * (size_t)a.n_in);
   assert_memory_equal(a.std, b.std, sizeof(float) * (size_t)a.n_in);
-  wv_fabricnet_free(&a), wv_fabricnet_free(&b);
+  /* The same training with the starting head mixed in at 0.5: the run and its best epoch
+   * are the same, so the saved head is the two heads' mean (w4 to f16 rounding, b4 exact
+   * to float rounding) and every other weight still the start's. */
+  char m2[512];
+  snprintf(m2, sizeof m2, "%s/mixed.bin", dir);
+  o.on_epoch = NULL, o.head_start_weight = 1.0;
+  assert_int_equal(wv_train(ds, m2, &o, &r, &e), WV_ERR_INVALID);
+  o.head_start_weight = 0.5, o.pattern_head_only = 0;
+  assert_int_equal(wv_train(ds, m2, &o, &r, &e), WV_ERR_INVALID);
+  assert_non_null(strstr(e.msg, "mixing"));
+  o.pattern_head_only = 1;
+  assert_int_equal(wv_train(ds, m2, &o, &r, &e), WV_OK);
+  wv_fabricnet c;
+  assert_int_equal(wv_fabricnet_load(m2, &c, &e), WV_OK);
+  float *tc[WV_NET_TENSORS];
+  size_t lc[WV_NET_TENSORS];
+  wv_fabricnet_tensors(&c, tc, lc);
+  for (int i = 0; i < WV_NET_HEAD_W; i++) assert_memory_equal(ta[i], tc[i], sizeof(float) * la[i]);
+  double worst = 0;
+  for (int k = WV_NET_HEAD_W; k < WV_NET_TENSORS; k++)
+    for (size_t j = 0; j < la[k]; j++) {
+      /* f16 (w4): a relative 2^-11 per rounding; f32 (b4): 2^-24 */
+      double mean = 0.5 * ((double)ta[k][j] + tb[k][j]), d = fabs(tc[k][j] - mean);
+      assert_true(d <= (k == WV_NET_HEAD_W ? 1e-3 : 1e-6) * (fabs(ta[k][j]) + fabs(tb[k][j])) + 1e-9);
+      worst = d > worst ? d : worst;
+    }
+  fprintf(stderr, "pattern head mixed with the start's at 0.5: largest distance from the mean %.2g\n", worst);
+  /* not the trained head, nor the start's */
+  assert_memory_not_equal(tb[WV_NET_HEAD_W], tc[WV_NET_HEAD_W], sizeof(float) * la[WV_NET_HEAD_W]);
+  assert_memory_not_equal(ta[WV_NET_HEAD_W], tc[WV_NET_HEAD_W], sizeof(float) * la[WV_NET_HEAD_W]);
+  /* a resumed run has no starting model to mix in */
+  o.init = NULL, o.resume = 1;
+  assert_int_equal(wv_train(ds, m2, &o, &r, &e), WV_ERR_INVALID);
+  wv_fabricnet_free(&a), wv_fabricnet_free(&b), wv_fabricnet_free(&c);
 }
 
 /* The features of an 8-bit PNG as a dataset stores them (f16). */

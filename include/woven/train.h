@@ -46,6 +46,10 @@ typedef struct {
                           * (fine-tuning; a version 1 model's missing pattern head starts fresh) */
   int pattern_head_only; /* with init or resume: only the pattern head learns; every other weight, and
                           * so every parameter estimate, stays the starting model's */
+  double head_start_weight; /* with pattern_head_only and init: the saved pattern head is (1 - w) times the
+                             * trained head plus w times the starting model's (weight-space ensembling,
+                             * Wortsman et al. 2022, "Robust fine-tuning of zero-shot models"); 0: the
+                             * trained head. In [0, 1); not with resume. The checkpoint keeps the trained head. */
   /* Optional callbacks: after loading (before the first epoch), during and after each epoch. */
   void (*on_start)(void *user, const wv_train_result *r);
   void (*on_progress)(void *user, double fraction);

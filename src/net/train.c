@@ -167,6 +167,27 @@ static double evaluate(const wv_fabricnet *net, trainset *t, const int *idx, int
   return n ? s / ((double)n * no) : 0;
 }
 
+/* The model file: net, its pattern head mixed with the starting one (start: w4 then b4) when
+ * w > 0. The trained head is put back after: training and the checkpoint go on from it. */
+static wv_status save_model(const char *path, wv_fabricnet *net, const float *start, double w, wv_error *err) {
+  if (!(w > 0)) return wv_fabricnet_save(path, net, err);
+  float *t[WV_NET_TENSORS];
+  size_t len[WV_NET_TENSORS];
+  wv_fabricnet_tensors(net, t, len);
+  size_t nw = len[WV_NET_HEAD_W], nh = nw + len[WV_NET_HEAD_W + 1];
+  float *kept = malloc(sizeof(float) * nh);
+  if (!kept) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the pattern head");
+  for (size_t j = 0; j < nh; j++) {
+    float *x = j < nw ? t[WV_NET_HEAD_W] + j : t[WV_NET_HEAD_W + 1] + (j - nw);
+    kept[j] = *x;
+    *x = (float)((1 - w) * *x + w * start[j]);
+  }
+  wv_status st = wv_fabricnet_save(path, net, err);
+  for (size_t j = 0; j < nh; j++) *(j < nw ? t[WV_NET_HEAD_W] + j : t[WV_NET_HEAD_W + 1] + (j - nw)) = kept[j];
+  free(kept);
+  return st;
+}
+
 /* The built-in index of a pattern name (earlier names map to their canonical one). */
 static int pattern_label(const char *name) {
   const char *c = wv_weave_canonical(name);
@@ -184,6 +205,11 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
   if (o->resume && o->force) return wv_fail(err, WV_ERR_INVALID, "resume and force exclude each other");
   if (o->pattern_head_only && !o->init && !o->resume)
     return wv_fail(err, WV_ERR_INVALID, "training the pattern head alone needs a model to start from (init or resume)");
+  if (!(o->head_start_weight >= 0 && o->head_start_weight < 1))
+    return wv_fail(err, WV_ERR_INVALID, "the starting head's weight %g is outside [0, 1)", o->head_start_weight);
+  if (o->head_start_weight > 0 && (!o->pattern_head_only || !o->init || o->resume))
+    return wv_fail(err, WV_ERR_INVALID, "mixing the starting pattern head into the trained one needs the pattern head "
+                                        "trained alone from a model given to start from (init, not resume)");
   char work[4096], ckpt[4096], path[4096];
   snprintf(work, sizeof work, "%s.train", model);
   { /* model and model.train/ must not land on the dataset's files */
@@ -278,6 +304,7 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
   memset(&net, 0, sizeof net);
   wv_fabricnet_trainstate ts = {0, 0, 0, INFINITY, 0};
   float *am = NULL, *av = NULL;
+  float *start_head = NULL; /* the starting model's w4 then b4, to mix into the trained head */
   wv_train_epoch *hist = st ? NULL : calloc((size_t)o->epochs + 1, sizeof *hist);
   int nhist = 0;
   if (!st && !hist) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for the loss history");
@@ -308,6 +335,12 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
       memcpy(net.mean, from.mean, sizeof(float) * (size_t)info.n_feat);
       memcpy(net.std, from.std, sizeof(float) * (size_t)info.n_feat);
       memcpy(net.range, from.range, sizeof net.range);
+      if (o->head_start_weight > 0 && lf[WV_NET_HEAD_W] == ln[WV_NET_HEAD_W] && ln[WV_NET_HEAD_W]) {
+        size_t nh = ln[WV_NET_HEAD_W] + ln[WV_NET_HEAD_W + 1];
+        if (!(start_head = malloc(sizeof(float) * nh))) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for the head");
+        else memcpy(start_head, tf[WV_NET_HEAD_W], sizeof(float) * ln[WV_NET_HEAD_W]),
+             memcpy(start_head + ln[WV_NET_HEAD_W], tf[WV_NET_HEAD_W + 1], sizeof(float) * ln[WV_NET_HEAD_W + 1]);
+      }
       wv_fabricnet_free(&from);
     }
   } else if (!st && !o->init &&
@@ -337,14 +370,16 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
   }
   if (!st && o->pattern_head_only && net.n_cls < 1)
     st = wv_fail(err, WV_ERR_INVALID, "%s has no pattern head to train", o->init ? o->init : ckpt);
+  if (!st && o->head_start_weight > 0 && !start_head)
+    st = wv_fail(err, WV_ERR_INVALID, "%s has no pattern head to mix into the trained one", o->init);
   if (!st && mkdir(work, 0777) != 0 && errno != EEXIST)
     st = wv_fail(err, WV_ERR_IO, "%s: cannot create directory: %s", work, strerror(errno));
   if (!st) {
     snprintf(path, sizeof path, "%s/train.json", work);
-    json_t *tj = json_pack("{s:s,s:s,s:i,s:i,s:i,s:f,s:i,s:f,s:f,s:I,s:i,s:b}", "kind", "woven-train", "dataset", dir,
+    json_t *tj = json_pack("{s:s,s:s,s:i,s:i,s:i,s:f,s:i,s:f,s:f,s:I,s:i,s:b,s:f}", "kind", "woven-train", "dataset", dir,
                            "samples", n, "train", ntr, "validation", nva, "val_frac", o->val_frac, "batch", o->batch,
                            "lr", o->lr, "ce_weight", o->ce_weight, "seed", (json_int_t)o->seed, "epochs", o->epochs,
-                           "pattern_head_only", o->pattern_head_only);
+                           "pattern_head_only", o->pattern_head_only, "head_start_weight", o->head_start_weight);
     char *text = tj ? json_dumps(tj, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(15)) : NULL;
     json_decref(tj);
     size_t len = text ? strlen(text) : 0;
@@ -416,7 +451,7 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
     double crit = e.val + (net.n_cls > 0 ? o->ce_weight * e.val_ce : 0);
     if (crit < ts.best_val) {
       ts.best_val = (float)crit, ts.best_epoch = ep + 1, e.best = 1;
-      st = wv_fabricnet_save(model, &net, err);
+      st = save_model(model, &net, start_head, o->head_start_weight, err);
     }
     e.seconds = omp_get_wtime() - t0;
     hist[nhist++] = e;
@@ -445,7 +480,7 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
   wv_nn_adam_free(&adam);
   wv_fabricnet_acts_free(&t.acts);
   wv_fabricnet_free(&net);
-  free(am), free(av), free(grad), free(order), free(hist), free(tr), free(va);
+  free(am), free(av), free(start_head), free(grad), free(order), free(hist), free(tr), free(va);
   free(t.x), free(t.y), free(t.lab), free(t.feat), free(t.targets), free(t.labels), free(ids);
   return st;
 }
