@@ -276,6 +276,47 @@ static void test_family_hears_network(void **state) {
   }
 }
 
+/* Within the family: the network sure of satin5_90, whose render matches the photo's peaks
+ * at 0.11, and satin8_90 matching at 0.33. The ranking score (0.75 match + 0.25 probability)
+ * puts satin5_90 first by more than the tie; satin8_90 goes to the loss criterion all the
+ * same, and its smaller loss takes it. With tie 0 the ranking score alone decides. */
+static void test_pattern_keeps_render_match(void **state) {
+  (void)state;
+  int nb = wv_weave_builtin_count(), s5 = -1, s8 = -1;
+  for (int i = 0; i < nb; i++) {
+    if (!strcmp(wv_weave_builtin_name(i), "satin5_90")) s5 = i;
+    if (!strcmp(wv_weave_builtin_name(i), "satin8_90")) s8 = i;
+  }
+  assert_true(s5 >= 0 && s8 >= 0);
+  static wv_pattern_choice c;
+  memset(&c, 0, sizeof c);
+  c.lattice.found = 1;
+  for (int i = 0; i < nb; i++) c.lattice.fit[i].score = 0.1, c.ranking.match[i] = 0.05;
+  c.lattice.fit[s5].score = 0.3, c.lattice.fit[s8].score = 0.4; /* satin is the family */
+  c.ranking.match[s5] = 0.11, c.ranking.match[s8] = 0.33;
+  for (int i = 0; i < nb; i++) c.ranking.score[i] = 0.75 * c.ranking.match[i] + 0.25 * (i == s5 ? 0.98 : 0.0);
+  for (int i = 0; i < nb; i++) c.ranking.order[i] = i;
+  for (int i = 0; i < nb; i++)
+    for (int j = i + 1; j < nb; j++)
+      if (c.ranking.score[c.ranking.order[j]] > c.ranking.score[c.ranking.order[i]]) {
+        int t = c.ranking.order[i];
+        c.ranking.order[i] = c.ranking.order[j], c.ranking.order[j] = t;
+      }
+  assert_true(c.ranking.score[s5] > c.ranking.score[s8] + 0.05);
+  assert_int_equal(wv_pattern_decide(&c, 0, 0, NULL), s5);
+  /* with the tie, the loss criterion is asked for */
+  int b = wv_pattern_decide(&c, 0, 0.05, NULL);
+  assert_true(b < 0);
+  c.evaluated[s5] = c.evaluated[s8] = 1;
+  c.loss[s5] = 0.0088, c.loss[s8] = 0.0069;
+  assert_int_equal(wv_pattern_decide(&c, 0, 0.05, NULL), s8);
+  /* a render match within the tie leaves the ranking score to decide */
+  memset(c.evaluated, 0, sizeof c.evaluated);
+  c.ranking.match[s8] = 0.15;
+  c.ranking.score[s8] = 0.75 * c.ranking.match[s8];
+  assert_int_equal(wv_pattern_decide(&c, 0, 0.05, NULL), s5);
+}
+
 /* The families' standing, runner-ups included: with a lattice each family's score is step
  * 2's (the best mean of lattice score and ranking score over its built-ins) and its candidate
  * its best-ranked built-in; without one, the network's probability or the loss criterion. */
@@ -347,7 +388,7 @@ int main(int argc, char **argv) {
       cmocka_unit_test_setup_teardown(test_photo_size, setup, teardown),
       cmocka_unit_test_setup_teardown(test_weak_lattice_densities, setup, teardown),
       cmocka_unit_test_setup_teardown(test_refined_start, setup, teardown),
-      cmocka_unit_test(test_family_hears_network),
+      cmocka_unit_test(test_family_hears_network), cmocka_unit_test(test_pattern_keeps_render_match),
       cmocka_unit_test(test_family_scores),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

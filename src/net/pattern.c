@@ -162,11 +162,16 @@ int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie,
     }
   if (contenders) *contenders = n;
   if (n > 1) fam = best_f;
-  /* 2. The pattern within it: the best ranking score; near ties by the loss criterion. */
+  /* 2. The pattern within it: the best ranking score; near ties by the loss criterion, and
+   * so is any built-in whose render matches the photo's peaks better than that one's by more
+   * than tie: the network's probability in the score must not carry, alone, a pattern whose
+   * render shows the photo's weave far worse. */
   int best = rep[fam];
   for (int k = 0; k < nb; k++) {
     int i = r->order[k];
-    if (i == rep[fam] || family_index(i) != fam || r->score[i] < r->score[rep[fam]] - tie) continue;
+    if (i == rep[fam] || family_index(i) != fam) continue;
+    int near = r->score[i] >= r->score[rep[fam]] - tie, matches = tie > 0 && r->match[i] > r->match[rep[fam]] + tie;
+    if (!near && !matches) continue;
     if (!c->evaluated[i] || !c->evaluated[best]) return -1 - (c->evaluated[i] ? best : i);
     if (c->loss[i] < c->loss[best]) best = i;
   }
@@ -324,8 +329,9 @@ char *wv_pattern_choice_to_json(const wv_pattern_choice *c) {
   static const char *CRITERION =
       "the built-ins ranked by how well the spectral peaks of their render (the network's estimate with each "
       "pattern's lattice densities) match the photo's, mixed with the network's pattern probabilities when it has "
-      "them; near ties decided by the smallest gram + w_pixel * pixel loss; a photo without a weave lattice by the "
-      "network's most probable pattern, or by that loss when the network gives no probabilities";
+      "them; near ties, and patterns of the chosen family whose render matches the photo's peaks better by more than the "
+      "tie, decided by the smallest gram + w_pixel * pixel loss; a photo without a weave lattice by the network's most "
+      "probable pattern, or by that loss when the network gives no probabilities";
   char *lj = wv_lattice_to_json(&c->lattice, c->lattice.found ? &c->ranking : NULL);
   json_t *lat = lj ? json_loads(lj, 0, NULL) : NULL;
   free(lj);
