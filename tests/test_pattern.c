@@ -244,6 +244,18 @@ static void test_photo_size(void **state) {
   wv_image_free(&photo);
 }
 
+/* The ranking's order as wv_lattice_rank makes it: best first by the ranking score. */
+static void rank_order(wv_pattern_choice *c) {
+  int nb = wv_weave_builtin_count();
+  for (int i = 0; i < nb; i++) c->ranking.order[i] = i;
+  for (int i = 0; i < nb; i++)
+    for (int j = i + 1; j < nb; j++)
+      if (c->ranking.score[c->ranking.order[j]] > c->ranking.score[c->ranking.order[i]]) {
+        int t = c->ranking.order[i];
+        c->ranking.order[i] = c->ranking.order[j], c->ranking.order[j] = t;
+      }
+}
+
 /* The family: a lattice that fits a plain weave and a basket at twice its densities
  * alike, a render match that prefers the basket (a two-colour plain weave's checks look
  * the same in both), and the network sure of plain: plain. Without the network's
@@ -262,14 +274,7 @@ static void test_family_hears_network(void **state) {
     c.ranking.match[plain] = 0.50, c.ranking.match[basket] = 0.65;
     for (int i = 0; i < nb; i++) /* the ranking's mix, as wv_lattice_rank makes it */
       c.ranking.score[i] = net ? 0.75 * c.ranking.match[i] + 0.25 * (i == plain) : c.ranking.match[i];
-    /* best first by the ranking score */
-    for (int i = 0; i < nb; i++) c.ranking.order[i] = i;
-    for (int i = 0; i < nb; i++)
-      for (int j = i + 1; j < nb; j++)
-        if (c.ranking.score[c.ranking.order[j]] > c.ranking.score[c.ranking.order[i]]) {
-          int t = c.ranking.order[i];
-          c.ranking.order[i] = c.ranking.order[j], c.ranking.order[j] = t;
-        }
+    rank_order(&c);
     int b = wv_pattern_decide(&c, 0, 0, NULL);
     printf("%s the network: %s\n", net ? "with" : "without", b >= 0 ? wv_weave_builtin_name(b) : "a loss asked for");
     assert_int_equal(b, net ? plain : basket);
@@ -295,13 +300,7 @@ static void test_pattern_keeps_render_match(void **state) {
   c.lattice.fit[s5].score = 0.3, c.lattice.fit[s8].score = 0.4; /* satin is the family */
   c.ranking.match[s5] = 0.11, c.ranking.match[s8] = 0.33;
   for (int i = 0; i < nb; i++) c.ranking.score[i] = 0.75 * c.ranking.match[i] + 0.25 * (i == s5 ? 0.98 : 0.0);
-  for (int i = 0; i < nb; i++) c.ranking.order[i] = i;
-  for (int i = 0; i < nb; i++)
-    for (int j = i + 1; j < nb; j++)
-      if (c.ranking.score[c.ranking.order[j]] > c.ranking.score[c.ranking.order[i]]) {
-        int t = c.ranking.order[i];
-        c.ranking.order[i] = c.ranking.order[j], c.ranking.order[j] = t;
-      }
+  rank_order(&c);
   assert_true(c.ranking.score[s5] > c.ranking.score[s8] + 0.05);
   assert_int_equal(wv_pattern_decide(&c, 0, 0, NULL), s5);
   /* with the tie, the loss criterion is asked for */
