@@ -37,7 +37,8 @@
 struct wv_descriptor;
 #define WV_PATTERN_SPP 4       /* as the fit iterates; 16 helps twill vs satin at 2-3x the cost (docs/fabricnet.md) */
 #define WV_PATTERN_W_PIXEL 0.2 /* the fit's w2 */
-#define WV_PATTERN_TIE 0.05    /* ranking scores this close to the best go to the loss criterion */
+#define WV_PATTERN_TIE 0.05    /* ranking scores this close to the best go to the loss criterion, and so do
+                                * the family's render matches better than the best-scored one's by more */
 #define WV_PATTERN_FAMILY_TIE 0.0 /* families this close to the best go to the loss criterion too; 0: the
                                   * lattice and render match alone decide the family (fewer wrong
                                   * families on synthetic targets, docs/analysis.md) */
