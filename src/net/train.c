@@ -168,22 +168,21 @@ static double evaluate(const wv_fabricnet *net, trainset *t, const int *idx, int
 }
 
 /* The model file: net, its pattern head mixed with the starting one (start: w4 then b4) when
- * w > 0. The trained head is put back after: training and the checkpoint go on from it. */
+ * w > 0. The trained head is put back after: training and the checkpoint go on from it. The
+ * head's two tensors are contiguous, as every tensor is (one block, wv_fabricnet_tensors order). */
 static wv_status save_model(const char *path, wv_fabricnet *net, const float *start, double w, wv_error *err) {
   if (!(w > 0)) return wv_fabricnet_save(path, net, err);
   float *t[WV_NET_TENSORS];
   size_t len[WV_NET_TENSORS];
   wv_fabricnet_tensors(net, t, len);
-  size_t nw = len[WV_NET_HEAD_W], nh = nw + len[WV_NET_HEAD_W + 1];
+  float *head = t[WV_NET_HEAD_W];
+  size_t nh = len[WV_NET_HEAD_W] + len[WV_NET_HEAD_W + 1];
   float *kept = malloc(sizeof(float) * nh);
   if (!kept) return wv_fail(err, WV_ERR_NOMEM, "out of memory for the pattern head");
-  for (size_t j = 0; j < nh; j++) {
-    float *x = j < nw ? t[WV_NET_HEAD_W] + j : t[WV_NET_HEAD_W + 1] + (j - nw);
-    kept[j] = *x;
-    *x = (float)((1 - w) * *x + w * start[j]);
-  }
+  memcpy(kept, head, sizeof(float) * nh);
+  for (size_t j = 0; j < nh; j++) head[j] = (float)((1 - w) * kept[j] + w * start[j]);
   wv_status st = wv_fabricnet_save(path, net, err);
-  for (size_t j = 0; j < nh; j++) *(j < nw ? t[WV_NET_HEAD_W] + j : t[WV_NET_HEAD_W + 1] + (j - nw)) = kept[j];
+  memcpy(head, kept, sizeof(float) * nh);
   free(kept);
   return st;
 }
@@ -338,8 +337,7 @@ wv_status wv_train(const char *dir, const char *model, const wv_train_opts *o, w
       if (o->head_start_weight > 0 && lf[WV_NET_HEAD_W] == ln[WV_NET_HEAD_W] && ln[WV_NET_HEAD_W]) {
         size_t nh = ln[WV_NET_HEAD_W] + ln[WV_NET_HEAD_W + 1];
         if (!(start_head = malloc(sizeof(float) * nh))) st = wv_fail(err, WV_ERR_NOMEM, "out of memory for the head");
-        else memcpy(start_head, tf[WV_NET_HEAD_W], sizeof(float) * ln[WV_NET_HEAD_W]),
-             memcpy(start_head + ln[WV_NET_HEAD_W], tf[WV_NET_HEAD_W + 1], sizeof(float) * ln[WV_NET_HEAD_W + 1]);
+        else memcpy(start_head, tf[WV_NET_HEAD_W], sizeof(float) * nh); /* w4 then b4, contiguous */
       }
       wv_fabricnet_free(&from);
     }
