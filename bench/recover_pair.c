@@ -16,7 +16,10 @@
  * the two types is reported), the transmitted colour (the mean linear radiance of the back-lit
  * re-render against the ceiling's, RGB, as above: the colour the back-lit photo shows, which
  * it determines where it does not tell k_t and k_st apart), and for each photo the SSIM (per RGB channel) of the re-render
- * against the target over the ceiling, the truth rendered with the fit's noise seed. Prints
+ * against the target over the ceiling, the truth rendered with the fit's noise seed; and the
+ * same for the back-lit ceiling with the fit's transmission colours in place of the truth's
+ * (ratio_t_fit_colours: near 1 where the photo does not tell the two sets of colours apart) and,
+ * for scale, with the truth's k_t 10% brighter (ratio_t_kt_10pct). Prints
  * a line per target, then one JSON object on the last line: per target, per family, overall.
  * --save DIR (an existing directory) writes each pair and its re-renders as PNGs, and the true
  * and fitted parameters (<family>_<draw>_truth.json, _fit.json). */
@@ -198,6 +201,17 @@ int main(int argc, char **argv) {
       ceil_p.seed = fs.params.seed != truth.seed ? fs.params.seed : truth.seed + 1;
       render(&s, &ceil_p, threads, 0, &ceil_r, NULL);
       render(&st, &ceil_p, threads, 0, &ceil_t, mean_truth);
+      /* the truth with the fit's transmission colours: how far the back-lit photo tells them
+       * from the truth's (near the ceiling: it does not) */
+      wv_params cf = ceil_p;
+      for (int k = WV_P_REFLECT_COUNT; k < WV_P_COUNT; k++) wv_param_set(&cf, k, wv_param_get(&fs.params, k));
+      cf.forward_width = fs.params.forward_width;
+      wv_image colours_t, kt10_t;
+      render(&st, &cf, threads, 0, &colours_t, NULL);
+      /* for scale: the truth with its k_t 10% brighter, every yarn type and channel */
+      cf = ceil_p;
+      for (int k = WV_P_KT_WARP_R; k < WV_P_KT_WARP_R + 6; k++) wv_param_set(&cf, k, 1.1 * wv_param_get(&cf, k));
+      render(&st, &cf, threads, 0, &kt10_t, NULL);
       if (save) { /* the pair and its re-renders, for a look */
         const wv_image *im[4] = {&photo, &photo_t, &rr, &rt};
         static const char *const tag[4] = {"R", "T", "fit_R", "fit_T"};
@@ -214,7 +228,8 @@ int main(int argc, char **argv) {
           if (wv_params_write(path, pp[k], &err)) die(&err);
         }
       }
-      double sr = ssim_of(&photo, &rr), st_ = ssim_of(&photo_t, &rt);
+      double sr = ssim_of(&photo, &rr), st_ = ssim_of(&photo_t, &rt), sc = ssim_of(&photo_t, &colours_t);
+      double s10 = ssim_of(&photo_t, &kt10_t);
       double cr = ssim_of(&photo, &ceil_r), ct = ssim_of(&photo_t, &ceil_t);
       double oa_t = open_area(&truth), oa_f = open_area(&fs.params);
       double oa_err = oa_t > 0 ? fabs(oa_f - oa_t) / oa_t : fabs(oa_f - oa_t);
@@ -226,15 +241,17 @@ int main(int argc, char **argv) {
       printf("%s %d %s -> %s: density %.1f/%.1f -> %.1f/%.1f, R %.3f/%.3f = %.3f, T %.3f/%.3f = %.3f, open area %.4f -> "
              "%.4f (%.2f), k_t error "
              "%.3f (start %.3f, %s), k_st error %.3f (start %.3f), k_f error %.3f (width %.3f -> %.3f), transmitted colour "
-             "error %.3f, back-lit view %s %.4f %+.2f deg, %d it, %.0f s\n",
+             "error %.3f, the truth with the fit's colours T %.3f (with k_t 10%% up %.3f), back-lit view %s %.4f %+.2f "
+             "deg, %d it, %.0f s\n",
              FAMILIES[f], i, pattern, fs.params.pattern, truth.density[0], truth.density[1], fs.params.density[0],
              fs.params.density[1], sr, cr, sr / cr, st_, ct, st_ / ct, oa_t, oa_f, oa_err, kt_e,
              kt_s, kt_model == 1 ? "pair model" : "prior", kst_e, kst_s, kf_e, truth.forward_width,
-             fs.params.forward_width, tc_e, fs.t_found ? "related" : "not related",
+             fs.params.forward_width, tc_e, sc / ct, s10 / ct, fs.t_found ? "related" : "not related",
              fs.t_scale, fs.t_rotation_deg, fs.iter, secs);
       fflush(stdout);
-      json_t *tj = json_pack("{s:f,s:f,s:f}", "kf_error", kf_e, "forward_width", truth.forward_width,
-                             "forward_width_fit", fs.params.forward_width);
+      json_t *tj = json_pack("{s:f,s:f,s:f,s:f}", "kf_error", kf_e, "forward_width", truth.forward_width,
+                             "forward_width_fit", fs.params.forward_width, "ratio_t_fit_colours", sc / ct);
+      json_object_set_new(tj, "ratio_t_kt_10pct", json_real(s10 / ct));
       json_t *rest = json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:b,s:f,s:f,s:i,s:f}",
                              "family", FAMILIES[f], "draw", i, "pattern", pattern, "chosen", fs.params.pattern, "family_right",
                              fam_right, "ssim_r", sr, "ceiling_r", cr, "ratio_r", sr / cr, "ssim_t", st_, "ceiling_t",
@@ -252,7 +269,7 @@ int main(int argc, char **argv) {
       wv_fit_state_free(&fs);
       free(pc);
       wv_image_free(&photo), wv_image_free(&photo_t), wv_image_free(&rr), wv_image_free(&rt);
-      wv_image_free(&ceil_r), wv_image_free(&ceil_t);
+      wv_image_free(&ceil_r), wv_image_free(&ceil_t), wv_image_free(&colours_t), wv_image_free(&kt10_t);
     }
   }
   json_t *fams = json_object();
