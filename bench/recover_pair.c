@@ -249,9 +249,9 @@ int main(int argc, char **argv) {
              fs.params.forward_width, tc_e, sc / ct, s10 / ct, fs.t_found ? "related" : "not related",
              fs.t_scale, fs.t_rotation_deg, fs.iter, secs);
       fflush(stdout);
-      json_t *tj = json_pack("{s:f,s:f,s:f,s:f}", "kf_error", kf_e, "forward_width", truth.forward_width,
-                             "forward_width_fit", fs.params.forward_width, "ratio_t_fit_colours", sc / ct);
-      json_object_set_new(tj, "ratio_t_kt_10pct", json_real(s10 / ct));
+      json_t *tj = json_pack("{s:f,s:f,s:f,s:f,s:f}", "kf_error", kf_e, "forward_width", truth.forward_width,
+                             "forward_width_fit", fs.params.forward_width, "ratio_t_fit_colours", sc / ct,
+                             "ratio_t_kt_10pct", s10 / ct);
       json_t *rest = json_pack("{s:s,s:i,s:s,s:s,s:b,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:b,s:f,s:f,s:i,s:f}",
                              "family", FAMILIES[f], "draw", i, "pattern", pattern, "chosen", fs.params.pattern, "family_right",
                              fam_right, "ssim_r", sr, "ceiling_r", cr, "ratio_r", sr / cr, "ssim_t", st_, "ceiling_t",
