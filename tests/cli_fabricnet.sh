@@ -35,8 +35,16 @@ check "dataset other scene" 2 "scene" -- "$WOVEN" dataset --scene flat45 --per-p
 check "dataset other spp" 2 "spp" -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 3 -o "$DS" --seed 3 --spp 3
 check "dataset other augmentation" 2 "augmentation" -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 3 -o "$DS" --seed 3 --no-augment
 cp -r "$DS" "$T/ds_r1"
-grep -q '"renderer": 2' "$T/ds_r1/dataset.json" || fail "dataset.json does not record the renderer version"
-sed -i '/"renderer": 2,/d' "$T/ds_r1/dataset.json" # as written by renderer version 1
+grep -q '"renderer": 3' "$T/ds_r1/dataset.json" || fail "dataset.json does not record the renderer version"
+# Renderer version 2 filled the same sample grid at 2 spp (2 x 1), so its images are these;
+# at 8 spp its grid (3 x 3) left a cell empty, so they are not.
+cp -r "$DS" "$T/ds_r2"
+sed -i 's/"renderer": 3,/"renderer": 2,/' "$T/ds_r2/dataset.json"
+check "dataset extends one of renderer 2 where its grid was full" 0 '"rendered": 16' -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 4 -o "$T/ds_r2" --seed 3 --json
+check "dataset at 8 spp" 0 '"rendered": 16' -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 1 -o "$T/ds_r8" --seed 3 --spp 8 --json
+sed -i 's/"renderer": 3,/"renderer": 2,/' "$T/ds_r8/dataset.json"
+check "dataset refuses one of renderer 2 where its grid was not full" 2 "renderer version" -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 2 -o "$T/ds_r8" --seed 3 --spp 8
+sed -i '/"renderer": 3,/d' "$T/ds_r1/dataset.json" # as written by renderer version 1
 check "dataset extends only with the same renderer" 2 "renderer version" -- "$WOVEN" dataset --scene "$T/tiny.json" --per-pattern 4 -o "$T/ds_r1" --seed 3
 check "train reads an older renderer's dataset" 0 '"epochs": 1' -- "$WOVEN" train "$T/ds_r1" -o "$T/m_r1.bin" --epochs 1 --batch 4 --json
 cp -r "$DS" "$T/ds_v2"

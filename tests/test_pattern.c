@@ -169,11 +169,12 @@ static void choose_noisy_plain(fixture *f, const wv_scene *s, uint64_t seed, con
  * lattice (the plain lattice scores between 0 and WV_LATTICE_MIN_SCORE), yet that lattice's
  * densities are the truth's, where the network's (here half the truth's) are an alias. The
  * network decides the pattern; the start takes the densities whose render's peaks match the
- * photo's better: the lattice's. */
+ * photo's better: the lattice's. (The noise's seed gives such a photo: most seeds leave one
+ * peak standing, which scores 0, or two, which make a lattice.) */
 static void test_weak_lattice_densities(void **state) {
   fixture *f = *state;
   static wv_pattern_choice c;
-  choose_noisy_plain(f, &f->scene, 7, (const double[2]){0.5, 0.5}, &c);
+  choose_noisy_plain(f, &f->scene, 58, (const double[2]){0.5, 0.5}, &c);
   fprintf(stderr, "lattice found %d, %d peaks, plain %.3f at %.1f x %.1f; peak match: network %.3f, lattice %.3f\n",
           c.lattice.found, c.lattice.n_peaks, c.lattice.fit[0].score, c.lattice.fit[0].density[0],
           c.lattice.fit[0].density[1], c.start_match[0], c.start_match[1]);

@@ -1,11 +1,12 @@
-/* Forward renderer: determinism, convergence of the default spp, the twill90
- * symmetry of the maps, light through the cloth (flat45-back) and its maps,
+/* Forward renderer: the pixel sampler's coverage, determinism, convergence of the default
+ * spp, the twill90 symmetry of the maps, light through the cloth (flat45-back) and its maps,
  * golden images. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "sampler/sampler.h"
 #include "testutil.h"
 
 #define M_PI 3.14159265358979323846
@@ -452,8 +453,37 @@ static void test_golden(void **state) {
   }
 }
 
+/* At every spp the pixel's samples fill its whole grid, one a cell, and their x values lie
+ * in distinct 1/spp strata, as do their y values: no part of the pixel goes unsampled (a
+ * grid with more cells than samples left its last cells empty at 8 or 32 spp). */
+static void test_sampler_covers_pixel(void **state) {
+  (void)state;
+  for (int spp = 1; spp <= 300; spp++) {
+    int nx, ny;
+    wv_pixel_grid(spp, &nx, &ny);
+    assert_int_equal(nx * ny, spp);
+    assert_true(ny <= nx);
+    unsigned char *used = calloc((size_t)3 * spp, 1);
+    assert_non_null(used);
+    for (int px = 0; px < 3; px++) {
+      memset(used, 0, (size_t)3 * spp);
+      wv_pixel_sampler_f ps = wv_pixel_sampler_make(px, 7, 64, 11);
+      for (int s = 0; s < spp; s++) {
+        float sx, sy;
+        wv_sample_at_f(&ps, nx, ny, s, &sx, &sy);
+        assert_true(sx >= 0 && sx < 1 && sy >= 0 && sy < 1);
+        int cx = (int)(sx * nx), cy = (int)(sy * ny), stx = (int)(sx * spp), sty = (int)(sy * spp);
+        assert_false(used[cy * nx + cx]++);           /* one sample a cell */
+        assert_false(used[spp + stx]++);              /* distinct x strata */
+        assert_false(used[2 * spp + sty]++);          /* distinct y strata */
+      }
+    }
+    free(used);
+  }
+}
+
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_deterministic), cmocka_unit_test(test_footprints_cache),
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_sampler_covers_pixel), cmocka_unit_test(test_deterministic), cmocka_unit_test(test_footprints_cache),
                                      cmocka_unit_test(test_default_spp_converged),
                                      cmocka_unit_test(test_twill90_is_mirrored_twill), cmocka_unit_test(test_maps_tile),
                                      cmocka_unit_test(test_back_lit), cmocka_unit_test(test_downscale),

@@ -13,8 +13,10 @@
 
 /* Bumped when the same parameters, scene and seed render to another image (a new
  * sampler, say): data made by an older renderer is not extended with newer images.
- * 1: jittered samples (renderer version 1); 2: correlated multi-jittered samples. */
-#define WV_RENDER_VERSION 2
+ * 1: jittered samples (renderer version 1); 2: correlated multi-jittered samples; 3: their
+ * grid as many cells as samples at any spp (the same images as 2 where 2's grid was full: a
+ * square spp, or 2, 6, 12, ...). */
+#define WV_RENDER_VERSION 3
 
 /* Per-pixel camera geometry of one scene (where each pixel's corners land on the
  * fabric, light and view directions). It does not depend on the fabric, so a fit

@@ -3,12 +3,14 @@
  * not yet done rendered in parallel and shared over the ranks of an MPI job. Notes and
  * progress come from rank 0 only. */
 #include <errno.h>
+#include <math.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
+#include "sampler/sampler.h"
 #include "util/note.h"
 #include "woven/dataset.h"
 #include "woven/descriptor.h"
@@ -36,6 +38,17 @@ static int sample_done(void *user, int k) {
   return wv_dataset_sample_done(sc->dir, sc->info, k);
 }
 
+/* Whether samples of renderer version a and b at spp are the same images: versions 2 and 3
+ * differ only in the pixel's sample grid, and only where version 2's (ceil(sqrt(spp))
+ * columns, as many rows as they need) held more cells than samples (WV_RENDER_VERSION). */
+static int same_renderer(int a, int b, int spp) {
+  if (a == b) return 1;
+  if (a < 2 || a > 3 || b < 2 || b > 3 || spp < 1) return 0;
+  int ox = (int)ceil(sqrt((double)spp)), oy = (spp + ox - 1) / ox, nx, ny;
+  wv_pixel_grid(spp, &nx, &ny);
+  return ox == nx && oy == ny;
+}
+
 /* The settings of want, checked against those recorded in dir (rank 0). */
 static wv_status check_existing(const wv_dataset_build_opts *o, const wv_dist *dist, wv_dataset_info *want,
                                 wv_error *err) {
@@ -55,7 +68,7 @@ static wv_status check_existing(const wv_dataset_build_opts *o, const wv_dist *d
                     : have.draws != want->draws     ? "way of drawing the cloths (--photo-draws)"
                     : strcmp(have.descriptor, want->descriptor) || have.n_feat != want->n_feat ? "descriptor"
                     : have.spp != want->spp                                                    ? "spp"
-                    : have.renderer != want->renderer                                          ? "renderer version"
+                    : !same_renderer(have.renderer, want->renderer, have.spp)                  ? "renderer version"
                     : !hj || !wj || strcmp(hj, wj)                                             ? "scene"
                                                                                                : NULL;
   free(hj), free(wj);

@@ -32,7 +32,7 @@ typedef struct {
   WV_W keyx, keyy; /* the permutations' keys (wv_pixel_keys) */
 } WV_FN(wv_pixel_sampler);
 
-/* Sample s of a pixel of spp = at most nx * ny samples (wv_pixel_grid):
+/* Sample s of a pixel of spp = nx * ny samples (wv_pixel_grid):
  * correlated multi-jittered (Kensler 2013, "Correlated Multi-Jittered
  * Sampling"). Sample s sits in cell (s mod nx, s div nx) of the grid, as plain
  * jittered sampling, and inside the cell in a sub-column and sub-row given by a

@@ -20,10 +20,17 @@
 #include "sampler/cmj_impl.h"
 #include "kernel/lane_end.h"
 
-/* Sample grid of a pixel: nx columns by ny rows, nx = ceil(sqrt(spp)). */
+/* Sample grid of a pixel: nx columns by ny rows, nx * ny = spp exactly (ny the largest
+ * divisor of spp not above its square root), so that the samples cover the whole pixel: a
+ * grid with more cells than samples leaves its last cells unsampled, a part of every pixel
+ * that thin gaps and edges then miss (docs/measurements.md, "The sampler at any spp"). */
 static inline void wv_pixel_grid(int spp, int *nx, int *ny) {
-  *nx = (int)ceilf(sqrtf((float)spp));
-  *ny = (spp + *nx - 1) / *nx;
+  int r = spp > 1 ? (int)sqrt((double)spp) : 1;
+  while (r > 1 && (long long)r * r > spp) r--;
+  while ((long long)(r + 1) * (r + 1) <= spp) r++;
+  while (r > 1 && spp % r) r--;
+  *ny = r;
+  *nx = spp > 0 ? spp / r : 1;
 }
 
 /* The pixel's state: its hash (wv_hash2's first round) and its two permutation keys. */
