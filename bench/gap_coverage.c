@@ -8,12 +8,12 @@
  * area (1 - width)^2, the open area the glow shows, and wv_open_area_measure's reading of
  * the render with the glow, as one JSON object.
  * Usage: gap_coverage [spp ...] (default 8 16 24 32 48 64 128 256) */
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 
 #include "sensor/sensor.h"
 #include "woven/analysis.h"
+#include "woven/metrics.h"
 #include "woven/render.h"
 
 #define SIDE 256
@@ -47,12 +47,10 @@ int main(int argc, char **argv) {
       printf("%s{\"pattern\": \"%s\", \"width\": %.2f, \"open_area\": %.5f, \"spp\": [", k || w ? ", " : "", pats[k],
              widths[w], open);
       for (int i = 0; i < n; i++) {
-        wv_scene s;
-        if (wv_scene_preset("flat45-back", &s, &e)) die(&e);
-        /* the centre window: the same pixels as the full image there */
-        const double deg = 3.14159265358979323846 / 180.0;
-        s.vfov_deg = 2.0 * atan(tan(0.5 * s.vfov_deg * deg) * SIDE / s.height) / deg;
-        s.width = s.height = SIDE, s.spp = spps[i];
+        wv_scene full, s;
+        if (wv_scene_preset("flat45-back", &full, &e)) die(&e);
+        wv_scene_centre_window(&full, SIDE, SIDE, &s); /* the same pixels as the full image there */
+        s.spp = spps[i];
         wv_scene dark = s;
         dark.glow_radiance = 0;
         wv_render_opts ro = {0};
