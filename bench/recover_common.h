@@ -40,6 +40,7 @@ typedef struct {
   wv_pattern_families families; /* how each family stood in the choice (kind "none": given) */
   wv_params start, fit;
   wv_scene fit_scene; /* the scene with the registration's offset */
+  double blur_start;  /* the camera blur measured before the first iteration (px) */
   double seconds, choice_seconds;
 } capture;
 
@@ -79,6 +80,7 @@ static void run_capture(const study *st, const wv_image *photo, const wv_params 
   if (wv_fit_state_init(&fs, &c->start, &o, &err) || wv_fit_run(&fs, &scene, photo, st->d, &o, NULL, NULL, &err))
     die(&err);
   c->fit = fs.params;
+  c->blur_start = fs.psf_start;
   wv_fit_scene(&fs, &scene, &c->fit_scene);
   wv_fit_state_free(&fs);
   c->seconds = bench_now() - t0;

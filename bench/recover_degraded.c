@@ -27,7 +27,9 @@
  * ceiling: the true parameters rendered with the fit's noise seed instead of the target's,
  * through the same rotation, distortion and blur (what a capture can model) but without the
  * noise, the 8 bits and the JPEG. Also the target's blurred-copy SSIM (woven capture's
- * ssim_rgb_blurred_photo) and whether the fit scores below it.
+ * ssim_rgb_blurred_photo) and whether the fit scores below it, and the camera blur the
+ * capture measured before its first iteration and the one it fitted, against the target's
+ * (camera_blur per target; camera_blur_error_px, the mean absolute errors, overall).
  * --jobs N captures N targets at once in N processes (each with --threads render threads;
  * give both, e.g. --jobs 2 --threads 1). Prints one line per target as it finishes, then one
  * JSON object on the last line: per target, per family and overall. --save DIR writes each
@@ -81,6 +83,7 @@ typedef struct {
   double fam_score[NFAM];
   double density[2], spacing_px[2], fit_density[2];
   double ssim_fit, ssim_ceiling, ratio, wsc_fit, wsc_ceiling, ssim_blurred_copy, seconds;
+  double blur_start, blur_fit; /* the capture's camera blur: measured at the start, fitted (px) */
   degradation deg;
 } result;
 
@@ -249,6 +252,7 @@ static void run_target(const study *st, const plan *pl, int index, int fam, int 
   for (int f = 0; f < NFAM; f++)
     r->fam_pattern[f] = c.families.pattern[f], r->fam_score[f] = c.families.score[f], r->fam_order[f] = c.families.order[f];
   r->fit_density[0] = c.fit.density[0], r->fit_density[1] = c.fit.density[1], r->fit_noise_level = c.fit.noise_level;
+  r->blur_start = c.blur_start, r->blur_fit = c.fit_scene.psf_sigma;
   double wsc[2];
   measure(&c.fit_scene, &c.fit, &photo, st->o.threads, &r->ssim_fit, NULL, wsc, 0, NULL);
   r->wsc_fit = wsc[0];
@@ -274,8 +278,9 @@ static void print_line(const plan *pl, const result *r) {
          r->fit_density[0] / (r->density[0] * r->deg.zoom), r->fit_density[1] / (r->density[1] * r->deg.zoom),
          r->noise_level, r->fit_noise_level);
   if (pl->degrade)
-    printf("  rot %+.2f lens %+.3f blur %.2f noise %.1e/%.1e jpeg %d", r->deg.rotation_deg, r->deg.lens_k,
-           r->deg.blur_px, r->deg.noise_a, r->deg.noise_b, r->deg.jpeg_quality);
+    printf("  rot %+.2f lens %+.3f blur %.2f (start %.2f, fit %.2f) noise %.1e/%.1e jpeg %d", r->deg.rotation_deg,
+           r->deg.lens_k, r->deg.blur_px, r->blur_start, r->blur_fit, r->deg.noise_a, r->deg.noise_b,
+           r->deg.jpeg_quality);
   printf("  %.1f s\n", r->seconds);
   fflush(stdout);
 }
@@ -301,6 +306,7 @@ static json_t *target_json(const plan *pl, const result *r) {
                                             r->spacing_px[1], "noise_level", r->noise_level));
   json_object_set_new(o, "fit_density", json_pack("[f,f]", r->fit_density[0], r->fit_density[1]));
   json_object_set_new(o, "fit_noise_level", json_integer(r->fit_noise_level));
+  json_object_set_new(o, "camera_blur", json_pack("{s:f,s:f}", "start", r->blur_start, "fit", r->blur_fit));
   json_object_set_new(o, "degradation",
                       pl->degrade ? json_pack("{s:f,s:f,s:f,s:f,s:f,s:f,s:i}", "rotation_deg", r->deg.rotation_deg,
                                               "zoom", r->deg.zoom,
@@ -512,10 +518,12 @@ int main(int argc, char **argv) {
   /* per family and overall */
   json_t *list = json_array(), *fams = json_object();
   int right = 0;
-  double sum = 0, lo = INFINITY;
+  double sum = 0, lo = INFINITY, blur_err[2] = {0, 0}; /* mean |camera blur - the target's|: start, fit */
   for (int t = 0; t < nt; t++) {
     json_array_append_new(list, target_json(&pl, &res[t]));
     right += res[t].family_right, sum += res[t].ratio, lo = fmin(lo, res[t].ratio);
+    blur_err[0] += fabs(res[t].blur_start - res[t].deg.blur_px) / nt;
+    blur_err[1] += fabs(res[t].blur_fit - res[t].deg.blur_px) / nt;
   }
   for (int f = 0; f < NFAM; f++) {
     int n = 0, fr = 0;
@@ -531,6 +539,8 @@ int main(int argc, char **argv) {
                           pl.shot_hi, "per_family", per, "first", first, "iters", o.iters, "iter_spp", o.iter_spp, "iter_scale", o.iter_scale,
                           "w_struct", o.w_struct, "lr", o.lr, "targets", nt, "family_right_pct", 100.0 * right / nt,
                           "mean_ratio", sum / nt, "min_ratio", lo, "families", fams, "per_target", list);
+  if (pl.degrade)
+    json_object_set_new(out, "camera_blur_error_px", json_pack("{s:f,s:f}", "start", blur_err[0], "fit", blur_err[1]));
   char *text = json_dumps(out, JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(6));
   json_decref(out);
   if (!text) return 1;

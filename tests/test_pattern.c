@@ -282,6 +282,39 @@ static void test_family_hears_network(void **state) {
   }
 }
 
+/* A basket whose pairs the camera's blur merges: the plain weave's lattice at half the
+ * densities explains the photo's peaks better (0.85 against the basket's 0.47: the pairs
+ * show as wide yarns whose frequency the basket's lattice does not hold), while its render
+ * and the network prefer the basket (ranking scores 0.72 against 0.46). The two lattices
+ * are one, so the ranking decides: basket. With the basket's lattice elsewhere (densities
+ * not twice the plain's) the plain's lattice counts: plain. */
+static void test_family_basket_twin(void **state) {
+  (void)state;
+  int nb = wv_weave_builtin_count(), plain = 0, basket = 1;
+  assert_string_equal(wv_weave_builtin_name(plain), "plain");
+  assert_string_equal(wv_weave_builtin_name(basket), "basket");
+  static wv_pattern_choice c;
+  for (int twin = 1; twin >= 0; twin--) {
+    memset(&c, 0, sizeof c);
+    c.lattice.found = 1;
+    for (int i = 0; i < nb; i++) {
+      c.lattice.fit[i].score = 0.3, c.ranking.score[i] = 0.2;
+      c.lattice.fit[i].density[0] = 100, c.lattice.fit[i].density[1] = 90;
+    }
+    c.lattice.fit[plain].score = 0.85, c.ranking.score[plain] = 0.46;
+    c.lattice.fit[plain].density[0] = 41, c.lattice.fit[plain].density[1] = 50;
+    c.lattice.fit[basket].score = 0.47, c.ranking.score[basket] = 0.72;
+    c.lattice.fit[basket].density[0] = twin ? 81 : 120, c.lattice.fit[basket].density[1] = 101;
+    rank_order(&c);
+    int b = wv_pattern_decide(&c, 0, 0, NULL);
+    assert_int_equal(b, twin ? basket : plain);
+    /* the families' reported standing agrees */
+    wv_pattern_families fs;
+    wv_pattern_family_scores(&c, &fs);
+    assert_string_equal(fs.family[fs.order[0]], twin ? "basket" : "plain");
+  }
+}
+
 /* Within the family: the network sure of satin5_90, whose render matches the photo's peaks
  * at 0.11, and satin8_90 matching at 0.33. The ranking score (0.75 match + 0.25 probability)
  * puts satin5_90 first by more than the tie; satin8_90 goes to the loss criterion all the
@@ -388,7 +421,8 @@ int main(int argc, char **argv) {
       cmocka_unit_test_setup_teardown(test_photo_size, setup, teardown),
       cmocka_unit_test_setup_teardown(test_weak_lattice_densities, setup, teardown),
       cmocka_unit_test_setup_teardown(test_refined_start, setup, teardown),
-      cmocka_unit_test(test_family_hears_network), cmocka_unit_test(test_pattern_keeps_render_match),
+      cmocka_unit_test(test_family_hears_network), cmocka_unit_test(test_family_basket_twin),
+      cmocka_unit_test(test_pattern_keeps_render_match),
       cmocka_unit_test(test_family_scores),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

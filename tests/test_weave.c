@@ -152,8 +152,36 @@ static void test_custom(void **state) {
   assert_non_null(strstr(err.msg, "herringbone"));
 }
 
+/* Yarns in groups: a basket's pairs, in both directions, weave as a plain weave; no other
+ * built-in has groups; a custom pattern with pairs one way only has them that way. */
+static void test_yarn_groups(void **state) {
+  (void)state;
+  wv_weave w;
+  int g[2] = {0, 0};
+  for (int i = 0; i < wv_weave_builtin_count(); i++) {
+    const char *name = wv_weave_builtin_name(i);
+    assert_int_equal(wv_weave_builtin(name, &w, NULL), WV_OK);
+    int basket = !strcmp(name, "basket");
+    assert_int_equal(wv_weave_yarn_group(&w, 0), basket ? 2 : 1);
+    assert_int_equal(wv_weave_yarn_group(&w, 1), basket ? 2 : 1);
+    int twin = wv_weave_builtin_twin(i, g);
+    if (basket) {
+      assert_string_equal(wv_weave_builtin_name(twin), "plain");
+      assert_int_equal(g[0], 2);
+      assert_int_equal(g[1], 2);
+    } else {
+      assert_int_equal(twin, -1);
+    }
+  }
+  const char *rib[] = {"1100", "0011"}; /* warp in pairs, weft single */
+  assert_int_equal(wv_weave_from_rows(rib, 2, &w, NULL), WV_OK);
+  assert_int_equal(wv_weave_yarn_group(&w, 0), 2);
+  assert_int_equal(wv_weave_yarn_group(&w, 1), 1);
+  assert_int_equal(wv_weave_builtin_twin(-1, g), -1);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_builtins), cmocka_unit_test(test_library), cmocka_unit_test(test_wraparound_lookup),
-                                     cmocka_unit_test(test_custom)};
+                                     cmocka_unit_test(test_custom), cmocka_unit_test(test_yarn_groups)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -41,6 +41,15 @@ const char *wv_weave_builtin_name(int i); /* NULL outside 0..count-1 */
 const char *wv_weave_canonical(const char *name);
 /* "plain", "basket", "twill", "satin", or "custom" for any other name. */
 const char *wv_weave_family(const char *name);
+/* The size of the groups of adjacent columns (dir 0) or rows (dir 1) that weave alike (a
+ * basket's pairs): the smallest g > 1 dividing the repeat such that every column (row)
+ * weaves as the first of its group; 1 when there is none. */
+int wv_weave_yarn_group(const wv_weave *w, int dir);
+/* The built-in that built-in i's groups of yarns weave as, each group taken as one yarn
+ * (basket: plain), with the group sizes in g (columns, rows); -1 when i has no groups or
+ * they weave as no built-in. Through a camera's blur i at densities d looks like that
+ * built-in at d / g with yarns g times as wide. */
+int wv_weave_builtin_twin(int i, int g[2]);
 /* A custom pattern from n text rows of '0'/'1' of equal length (1..WV_WEAVE_MAX). */
 wv_status wv_weave_from_rows(const char *const *rows, int n, wv_weave *w, wv_error *err);
 /* Cell lookup for any integer row/column (wraps around the repeat). */

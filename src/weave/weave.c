@@ -154,3 +154,35 @@ wv_status wv_weave_builtin(const char *name, wv_weave *w, wv_error *err) {
   (void)err;
   return WV_OK;
 }
+
+int wv_weave_yarn_group(const wv_weave *w, int dir) {
+  int n = dir ? w->rows : w->cols, m = dir ? w->cols : w->rows;
+  for (int g = 2; g <= n / 2; g++) {
+    if (n % g) continue;
+    int same = 1;
+    for (int k = 0; k < n && same; k++)
+      for (int l = 0; l < m && same; l++) {
+        int first = k - k % g;
+        same = dir ? w->p[k][l] == w->p[first][l] : w->p[l][k] == w->p[l][first];
+      }
+    if (same) return g;
+  }
+  return 1;
+}
+
+int wv_weave_builtin_twin(int i, int g[2]) {
+  wv_weave w, t;
+  const char *name = wv_weave_builtin_name(i);
+  if (!name || wv_weave_builtin(name, &w, NULL)) return -1;
+  g[0] = wv_weave_yarn_group(&w, 0), g[1] = wv_weave_yarn_group(&w, 1);
+  if (g[0] < 2 && g[1] < 2) return -1;
+  int rows = w.rows / g[1], cols = w.cols / g[0];
+  for (int j = 0; j < N_CANONICAL; j++) {
+    if (j == i || wv_weave_builtin(BUILTINS[j].name, &t, NULL) || t.rows != rows || t.cols != cols) continue;
+    int same = 1;
+    for (int r = 0; r < rows && same; r++)
+      for (int c = 0; c < cols && same; c++) same = t.p[r][c] == w.p[r * g[1]][c * g[0]];
+    if (same) return j;
+  }
+  return -1;
+}
