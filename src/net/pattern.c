@@ -162,9 +162,9 @@ void wv_pattern_family_scores(const wv_pattern_choice *c, wv_pattern_families *o
 int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie, int *contenders) {
   const wv_lattice_ranking *r = &c->ranking;
   int nb = wv_weave_builtin_count();
-  /* 1. The family: the best by the mean of lattice score and ranking score (the lattice
-   * alone cannot tell a plain weave from a basket at twice its densities, whose lattice
-   * holds the same points; their renders differ, and so do the network's probabilities,
+  /* 1. The family: the best by the mean of lattice term (lattice_term) and ranking score
+   * (the lattice cannot tell a plain weave from a basket at twice its densities; their
+   * renders differ, and so do the network's probabilities,
    * which the ranking score holds: on a two-colour plain weave the render match alone
    * prefers the basket, whose colour checks look the same), or the loss criterion among
    * the contenders, each represented by its best-ranked pattern. */
