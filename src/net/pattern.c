@@ -85,37 +85,37 @@ static int family_index(int i) {
   return f;
 }
 
-/* Built-in i's lattice score as the family step weighs it. A built-in whose yarns lie in
- * groups (a basket) and its twin that weaves as the groups (plain) describe one cloth seen
- * through a blur when the first's densities are the groups' times the twin's
+/* Each built-in's lattice score as the family step weighs it (term). A built-in whose
+ * yarns lie in groups (a basket) and its twin that weaves as the groups (plain) describe
+ * one cloth seen through a blur when the first's densities are the groups' times the twin's
  * (wv_weave_builtin_twin). Their lattices share the points of the colour checks; they
  * differ at the twin's yarn frequency, which the groups' shading shows and the grouped
  * lattice does not hold, and at the grouped one's own yarn frequency, which the blur takes
  * out: which scores higher tells the camera's blur, not the weave. Each then takes the
  * better of the two, and their renders and the network decide. */
-static double lattice_term(const wv_lattice *l, int i) {
-  double v = l->fit[i].score;
-  int g[2];
-  for (int k = 0; k < wv_weave_builtin_count(); k++) { /* k: a grouped built-in */
-    int twin = wv_weave_builtin_twin(k, g), same = 1;
-    if (twin < 0 || (k != i && twin != i)) continue;
-    for (int d = 0; d < 2; d++)
-      same = same && fabs(log(l->fit[k].density[d] / (g[d] * l->fit[twin].density[d]))) < WV_LATTICE_NEAR;
-    if (same) v = fmax(l->fit[k].score, l->fit[twin].score);
+static void lattice_terms(const wv_lattice *l, double *term) {
+  int nb = wv_weave_builtin_count(), g[2];
+  for (int i = 0; i < nb; i++) term[i] = l->fit[i].score;
+  for (int k = 0; k < nb; k++) { /* k: a grouped built-in */
+    int twin = wv_weave_builtin_twin(k, g), same = twin >= 0;
+    for (int d = 0; d < 2 && same; d++)
+      same = fabs(log(l->fit[k].density[d] / (g[d] * l->fit[twin].density[d]))) < WV_LATTICE_NEAR;
+    if (same) term[k] = term[twin] = fmax(l->fit[k].score, l->fit[twin].score);
   }
-  return v;
 }
 
-/* Step 2's family score: the best mean of lattice term (lattice_term) and ranking score over
+/* Step 2's family score: the best mean of lattice term (lattice_terms) and ranking score over
  * the family's built-ins (ff) and the built-in that has it (arg, may be NULL), and the
  * family's best-ranked built-in (rep); -1 for a family without any. */
 static void lattice_families(const wv_pattern_choice *c, double *ff, int *rep, int *arg) {
   const wv_lattice *l = &c->lattice;
   const wv_lattice_ranking *r = &c->ranking;
+  double term[WV_WEAVE_BUILTINS];
+  lattice_terms(l, term);
   for (int f = 0; f < WV_PATTERN_FAMILIES; f++) ff[f] = -1, rep[f] = -1;
   for (int k = 0; k < wv_weave_builtin_count(); k++) {
     int i = r->order[k], f = family_index(i);
-    double v = 0.5 * (lattice_term(l, i) + r->score[i]);
+    double v = 0.5 * (term[i] + r->score[i]);
     if (v > ff[f]) {
       ff[f] = v;
       if (arg) arg[f] = i;
@@ -162,7 +162,7 @@ void wv_pattern_family_scores(const wv_pattern_choice *c, wv_pattern_families *o
 int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie, int *contenders) {
   const wv_lattice_ranking *r = &c->ranking;
   int nb = wv_weave_builtin_count();
-  /* 1. The family: the best by the mean of lattice term (lattice_term) and ranking score
+  /* 1. The family: the best by the mean of lattice term (lattice_terms) and ranking score
    * (the lattice cannot tell a plain weave from a basket at twice its densities; their
    * renders differ, and so do the network's probabilities,
    * which the ranking score holds: on a two-colour plain weave the render match alone
