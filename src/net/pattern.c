@@ -98,8 +98,10 @@ static void lattice_terms(const wv_lattice *l, double *term) {
   for (int i = 0; i < nb; i++) term[i] = l->fit[i].score;
   for (int k = 0; k < nb; k++) { /* k: a grouped built-in */
     int twin = wv_weave_builtin_twin(k, g), same = twin >= 0;
-    for (int d = 0; d < 2 && same; d++)
-      same = fabs(log(l->fit[k].density[d] / (g[d] * l->fit[twin].density[d]))) < WV_LATTICE_NEAR;
+    for (int d = 0; d < 2 && same; d++) {
+      double a = l->fit[k].density[d], b = g[d] * l->fit[twin].density[d]; /* 0: not fitted */
+      same = a > 0 && b > 0 && fabs(log(a / b)) < WV_LATTICE_NEAR;
+    }
     if (same) term[k] = term[twin] = fmax(l->fit[k].score, l->fit[twin].score);
   }
 }
