@@ -257,6 +257,17 @@ static void rank_order(wv_pattern_choice *c) {
       }
 }
 
+/* A choice with a lattice and nothing else set, for the decision's rules alone; plain and
+ * basket are built-ins 0 and 1. (static: the choice is large.) */
+static wv_pattern_choice *lattice_choice(void) {
+  static wv_pattern_choice c;
+  assert_string_equal(wv_weave_builtin_name(0), "plain");
+  assert_string_equal(wv_weave_builtin_name(1), "basket");
+  memset(&c, 0, sizeof c);
+  c.lattice.found = 1;
+  return &c;
+}
+
 /* The family: a lattice that fits a plain weave and a basket at twice its densities
  * alike, a render match that prefers the basket (a two-colour plain weave's checks look
  * the same in both), and the network sure of plain: plain. Without the network's
@@ -264,19 +275,15 @@ static void rank_order(wv_pattern_choice *c) {
 static void test_family_hears_network(void **state) {
   (void)state;
   int nb = wv_weave_builtin_count(), plain = 0, basket = 1;
-  assert_string_equal(wv_weave_builtin_name(plain), "plain");
-  assert_string_equal(wv_weave_builtin_name(basket), "basket");
-  static wv_pattern_choice c;
   for (int net = 0; net < 2; net++) {
-    memset(&c, 0, sizeof c);
-    c.lattice.found = 1;
-    for (int i = 0; i < nb; i++) c.lattice.fit[i].score = 0.2, c.ranking.match[i] = 0.1;
-    c.lattice.fit[plain].score = 0.52, c.lattice.fit[basket].score = 0.50;
-    c.ranking.match[plain] = 0.50, c.ranking.match[basket] = 0.65;
+    wv_pattern_choice *c = lattice_choice();
+    for (int i = 0; i < nb; i++) c->lattice.fit[i].score = 0.2, c->ranking.match[i] = 0.1;
+    c->lattice.fit[plain].score = 0.52, c->lattice.fit[basket].score = 0.50;
+    c->ranking.match[plain] = 0.50, c->ranking.match[basket] = 0.65;
     for (int i = 0; i < nb; i++) /* the ranking's mix, as wv_lattice_rank makes it */
-      c.ranking.score[i] = net ? 0.75 * c.ranking.match[i] + 0.25 * (i == plain) : c.ranking.match[i];
-    rank_order(&c);
-    int b = wv_pattern_decide(&c, 0, 0, NULL);
+      c->ranking.score[i] = net ? 0.75 * c->ranking.match[i] + 0.25 * (i == plain) : c->ranking.match[i];
+    rank_order(c);
+    int b = wv_pattern_decide(c, 0, 0, NULL);
     printf("%s the network: %s\n", net ? "with" : "without", b >= 0 ? wv_weave_builtin_name(b) : "a loss asked for");
     assert_int_equal(b, net ? plain : basket);
   }
@@ -291,26 +298,22 @@ static void test_family_hears_network(void **state) {
 static void test_family_basket_twin(void **state) {
   (void)state;
   int nb = wv_weave_builtin_count(), plain = 0, basket = 1;
-  assert_string_equal(wv_weave_builtin_name(plain), "plain");
-  assert_string_equal(wv_weave_builtin_name(basket), "basket");
-  static wv_pattern_choice c;
   for (int twin = 1; twin >= 0; twin--) {
-    memset(&c, 0, sizeof c);
-    c.lattice.found = 1;
+    wv_pattern_choice *c = lattice_choice();
     for (int i = 0; i < nb; i++) {
-      c.lattice.fit[i].score = 0.3, c.ranking.score[i] = 0.2;
-      c.lattice.fit[i].density[0] = 100, c.lattice.fit[i].density[1] = 90;
+      c->lattice.fit[i].score = 0.3, c->ranking.score[i] = 0.2;
+      c->lattice.fit[i].density[0] = 100, c->lattice.fit[i].density[1] = 90;
     }
-    c.lattice.fit[plain].score = 0.85, c.ranking.score[plain] = 0.46;
-    c.lattice.fit[plain].density[0] = 41, c.lattice.fit[plain].density[1] = 50;
-    c.lattice.fit[basket].score = 0.47, c.ranking.score[basket] = 0.72;
-    c.lattice.fit[basket].density[0] = twin ? 81 : 120, c.lattice.fit[basket].density[1] = 101;
-    rank_order(&c);
-    int b = wv_pattern_decide(&c, 0, 0, NULL);
+    c->lattice.fit[plain].score = 0.85, c->ranking.score[plain] = 0.46;
+    c->lattice.fit[plain].density[0] = 41, c->lattice.fit[plain].density[1] = 50;
+    c->lattice.fit[basket].score = 0.47, c->ranking.score[basket] = 0.72;
+    c->lattice.fit[basket].density[0] = twin ? 81 : 120, c->lattice.fit[basket].density[1] = 101;
+    rank_order(c);
+    int b = wv_pattern_decide(c, 0, 0, NULL);
     assert_int_equal(b, twin ? basket : plain);
     /* the families' reported standing agrees */
     wv_pattern_families fs;
-    wv_pattern_family_scores(&c, &fs);
+    wv_pattern_family_scores(c, &fs);
     assert_string_equal(fs.family[fs.order[0]], twin ? "basket" : "plain");
   }
 }
