@@ -7,8 +7,7 @@
  *   2. If there is a lattice: the family (plain, basket, twill, satin) whose best built-in
  *      has the best mean of lattice score and ranking score (below) wins (a basket and a
  *      plain weave at half its densities share the better of their two lattice scores:
- *      wv_weave_builtin_twin); families within
- *      o->family_tie of it are contenders,
+ *      wv_weave_builtin_twin); families within o->family_tie of it are contenders,
  *      decided by the loss criterion below (each with its best-ranked pattern). Within the
  *      family every built-in is rendered with the network's estimate and its own lattice
  *      densities in the centre window at a low spp and scored by how well its spectral peaks
@@ -117,9 +116,9 @@ int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie,
 /* How each family (plain, basket, twill, satin: wv_weave_family's names, in that order) stood
  * in the choice c, runner-ups included: its best candidate and that candidate's score. With
  * a lattice, step 2's family score: the best mean of lattice score (a basket and its plain
- * twin sharing theirs) and ranking score over the family's built-ins, and the built-in that has it (kind "lattice+ranking", higher is
- * better; within the chosen family the pattern itself goes by the ranking score alone, so
- * it may be another). Without a lattice, by the choice's method: "network" each family's
+ * twin sharing theirs) and ranking score over the family's built-ins, and the built-in that
+ * has it (kind "lattice+ranking", higher is better; within the chosen family the pattern
+ * itself goes by the ranking score alone, so it may be another). Without a lattice, by the choice's method: "network" each family's
  * most probable built-in and its probability (kind "probability", higher is better); "loss"
  * the built-in with the smallest loss criterion and that loss (kind "loss", lower is
  * better). pattern[f] -1: the family had no scored candidate (then score is 0). */
