@@ -172,17 +172,23 @@ static inline double z_at(const smap *m, double bu, double bv) {
 
 /* ---- a pattern's lattice ---- */
 
-#define MAX_POINTS 160
+#define HARMONIC_REACH 2 /* cycles per yarn: the harmonics up to twice the yarn frequency */
+#define MAX_POINTS 1024
 typedef struct {
   int n;
   float u[MAX_POINTS], v[MAX_POINTS], w[MAX_POINTS]; /* cycles per yarn (u across columns, v down rows), weight */
+  int n_base; /* the points up to the yarn frequency come first; the harmonics beyond follow */
 } lmodel;
 
-/* The reciprocal lattice of a weave up to the yarn frequency, in the half plane: the
+/* The reciprocal lattice of a weave up to twice the yarn frequency, in the half plane: the
  * repeat's Fourier coefficients |c(p, q)| of the 0/1 matrix (minus its mean) at
  * (p / cols + a, q / rows + b), and the yarn frequencies themselves, which every weave
  * shows through the yarns' shading. Weights fall off with frequency (the yarn's profile
- * is smooth); the strongest coefficient weighs 1. */
+ * is smooth); the strongest coefficient weighs 1. The points up to the yarn frequency come
+ * first (n_base): they place the lattice and make its precision. The harmonics beyond
+ * count for its recall only: at 1 to 2.5 pixels a yarn the pixel grid folds them back into
+ * the band, where they are peaks of the weave (docs/analysis.md), but a camera's blur may
+ * as well have taken them out. */
 static void build_model(const wv_weave *w, lmodel *m) {
   int R = w->rows, C = w->cols;
   double mean = 0, amp[WV_WEAVE_MAX][WV_WEAVE_MAX], amax = 0;
@@ -201,23 +207,27 @@ static void build_model(const wv_weave *w, lmodel *m) {
       if (amp[q][p] > amax) amax = amp[q][p];
     }
   m->n = 0;
-  for (int q = 0; q < R; q++)
-    for (int p = 0; p < C; p++)
-      for (int b = -1; b <= 1; b++)
-        for (int a = -1; a <= 1; a++) {
-          double u = (double)p / C + a, v = (double)q / R + b;
-          if (fabs(u) > 1 + 1e-9 || fabs(v) > 1 + 1e-9) continue;
-          if (!(u > 1e-9 || (fabs(u) < 1e-9 && v > 1e-9))) continue; /* half plane, no DC */
-          double wt;
-          if (p == 0 && q == 0) /* a yarn frequency: (1, 0), (0, 1) and the diagonals */
-            wt = YARN_W * (fabs(u) + fabs(v) < 1.5 ? 1.0 : 0.5);
-          else
-            wt = amax > 0 ? amp[q][p] / amax : 0;
-          wt *= exp(-0.5 * (u * u + v * v));
-          if (wt < 0.02 || m->n >= MAX_POINTS) continue;
-          m->u[m->n] = (float)u, m->v[m->n] = (float)v, m->w[m->n] = (float)wt;
-          m->n++;
-        }
+  for (int pass = 0; pass < 2; pass++) {
+    for (int q = 0; q < R; q++)
+      for (int p = 0; p < C; p++)
+        for (int b = -HARMONIC_REACH; b <= HARMONIC_REACH; b++)
+          for (int a = -HARMONIC_REACH; a <= HARMONIC_REACH; a++) {
+            double u = (double)p / C + a, v = (double)q / R + b;
+            if (fabs(u) > HARMONIC_REACH + 1e-9 || fabs(v) > HARMONIC_REACH + 1e-9) continue;
+            if ((fabs(u) > 1 + 1e-9 || fabs(v) > 1 + 1e-9) != pass) continue;
+            if (!(u > 1e-9 || (fabs(u) < 1e-9 && v > 1e-9))) continue; /* half plane, no DC */
+            double wt;
+            if (p == 0 && q == 0) /* a yarn frequency: (1, 0), (0, 1) and the diagonals */
+              wt = YARN_W * (fabs(u) + fabs(v) < 1.5 ? 1.0 : 0.5);
+            else
+              wt = amax > 0 ? amp[q][p] / amax : 0;
+            wt *= exp(-0.5 * (u * u + v * v));
+            if (wt < 0.02 || m->n >= MAX_POINTS) continue;
+            m->u[m->n] = (float)u, m->v[m->n] = (float)v, m->w[m->n] = (float)wt;
+            m->n++;
+          }
+    if (!pass) m->n_base = m->n;
+  }
 }
 
 /* Cells a row moves the pattern (row i + 1 = row i shifted right by s), the smallest in
@@ -269,9 +279,9 @@ static void axes(const frame *fr, const hyp *h, double px[2], double py[2]) {
 
 /* F score of the lattice of m under hypothesis h against the spectrum map: precision =
  * weighted mean prominence (coarse: the dilated map; fine: bilinear) at the predicted
- * peaks, recall = share of the photo's peak prominence within reach of a predicted
- * peak. */
-static double evaluate(const lmodel *m, const smap *sm, const frame *fr, const hyp *h, int fine, scratch *sc,
+ * peaks up to the yarn frequency, recall = share of the photo's peak prominence within
+ * reach of a predicted peak (with harm: of the harmonics too). */
+static double evaluate(const lmodel *m, const smap *sm, const frame *fr, const hyp *h, int fine, int harm, scratch *sc,
                        double *prec, double *rec) {
   int n = sm->n;
   double px[2], py[2];
@@ -279,7 +289,7 @@ static double evaluate(const lmodel *m, const smap *sm, const frame *fr, const h
   double pw = 0, pz = 0, rz = 0;
   sc->stamp++;
   const signed char *id = fine ? sm->idf : sm->idc;
-  for (int k = 0; k < m->n; k++) {
+  for (int k = 0; k < (harm ? m->n : m->n_base); k++) {
     double kx = m->u[k] * px[0] + m->v[k] * py[0], ky = m->u[k] * px[1] + m->v[k] * py[1];
     /* a pixel integrates over its square: the yarns' contrast falls with frequency */
     double w = m->w[k] * sinc_abs(sm, kx) * sinc_abs(sm, ky);
@@ -287,8 +297,10 @@ static double evaluate(const lmodel *m, const smap *sm, const frame *fr, const h
     double bu = kx * n, bv = ky * n;
     if (bu * bu + bv * bv <= WV_WSC_DC_RADIUS * WV_WSC_DC_RADIUS) continue; /* unobservable */
     int iu = (int)floor(bu + 0.5), iv = (int)floor(bv + 0.5);
-    double z = fine ? z_at(sm, bu, bv) : sm->zc[bin(n, iu, iv)];
-    pw += w, pz += w * z;
+    if (k < m->n_base) {
+      double z = fine ? z_at(sm, bu, bv) : sm->zc[bin(n, iu, iv)];
+      pw += w, pz += w * z;
+    }
     int p = id[bin(n, iu, iv)];
     if (p >= 0 && sc->seen[p] != sc->stamp) sc->seen[p] = sc->stamp, rz += sm->pk[p].z;
   }
@@ -326,7 +338,7 @@ static double lattice_power(const objective *o, const hyp *h) {
   int n = o->n;
   double px[2], py[2], sw = 0, s = 0;
   axes(o->fr, h, px, py);
-  for (int k = 0; k < m->n; k++) {
+  for (int k = 0; k < m->n_base; k++) {
     double kx = m->u[k] * px[0] + m->v[k] * py[0], ky = m->u[k] * px[1] + m->v[k] * py[1];
     kx -= floor(kx + 0.5), ky -= floor(ky + 0.5);
     double bu = kx * n, bv = ky * n;
@@ -342,7 +354,7 @@ static double lattice_power(const objective *o, const hyp *h) {
 }
 
 static double objective_at(const objective *o, const hyp *h) {
-  return o->logp ? lattice_power(o, h) : evaluate(o->m, o->sm, o->fr, h, 1, o->sc, NULL, NULL);
+  return o->logp ? lattice_power(o, h) : evaluate(o->m, o->sm, o->fr, h, 1, 0, o->sc, NULL, NULL);
 }
 
 /* Pattern search on (log dw, log df, rho, sigma) from h. */
@@ -389,7 +401,7 @@ static void fit_pattern(const lmodel *m, const smap *sm, const frame *fr, double
       double best = 0;
       for (int r = 0; r < N_ORIENT; r++) {
         hyp h = {exp(l0 + i * lstep), exp(l0 + j * lstep), COARSE_ANG[r][0], COARSE_ANG[r][1]};
-        double v = evaluate(m, sm, fr, &h, 0, &sc, NULL, NULL);
+        double v = evaluate(m, sm, fr, &h, 0, 0, &sc, NULL, NULL);
         if (v > best) best = v;
       }
       grid[(size_t)i * ng + j] = best;
@@ -410,16 +422,19 @@ static void fit_pattern(const lmodel *m, const smap *sm, const frame *fr, double
     double r0 = -1;
     for (int r = 0; r < N_ORIENT; r++) { /* the orientation the grid point scored best with */
       h.rho = COARSE_ANG[r][0], h.sigma = COARSE_ANG[r][1];
-      double v = evaluate(m, sm, fr, &h, 0, &sc, NULL, NULL);
+      double v = evaluate(m, sm, fr, &h, 0, 0, &sc, NULL, NULL);
       if (v > r0) r0 = v, hb = h;
     }
+    /* placed and compared by the points up to the yarn frequency: with the harmonics an
+     * irregular cloth's density drifts, and the lattice at half a density, whose harmonics
+     * hold the whole lattice, can win; the score reported counts the harmonics */
     objective ob = {m, fr, sm, &sc, NULL, 0};
     double f = refine(&ob, &hb);
     if (f > best_f) {
       best_f = f;
       out->density[WV_WARP] = hb.dw, out->density[WV_WEFT] = hb.df;
       out->angle_deg = hb.rho * 180 / PI, out->skew_deg = hb.sigma * 180 / PI;
-      out->score = evaluate(m, sm, fr, &hb, 1, &sc, &out->precision, &out->recall);
+      out->score = evaluate(m, sm, fr, &hb, 1, 1, &sc, &out->precision, &out->recall);
     }
   }
 }
@@ -697,7 +712,7 @@ static void deskew_peaks(const wv_lattice *lat, int i, const frame *fr, wv_spect
   for (int p = 0; p < lat->n_peaks; p++) {
     out[p] = lat->peaks[p];
     double best = tol;
-    for (int k = 0; k < m.n; k++)
+    for (int k = 0; k < m.n_base; k++)
       for (int sg = -1; sg <= 1; sg += 2) {
         double kx = sg * (m.u[k] * px[0] + m.v[k] * py[0]), ky = sg * (m.u[k] * px[1] + m.v[k] * py[1]);
         double dx = lat->peaks[p].u - kx, dy = lat->peaks[p].v - ky;
