@@ -68,6 +68,12 @@ static void print_choice(cli_ctx *c, const wv_pattern_choice *pc) {
         len += snprintf(line + len, sizeof line - (size_t)len, " (loss %.5f)", pc->loss[i]);
     }
     cli_info(c, "%s (%.2f s)\n", line, pc->seconds);
+    if (pc->start_refined)
+      cli_info(c, "start from the network's %.1f x %.1f yarns/inch, refined from the photo's peaks to %.1f x %.1f, "
+                  "the cloth turned %.2f deg and %.2f deg out of square (peak match: the lattice's %.3f, refined "
+                  "%.3f)\n",
+               pc->unrefined[0], pc->unrefined[1], pc->start_fit.density[0], pc->start_fit.density[1],
+               pc->start_fit.angle_deg, pc->start_fit.skew_deg, pc->refine_match[0], pc->refine_match[1]);
   } else {
     cli_info(c, "weave analysis: %s\n", l->reason);
     cli_info(c, "pattern %s chosen (%s; %s family): %s (%.2f s)\n", name, pc->method, wv_weave_family(name),

@@ -195,6 +195,33 @@ static void test_weak_lattice_densities(void **state) {
   free(js);
 }
 
+/* The same noisy plain, square to the camera, with a lattice found: the noise's seed gives
+ * a photo whose best lattice is an alias (about 203 x 205 yarns/inch against the truth's 150
+ * x 110) that scores above WV_LATTICE_MIN_SCORE. The network's densities, 3% off either way,
+ * climbed as without a lattice, match the photo's peaks better than the alias does, and the
+ * start takes them. */
+static void test_refined_start_with_lattice(void **state) {
+  fixture *f = *state;
+  static wv_pattern_choice c;
+  choose_noisy_plain(f, &f->scene, 27, (const double[2]){1.03, 0.97}, &c);
+  fprintf(stderr, "lattice found %d, plain %.3f at %.1f x %.1f; refined %d: %.2f x %.2f; match %.3f -> %.3f\n",
+          c.lattice.found, c.lattice.fit[0].score, c.lattice.fit[0].density[0], c.lattice.fit[0].density[1],
+          c.start_refined, c.params[0].density[0], c.params[0].density[1], c.refine_match[0], c.refine_match[1]);
+  assert_true(c.lattice.found);
+  assert_int_equal(c.best, 0);
+  assert_true(fabs(c.lattice.fit[0].density[0] / PLAIN_TRUTH[0] - 1) > 0.2); /* the alias */
+  assert_true(c.start_refine_tried && c.start_refined);
+  assert_true(c.refine_match[1] > c.refine_match[0]);
+  for (int y = 0; y < 2; y++) assert_true(fabs(c.params[0].density[y] / PLAIN_TRUTH[y] - 1) < 0.01);
+  wv_scene sc;
+  wv_pattern_choice_scene(&c, &f->scene, 0, &sc);
+  assert_true(fabs(sc.rotation_deg - c.start_fit.angle_deg) < 1e-9);
+  char *js = wv_pattern_choice_to_json(&c);
+  assert_non_null(js);
+  assert_non_null(strstr(js, "\"start_refinement\": {\"moved\": true, \"kept\": true"));
+  free(js);
+}
+
 /* A plain weave turned by 1.5 degrees, under the same heavy noise: no lattice is found,
  * and the network's densities are 3% off either way. Across a photo a few hundred yarns
  * wide that is several yarns of drift, beyond the registration's reach. The chosen
@@ -424,6 +451,7 @@ int main(int argc, char **argv) {
       cmocka_unit_test_setup_teardown(test_photo_size, setup, teardown),
       cmocka_unit_test_setup_teardown(test_weak_lattice_densities, setup, teardown),
       cmocka_unit_test_setup_teardown(test_refined_start, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_refined_start_with_lattice, setup, teardown),
       cmocka_unit_test(test_family_hears_network), cmocka_unit_test(test_family_basket_twin),
       cmocka_unit_test(test_pattern_keeps_render_match),
       cmocka_unit_test(test_family_scores),

@@ -96,15 +96,18 @@ typedef struct {
    * from the start's densities with the cloth square (wv_lattice_refine_from) was tried
    * (start_refine_tried); it moved (start_refine_moved); and the start took its densities and
    * the scene its orientation (start_refined) when its render's peaks matched the photo's no
-   * worse than the start's (refine_match: the start's, the refined; 0 unless it moved). */
+   * worse than the start's (refine_match: the start's, the refined; 0 unless it moved). With
+   * a lattice and the network's probabilities: the same, refined from the network's
+   * densities, against the chosen lattice's start with its orientation, and taken only when
+   * it matched strictly better (unrefined: the network's densities). */
   int start_refine_tried, start_refine_moved, start_refined;
   wv_lattice_fit start_fit; /* the refined geometry */
   double refine_match[2];
   double unrefined[2];      /* the start's densities before the refinement */
 } wv_pattern_choice;
 /* The scene in which candidate i of c is rendered and fitted: s, with the rotation and
- * skew of its lattice added when c->orient and the lattice was found, or of the refined
- * start (start_refined) for the chosen candidate (a plane scene). out may be s. */
+ * skew of the refined start (start_refined) for the chosen candidate, or else of its
+ * lattice when the lattice was found, added when c->orient (a plane scene). out may be s. */
 void wv_pattern_choice_scene(const wv_pattern_choice *c, const wv_scene *s, int i, wv_scene *out);
 /* The loss criterion of candidate i of a choice made for this photo (a no-op when known). */
 wv_status wv_pattern_loss(struct wv_descriptor *d, const wv_scene *s, const wv_image *photo, const float *gram_photo,

@@ -452,6 +452,12 @@ wv_status wv_report_write_html(const char *path, const wv_report *r, wv_error *e
         else sb_printf(&b, "<td></td></tr>\n");
       }
       sb_printf(&b, "</table>\n");
+      if (pc->start_refined)
+        sb_printf(&b, "<p>The start's densities: the network's, %.1f / %.1f yarns/inch, refined from the photo's "
+                      "spectral peaks to %.1f / %.1f, the cloth turned %.2f&deg; and %.2f&deg; out of square: the "
+                      "render's peaks matched the photo's %.3f, against %.3f with the %s lattice's.</p>\n",
+                  pc->unrefined[0], pc->unrefined[1], pc->start_fit.density[0], pc->start_fit.density[1],
+                  pc->start_fit.angle_deg, pc->start_fit.skew_deg, pc->refine_match[1], pc->refine_match[0], chosen);
     } else {
       sb_printf(&b, "<p>The weave analysis found no weave lattice (%s). The pattern was chosen as the network "
                     "would: <b>%s</b> (%s family), %s.</p>\n",

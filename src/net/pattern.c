@@ -72,9 +72,10 @@ void wv_pattern_choice_scene(const wv_pattern_choice *c, const wv_scene *s, int 
   wv_params unused;
   wv_scene in = *s;
   *out = in;
-  if (c->orient && c->lattice.found) wv_lattice_candidate(&c->lattice, i, &c->params[i], &in, 1, &unused, out);
-  else if (c->orient && c->start_refined && i == c->best)
+  if (c->orient && c->start_refined && i == c->best)
     wv_lattice_fit_apply(&c->start_fit, &c->params[i], &in, 1, &unused, out);
+  else if (c->orient && c->lattice.found)
+    wv_lattice_candidate(&c->lattice, i, &c->params[i], &in, 1, &unused, out);
 }
 
 static const char *const FAMILY[WV_PATTERN_FAMILIES] = {"plain", "basket", "twill", "satin"};
@@ -259,6 +260,27 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
         wv_scene unused;
         wv_params p = out->params[b];
         wv_lattice_candidate(&out->lattice, b, &p, s, 0, &out->params[b], &unused);
+      }
+      /* A lattice found by its harmonics' recall can be weak and lie a few percent off, out
+       * of the registration's reach: the network's densities, the chosen pattern's lattice
+       * climbed from them, give the start when their render's peaks match the photo's
+       * better (docs/analysis.md, "The start's geometry without a lattice") */
+      if (!st && o->prob && o->orient) {
+        wv_params net, pr;
+        wv_scene sr, sl;
+        int moved = 0;
+        st = wv_fabricnet_params(n, y, wv_weave_builtin_name(b), &net, err);
+        out->unrefined[0] = net.density[0], out->unrefined[1] = net.density[1];
+        if (!st) st = wv_lattice_refine_from(s, photo, b, net.density, &out->start_fit, &moved, err);
+        out->start_refine_tried = !st, out->start_refine_moved = moved;
+        if (!st && moved) {
+          wv_lattice_fit_apply(&out->start_fit, &out->params[b], s, 1, &pr, &sr);
+          wv_params pl;
+          wv_lattice_candidate(&out->lattice, b, &out->params[b], s, 1, &pl, &sl);
+          st = wv_lattice_match(&sl, &out->lattice, &pl, sc.spp, o->threads, &out->refine_match[0], err);
+          if (!st) st = wv_lattice_match(&sr, &out->lattice, &pr, sc.spp, o->threads, &out->refine_match[1], err);
+          if (!st && out->refine_match[1] > out->refine_match[0]) out->params[b] = pr, out->start_refined = 1;
+        }
       }
       int used = 0;
       for (int i = 0; i < nb; i++) used += out->evaluated[i];
