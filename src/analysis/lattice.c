@@ -292,12 +292,12 @@ static double evaluate(const lmodel *m, const smap *sm, const frame *fr, const h
   for (int k = 0; k < (harm ? m->n : m->n_base); k++) {
     double kx = m->u[k] * px[0] + m->v[k] * py[0], ky = m->u[k] * px[1] + m->v[k] * py[1];
     /* a pixel integrates over its square: the yarns' contrast falls with frequency */
-    double w = m->w[k] * sinc_abs(sm, kx) * sinc_abs(sm, ky);
+    double w = k < m->n_base ? m->w[k] * sinc_abs(sm, kx) * sinc_abs(sm, ky) : 0;
     kx -= floor(kx + 0.5), ky -= floor(ky + 0.5); /* folded into the pixel grid's band */
     double bu = kx * n, bv = ky * n;
     if (bu * bu + bv * bv <= WV_WSC_DC_RADIUS * WV_WSC_DC_RADIUS) continue; /* unobservable */
     int iu = (int)floor(bu + 0.5), iv = (int)floor(bv + 0.5);
-    if (k < m->n_base) {
+    if (k < m->n_base) { /* the harmonics count for the recall alone */
       double z = fine ? z_at(sm, bu, bv) : sm->zc[bin(n, iu, iv)];
       pw += w, pz += w * z;
     }

@@ -202,6 +202,31 @@ int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie,
   return best;
 }
 
+/* The chosen built-in b's lattice climbed from densities `from` (wv_lattice_refine_from)
+ * with its orientation, against the start `start` rendered in `start_scene` (its peak match
+ * `known`, or NULL to measure it): the refined start replaces out->params[b]
+ * (start_refined) when its render's peaks match the photo's better, or no worse unless
+ * strict. Fills the choice's start_refine_tried, start_refine_moved, start_fit,
+ * refine_match and unrefined. */
+static wv_status climb_start(const wv_scene *s, const wv_image *photo, int b, const double from[2],
+                             const wv_scene *start_scene, const wv_params *start, const double *known, int strict,
+                             int spp, int threads, wv_pattern_choice *out, wv_error *err) {
+  int moved = 0;
+  out->unrefined[0] = from[0], out->unrefined[1] = from[1];
+  wv_status st = wv_lattice_refine_from(s, photo, b, from, &out->start_fit, &moved, err);
+  out->start_refine_tried = !st, out->start_refine_moved = moved;
+  if (st || !moved) return st;
+  wv_params pr;
+  wv_scene sr;
+  wv_lattice_fit_apply(&out->start_fit, &out->params[b], s, 1, &pr, &sr);
+  if (known) out->refine_match[0] = *known;
+  else st = wv_lattice_match(start_scene, &out->lattice, start, spp, threads, &out->refine_match[0], err);
+  if (!st) st = wv_lattice_match(&sr, &out->lattice, &pr, spp, threads, &out->refine_match[1], err);
+  double m0 = out->refine_match[0], m1 = out->refine_match[1];
+  if (!st && (strict ? m1 > m0 : m1 >= m0)) out->params[b] = pr, out->start_refined = 1;
+  return st;
+}
+
 wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, const wv_scene *s,
                                       const wv_image *photo, const float *gram_photo, const float *y,
                                       const wv_pattern_opts *o, wv_pattern_choice *out, wv_error *err) {
@@ -266,21 +291,11 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
        * climbed from them, give the start when their render's peaks match the photo's
        * better (docs/analysis.md, "The start's geometry without a lattice") */
       if (!st && o->prob && o->orient) {
-        wv_params net, pr;
-        wv_scene sr, sl;
-        int moved = 0;
+        wv_params net, pl;
+        wv_scene sl;
+        wv_lattice_candidate(&out->lattice, b, &out->params[b], s, 1, &pl, &sl);
         st = wv_fabricnet_params(n, y, wv_weave_builtin_name(b), &net, err);
-        out->unrefined[0] = net.density[0], out->unrefined[1] = net.density[1];
-        if (!st) st = wv_lattice_refine_from(s, photo, b, net.density, &out->start_fit, &moved, err);
-        out->start_refine_tried = !st, out->start_refine_moved = moved;
-        if (!st && moved) {
-          wv_lattice_fit_apply(&out->start_fit, &out->params[b], s, 1, &pr, &sr);
-          wv_params pl;
-          wv_lattice_candidate(&out->lattice, b, &out->params[b], s, 1, &pl, &sl);
-          st = wv_lattice_match(&sl, &out->lattice, &pl, sc.spp, o->threads, &out->refine_match[0], err);
-          if (!st) st = wv_lattice_match(&sr, &out->lattice, &pr, sc.spp, o->threads, &out->refine_match[1], err);
-          if (!st && out->refine_match[1] > out->refine_match[0]) out->params[b] = pr, out->start_refined = 1;
-        }
+        if (!st) st = climb_start(s, photo, b, net.density, &sl, &pl, NULL, 1, sc.spp, o->threads, out, err);
       }
       int used = 0;
       for (int i = 0; i < nb; i++) used += out->evaluated[i];
@@ -309,20 +324,10 @@ wv_status wv_fabricnet_choose_pattern(const wv_fabricnet *n, wv_descriptor *d, c
      * lattice, climbed from the start's densities, gives both when its render's peaks match
      * the photo's no worse. */
     if (!st && o->lattice && o->orient && out->lattice.n_peaks > 0) {
-      int moved = 0;
-      out->unrefined[0] = out->params[b].density[0], out->unrefined[1] = out->params[b].density[1];
-      st = wv_lattice_refine_from(s, photo, b, out->params[b].density, &out->start_fit, &moved, err);
-      out->start_refine_tried = !st, out->start_refine_moved = moved;
-      if (!st && moved) {
-        wv_params pr;
-        wv_scene sr;
-        wv_lattice_fit_apply(&out->start_fit, &out->params[b], s, 1, &pr, &sr);
-        /* the start's match is known when the weak lattice's densities were compared */
-        if (out->start_compared) out->refine_match[0] = out->start_match[out->lattice_densities];
-        else st = wv_lattice_match(s, &out->lattice, &out->params[b], sc.spp, o->threads, &out->refine_match[0], err);
-        if (!st) st = wv_lattice_match(&sr, &out->lattice, &pr, sc.spp, o->threads, &out->refine_match[1], err);
-        if (!st && out->refine_match[1] >= out->refine_match[0]) out->params[b] = pr, out->start_refined = 1;
-      }
+      /* the start's match is known when the weak lattice's densities were compared */
+      const double *known = out->start_compared ? &out->start_match[out->lattice_densities] : NULL;
+      wv_params start = out->params[b];
+      st = climb_start(s, photo, b, start.density, s, &start, known, 0, sc.spp, o->threads, out, err);
     }
   } else if (!st) {
     for (int i = 0; i < nb && !st; i++) {
