@@ -439,6 +439,31 @@ static void fit_pattern(const lmodel *m, const smap *sm, const frame *fr, double
   }
 }
 
+/* A built-in whose yarns lie in groups (a basket) and its twin that weaves as the groups
+ * (plain, wv_weave_builtin_twin) have one lattice when the first's densities are the
+ * groups' times the twin's: they differ only in which of its points each counts up to its
+ * yarn frequency, so which fits better tells the camera's blur, not the weave. Left to
+ * itself the weaker one's search can settle elsewhere, and its render, ranked against the
+ * photo, then shows a cloth the photo is not; it takes the stronger one's lattice, scaled
+ * by the groups, and its own score there (the family step weighs both alike). */
+static void share_twins(const lmodel *models, const smap *sm, const frame *fr, wv_lattice *out) {
+  scratch sc;
+  memset(&sc, 0, sizeof sc);
+  int g[2];
+  for (int k = 0; k < wv_weave_builtin_count(); k++) {
+    int t = wv_weave_builtin_twin(k, g);
+    if (t < 0 || out->fit[k].score == out->fit[t].score) continue;
+    wv_lattice_fit *fk = &out->fit[k], *ft = &out->fit[t], *weak = fk->score < ft->score ? fk : ft;
+    const wv_lattice_fit *strong = weak == fk ? ft : fk;
+    double s = weak == fk ? 1.0 : -1.0; /* the groups' factor, toward the weaker */
+    hyp h = {strong->density[WV_WARP] * pow(g[0], s), strong->density[WV_WEFT] * pow(g[1], s),
+             strong->angle_deg * PI / 180, strong->skew_deg * PI / 180};
+    wv_lattice_fit f = {.density = {h.dw, h.df}, .angle_deg = strong->angle_deg, .skew_deg = strong->skew_deg};
+    f.score = evaluate(&models[weak == fk ? k : t], sm, fr, &h, 1, 1, &sc, &f.precision, &f.recall);
+    *weak = f;
+  }
+}
+
 /* The scene's map pixel -> fabric mm at the image centre, transposed. */
 static int centre_frame(const wv_scene *s, frame *fr, double *mm_per_px) {
   return wv_render_centre_scale(s, fr->jt, mm_per_px);
@@ -515,6 +540,7 @@ wv_status wv_lattice_analyse(const wv_scene *s, const wv_image *photo, wv_lattic
     if (same[i] == i)
       fit_pattern(&models[i], &sm, &fr, grids + (size_t)ng * ng * (size_t)omp_get_thread_num(), ng, &out->fit[i]);
   for (int i = 0; i < nb; i++) out->fit[i] = out->fit[same[i]];
+  share_twins(models, &sm, &fr, out);
   free(grids), free(models);
   smap_free(&sm);
   int best = 0;
