@@ -66,7 +66,9 @@ typedef struct {
 } wv_lattice;
 
 /* Analyses the centre window of photo (the scene's capture image; at least 64 x 64). A
- * photo without a lattice is not an error: out->found = 0 with out->reason. */
+ * photo without a lattice is not an error: out->found = 0 with out->reason. A built-in
+ * and its twin (wv_weave_builtin_twin) come back at twin densities: the weaker fit takes
+ * the stronger one's lattice, scaled by the groups, with its own score there. */
 wv_status wv_lattice_analyse(const wv_scene *s, const wv_image *photo, wv_lattice *out, wv_error *err);
 
 /* Refines fit i of lat (found) over the photo's centre window of up to
