@@ -124,7 +124,8 @@ int wv_pattern_decide(const wv_pattern_choice *c, double family_tie, double tie,
  * itself goes by the ranking score alone, so it may be another). Without a lattice, by the
  * choice's method: "network" each family's most probable built-in and its probability
  * (kind "probability", higher is better); "loss" the built-in with the smallest loss
- * criterion and that loss (kind "loss", lower is better). pattern[f] -1: the family had no scored candidate (then score is 0). */
+ * criterion and that loss (kind "loss", lower is better). pattern[f] -1: the family had no
+ * scored candidate (then score is 0). */
 #define WV_PATTERN_FAMILIES 4
 typedef struct {
   const char *kind;                   /* "lattice+ranking", "probability", "loss" or "none" */

@@ -453,14 +453,14 @@ static void share_twins(const lmodel *models, const smap *sm, const frame *fr, w
   for (int k = 0; k < wv_weave_builtin_count(); k++) {
     int t = wv_weave_builtin_twin(k, g);
     if (t < 0 || out->fit[k].score == out->fit[t].score) continue;
-    wv_lattice_fit *fk = &out->fit[k], *ft = &out->fit[t], *weak = fk->score < ft->score ? fk : ft;
-    const wv_lattice_fit *strong = weak == fk ? ft : fk;
-    double s = weak == fk ? 1.0 : -1.0; /* the groups' factor, toward the weaker */
+    int weak = out->fit[k].score < out->fit[t].score ? k : t;
+    const wv_lattice_fit *strong = &out->fit[weak == k ? t : k];
+    double s = weak == k ? 1.0 : -1.0; /* the groups' factor, toward the weaker */
     hyp h = {strong->density[WV_WARP] * pow(g[0], s), strong->density[WV_WEFT] * pow(g[1], s),
              strong->angle_deg * PI / 180, strong->skew_deg * PI / 180};
     wv_lattice_fit f = {.density = {h.dw, h.df}, .angle_deg = strong->angle_deg, .skew_deg = strong->skew_deg};
-    f.score = evaluate(&models[weak == fk ? k : t], sm, fr, &h, 1, 1, &sc, &f.precision, &f.recall);
-    *weak = f;
+    f.score = evaluate(&models[weak], sm, fr, &h, 1, 1, &sc, &f.precision, &f.recall);
+    out->fit[weak] = f;
   }
 }
 
